@@ -1,0 +1,150 @@
+#pragma once
+// Lane types: the one abstraction that lets a single template serve scalars and SIMD packets.
+//
+// Every distance, fold and march step in krs is written once, as a template over a *lane type* T:
+// `float`, `double`, or `xsimd::batch<float, A>` / `xsimd::batch<double, A>`. A lane type knows
+// its scalar (`scalar_t<T>`), its mask (`mask_t<T>`: `bool` for scalars, `xsimd::batch_bool` for
+// packets) and its width (`lane_count<T>`). Data-dependent branches are written as
+// `select(mask, a, b)`, so the same source compiles to a branch for scalars and a blend for
+// packets. The free functions below (`select`, `min`, `max`, `abs`, `sqrt`, `any`, `all`, ...) are
+// the vocabulary of that source; their scalar overloads exist because xsimd 8.1 has none (its
+// scalar `select` arrived in 9.0).
+
+#include <xsimd/xsimd.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <type_traits>
+
+namespace krs {
+
+// Primary template: a scalar is its own scalar, its mask is bool, it is one lane wide.
+template <class T>
+struct lane_traits {
+    using scalar = T;
+    using mask = bool;
+    static constexpr std::size_t size = 1;
+};
+
+template <class S, class A>
+struct lane_traits<xsimd::batch<S, A>> {
+    using scalar = S;
+    using mask = xsimd::batch_bool<S, A>;
+    static constexpr std::size_t size = xsimd::batch<S, A>::size;
+};
+
+template <class T>
+using scalar_t = typename lane_traits<T>::scalar;
+template <class T>
+using mask_t = typename lane_traits<T>::mask;
+template <class T>
+inline constexpr std::size_t lane_count = lane_traits<T>::size;
+
+// A lane type is a floating-point scalar or an xsimd batch of one.
+template <class T>
+concept lane = std::floating_point<scalar_t<T>> &&
+               (std::floating_point<T> || std::same_as<T, xsimd::batch<scalar_t<T>, typename T::arch_type>>);
+
+// The widest packet the compiler targets for this translation unit (16 floats with AVX-512,
+// 8 with AVX2, 4 with SSE2).
+using packet_f = xsimd::batch<float>;
+using packet_d = xsimd::batch<double>;
+
+// Broadcast a scalar parameter into a lane. Parameters are stored as float (the precision a
+// shader would use); a double lane evaluates the same geometry in double arithmetic.
+template <lane T>
+inline T splat(float v) noexcept
+{
+    return T(static_cast<scalar_t<T>>(v));
+}
+template <lane T>
+inline T splat(double v) noexcept
+{
+    return T(static_cast<scalar_t<T>>(v));
+}
+
+// ---- scalar overloads ------------------------------------------------------------------------
+// Packets use xsimd's own functions of the same names, found by argument-dependent lookup, so
+// generic code calls these unqualified (`min(a, b)`, not `krs::min(a, b)`), as with std::swap.
+
+template <std::floating_point T>
+inline T select(bool m, T a, T b) noexcept
+{
+    return m ? a : b;
+}
+template <std::floating_point T>
+inline T min(T a, T b) noexcept
+{
+    return a < b ? a : b;
+}
+template <std::floating_point T>
+inline T max(T a, T b) noexcept
+{
+    return a > b ? a : b;
+}
+template <std::floating_point T>
+inline T abs(T a) noexcept
+{
+    return std::abs(a);
+}
+template <std::floating_point T>
+inline T sqrt(T a) noexcept
+{
+    return std::sqrt(a);
+}
+inline bool any(bool m) noexcept { return m; }
+inline bool all(bool m) noexcept { return m; }
+inline bool none(bool m) noexcept { return !m; }
+
+// Lane-wise finiteness: false for NaN and +-inf. (x - x) is 0 for finite x and NaN otherwise,
+// which avoids relying on std::isfinite under -ffast-math-like flags the user might set.
+template <lane T>
+inline mask_t<T> is_finite(const T& x) noexcept
+{
+    return (x - x) == T(0);
+}
+
+template <lane T>
+inline T clamp(const T& x, const T& lo, const T& hi) noexcept
+{
+    return min(max(x, lo), hi);
+}
+
+// lerp as in GLSL's mix: a + (b - a) * t.
+template <lane T>
+inline T mix(const T& a, const T& b, const T& t) noexcept
+{
+    return a + (b - a) * t;
+}
+
+// Extract lane i of a lane value (scalars have just lane 0).
+template <lane T>
+inline scalar_t<T> lane_at(const T& x, std::size_t i) noexcept
+{
+    if constexpr (std::floating_point<T>) {
+        (void)i;
+        return x;
+    } else {
+        alignas(64) scalar_t<T> buffer[lane_count<T>];
+        x.store_aligned(buffer);
+        return buffer[i];
+    }
+}
+// Lane i of a mask; T names the lane type because a mask alone cannot say it (bool is every
+// scalar's mask).
+template <lane T>
+inline bool mask_lane(const mask_t<T>& m, std::size_t i) noexcept
+{
+    if constexpr (std::floating_point<T>) {
+        (void)i;
+        return m;
+    } else {
+        alignas(64) bool buffer[lane_count<T>];
+        m.store_aligned(buffer);
+        return buffer[i];
+    }
+}
+
+} // namespace krs

@@ -1,0 +1,114 @@
+#pragma once
+// vec3<T>: the hot path's 3-vector over any lane type.
+//
+// GLM's geometric functions static-assert on xsimd batches (glm::vec<3, batch> is storage only),
+// so the distance code uses this small struct instead. The names mirror GLSL (`dot`, `length`,
+// `normalize`, `cross`) so a C++ body and its emitted GLSL read alike. `vec3f`/`vec3d` are the
+// scalar aliases; `vec3fP` is a packet of vectors in structure-of-arrays form (one batch per axis).
+
+#include "krs/core/lanes.hpp"
+
+namespace krs {
+
+template <class T>
+struct vec3 {
+    T x{}, y{}, z{};
+
+    constexpr vec3() = default;
+    constexpr vec3(T x_, T y_, T z_) : x(x_), y(y_), z(z_) {}
+    // Broadcast a scalar vector into every lane (or convert float <-> double).
+    template <class U>
+        requires(!std::same_as<U, T> && std::floating_point<U>)
+    explicit constexpr vec3(const vec3<U>& v)
+        : x(T(static_cast<scalar_t<T>>(v.x))), y(T(static_cast<scalar_t<T>>(v.y))),
+          z(T(static_cast<scalar_t<T>>(v.z)))
+    {
+    }
+
+    friend vec3 operator+(const vec3& a, const vec3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+    friend vec3 operator-(const vec3& a, const vec3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+    friend vec3 operator-(const vec3& a) { return {-a.x, -a.y, -a.z}; }
+    friend vec3 operator*(const vec3& a, const T& s) { return {a.x * s, a.y * s, a.z * s}; }
+    friend vec3 operator*(const T& s, const vec3& a) { return {a.x * s, a.y * s, a.z * s}; }
+    friend vec3 operator/(const vec3& a, const T& s) { return {a.x / s, a.y / s, a.z / s}; }
+    vec3& operator+=(const vec3& b) { return *this = *this + b; }
+    vec3& operator-=(const vec3& b) { return *this = *this - b; }
+    vec3& operator*=(const T& s) { return *this = *this * s; }
+};
+
+using vec3f = vec3<float>;
+using vec3d = vec3<double>;
+using vec3fP = vec3<packet_f>;
+using vec3dP = vec3<packet_d>;
+
+template <class T>
+inline T dot(const vec3<T>& a, const vec3<T>& b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+template <class T>
+inline vec3<T> cross(const vec3<T>& a, const vec3<T>& b)
+{
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+template <class T>
+inline T length_squared(const vec3<T>& a)
+{
+    return dot(a, a);
+}
+template <class T>
+inline T length(const vec3<T>& a)
+{
+    return sqrt(dot(a, a));
+}
+template <class T>
+inline T distance(const vec3<T>& a, const vec3<T>& b)
+{
+    return length(a - b);
+}
+// Unit vector along a. A zero vector gives NaN: callers that can meet one validate first.
+template <class T>
+inline vec3<T> normalize(const vec3<T>& a)
+{
+    return a / length(a);
+}
+template <class T>
+inline vec3<T> min(const vec3<T>& a, const vec3<T>& b)
+{
+    return {min(a.x, b.x), min(a.y, b.y), min(a.z, b.z)};
+}
+template <class T>
+inline vec3<T> max(const vec3<T>& a, const vec3<T>& b)
+{
+    return {max(a.x, b.x), max(a.y, b.y), max(a.z, b.z)};
+}
+template <class T>
+inline vec3<T> abs(const vec3<T>& a)
+{
+    return {abs(a.x), abs(a.y), abs(a.z)};
+}
+template <class T>
+inline vec3<T> select(const mask_t<T>& m, const vec3<T>& a, const vec3<T>& b)
+{
+    return {select(m, a.x, b.x), select(m, a.y, b.y), select(m, a.z, b.z)};
+}
+template <class T>
+inline mask_t<T> is_finite(const vec3<T>& a)
+{
+    return is_finite(a.x) && is_finite(a.y) && is_finite(a.z);
+}
+// Reflection of a direction on a plane with unit normal m (the paper's M_i operator).
+template <class T>
+inline vec3<T> reflect_direction(const vec3<T>& w, const vec3<T>& m)
+{
+    return w - m * (T(2) * dot(m, w));
+}
+
+// Lane i of a vector of lanes, as a scalar vector.
+template <class T>
+inline vec3<scalar_t<T>> lane_at(const vec3<T>& v, std::size_t i)
+{
+    return {lane_at(v.x, i), lane_at(v.y, i), lane_at(v.z, i)};
+}
+
+} // namespace krs
