@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Install what is missing, build the examples and render their images into out/.
+set -euo pipefail
+# shellcheck source=scripts/common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+"$repo_root/scripts/install-deps.sh" --examples
+
+# Only the examples: no doctest, Mesa or Google Benchmark needed for pictures.
+configure -DKRS_BUILD_EXAMPLES=ON -DKRS_BUILD_TESTS=OFF -DKRS_BUILD_BENCHMARKS=OFF
+cmake --build "$build_dir" --parallel "$build_jobs" --target krs_examples
+
+out_dir="$repo_root/out"
+mkdir -p "$out_dir"
+ran=0
+if [ -x "$build_dir/examples/krs_tree" ]; then
+    echo "examples.sh: krs_tree -> out/krs_tree.png"
+    "$build_dir/examples/krs_tree" --output "$out_dir/krs_tree.png"
+    ran=$((ran + 1))
+fi
+echo "examples.sh: $ran example(s) rendered into $out_dir"

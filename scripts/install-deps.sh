@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Install the Debian packages krs needs.  Usage: scripts/install-deps.sh [--tests|--examples|--all]
+#   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa (GLSL tests), OpenImageIO
+#               (a test checks an example's image)
+#   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO
+#   --all       all of the above plus Google Benchmark (the default)
+# Only missing packages are installed; apt-get update runs only when something is missing, so a
+# repeated run costs a dpkg-query and nothing else.
+set -euo pipefail
+
+mode="${1:---all}"
+
+base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
+tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools)
+examples=(libopenimageio-dev)
+benchmarks=(libbenchmark-dev)
+
+case "$mode" in
+    --tests) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}") ;;
+    --examples) wanted=("${base[@]}" "${examples[@]}") ;;
+    --all) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}") ;;
+    -h | --help)
+        sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'
+        exit 0
+        ;;
+    *)
+        echo "install-deps.sh: unknown option '$mode' (use --tests, --examples or --all)" >&2
+        exit 2
+        ;;
+esac
+
+missing=()
+for pkg in "${wanted[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q 'install ok installed'; then
+        missing+=("$pkg")
+    fi
+done
+
+if [ "${#missing[@]}" -eq 0 ]; then
+    echo "install-deps.sh: all ${#wanted[@]} packages for $mode are installed"
+    exit 0
+fi
+
+if [ "$(id -u)" -eq 0 ]; then
+    as_root=()
+elif command -v sudo >/dev/null 2>&1; then
+    as_root=(sudo)
+else
+    echo "install-deps.sh: need root (or sudo) to install: ${missing[*]}" >&2
+    exit 1
+fi
+
+echo "install-deps.sh: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
+"${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y -q --no-install-recommends "${missing[@]}"
