@@ -17,6 +17,15 @@ struct bounding_sphere {
     bool is_bounded() const { return radius < std::numeric_limits<float>::infinity(); }
 };
 
+// A float sphere that holds the double sphere (c, r): the radius grows by the distance the
+// center moved when rounded to float, then by a few ulps, so float storage never shrinks it.
+inline bounding_sphere bound_around(const vec3d& c, double r)
+{
+    const vec3f cf{static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z)};
+    const double grown = r + length(vec3d(cf) - c);
+    return {cf, static_cast<float>(grown) * (1.0f + 4e-7f) + 1e-30f};
+}
+
 // Smallest sphere of the form "around a's or b's center or between them" holding both: exact for
 // two spheres, which is all the enclosing step of an expansion needs.
 inline bounding_sphere enclose(const bounding_sphere& a, const bounding_sphere& b)
@@ -27,9 +36,7 @@ inline bounding_sphere enclose(const bounding_sphere& a, const bounding_sphere& 
     if (dist + b.radius <= a.radius) return a;
     if (dist + a.radius <= b.radius) return b;
     const double r = 0.5 * (dist + a.radius + b.radius);
-    const vec3d c = ca + (cb - ca) * ((r - a.radius) / dist);
-    // Round the radius up by a few ulps so float storage never shrinks the sphere.
-    return {vec3f{float(c.x), float(c.y), float(c.z)}, float(r) * (1.0f + 4e-7f) + 1e-30f};
+    return bound_around(ca + (cb - ca) * ((r - a.radius) / dist), r);
 }
 
 } // namespace krs

@@ -1,0 +1,121 @@
+#pragma once
+// Box kernel: a solid rectangular box, axis-aligned or oriented by an orthonormal frame.
+//
+// In the box's frame, with q = |local p| - half_extents, the signed distance
+// length(max(q, 0)) + min(max(q.x, q.y, q.z), 0) is exact: outside it is the distance to the
+// nearest point of the surface, inside minus the distance to the nearest face. A rotation keeps
+// it exact, which is why the frame must be orthonormal (a skewed frame would stretch space and
+// overestimate). The frame is checked to 1e-4 and then re-orthonormalized in double, so the stored
+// axes are orthonormal to float precision. Zero half extents are allowed (a rectangle, a segment,
+// a point).
+
+#include "krs/core/bounds.hpp"
+#include "krs/core/validate.hpp"
+#include "krs/kernels/capsule.hpp"
+
+#include <cmath>
+
+namespace krs {
+
+struct box {
+    box() = default;
+    box(const vec3f& center, const vec3f& half_extents)
+        : center_(require_finite("box.center", center)), half_extents_(checked_extents(half_extents))
+    {
+    }
+    // Oriented box: local axis i of the box is world direction axis_i.
+    box(const vec3f& center, const vec3f& half_extents, const vec3f& axis_x, const vec3f& axis_y,
+        const vec3f& axis_z)
+        : center_(require_finite("box.center", center)), half_extents_(checked_extents(half_extents))
+    {
+        require_finite("box.axes", axis_x);
+        require_finite("box.axes", axis_y);
+        require_finite("box.axes", axis_z);
+        const vec3d x(axis_x), y(axis_y), z(axis_z);
+        constexpr double tolerance = 1e-4;
+        const bool orthonormal = std::abs(length(x) - 1) <= tolerance && std::abs(length(y) - 1) <= tolerance &&
+                                 std::abs(length(z) - 1) <= tolerance && std::abs(dot(x, y)) <= tolerance &&
+                                 std::abs(dot(y, z)) <= tolerance && std::abs(dot(z, x)) <= tolerance;
+        if (!orthonormal)
+            throw invalid_parameter("box.axes", "must be orthonormal within 1e-4",
+                                    detail::to_text(axis_x) + ", " + detail::to_text(axis_y) + ", " +
+                                        detail::to_text(axis_z));
+        // Gram-Schmidt keeps x's direction; z keeps its handedness (a mirrored frame is still a box).
+        const vec3d ux = normalize(x);
+        const vec3d uy = normalize(y - ux * dot(ux, y));
+        const vec3d c = cross(ux, uy);
+        const vec3d uz = dot(c, z) >= 0 ? c : -c;
+        axes_[0] = vec3f(ux);
+        axes_[1] = vec3f(uy);
+        axes_[2] = vec3f(uz);
+        oriented_ = true;
+    }
+
+    const vec3f& center() const { return center_; }
+    const vec3f& half_extents() const { return half_extents_; }
+    const vec3f& axis(int i) const { return axes_[i]; }
+    bool oriented() const { return oriented_; }
+
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        const vec3<T> q = abs(to_local(p)) - vec3<T>(half_extents_);
+        return length(max(q, vec3<T>(T(0), T(0), T(0)))) + min(max(q.x, max(q.y, q.z)), T(0));
+    }
+
+    // Gradient of the distance: outside, toward p from the nearest surface point; inside, the
+    // normal of the nearest face (ties go to x, then y, the order a GLSL port would use).
+    template <class T>
+    vec3<T> normal(const vec3<T>& p) const
+    {
+        const vec3<T> local = to_local(p);
+        const vec3<T> sign{select(local.x < T(0), T(-1), T(1)), select(local.y < T(0), T(-1), T(1)),
+                           select(local.z < T(0), T(-1), T(1))};
+        const vec3<T> q = abs(local) - vec3<T>(half_extents_);
+        const vec3<T> outside = max(q, vec3<T>(T(0), T(0), T(0)));
+        const T outside_length = length(outside);
+        const auto is_outside = outside_length > T(0);
+        const vec3<T> outward = outside / select(is_outside, outside_length, T(1));
+        const auto x_largest = q.x >= q.y && q.x >= q.z;
+        const auto y_largest = !x_largest && q.y >= q.z;
+        const vec3<T> face{select(x_largest, T(1), T(0)), select(y_largest, T(1), T(0)),
+                           select(x_largest || y_largest, T(0), T(1))};
+        const vec3<T> g = select(is_outside, outward, face);
+        return to_world(vec3<T>{g.x * sign.x, g.y * sign.y, g.z * sign.z});
+    }
+
+    bounding_sphere bound() const
+    {
+        return bound_around(vec3d(center_), length(vec3d(half_extents_)));
+    }
+
+private:
+    static vec3f checked_extents(const vec3f& h)
+    {
+        require_finite("box.half_extents", h);
+        if (h.x < 0 || h.y < 0 || h.z < 0)
+            throw invalid_parameter("box.half_extents", "must be >= 0 in every component", detail::to_text(h));
+        return h;
+    }
+
+    template <class T>
+    vec3<T> to_local(const vec3<T>& p) const
+    {
+        const vec3<T> d = p - vec3<T>(center_);
+        if (!oriented_) return d;
+        return {dot(d, vec3<T>(axes_[0])), dot(d, vec3<T>(axes_[1])), dot(d, vec3<T>(axes_[2]))};
+    }
+    template <class T>
+    vec3<T> to_world(const vec3<T>& v) const
+    {
+        if (!oriented_) return v;
+        return vec3<T>(axes_[0]) * v.x + vec3<T>(axes_[1]) * v.y + vec3<T>(axes_[2]) * v.z;
+    }
+
+    vec3f center_{};
+    vec3f half_extents_{};
+    vec3f axes_[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    bool oriented_ = false; // uniform over lanes: the axis-aligned box skips the rotation
+};
+
+} // namespace krs

@@ -1,0 +1,76 @@
+#pragma once
+// Capsule kernel: every point within `radius` of the segment from a to b.
+//
+// Its signed distance |p - closest point of ab| - radius is exact (1-Lipschitz, zero on the
+// surface): the straight branch of a tree and the limit of a torus_capsule whose control point
+// lies on the chord. a == b is allowed and gives a sphere; radius 0 gives the bare segment.
+
+#include "krs/core/bounds.hpp"
+#include "krs/core/validate.hpp"
+
+namespace krs {
+
+struct capsule {
+    vec3f a{}, b{};
+    float radius = 0.0f;
+
+    capsule() = default;
+    capsule(const vec3f& a_, const vec3f& b_, float radius_)
+        : a(require_finite("capsule.a", a_)), b(require_finite("capsule.b", b_)),
+          radius(require_non_negative("capsule.radius", radius_))
+    {
+        const vec3d ad(a), bd(b);
+        const vec3d ab = bd - ad;
+        const double len2 = dot(ab, ab);
+        axis_ = vec3f(ab);
+        // a == b makes every t equivalent; 0 keeps the clamp below free of a 0/0.
+        inverse_length_squared_ = len2 > 0.0 ? static_cast<float>(1.0 / len2) : 0.0f;
+        // On the segment itself the normal is any direction perpendicular to it.
+        const vec3d helper = std::abs(ab.x) <= std::abs(ab.y) && std::abs(ab.x) <= std::abs(ab.z)
+                                 ? vec3d{1, 0, 0}
+                                 : (std::abs(ab.y) <= std::abs(ab.z) ? vec3d{0, 1, 0} : vec3d{0, 0, 1});
+        const vec3d perpendicular = len2 > 0.0 ? normalize(cross(ab, helper)) : vec3d{0, 0, 1};
+        perpendicular_ = vec3f(perpendicular);
+    }
+
+    // Offset from the closest point of the segment to p (its length is the unsigned distance to
+    // the segment).
+    template <class T>
+    vec3<T> offset_from_axis(const vec3<T>& p) const
+    {
+        const vec3<T> ap = p - vec3<T>(a);
+        const vec3<T> ab(axis_);
+        const T t = clamp(dot(ap, ab) * T(inverse_length_squared_), T(0), T(1));
+        return ap - ab * t;
+    }
+
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        return length(offset_from_axis(p)) - T(radius);
+    }
+
+    // Outward normal: away from the closest segment point; on the segment, a fixed perpendicular.
+    template <class T>
+    vec3<T> normal(const vec3<T>& p) const
+    {
+        const vec3<T> q = offset_from_axis(p);
+        const T len = length(q);
+        const auto degenerate = len <= T(0);
+        const T safe = select(degenerate, T(1), len);
+        return select(degenerate, vec3<T>(perpendicular_), q / safe);
+    }
+
+    bounding_sphere bound() const
+    {
+        const vec3d ad(a), bd(b);
+        return bound_around((ad + bd) * 0.5, 0.5 * length(bd - ad) + radius);
+    }
+
+private:
+    vec3f axis_{};                      // b - a, rounded to float once
+    float inverse_length_squared_ = 0;  // 1 / |b - a|^2, or 0 when a == b
+    vec3f perpendicular_{0, 0, 1};      // unit, perpendicular to b - a
+};
+
+} // namespace krs

@@ -1,0 +1,8 @@
+#pragma once
+// All kernel kinds krs ships, for users who do not want to pick headers one by one.
+
+#include "krs/kernels/box.hpp"
+#include "krs/kernels/capsule.hpp"
+#include "krs/kernels/plane.hpp"
+#include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus_capsule.hpp"

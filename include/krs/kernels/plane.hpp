@@ -1,0 +1,52 @@
+#pragma once
+// Plane kernel: the solid half-space dot(n, p) <= offset, with n a unit normal.
+//
+// Its signed distance dot(n, p) - offset is exact (1-Lipschitz because |n| = 1, zero on the
+// plane): a ground for terrain and the clipping half of a KRS mirror. The normal is normalized at
+// construction (in double), so a user may pass any non-zero direction. A half-space has no finite
+// bound, so bound() reports an unbounded sphere and tracers must clip it themselves.
+
+#include "krs/core/bounds.hpp"
+#include "krs/core/validate.hpp"
+
+namespace krs {
+
+struct plane {
+    vec3f normal_direction{0, 0, 1};
+    float offset = 0.0f;
+
+    plane() = default;
+    plane(const vec3f& normal_, float offset_)
+        : normal_direction(require_direction("plane.normal", normal_)), offset(require_finite("plane.offset", offset_))
+    {
+    }
+
+    // The half-space whose boundary passes through `point` with outward normal `normal`. The
+    // offset is computed in double from the normalized (float) normal, so `point` lies on the
+    // stored plane to within float rounding of the offset.
+    static plane through(const vec3f& point, const vec3f& normal)
+    {
+        const vec3f n = require_direction("plane.normal", normal);
+        const vec3d p(require_finite("plane.point", point));
+        plane result;
+        result.normal_direction = n;
+        result.offset = static_cast<float>(dot(vec3d(n), p));
+        return result;
+    }
+
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        return dot(vec3<T>(normal_direction), p) - T(offset);
+    }
+
+    template <class T>
+    vec3<T> normal(const vec3<T>&) const
+    {
+        return vec3<T>(normal_direction);
+    }
+
+    bounding_sphere bound() const { return bounding_sphere::unbounded(); }
+};
+
+} // namespace krs
