@@ -1,0 +1,233 @@
+#pragma once
+// Kernel-reflection sequence (KRS), paper section 3.
+//
+// A KRS is a pair of sequences: kernel sets K_0 ... K_n and mirrors R_0 ... R_{n-1}. Expansion
+// level L_{i+1} = K_{i+1} u L_i u R_i L_i with L_0 = K_0, so a kernel of level i is doubled by
+// mirrors i ... n-1 and appears 2^(n-i) times: the sequence holds sum_i |K_i| 2^(n-i) instances.
+// Its distance is evaluated in O(n) by Algorithm 1: walk the levels from the top, reflect the
+// point onto the negative side of each mirror (the closest instance must lie there when kernels
+// are separated by the mirror), and take the minimum of the kernels met on the way:
+//
+//     l_{i+1}(x) = min(k_{i+1}(x), l_i(x))       if m_i . x - c_i <= 0
+//                  min(k_{i+1}(x), l_i(R_i x))   otherwise.
+//
+// Where a kernel crosses a mirror, that choice clips it to the mirror's negative side: the field
+// then describes the clipped geometry (section 3, figure 2), and stays a 1-Lipschitz
+// underestimate of the distance to it, because folds are 1-Lipschitz and min keeps the bound.
+//
+// Kernel kinds are fixed at compile time: `sequence<sphere, torus_capsule>` holds only those, and
+// a level's kernels dispatch through a closed variant, uniform across the lanes of a packet.
+// A sequence is an immutable value once built (use `sequence<...>::builder`), so any number of
+// threads may evaluate it.
+
+#include "krs/field.hpp"
+#include "krs/mirror.hpp"
+
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace krs {
+
+// Where Algorithm 1 found the closest kernel: the point in that kernel's space, which kernel, and
+// the reflection decisions b_i (bit i set when R_i was applied). Shading needs them (section 6.1):
+// p_world = R_{n-1}^{b_{n-1}} ... R_level^{b_level} p_kernel.
+template <class S>
+struct location {
+    S distance = std::numeric_limits<S>::infinity();
+    vec3<S> kernel_point{};
+    std::uint32_t kernel = 0; // index into sequence::kernels()
+    std::uint32_t level = 0;  // the kernel's level i (it was reached through mirrors n-1 ... i)
+    std::uint64_t reflections = 0;
+
+    bool reflected(std::size_t i) const { return (reflections >> i) & 1u; }
+};
+
+template <kernel... Kinds>
+class sequence {
+    static_assert(sizeof...(Kinds) > 0, "krs::sequence needs at least one kernel kind");
+
+public:
+    using kernel_variant = std::variant<Kinds...>;
+    // The reflection decisions of a point fit one 64-bit word; 2^64 instances is beyond any scene.
+    static constexpr std::size_t max_levels = 64;
+
+    class builder;
+
+    sequence() = default;
+
+    // n: the number of mirrors; kernel levels run 0 ... n.
+    std::size_t mirror_count() const { return mirrors_.size(); }
+    const std::vector<mirror>& mirrors() const { return mirrors_; }
+    const std::vector<kernel_variant>& kernels() const { return kernels_; }
+    std::uint32_t kernel_level(std::size_t kernel_index) const { return kernel_levels_[kernel_index]; }
+    // Kernels of level i are kernels()[level_begin(i) .. level_begin(i + 1)).
+    std::uint32_t level_begin(std::size_t level) const { return level_begin_[level]; }
+    // Number of kernel instances of the full expansion, as a double (it reaches 2^64).
+    double instance_count() const
+    {
+        double count = 0;
+        for (std::uint32_t level : kernel_levels_) count += std::ldexp(1.0, int(mirrors_.size() - level));
+        return count;
+    }
+    // A sphere holding every instance (infinite if any kernel is unbounded).
+    const bounding_sphere& bound() const { return bound_; }
+
+    // Algorithm 1.
+    template <class T>
+    T distance(const vec3<T>& x) const
+    {
+        const std::size_t n = mirrors_.size();
+        vec3<T> p = x;
+        T d = nearest_kernel(p, n, T(std::numeric_limits<scalar_t<T>>::infinity()));
+        for (std::size_t i = n; i-- > 0;) {
+            p = mirrors_[i].fold(p);
+            d = nearest_kernel(p, i, d);
+        }
+        return d;
+    }
+
+    // Algorithm 1, also recording where the minimum was found (scalar lanes).
+    template <std::floating_point S>
+    location<S> locate(const vec3<S>& x) const
+    {
+        const std::size_t n = mirrors_.size();
+        location<S> where;
+        vec3<S> p = x;
+        for (std::size_t i = n + 1; i-- > 0;) {
+            if (i < n && mirrors_[i].signed_distance(p) > S(0)) {
+                p = mirrors_[i].reflect(p);
+                where.reflections |= std::uint64_t(1) << i;
+            }
+            for (std::uint32_t k = level_begin_[i]; k < level_begin_[i + 1]; ++k) {
+                const S d = std::visit([&](const auto& kernel) { return kernel.distance(p); }, kernels_[k]);
+                if (d < where.distance) {
+                    where.distance = d;
+                    where.kernel_point = p;
+                    where.kernel = k;
+                    where.level = std::uint32_t(i);
+                }
+            }
+        }
+        return where;
+    }
+
+    // A kernel-space point or direction taken back to world space through the located kernel's
+    // reflections (section 6.1: R_level first, R_{n-1} last).
+    template <std::floating_point S>
+    vec3<S> to_world_point(const location<S>& where, vec3<S> p) const
+    {
+        for (std::size_t i = where.level; i < mirrors_.size(); ++i)
+            if (where.reflected(i)) p = mirrors_[i].reflect(p);
+        return p;
+    }
+    template <std::floating_point S>
+    vec3<S> to_world_direction(const location<S>& where, vec3<S> w) const
+    {
+        for (std::size_t i = where.level; i < mirrors_.size(); ++i)
+            if (where.reflected(i)) w = mirrors_[i].reflect_direction(w);
+        return w;
+    }
+
+    // Outward unit normal of the nearest kernel, in world space: the kernel's own normal at the
+    // kernel-space point, carried back by the recorded reflections.
+    template <std::floating_point S>
+    vec3<S> normal(const vec3<S>& x) const
+    {
+        return normal(locate(x));
+    }
+    // The same, from a location already found (a hit's).
+    template <std::floating_point S>
+    vec3<S> normal(const location<S>& where) const
+    {
+        const vec3<S> n = std::visit([&](const auto& kernel) { return kernel.normal(where.kernel_point); },
+                                     kernels_[where.kernel]);
+        return to_world_direction(where, n);
+    }
+
+private:
+    template <class T>
+    T nearest_kernel(const vec3<T>& p, std::size_t level, T d) const
+    {
+        for (std::uint32_t k = level_begin_[level]; k < level_begin_[level + 1]; ++k)
+            d = min(d, std::visit([&](const auto& kernel) { return kernel.distance(p); }, kernels_[k]));
+        return d;
+    }
+
+    std::vector<mirror> mirrors_;
+    std::vector<kernel_variant> kernels_;        // grouped by level, level 0 first
+    std::vector<std::uint32_t> kernel_levels_;   // level of each kernel
+    std::vector<std::uint32_t> level_begin_{0, 0}; // n + 2 offsets into kernels_
+    bounding_sphere bound_{};
+};
+
+// Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
+// kernels of level 1, and so on. `build()` validates and returns the immutable sequence.
+template <kernel... Kinds>
+class sequence<Kinds...>::builder {
+public:
+    // Adds a kernel to the current level (level 0 until the first mirror).
+    template <class K>
+        requires(std::same_as<std::remove_cvref_t<K>, Kinds> || ...)
+    builder& kernel(K&& k)
+    {
+        levels_.back().push_back(kernel_variant(std::forward<K>(k)));
+        return *this;
+    }
+    // Closes the current level with its mirror R_i; later kernels belong to level i + 1.
+    builder& mirror(const krs::mirror& m)
+    {
+        if (mirrors_.size() >= max_levels)
+            throw invalid_parameter("sequence.mirror", "at most " + std::to_string(max_levels) + " mirrors are allowed",
+                                    std::to_string(mirrors_.size() + 1));
+        require_direction("sequence.mirror.normal", m.normal);
+        require_finite("sequence.mirror.offset", m.offset);
+        mirrors_.push_back(m);
+        levels_.emplace_back();
+        return *this;
+    }
+    std::size_t current_level() const { return mirrors_.size(); }
+
+    sequence build() const
+    {
+        sequence s;
+        s.mirrors_ = mirrors_;
+        s.level_begin_.assign(1, 0);
+        for (std::size_t i = 0; i < levels_.size(); ++i) {
+            for (const kernel_variant& k : levels_[i]) {
+                s.kernels_.push_back(k);
+                s.kernel_levels_.push_back(std::uint32_t(i));
+            }
+            s.level_begin_.push_back(std::uint32_t(s.kernels_.size()));
+        }
+        if (s.kernels_.empty()) throw invalid_parameter("sequence.kernels", "a sequence needs at least one kernel");
+        s.bound_ = expansion_bound(s);
+        return s;
+    }
+
+private:
+    // Bound of L_{i+1} = K_{i+1} u L_i u R_i L_i, level by level.
+    static bounding_sphere expansion_bound(const sequence& s)
+    {
+        std::optional<bounding_sphere> b;
+        for (std::size_t i = 0; i <= s.mirrors_.size(); ++i) {
+            if (i > 0 && b) {
+                const krs::mirror& m = s.mirrors_[i - 1];
+                b = enclose(*b, bounding_sphere{m.reflect(b->center), b->radius});
+            }
+            for (std::uint32_t k = s.level_begin_[i]; k < s.level_begin_[i + 1]; ++k) {
+                const bounding_sphere kb = std::visit([](const auto& kernel) { return kernel.bound(); }, s.kernels_[k]);
+                b = b ? enclose(*b, kb) : kb;
+            }
+        }
+        return *b;
+    }
+
+    std::vector<krs::mirror> mirrors_;
+    std::vector<std::vector<kernel_variant>> levels_{1};
+};
+
+} // namespace krs

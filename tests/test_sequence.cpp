@@ -1,0 +1,257 @@
+// KRS distance (Algorithm 1) against the explicit 2^n expansion, and the properties that must
+// hold where kernels are not separated: a subset of the expansion's terms, 1-Lipschitz, and a
+// bound of its own zero set found by sampling.
+
+#include "krs/expansion.hpp"
+#include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus_capsule.hpp"
+#include "krs/sequence.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace {
+
+using krs::vec3d;
+using krs::vec3f;
+using test_sequence = krs::sequence<krs::sphere, krs::torus_capsule>;
+
+struct random_source {
+    std::mt19937_64 engine;
+    explicit random_source(std::uint64_t seed) : engine(seed) {}
+    double uniform(double lo, double hi) { return lo + (hi - lo) * double(engine() >> 11) * 0x1.0p-53; }
+    vec3d in_ball(double radius)
+    {
+        for (;;) {
+            const vec3d v{uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)};
+            if (krs::length_squared(v) <= 1.0) return v * radius;
+        }
+    }
+    vec3d direction()
+    {
+        for (;;) {
+            const vec3d v = in_ball(1.0);
+            const double l = krs::length(v);
+            if (l > 0.1) return v / l;
+        }
+    }
+};
+
+vec3f to_f(const vec3d& v) { return {float(v.x), float(v.y), float(v.z)}; }
+
+// A random sphere or torus capsule near `center`, of size about `size`.
+void add_random_kernel(test_sequence::builder& b, random_source& r, const vec3d& center, double size)
+{
+    if (r.uniform(0, 1) < 0.5) {
+        b.kernel(krs::sphere(to_f(center + r.in_ball(size)), float(r.uniform(0.1, 0.4) * size)));
+    } else {
+        const vec3d a = center + r.in_ball(size), e = center + r.in_ball(size);
+        const vec3d mid = (a + e) * 0.5 + r.in_ball(0.4 * krs::length(e - a));
+        b.kernel(krs::torus_capsule(to_f(a), to_f(e), to_f(mid), float(r.uniform(0.05, 0.2) * size)));
+    }
+}
+
+// A sequence whose kernels are separated by every mirror (the paper's assumption): each mirror
+// is placed outside the bounding sphere of the expansion level below it, so L_i lies strictly on
+// its negative side.
+test_sequence separated_sequence(std::size_t n, std::uint64_t seed)
+{
+    random_source r(seed);
+    test_sequence::builder b;
+    add_random_kernel(b, r, {0, 0, 0}, 1.0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const krs::bounding_sphere level_bound = b.build().bound();
+        const vec3d m = r.direction();
+        const double gap = r.uniform(0.02, 0.3) * level_bound.radius;
+        const double c = krs::dot(m, vec3d(level_bound.center)) + level_bound.radius + gap;
+        b.mirror(krs::mirror(to_f(m), float(c)));
+        // A new kernel at this level now and then, anywhere near the level so far.
+        if (r.uniform(0, 1) < 0.5) add_random_kernel(b, r, vec3d(level_bound.center), 0.5 * level_bound.radius);
+    }
+    return b.build();
+}
+
+// Random planes through random points: kernels are cut by mirrors (non-separated).
+test_sequence random_plane_sequence(std::size_t n, std::uint64_t seed)
+{
+    random_source r(seed);
+    test_sequence::builder b;
+    add_random_kernel(b, r, {0, 0, 0}, 1.0);
+    for (std::size_t i = 0; i < n; ++i) {
+        b.mirror(krs::mirror::through(to_f(r.in_ball(1.5)), to_f(r.direction())));
+        if (r.uniform(0, 1) < 0.6) add_random_kernel(b, r, r.in_ball(1.0), 1.0);
+    }
+    return b.build();
+}
+
+} // namespace
+
+TEST_CASE("separated KRS: Algorithm 1 equals the minimum over all 2^n instances")
+{
+    for (std::size_t n : {1u, 4u, 8u, 12u}) {
+        const test_sequence s = separated_sequence(n, 1000 + n);
+        const auto e = krs::expand(s);
+        REQUIRE(double(e.instances.size()) == s.instance_count());
+        REQUIRE(e.instances.size() >= (std::size_t(1) << n));
+
+        const double extent = s.bound().radius;
+        random_source r(n);
+        const int points = n <= 8 ? 100000 : 20000;
+        double worst_double = 0, worst_float = 0, worst_relative = 0;
+        for (int k = 0; k < points; ++k) {
+            // Half the points near a random instance's kernel (where the answer is subtle), half
+            // anywhere in the bound.
+            vec3d x;
+            if (k % 2 == 0) {
+                const auto& in = e.instances[std::size_t(r.uniform(0, double(e.instances.size()))) % e.instances.size()];
+                const krs::bounding_sphere kb =
+                    std::visit([](const auto& kernel) { return kernel.bound(); }, s.kernels()[in.kernel]);
+                x = in.to_world.apply(vec3d(kb.center) + r.in_ball(1.5 * kb.radius));
+            } else {
+                x = vec3d(s.bound().center) + r.in_ball(1.2 * extent);
+            }
+            const double reference = e.distance(x);
+            const double fast = s.distance(x);
+            const float fast_float = s.distance(to_f(x));
+            worst_double = std::max(worst_double, std::abs(fast - reference) / extent);
+            worst_float = std::max(worst_float, std::abs(double(fast_float) - reference) / extent);
+            if (std::abs(reference) > 0.05 * extent)
+                worst_relative = std::max(worst_relative, std::abs(fast - reference) / std::abs(reference));
+        }
+        // Mirror normals are stored as float, so |m| = 1 only to ~6e-8 and a reflection is an
+        // isometry only to that precision: double evaluation agrees with the expansion to ~1e-7
+        // of the extent, float evaluation adds its own rounding through n folds.
+        INFO("n = " << n << ", instances = " << e.instances.size() << ", errors/extent: double " << worst_double
+                    << ", float " << worst_float << ", double relative to |d| " << worst_relative);
+        CHECK(worst_double <= 1e-6);
+        CHECK(worst_float <= 1e-5);
+        CHECK(worst_relative <= 1e-5);
+    }
+}
+
+TEST_CASE("non-separated KRS: a subset of the expansion's terms, 1-Lipschitz, bound of its zero set")
+{
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        const std::size_t n = 6 + 2 * seed;
+        const test_sequence s = random_plane_sequence(n, seed);
+        const auto e = krs::expand(s);
+        random_source r(seed * 77);
+        const double extent = 4.0;
+
+        // Never below the minimum over all instances: Algorithm 1 picks some of them. (Up to the
+        // ~1e-7 relative isometry error of float-stored mirror normals.)
+        for (int k = 0; k < 20000; ++k) {
+            const vec3d x = r.in_ball(extent);
+            REQUIRE(s.distance(x) >= e.distance(x) - 1e-6);
+        }
+
+        // 1-Lipschitz on close pairs.
+        for (int k = 0; k < 100000; ++k) {
+            const vec3d a = r.in_ball(extent);
+            const vec3d b = a + r.direction() * r.uniform(1e-6, 1e-2);
+            REQUIRE(std::abs(s.distance(a) - s.distance(b)) <= krs::length(a - b) * (1 + 1e-9) + 1e-12);
+        }
+
+        // Points of the zero set by bisection on segments whose ends differ in sign; then the
+        // field at any point must not exceed the distance to any of them.
+        std::vector<vec3d> surface;
+        while (surface.size() < 2000) {
+            vec3d a = r.in_ball(extent), b = a + r.direction() * 0.5;
+            double fa = s.distance(a), fb = s.distance(b);
+            if ((fa > 0) == (fb > 0)) continue;
+            for (int it = 0; it < 60; ++it) {
+                const vec3d m = (a + b) * 0.5;
+                const double fm = s.distance(m);
+                if ((fm > 0) == (fa > 0)) a = m, fa = fm;
+                else b = m, fb = fm;
+            }
+            surface.push_back((a + b) * 0.5);
+        }
+        for (int k = 0; k < 5000; ++k) {
+            const vec3d x = r.in_ball(extent);
+            double nearest = 1e30;
+            for (const vec3d& p : surface) nearest = std::min(nearest, krs::length(x - p));
+            REQUIRE(std::abs(s.distance(x)) <= nearest + 1e-9);
+        }
+    }
+}
+
+TEST_CASE_TEMPLATE("packet lanes equal the scalar distance", P, krs::packet_f, krs::packet_d)
+{
+    using S = krs::scalar_t<P>;
+    constexpr std::size_t lanes = krs::lane_count<P>;
+    const test_sequence s = random_plane_sequence(10, 5);
+    random_source r(9);
+    for (int k = 0; k < 500; ++k) {
+        alignas(64) S xs[lanes], ys[lanes], zs[lanes];
+        for (std::size_t i = 0; i < lanes; ++i) {
+            const vec3d v = r.in_ball(3.0);
+            xs[i] = S(v.x), ys[i] = S(v.y), zs[i] = S(v.z);
+        }
+        const krs::vec3<P> p{P::load_aligned(xs), P::load_aligned(ys), P::load_aligned(zs)};
+        const P d = s.distance(p);
+        for (std::size_t i = 0; i < lanes; ++i) {
+            const S scalar = s.distance(krs::vec3<S>{xs[i], ys[i], zs[i]});
+            REQUIRE(krs::lane_at(d, i) == doctest::Approx(scalar).epsilon(1e-6));
+        }
+    }
+}
+
+TEST_CASE("locate: the kernel-space point maps back to the query, its kernel gives the distance")
+{
+    const test_sequence s = random_plane_sequence(12, 11);
+    random_source r(3);
+    for (int k = 0; k < 20000; ++k) {
+        const vec3d x = r.in_ball(3.0);
+        const krs::location<double> where = s.locate(x);
+        REQUIRE(where.distance == doctest::Approx(s.distance(x)).epsilon(1e-12));
+        REQUIRE(s.kernel_level(where.kernel) == where.level);
+        const double d = std::visit([&](const auto& kernel) { return kernel.distance(where.kernel_point); },
+                                    s.kernels()[where.kernel]);
+        REQUIRE(d == where.distance);
+        // Only reflections at or above the kernel's level were taken on the way to it.
+        // (R R x = x up to the float-stored normal's deviation from unit length.)
+        REQUIRE(krs::length(s.to_world_point(where, where.kernel_point) - x) <= 1e-5);
+    }
+}
+
+TEST_CASE("normals: the kernel normal carried back by the reflections is the field's gradient")
+{
+    const test_sequence s = separated_sequence(8, 21);
+    random_source r(5);
+    const double h = 1e-6;
+    int compared = 0;
+    for (int k = 0; k < 4000; ++k) {
+        const vec3d x = vec3d(s.bound().center) + r.in_ball(s.bound().radius);
+        // Central differences; where they do not form a unit vector, x sits on a crease of the
+        // field (equidistant from two instances) and no single normal exists.
+        const vec3d g{(s.distance(x + vec3d{h, 0, 0}) - s.distance(x - vec3d{h, 0, 0})) / (2 * h),
+                      (s.distance(x + vec3d{0, h, 0}) - s.distance(x - vec3d{0, h, 0})) / (2 * h),
+                      (s.distance(x + vec3d{0, 0, h}) - s.distance(x - vec3d{0, 0, h})) / (2 * h)};
+        if (std::abs(krs::length(g) - 1) > 1e-4) continue;
+        ++compared;
+        REQUIRE(krs::length(s.normal(x) - g) <= 1e-4);
+    }
+    CHECK(compared >= 3600);
+}
+
+TEST_CASE("sequence validation names the parameter")
+{
+    test_sequence::builder b;
+    CHECK_THROWS_WITH_AS(b.build(), doctest::Contains("sequence.kernels"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::mirror({0, 0, 0}, 1.0f), doctest::Contains("mirror.normal"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::mirror({1, 0, 0}, std::nanf("")), doctest::Contains("mirror.offset"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::mirror::through({0, INFINITY, 0}, {1, 0, 0}), doctest::Contains("mirror.point"),
+                         krs::invalid_parameter);
+    b.kernel(krs::sphere({0, 0, 0}, 1));
+    for (std::size_t i = 0; i < test_sequence::max_levels; ++i) b.mirror(krs::mirror({1, 0, 0}, float(i + 2)));
+    CHECK_THROWS_WITH_AS(b.mirror(krs::mirror({1, 0, 0}, 1)), doctest::Contains("sequence.mirror"), krs::invalid_parameter);
+    // 2^64 instances: expansion refuses before allocating.
+    const test_sequence deep = b.build();
+    CHECK(deep.instance_count() == std::ldexp(1.0, 64));
+    CHECK_THROWS_WITH_AS(krs::expand(deep), doctest::Contains("max_instances"), krs::invalid_parameter);
+}

@@ -1,0 +1,253 @@
+// Sphere tracer, camera and shading against closed forms and brute-force references.
+
+#include "krs/expansion.hpp"
+#include "krs/kernels/plane.hpp"
+#include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus_capsule.hpp"
+#include "krs/shade/lambert.hpp"
+#include "krs/trace/camera.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+using krs::vec3d;
+using krs::vec3f;
+
+double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
+vec3d random_direction(std::mt19937_64& g)
+{
+    for (;;) {
+        const vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
+        const double l = krs::length(v);
+        if (l > 0.1 && l <= 1) return v / l;
+    }
+}
+
+// Closed-form first intersection of a ray with a sphere (infinity if none ahead).
+double ray_sphere(const vec3d& o, const vec3d& d, const vec3d& c, double r)
+{
+    const vec3d oc = o - c;
+    const double b = krs::dot(oc, d), q = krs::dot(oc, oc) - r * r, disc = b * b - q;
+    if (disc < 0) return INFINITY;
+    const double t0 = -b - std::sqrt(disc), t1 = -b + std::sqrt(disc);
+    return t0 >= 0 ? t0 : (t1 >= 0 ? 0.0 : INFINITY);
+}
+
+using scene = krs::sequence<krs::sphere, krs::torus_capsule>;
+scene small_forest()
+{
+    scene::builder b;
+    b.kernel(krs::sphere({0.3f, 1.2f, 0.1f}, 0.25f));
+    b.kernel(krs::torus_capsule({0, 0, 0}, {0.3f, 1.0f, 0.1f}, {0.05f, 0.5f, 0.1f}, 0.06f));
+    b.mirror(krs::mirror({1, 0, 0.2f}, 0.8f));
+    b.mirror(krs::mirror({0.1f, 0, 1}, 0.9f));
+    b.kernel(krs::sphere({0, -0.5f, 0}, 0.2f));
+    b.mirror(krs::mirror({1, 0, -0.3f}, 2.5f));
+    b.mirror(krs::mirror({-0.2f, 0, 1}, 2.6f));
+    return b.build();
+}
+
+} // namespace
+
+TEST_CASE_TEMPLATE("sphere tracing a sphere matches the closed-form intersection", S, float, double)
+{
+    const krs::sphere s({0.5f, -0.2f, 3.0f}, 1.25f);
+    krs::trace_options o;
+    o.pixel_footprint = 1e-4f;
+    o.threshold_floor = 1e-6f;
+    std::mt19937_64 g(1);
+    int hits = 0;
+    for (int k = 0; k < 5000; ++k) {
+        const vec3d origin{uniform(g, -3, 3), uniform(g, -3, 3), uniform(g, -6, -2)};
+        const vec3d target = vec3d(s.center) + random_direction(g) * (1.5 * s.radius * uniform(g, 0, 1));
+        const vec3d d = krs::normalize(target - origin);
+        const double exact = ray_sphere(origin, d, vec3d(s.center), s.radius);
+        const krs::ray<S> r{krs::vec3<S>(origin), krs::vec3<S>(d)};
+        const krs::hit<S> h = krs::sphere_trace(s, r, o);
+        if (std::isinf(exact)) {
+            // A miss may still come within one threshold of the surface (a grazing ray): then the
+            // tracer may report it; otherwise it must not.
+            if (h.found) REQUIRE(s.distance(krs::point_at(r, h.t)) <= o.threshold(h.t) * 1.01);
+            continue;
+        }
+        REQUIRE(h.found);
+        ++hits;
+        // Sphere tracing never passes the surface; it stops within the threshold of it.
+        REQUIRE(double(h.t) <= exact + 1e-5);
+        REQUIRE(s.distance(krs::point_at(r, h.t)) <= o.threshold(h.t) * 1.01 + 1e-6);
+    }
+    CHECK(hits > 2000);
+}
+
+TEST_CASE("tracing a KRS finds the first intersection of its expansion")
+{
+    const scene s = small_forest();
+    const auto e = krs::expand(s);
+    krs::trace_options o;
+    o.pixel_footprint = 2e-4f;
+    o.max_distance = 40.0f;
+    std::mt19937_64 g(7);
+    int hits = 0, misses = 0;
+    for (int k = 0; k < 1500; ++k) {
+        const vec3d origin{uniform(g, -8, 8), uniform(g, 1, 4), uniform(g, -12, -9)};
+        const vec3d target{uniform(g, -3, 5), uniform(g, -0.7, 1.5), uniform(g, -3, 5)};
+        const vec3d d = krs::normalize(target - origin);
+        // Reference: march the expansion in steps of 1e-3 (far below every kernel's thickness)
+        // and bisect the first sign change.
+        double t_true = INFINITY;
+        for (double t = 0; t < 40.0; t += 1e-3) {
+            if (e.distance(origin + d * t) <= 0) {
+                double lo = t - 1e-3, hi = t;
+                for (int i = 0; i < 40; ++i) {
+                    const double mid = 0.5 * (lo + hi);
+                    (e.distance(origin + d * mid) <= 0 ? hi : lo) = mid;
+                }
+                t_true = hi;
+                break;
+            }
+            if (t > 0 && e.distance(origin + d * t) > 0.5) t += e.distance(origin + d * t) - 0.5; // skip empty space safely
+        }
+        const krs::ray<double> r{origin, d};
+        const krs::hit<double> h = krs::sphere_trace(s, r, o);
+        if (std::isfinite(t_true)) {
+            ++hits;
+            REQUIRE(h.found);
+            REQUIRE(h.t <= t_true + 1e-9);
+        } else {
+            ++misses;
+        }
+        if (h.found) REQUIRE(e.distance(krs::point_at(r, h.t)) <= o.threshold(h.t) + 1e-9);
+        REQUIRE(h.evaluations == h.steps);
+    }
+    CHECK(hits > 200);
+    CHECK(misses > 200);
+}
+
+TEST_CASE("packet tracing gives every lane the scalar result")
+{
+    const scene s = small_forest();
+    const krs::pinhole_camera camera({1, 3, -10}, {1, 0.3f, 1}, {0, 1, 0}, 50.0f, 64, 48);
+    krs::trace_options o;
+    o.pixel_footprint = camera.pixel_footprint();
+    using P = krs::packet_f;
+    constexpr std::size_t lanes = krs::lane_count<P>;
+    int found = 0;
+    for (int y = 0; y < camera.height(); ++y)
+        for (int x = 0; x + int(lanes) <= camera.width(); x += int(lanes)) {
+            alignas(64) float xs[lanes];
+            for (std::size_t i = 0; i < lanes; ++i) xs[i] = float(x + int(i)) + 0.5f;
+            const krs::hit<P> hp = krs::sphere_trace(s, camera.primary_ray(P::load_aligned(xs), P(y + 0.5f)), o);
+            for (std::size_t i = 0; i < lanes; ++i) {
+                const krs::hit<float> h = krs::sphere_trace(s, camera.primary_ray(xs[i], y + 0.5f), o);
+                REQUIRE(krs::mask_lane<P>(hp.found, i) == h.found);
+                REQUIRE(krs::lane_at(hp.steps, i) == float(h.steps));
+                if (h.found) REQUIRE(krs::lane_at(hp.t, i) == doctest::Approx(h.t).epsilon(1e-5));
+                found += h.found;
+            }
+        }
+    CHECK(found > 100);
+}
+
+TEST_CASE("camera: center ray is the view direction, neighbours are one footprint apart")
+{
+    const krs::pinhole_camera c({1, 2, 3}, {4, 2, -1}, {0, 1, 0}, 60.0f, 640, 480);
+    const krs::ray<float> center = c.primary_ray(320.0f, 240.0f);
+    CHECK(krs::length(center.direction - krs::normalize(vec3f{3, 0, -4})) < 1e-6f);
+    const krs::ray<float> next = c.primary_ray(321.0f, 240.0f);
+    CHECK(std::acos(double(krs::dot(center.direction, next.direction))) == doctest::Approx(c.pixel_footprint()).epsilon(1e-3));
+    // The top edge of the image is half the vertical field of view above the center.
+    const krs::ray<float> top = c.primary_ray(320.0f, 0.0f);
+    CHECK(std::acos(double(krs::dot(center.direction, top.direction))) * 180 / M_PI == doctest::Approx(30.0).epsilon(1e-4));
+    CHECK_THROWS_WITH_AS(krs::pinhole_camera({0, 0, 0}, {0, 0, 0}, {0, 1, 0}, 60, 10, 10), doctest::Contains("camera.target"),
+                         krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::pinhole_camera({0, 0, 0}, {0, 1, 0}, {0, 1, 0}, 60, 10, 10), doctest::Contains("camera.up"),
+                         krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::pinhole_camera({0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 180, 10, 10),
+                         doctest::Contains("vertical_fov"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::pinhole_camera({0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 60, 0, 10), doctest::Contains("camera.size"),
+                         krs::invalid_parameter);
+}
+
+TEST_CASE("degenerate rays and options give defined results")
+{
+    const krs::sphere s({0, 0, 0}, 1);
+    krs::trace_options o;
+    for (const vec3f bad : {vec3f{0, 0, 0}, vec3f{NAN, 0, 1}, vec3f{INFINITY, 0, 0}}) {
+        const krs::hit<float> h = krs::sphere_trace(s, krs::ray<float>{{0, 0, -5}, bad}, o);
+        CHECK(h.invalid);
+        CHECK(!h.found);
+        CHECK(std::isinf(h.t));
+    }
+    // Starting inside the solid is a hit at the start.
+    const krs::hit<float> inside = krs::sphere_trace(s, krs::ray<float>{{0, 0, 0.5f}, {0, 0, 1}}, o);
+    CHECK(inside.found);
+    CHECK(inside.t == 0.0f);
+    // A ray that never comes close stops at max_distance, within max_steps.
+    o.max_steps = 10000;
+    const krs::hit<float> away = krs::sphere_trace(s, krs::ray<float>{{0, 0, -5}, {0, 0, -1}}, o);
+    CHECK(!away.found);
+    CHECK(away.steps < 10000);
+    // A grazing ray parallel to a plane kernel at height > threshold never hits and never loops.
+    const krs::plane ground({0, 1, 0}, 0.0f);
+    o.max_steps = 64;
+    const krs::hit<float> graze = krs::sphere_trace(ground, krs::ray<float>{{0, 1e-3f, 0}, {1, 0, 0}}, o);
+    CHECK(!graze.found);
+    CHECK(graze.steps == 64);
+    CHECK(std::isinf(graze.t));
+
+    krs::trace_options bad;
+    bad.max_steps = 0;
+    CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("max_steps"), krs::invalid_parameter);
+    bad = {};
+    bad.max_distance = NAN;
+    CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("max_distance"), krs::invalid_parameter);
+    bad = {};
+    bad.threshold_floor = 0;
+    CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("threshold_floor"), krs::invalid_parameter);
+}
+
+TEST_CASE("normals: tetrahedral gradient and KRS kernel normals agree with the closed form")
+{
+    const krs::sphere s({1, 2, 3}, 2);
+    scene::builder b;
+    b.kernel(krs::sphere({1, 2, 3}, 2));
+    b.mirror(krs::mirror({1, 0, 0}, 4)); // a second sphere, mirrored to x = 7
+    const scene krs_scene = b.build();
+    std::mt19937_64 g(3);
+    for (int k = 0; k < 1000; ++k) {
+        const vec3d n = random_direction(g);
+        const vec3d p = vec3d(s.center) + n * 2.0;
+        // First-order scheme: error <= h * curvature (1 / radius) times a small constant.
+        CHECK(krs::length(krs::gradient_normal(s, p, 1e-5) - n) < 1e-5 / 2.0 * 2.0);
+        // The mirrored copy: its normal is the reflected one.
+        const vec3d q{8.0 - p.x, p.y, p.z};
+        const vec3d expected{-n.x, n.y, n.z};
+        CHECK(krs::length(krs::surface_normal(krs_scene, q, 1e-5) - expected) < 1e-9);
+    }
+}
+
+TEST_CASE("Lambert shading and hard shadows: a sphere over a ground plane")
+{
+    krs::sequence<krs::sphere, krs::plane>::builder b;
+    b.kernel(krs::sphere({0, 2, 0}, 1));
+    b.kernel(krs::plane({0, 1, 0}, 0));
+    const auto s = b.build();
+    const krs::directional_light sun({0, 1, 0}, {1, 1, 1});
+    krs::lambert_material m;
+    m.albedo = {1, 1, 1};
+    m.ambient = 0.1f;
+    const vec3d up{0, 1, 0};
+    // Under the sphere: shadowed, only ambient remains.
+    CHECK(krs::shade_lambert(s, vec3d{0.2, 0, 0.1}, up, sun, m, 1e-4, 100.0).x == doctest::Approx(0.1));
+    // Away from it: ambient + n . l = 1.1.
+    CHECK(krs::shade_lambert(s, vec3d{3, 0, 0}, up, sun, m, 1e-4, 100.0).x == doctest::Approx(1.1));
+    // On the sphere at 60 degrees from the light: ambient + cos 60.
+    const vec3d n{std::sin(M_PI / 3), std::cos(M_PI / 3), 0};
+    CHECK(krs::shade_lambert(s, vec3d{0, 2, 0} + n, n, sun, m, 1e-4, 100.0).x == doctest::Approx(0.1 + 0.5).epsilon(1e-6));
+    // Facing away from the light: ambient only, no shadow ray needed.
+    CHECK(krs::shade_lambert(s, vec3d{0, 1, 0}, vec3d{0, -1, 0}, sun, m, 1e-4, 100.0).x == doctest::Approx(0.1));
+}
