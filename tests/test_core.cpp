@@ -1,0 +1,141 @@
+// Lane-generic core: the vocabulary every distance is written in must mean the same thing for
+// scalars and for each lane of a packet, and GLM must round-trip at the API surface.
+
+#include "krs/core/bounds.hpp"
+#include "krs/core/glm_interop.hpp"
+#include "krs/core/validate.hpp"
+
+#include <doctest/doctest.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+static_assert(std::same_as<krs::scalar_t<float>, float>);
+static_assert(std::same_as<krs::mask_t<double>, bool>);
+static_assert(std::same_as<krs::scalar_t<krs::packet_f>, float>);
+static_assert(std::same_as<krs::mask_t<krs::packet_f>, xsimd::batch_bool<float>>);
+static_assert(krs::lane_count<float> == 1 && krs::lane_count<krs::packet_f> == xsimd::batch<float>::size);
+static_assert(krs::lane<float> && krs::lane<double> && krs::lane<krs::packet_f> && krs::lane<krs::packet_d>);
+static_assert(!krs::lane<int>);
+
+namespace {
+template <class P>
+P load(const krs::scalar_t<P>* values)
+{
+    return P::load_unaligned(values);
+}
+} // namespace
+
+TEST_CASE_TEMPLATE("packet vocabulary equals the scalar one lane by lane", P, krs::packet_f, krs::packet_d)
+{
+    using S = krs::scalar_t<P>;
+    constexpr std::size_t n = krs::lane_count<P>;
+    std::mt19937 g(1);
+    std::uniform_real_distribution<double> u(-10, 10);
+    for (int round = 0; round < 200; ++round) {
+        S a[n], b[n], c[n];
+        for (std::size_t i = 0; i < n; ++i) a[i] = S(u(g)), b[i] = S(u(g)), c[i] = S(u(g));
+        a[0] = b[0]; // equal operands exercise the comparisons' boundary
+        const P pa = load<P>(a), pb = load<P>(b), pc = load<P>(c);
+        const auto m = pa < pb;
+        const P sel = select(m, pa, pb), mn = min(pa, pb), mx = max(pa, pb), ab = abs(pa), sq = sqrt(abs(pc));
+        const P cl = krs::clamp(pa, pb, pb + abs(pc)), mi = krs::mix(pa, pb, pc);
+        for (std::size_t i = 0; i < n; ++i) {
+            CHECK(krs::mask_lane<P>(m, i) == (a[i] < b[i]));
+            CHECK(krs::lane_at(sel, i) == krs::select(a[i] < b[i], a[i], b[i]));
+            CHECK(krs::lane_at(mn, i) == std::min(a[i], b[i]));
+            CHECK(krs::lane_at(mx, i) == std::max(a[i], b[i]));
+            CHECK(krs::lane_at(ab, i) == std::abs(a[i]));
+            CHECK(krs::lane_at(sq, i) == std::sqrt(std::abs(c[i])));
+            CHECK(krs::lane_at(cl, i) == krs::clamp(a[i], b[i], S(b[i] + std::abs(c[i]))));
+            CHECK(krs::lane_at(mi, i) == krs::mix(a[i], b[i], c[i]));
+        }
+        CHECK(any(m) == [&] { for (std::size_t i = 0; i < n; ++i) if (a[i] < b[i]) return true; return false; }());
+        CHECK(all(pa == pa));
+        CHECK_FALSE(any(pa != pa));
+    }
+}
+
+TEST_CASE("scalar vocabulary and finiteness")
+{
+    CHECK(krs::select(true, 1.0f, 2.0f) == 1.0f);
+    CHECK(krs::select(false, 1.0, 2.0) == 2.0);
+    CHECK(krs::any(true));
+    CHECK_FALSE(krs::all(false));
+    CHECK(krs::none(false));
+    CHECK(krs::is_finite(1.0f));
+    CHECK_FALSE(krs::is_finite(std::numeric_limits<float>::quiet_NaN()));
+    CHECK_FALSE(krs::is_finite(-std::numeric_limits<double>::infinity()));
+    const float lanes[4] = {1.0f, std::numeric_limits<float>::infinity(), std::nanf(""), -3.0f};
+    krs::packet_f p(0.0f);
+    alignas(64) float buffer[krs::lane_count<krs::packet_f>] = {};
+    for (std::size_t i = 0; i < krs::lane_count<krs::packet_f>; ++i) buffer[i] = lanes[i % 4];
+    p = krs::packet_f::load_aligned(buffer);
+    const auto finite = krs::is_finite(p);
+    for (std::size_t i = 0; i < krs::lane_count<krs::packet_f>; ++i)
+        CHECK(krs::mask_lane<krs::packet_f>(finite, i) == std::isfinite(lanes[i % 4]));
+}
+
+TEST_CASE("vec3 algebra agrees with GLM and round-trips through it")
+{
+    std::mt19937 g(2);
+    std::uniform_real_distribution<float> u(-5, 5);
+    for (int k = 0; k < 1000; ++k) {
+        const glm::vec3 a{u(g), u(g), u(g)}, b{u(g), u(g), u(g)};
+        const krs::vec3f ka = krs::from_glm(a), kb = krs::from_glm(b);
+        CHECK(krs::dot(ka, kb) == doctest::Approx(glm::dot(a, b)).epsilon(1e-6));
+        const glm::vec3 c = glm::cross(a, b);
+        const krs::vec3f kc = krs::cross(ka, kb);
+        CHECK(glm::length(krs::to_glm(kc) - c) <= 1e-5f * (1 + glm::length(c)));
+        CHECK(krs::length(ka) == doctest::Approx(glm::length(a)).epsilon(1e-6));
+        CHECK(glm::length(krs::to_glm(krs::normalize(ka)) - glm::normalize(a)) < 1e-6f);
+        CHECK(krs::to_glm(ka + kb) == a + b);
+        CHECK(krs::to_glm(ka - kb) == a - b);
+        CHECK(krs::to_glm(ka * 2.0f) == a * 2.0f);
+        const glm::vec3 n = glm::normalize(b);
+        CHECK(glm::length(krs::to_glm(krs::reflect_direction(ka, krs::from_glm(n))) - glm::reflect(a, n)) < 1e-5f);
+    }
+    const glm::dvec3 d{1.5, -2.0, 3.25};
+    CHECK(krs::to_glm(krs::from_glm(d)) == d);
+}
+
+TEST_CASE("validation helpers name the parameter and say what was allowed")
+{
+    CHECK_THROWS_WITH_AS(krs::require_positive("thing.size", 0.0f), "krs: thing.size: must be > 0 (got 0)",
+                         krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::require_non_negative("r", -1.0), doctest::Contains("must be >= 0"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::require_finite("x", std::nan("")), doctest::Contains("must be finite"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::require_direction("n", krs::vec3f{0, 0, 0}), doctest::Contains("non-zero direction"),
+                         krs::invalid_parameter);
+    try {
+        krs::require_finite("p", krs::vec3f{1, INFINITY, 0});
+        FAIL("no exception");
+    } catch (const krs::invalid_parameter& e) {
+        CHECK(e.parameter() == "p");
+    }
+    // A direction comes back unit length to float precision, computed in double.
+    const krs::vec3f n = krs::require_direction("n", krs::vec3f{3e-20f, 4e-20f, 0});
+    CHECK(n.x == doctest::Approx(0.6f));
+    CHECK(std::abs(krs::length(krs::vec3d(n)) - 1.0) < 1e-7);
+}
+
+TEST_CASE("enclose holds both spheres and is tight for disjoint ones")
+{
+    std::mt19937 g(3);
+    std::uniform_real_distribution<float> u(-10, 10), r(0, 3);
+    for (int k = 0; k < 10000; ++k) {
+        const krs::bounding_sphere a{{u(g), u(g), u(g)}, r(g)}, b{{u(g), u(g), u(g)}, r(g)};
+        const krs::bounding_sphere e = krs::enclose(a, b);
+        const auto holds = [&](const krs::bounding_sphere& s) {
+            return krs::length(krs::vec3d(s.center) - krs::vec3d(e.center)) + s.radius <= double(e.radius);
+        };
+        REQUIRE(holds(a));
+        REQUIRE(holds(b));
+        const double span = krs::length(krs::vec3d(a.center) - krs::vec3d(b.center)) + a.radius + b.radius;
+        REQUIRE(double(e.radius) <= std::max({0.5 * span, double(a.radius), double(b.radius)}) * (1 + 1e-6) + 1e-6);
+    }
+    CHECK_FALSE(krs::enclose(krs::bounding_sphere::unbounded(), krs::bounding_sphere{}).is_bounded());
+}
