@@ -32,7 +32,11 @@ using krs::vec3f;
 
 constexpr double float_ulp = FLT_EPSILON;
 
-vec3f to_f(const vec3d& v) { return vec3f(v); }
+// GCC 12.2 at -O2/-O3 miscompiles a vectorized (double)(float)x into x (its SLP vectorizer plus
+// a match.pd simplification drop the rounding), which made the same query point p take two values
+// within one finite difference. Keeping the double -> float rounding out of line stops the
+// caller from ever seeing both conversions. (Reproduced standalone; clang and -O1 are correct.)
+[[gnu::noinline]] vec3f to_f(const vec3d& v) { return vec3f(v); }
 
 struct random_source {
     std::mt19937_64 engine;
