@@ -14,3 +14,13 @@ cmake --build "$build_dir" --parallel "$build_jobs"
 # Fewer ctest jobs than test processes would leave cores idle; every test case is its own process.
 cd "$build_dir"
 ctest --output-on-failure --parallel "$build_jobs" --timeout 900
+
+# The same suite under AddressSanitizer and UndefinedBehaviorSanitizer, in its own build tree
+# (examples, benchmarks and the packaging checks add nothing there).
+sanitize_dir="${build_dir}-sanitize"
+cmake -S "$repo_root" -B "$sanitize_dir" -DCMAKE_BUILD_TYPE=Release -DKRS_BUILD_TESTS=ON \
+    -DKRS_BUILD_EXAMPLES=OFF -DKRS_BUILD_BENCHMARKS=OFF -DKRS_SANITIZERS=address,undefined
+cmake --build "$sanitize_dir" --parallel "$build_jobs"
+cd "$sanitize_dir"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --output-on-failure --parallel "$build_jobs" --timeout 900 --exclude-regex "consumer"
