@@ -3,18 +3,25 @@
 //     krs_tree [--width W] [--height H] [--threads N] [--levels L] [--seed S] [--output FILE]
 //
 // Sphere traces every pixel with the pixel-footprint threshold, shades with Lambert and a
-// sphere-traced shadow ray, and prints the time per frame and per ray. Threads render 16x16 tiles
-// taken from a shared counter; the library itself starts no threads.
+// sphere-traced shadow ray, and prints the time per frame and per ray. Everything runs on the
+// packet path: threads take 16x16 tiles from a shared counter, run the tile prepass (section 4.1)
+// and stream the tile's rays through trace_stream (lane refill, two interleaved packets, mild
+// over-relaxation); then they shade tiles in packets (per-lane locate for normals and materials,
+// packet shadow rays). The library itself starts no threads.
 
 #include "krs/expansion.hpp"
 #include "krs/model/tree.hpp"
 #include "krs/shade/lambert.hpp"
 #include "krs/trace/camera.hpp"
-#include "krs/trace/located_hit.hpp"
+#include "krs/trace/packet_shade.hpp"
+#include "krs/trace/packet_trace.hpp"
+#include "krs/trace/tile_prepass.hpp"
 
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -113,59 +120,114 @@ int main(int argc, char** argv)
     trace.pixel_footprint = camera.pixel_footprint() * 0.5f; // unbounding sphere under half a pixel
     trace.max_distance = 4.0f * away;
     trace.threshold_floor = 1e-5f;
-    trace.validate();
     const krs::directional_light sun({0.5f, 0.8f, 0.35f}, {1.0f, 0.97f, 0.9f});
 
+    trace.omega = 1.2f;
+    trace.validate();
     std::vector<float> pixels(std::size_t(opt.width) * opt.height * 3);
+    std::vector<float> depth(std::size_t(opt.width) * opt.height, INFINITY);
     constexpr int tile = 16;
     const int tiles_x = (opt.width + tile - 1) / tile, tiles_y = (opt.height + tile - 1) / tile;
     const int tiles = tiles_x * tiles_y;
-    std::atomic<int> next{0}, done{0};
+    // Tiles are traced (phase 0) and then shaded (phase 1); `done` counts both for the progress bar.
+    std::atomic<int> next_trace{0}, next_shade{0}, done{0};
+    std::atomic<long long> traced_rays{0};
     std::atomic<long long> steps{0}, hits{0};
+    using P = krs::packet_f;
+    constexpr std::size_t W = krs::lane_count<P>;
 
     auto worker = [&] {
-        long long my_steps = 0, my_hits = 0;
-        for (int k; (k = next.fetch_add(1)) < tiles; done.fetch_add(1)) {
-            const int x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
-            for (int y = y0; y < std::min(y0 + tile, opt.height); ++y)
-                for (int x = x0; x < std::min(x0 + tile, opt.width); ++x) {
-                    const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
-                    const krs::located_hit<float> h = krs::trace_and_locate(tree, r, trace);
-                    my_steps += h.steps;
-                    krs::vec3f color = sky(r.direction);
-                    if (h.found) {
-                        ++my_hits;
-                        const krs::vec3f& p = h.position;
-                        const krs::location<float>& where = h.where;
-                        krs::vec3f n = tree.normal(where);
-                        if (krs::dot(n, r.direction) > 0) n = -n; // a ray that started inside sees the back
-                        krs::lambert_material material;
-                        const auto& kernel = tree.kernels()[where.kernel];
-                        if (std::holds_alternative<krs::sphere>(kernel)) {
-                            // Leaves: vary the green by the reflections that placed this instance.
-                            const float v = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
-                            material.albedo = {0.18f + 0.12f * v, 0.42f + 0.15f * v, 0.10f};
-                        } else if (std::holds_alternative<krs::plane>(kernel)) {
-                            material.albedo = {0.45f, 0.40f, 0.28f};
-                        } else {
-                            material.albedo = {0.36f, 0.24f, 0.15f};
-                        }
-                        color = krs::shade_lambert(tree, p, n, sun, material, trace.threshold(h.t), 2.0f * crown.radius);
+        // Phase 0: one ray stream per thread over the tiles it takes; a tile's rays start at its
+        // prepass depth.
+        int x0 = 0, y0 = 0, x1 = 0, y1 = 0, x = 0, y = 0, k = -1;
+        krs::tile_prepass pre;
+        auto take_tile = [&] {
+            k = next_trace.fetch_add(1);
+            if (k >= tiles) return false;
+            x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
+            x1 = std::min(x0 + tile, opt.width), y1 = std::min(y0 + tile, opt.height);
+            x = x0, y = y0;
+            pre = krs::prepass_tile(tree, camera, x0, y0, x1, y1, trace);
+            done.fetch_add(1);
+            return true;
+        };
+        bool have_tile = take_tile();
+        auto next = [&](krs::ray_job& job) {
+            while (have_tile && y >= y1) have_tile = take_tile();
+            if (!have_tile) return false;
+            job.r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+            job.t_start = pre.start_for(job.r);
+            job.t_max = trace.max_distance;
+            job.id = std::uint32_t(y * opt.width + x);
+            if (++x >= x1) x = x0, ++y;
+            return true;
+        };
+        long long my_hits = 0;
+        auto finished = [&](std::uint32_t id, const krs::hit<float>& h) {
+            depth[id] = h.found ? h.t : INFINITY;
+            my_hits += h.found ? 1 : 0;
+        };
+        const krs::stream_stats st = krs::trace_stream<P, 2>(tree, next, finished, trace);
+        steps += st.evaluations;
+        hits += my_hits;
+        traced_rays += st.rays;
+        // Phase 1 needs every depth: wait until every thread's rays are traced.
+        while (traced_rays.load() < (long long)opt.width * opt.height) std::this_thread::yield();
+
+        // Phase 1: shade tiles W pixels at a time.
+        for (int j; (j = next_shade.fetch_add(1)) < tiles; done.fetch_add(1)) {
+            const int sx0 = (j % tiles_x) * tile, sy0 = (j / tiles_x) * tile;
+            const int sx1 = std::min(sx0 + tile, opt.width), sy1 = std::min(sy0 + tile, opt.height);
+            const int count = (sx1 - sx0) * (sy1 - sy0);
+            for (int first = 0; first < count; first += int(W)) {
+                alignas(64) float xs[W], ys[W], ts[W];
+                alignas(64) bool lane_hit[W];
+                for (std::size_t i = 0; i < W; ++i) {
+                    const int q = std::min(first + int(i), count - 1);
+                    xs[i] = float(sx0 + q % (sx1 - sx0)), ys[i] = float(sy0 + q / (sx1 - sx0));
+                    const float t = depth[std::size_t(ys[i]) * opt.width + std::size_t(xs[i])];
+                    lane_hit[i] = std::isfinite(t) && first + int(i) < count;
+                    ts[i] = lane_hit[i] ? t : 0.0f;
+                }
+                const krs::ray<P> r = camera.primary_ray(P::load_aligned(xs) + P(0.5f), P::load_aligned(ys) + P(0.5f));
+                const auto found = krs::mask_t<P>::load_aligned(lane_hit);
+                const P t = P::load_aligned(ts);
+                const krs::vec3<P> p = krs::point_at(r, t);
+                std::array<krs::location<float>, W> where;
+                krs::vec3<P> n = krs::locate_lanes(tree, p, found, where);
+                n = krs::select(krs::dot(n, r.direction) > P(0), -n, n); // a ray that started inside sees the back
+                alignas(64) float ax[W], ay[W], az[W];
+                for (std::size_t i = 0; i < W; ++i) {
+                    krs::vec3f albedo{0.36f, 0.24f, 0.15f};
+                    const auto& kernel = tree.kernels()[where[i].kernel];
+                    if (std::holds_alternative<krs::sphere>(kernel)) {
+                        // Leaves: vary the green by the reflections that placed this instance.
+                        const float v = float((where[i].reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
+                        albedo = {0.18f + 0.12f * v, 0.42f + 0.15f * v, 0.10f};
+                    } else if (std::holds_alternative<krs::plane>(kernel)) {
+                        albedo = {0.45f, 0.40f, 0.28f};
                     }
-                    float* out = &pixels[(std::size_t(y) * opt.width + x) * 3];
+                    ax[i] = albedo.x, ay[i] = albedo.y, az[i] = albedo.z;
+                }
+                const krs::vec3<P> albedo{P::load_aligned(ax), P::load_aligned(ay), P::load_aligned(az)};
+                const krs::vec3<P> lit = krs::shade_lambert_lanes(tree, p, n, sun.direction, sun.color, albedo, 0.15f,
+                                                                  trace.threshold(t), 2.0f * crown.radius, found);
+                for (std::size_t i = 0; i < W && first + int(i) < count; ++i) {
+                    krs::vec3f color = krs::lane_at(lit, i);
+                    if (!lane_hit[i]) color = sky(krs::lane_at(r.direction, i));
+                    float* out = &pixels[(std::size_t(ys[i]) * opt.width + std::size_t(xs[i])) * 3];
                     out[0] = color.x, out[1] = color.y, out[2] = color.z;
                 }
+            }
         }
-        steps += my_steps;
-        hits += my_hits;
     };
 
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::thread> pool;
     for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
     const bool interactive = std::getenv("CI") == nullptr;
-    for (int shown = -1; done.load() < tiles;) {
-        const int percent = 100 * done.load() / tiles;
+    for (int shown = -1; done.load() < 2 * tiles;) {
+        const int percent = 100 * done.load() / (2 * tiles);
         if (percent != shown && (interactive || percent % 25 == 0)) {
             std::printf("\r[%-40s] %3d%%", std::string(std::size_t(percent * 40 / 100), '#').c_str(), percent);
             std::fflush(stdout);
@@ -178,8 +240,8 @@ int main(int argc, char** argv)
     const double rays = double(opt.width) * opt.height;
     std::printf("\r[%s] 100%%\n", std::string(40, '#').c_str());
     std::printf("frame: %.3f s on %d threads; %.2f core-us per primary ray (shading and shadow ray included); "
-                "%.1f steps per primary ray; %.1f%% of pixels hit\n",
-                seconds, opt.threads, 1e6 * seconds * opt.threads / rays, double(steps.load()) / rays,
+                "%.1f steps per primary ray (%zu-lane packets); %.1f%% of pixels hit\n",
+                seconds, opt.threads, 1e6 * seconds * opt.threads / rays, double(steps.load()) / rays, W,
                 100.0 * double(hits.load()) / rays);
 
     // Gamma-encode to 8 bits.

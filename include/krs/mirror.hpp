@@ -11,6 +11,10 @@
 
 #include "krs/core/validate.hpp"
 
+#include <concepts>
+#include <cstdint>
+#include <string>
+
 namespace krs {
 
 struct mirror {
@@ -57,6 +61,97 @@ struct mirror {
     {
         return krs::reflect_direction(w, vec3<T>(normal));
     }
+};
+
+// Axis-aligned mirror: the plane x_axis = position, normal +e_axis (reflects the side above the
+// plane) or -e_axis (reflects the side below). Algorithm 1's fold then touches one coordinate:
+//     normal +e:  x <- min(x, 2 position - x)        normal -e:  x <- max(x, 2 position - x),
+// which is the general fold (x - 2 max(x - position, 0) for +e) rewritten, equal to it up to float
+// rounding. The axis and side are the same for every lane of a packet, so their branches are
+// uniform; a sequence whose mirrors are all axis-aligned (grids of instances, rocks, terrain
+// strata) uses `basic_sequence<axis_mirror, ...>` and pays one min per level instead of a dot
+// product and a multiply-add per coordinate. It has the same interface as `mirror` (normal,
+// offset, signed_distance, reflect, fold, reflect_direction), so code written for one takes both.
+struct axis_mirror {
+    vec3f normal{1, 0, 0}; // +-e_axis
+    float offset = 0.0f;   // normal . x = offset, as for `mirror`
+    std::uint8_t axis = 0; // 0, 1, 2 for x, y, z
+    bool above = true;     // true: normal +e_axis, the side x_axis > position is folded
+    float twice_position = 0.0f;
+
+    axis_mirror() = default;
+    // The plane x_axis = position; `fold_above` chooses which side Algorithm 1 folds onto the other.
+    axis_mirror(int axis_, float position, bool fold_above = true)
+    {
+        if (axis_ < 0 || axis_ > 2)
+            throw invalid_parameter("axis_mirror.axis", "must be 0, 1 or 2 (x, y, z)", std::to_string(axis_));
+        require_finite("axis_mirror.position", position);
+        axis = std::uint8_t(axis_);
+        above = fold_above;
+        const float sign = above ? 1.0f : -1.0f;
+        normal = vec3f{axis == 0 ? sign : 0.0f, axis == 1 ? sign : 0.0f, axis == 2 ? sign : 0.0f};
+        offset = sign * position;
+        twice_position = 2.0f * position;
+    }
+    float position() const { return 0.5f * twice_position; }
+    // The same plane as a general mirror (for code that needs one, and for tests).
+    mirror general() const { return mirror(normal, offset); }
+
+    template <class T>
+    T signed_distance(const vec3<T>& p) const
+    {
+        const T x = axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
+        return above ? x - T(position()) : T(position()) - x;
+    }
+    template <class T>
+    vec3<T> reflect(const vec3<T>& p) const
+    {
+        const T c(twice_position);
+        switch (axis) {
+        case 0: return {c - p.x, p.y, p.z};
+        case 1: return {p.x, c - p.y, p.z};
+        default: return {p.x, p.y, c - p.z};
+        }
+    }
+    // Built by value per axis (no reference into the vector), so the coordinates stay in registers.
+    template <class T>
+    vec3<T> fold(const vec3<T>& p) const
+    {
+        const T c(twice_position);
+        if (above) {
+            switch (axis) {
+            case 0: return {min(p.x, c - p.x), p.y, p.z};
+            case 1: return {p.x, min(p.y, c - p.y), p.z};
+            default: return {p.x, p.y, min(p.z, c - p.z)};
+            }
+        }
+        switch (axis) {
+        case 0: return {max(p.x, c - p.x), p.y, p.z};
+        case 1: return {p.x, max(p.y, c - p.y), p.z};
+        default: return {p.x, p.y, max(p.z, c - p.z)};
+        }
+    }
+    template <class T>
+    vec3<T> reflect_direction(const vec3<T>& w) const
+    {
+        switch (axis) {
+        case 0: return {-w.x, w.y, w.z};
+        case 1: return {w.x, -w.y, w.z};
+        default: return {w.x, w.y, -w.z};
+        }
+    }
+};
+
+// What a KRS level's mirror must offer (both `mirror` and `axis_mirror` do).
+template <class M>
+concept mirror_kind = requires(const M& m, const vec3f& pf, const vec3d& pd) {
+    { m.normal } -> std::convertible_to<vec3f>;
+    { m.offset } -> std::convertible_to<float>;
+    { m.fold(pf) } -> std::same_as<vec3f>;
+    { m.fold(pd) } -> std::same_as<vec3d>;
+    { m.reflect(pf) } -> std::same_as<vec3f>;
+    { m.signed_distance(pd) } -> std::same_as<double>;
+    { m.reflect_direction(pf) } -> std::same_as<vec3f>;
 };
 
 } // namespace krs

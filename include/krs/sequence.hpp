@@ -19,6 +19,10 @@
 // a level's kernels dispatch through a closed variant, uniform across the lanes of a packet.
 // A sequence is an immutable value once built (use `sequence<...>::builder`), so any number of
 // threads may evaluate it.
+//
+// Mirrors come in kinds chosen by type as well: `sequence<Kinds...>` is
+// `basic_sequence<mirror, Kinds...>` (general planes); `basic_sequence<axis_mirror, Kinds...>`
+// holds only axis-aligned mirrors, whose fold is one min per level.
 
 #include "krs/field.hpp"
 #include "krs/mirror.hpp"
@@ -46,22 +50,23 @@ struct location {
     bool reflected(std::size_t i) const { return (reflections >> i) & 1u; }
 };
 
-template <kernel... Kinds>
-class sequence {
+template <mirror_kind Mirror, kernel... Kinds>
+class basic_sequence {
     static_assert(sizeof...(Kinds) > 0, "krs::sequence needs at least one kernel kind");
 
 public:
     using kernel_variant = std::variant<Kinds...>;
+    using mirror_type = Mirror;
     // The reflection decisions of a point fit one 64-bit word; 2^64 instances is beyond any scene.
     static constexpr std::size_t max_levels = 64;
 
     class builder;
 
-    sequence() = default;
+    basic_sequence() = default;
 
     // n: the number of mirrors; kernel levels run 0 ... n.
     std::size_t mirror_count() const { return mirrors_.size(); }
-    const std::vector<mirror>& mirrors() const { return mirrors_; }
+    const std::vector<Mirror>& mirrors() const { return mirrors_; }
     const std::vector<kernel_variant>& kernels() const { return kernels_; }
     std::uint32_t kernel_level(std::size_t kernel_index) const { return kernel_levels_[kernel_index]; }
     // Kernels of level i are kernels()[level_begin(i) .. level_begin(i + 1)).
@@ -85,6 +90,14 @@ public:
         T d = nearest_kernel(p, n, T(std::numeric_limits<scalar_t<T>>::infinity()));
         for (std::size_t i = n; i-- > 0;) {
             p = mirrors_[i].fold(p);
+            // Early out: every kernel instance still to come lies in L_i's bounding sphere (in
+            // this folded space), and each kernel is at least as far as its instance's distance
+            // to that sphere, so when the sphere is no nearer than d for every lane the rest of
+            // the walk cannot lower d. The result equals the full walk's; far from the finer
+            // levels (most sphere-tracing steps) the walk stops after a few levels.
+            const bounding_sphere& b = level_bounds_[i];
+            const T reach = d + T(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
+            if (all(length_squared(p - vec3<T>(b.center)) > reach * reach && reach > T(0))) break;
             d = nearest_kernel(p, i, d);
         }
         return d;
@@ -157,17 +170,18 @@ private:
         return d;
     }
 
-    std::vector<mirror> mirrors_;
+    std::vector<Mirror> mirrors_;
     std::vector<kernel_variant> kernels_;        // grouped by level, level 0 first
     std::vector<std::uint32_t> kernel_levels_;   // level of each kernel
     std::vector<std::uint32_t> level_begin_{0, 0}; // n + 2 offsets into kernels_
     bounding_sphere bound_{};
+    std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
 };
 
 // Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
 // kernels of level 1, and so on. `build()` validates and returns the immutable sequence.
-template <kernel... Kinds>
-class sequence<Kinds...>::builder {
+template <mirror_kind Mirror, kernel... Kinds>
+class basic_sequence<Mirror, Kinds...>::builder {
 public:
     // Adds a kernel to the current level (level 0 until the first mirror).
     template <class K>
@@ -178,7 +192,7 @@ public:
         return *this;
     }
     // Closes the current level with its mirror R_i; later kernels belong to level i + 1.
-    builder& mirror(const krs::mirror& m)
+    builder& mirror(const Mirror& m)
     {
         if (mirrors_.size() >= max_levels)
             throw invalid_parameter("sequence.mirror", "at most " + std::to_string(max_levels) + " mirrors are allowed",
@@ -191,9 +205,9 @@ public:
     }
     std::size_t current_level() const { return mirrors_.size(); }
 
-    sequence build() const
+    basic_sequence build() const
     {
-        sequence s;
+        basic_sequence s;
         s.mirrors_ = mirrors_;
         s.level_begin_.assign(1, 0);
         for (std::size_t i = 0; i < levels_.size(); ++i) {
@@ -204,18 +218,19 @@ public:
             s.level_begin_.push_back(std::uint32_t(s.kernels_.size()));
         }
         if (s.kernels_.empty()) throw invalid_parameter("sequence.kernels", "a sequence needs at least one kernel");
-        s.bound_ = expansion_bound(s);
+        s.bound_ = expansion_bound(s, &s.level_bounds_);
         return s;
     }
 
 private:
     // Bound of L_{i+1} = K_{i+1} u L_i u R_i L_i, level by level.
-    static bounding_sphere expansion_bound(const sequence& s)
+    static bounding_sphere expansion_bound(const basic_sequence& s, std::vector<bounding_sphere>* levels)
     {
         std::optional<bounding_sphere> b;
         for (std::size_t i = 0; i <= s.mirrors_.size(); ++i) {
+            if (i > 0) levels->push_back(b ? *b : bounding_sphere::unbounded());
             if (i > 0 && b) {
-                const krs::mirror& m = s.mirrors_[i - 1];
+                const Mirror& m = s.mirrors_[i - 1];
                 b = enclose(*b, bounding_sphere{m.reflect(b->center), b->radius});
             }
             for (std::uint32_t k = s.level_begin_[i]; k < s.level_begin_[i + 1]; ++k) {
@@ -226,8 +241,15 @@ private:
         return *b;
     }
 
-    std::vector<krs::mirror> mirrors_;
+    std::vector<Mirror> mirrors_;
     std::vector<std::vector<kernel_variant>> levels_{1};
 };
+
+// The KRS with general mirror planes (the paper's); existing code names it `sequence<Kinds...>`.
+template <kernel... Kinds>
+using sequence = basic_sequence<mirror, Kinds...>;
+// A KRS whose mirrors are all axis-aligned.
+template <kernel... Kinds>
+using axis_sequence = basic_sequence<axis_mirror, Kinds...>;
 
 } // namespace krs

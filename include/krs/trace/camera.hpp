@@ -9,6 +9,7 @@
 #include "krs/core/validate.hpp"
 #include "krs/trace/ray.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -57,6 +58,31 @@ public:
         const T sy = (T(0.5f * float(height_)) - py) * scale;
         const vec3<T> d = vec3<T>(forward_) + vec3<T>(right_) * sx + vec3<T>(up_) * sy;
         return {vec3<T>(eye_), normalize(d)};
+    }
+
+    // The beam of the pixel rectangle [x0, x1) x [y0, y1): its axis (the ray through the
+    // rectangle's center) and the cosine and sine of the smallest half-angle about that axis that
+    // holds every pixel-center ray of the rectangle. The rays that hit the image plane inside a
+    // cone about the axis form an ellipse there (a convex set), so the widest ray is one through
+    // a corner pixel center; the angle is widened by a few float ulps against rounding.
+    struct beam_cone {
+        ray<float> axis;
+        float cos_half_angle = 1.0f, sin_half_angle = 0.0f;
+    };
+    beam_cone beam(int x0, int y0, int x1, int y1) const
+    {
+        const float cx = 0.5f * float(x0 + x1), cy = 0.5f * float(y0 + y1);
+        beam_cone b;
+        b.axis = primary_ray(cx, cy);
+        const vec3d a(b.axis.direction);
+        double widest = 1.0;
+        const float xs[2] = {float(x0) + 0.5f, float(x1) - 0.5f}, ys[2] = {float(y0) + 0.5f, float(y1) - 0.5f};
+        for (float x : xs)
+            for (float y : ys) widest = std::min(widest, dot(a, vec3d(primary_ray(x, y).direction)));
+        const double angle = std::acos(std::clamp(widest, -1.0, 1.0)) * (1.0 + 1e-5) + 1e-6;
+        b.cos_half_angle = float(std::cos(angle));
+        b.sin_half_angle = float(std::sin(angle));
+        return b;
     }
 
 private:

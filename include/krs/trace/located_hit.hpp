@@ -15,8 +15,8 @@ struct located_hit : hit<S> {
     location<S> where{};   // nearest kernel at the hit point (valid when found)
 };
 
-template <kernel... Kinds, std::floating_point S>
-located_hit<S> trace_and_locate(const sequence<Kinds...>& s, const ray<S>& r, const trace_options& options)
+template <mirror_kind M, kernel... Kinds, std::floating_point S>
+located_hit<S> trace_and_locate(const basic_sequence<M, Kinds...>& s, const ray<S>& r, const trace_options& options)
 {
     located_hit<S> h;
     static_cast<hit<S>&>(h) = sphere_trace(s, r, options);

@@ -25,6 +25,10 @@ struct trace_options {
     float max_distance = 1.0e4f;  // t beyond which the ray misses (a far plane, or a depth buffer)
     float pixel_footprint = 1e-3f; // radians: threshold grows as footprint * t (camera.pixel_footprint())
     float threshold_floor = 1e-6f; // absolute threshold near t = 0, in scene units
+    // Over-relaxation factor (Keinert et al. 2014): step omega * d while consecutive unbounding
+    // spheres overlap, fall back to omega = 1 for the rest of the ray when they do not. 1 is plain
+    // sphere tracing; useful values are about 1.2 ... 1.8, and it must stay below 2.
+    float omega = 1.0f;
 
     // Rejects impossible options; returns *this for chaining.
     const trace_options& validate() const
@@ -38,6 +42,9 @@ struct trace_options {
                                     detail::to_text(max_distance));
         require_non_negative("trace_options.pixel_footprint", pixel_footprint);
         require_positive("trace_options.threshold_floor", threshold_floor);
+        require_finite("trace_options.omega", omega);
+        if (!(omega >= 1.0f && omega < 2.0f))
+            throw invalid_parameter("trace_options.omega", "must be in [1, 2)", detail::to_text(omega));
         return *this;
     }
     // The hit threshold at depth t.
@@ -72,31 +79,99 @@ inline count_t<T> count_if(const mask_t<T>& m)
 }
 } // namespace detail
 
+// The state of one ray (or one packet of rays) between march steps. Each lane carries its own
+// start, step count and over-relaxation factor, so a packet tracer may refill a finished lane with
+// a new ray while the other lanes go on.
+template <class T>
+struct march_state {
+    ray<T> r{};
+    T t{};               // current sample point
+    T t_max{};           // the lane's far limit
+    T accepted_t{};      // last sample whose unbounding sphere was kept (over-relaxation)
+    T accepted_d{};      // its radius; +infinity before the first sample
+    T omega{};           // this lane's relaxation factor (drops to 1 after a failed overlap test)
+    T threshold_bias{};  // added to the hit threshold (a shadow ray inherits its primary hit's)
+    mask_t<T> active{};
+    hit<T> result{};
+};
+
+// Starts a march along r from t_start (per lane) to t_max.
+template <class T>
+march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options)
+{
+    using S = scalar_t<T>;
+    march_state<T> m;
+    m.r = r;
+    const T dir_len2 = length_squared(r.direction);
+    m.result.invalid = !(is_finite(r.origin) && is_finite(r.direction) && dir_len2 > T(0) && is_finite(t_start));
+    m.active = !m.result.invalid;
+    m.result.found = m.active && !m.active; // all false, in the mask's own type
+    m.result.t = T(std::numeric_limits<S>::infinity());
+    m.t = t_start;
+    m.t_max = t_max;
+    m.accepted_t = t_start;
+    m.accepted_d = T(std::numeric_limits<S>::infinity());
+    m.omega = T(options.omega);
+    return m;
+}
+
+// One march step: the single body every tracer (scalar, packet, refilling packet) runs.
+//
+// Evaluate d at t. With over-relaxation the previous kept sphere (t_a, d_a) and this one must
+// overlap along the ray, with room for the hit threshold: d_a + |d| - (t - t_a) >= 2 threshold(t).
+// Then, because the field is 1-Lipschitz, every point between t_a and t is at least
+// (d_a + |d| - (t - t_a)) / 2 >= threshold from the surface: the long step skipped nothing plain
+// sphere tracing could stop at. If they do not overlap, the sample is discarded, the lane steps
+// back to t_a + d_a (the plain step from the kept sphere) and marches with omega = 1 from there.
+// Lanes that are not active are left untouched (their state freezes through `select`).
+template <field F, class T>
+void march_step(const F& f, march_state<T>& m, const trace_options& options)
+{
+    const mask_t<T> was_active = m.active;
+    const T d = f.distance(point_at(m.r, m.t));
+    m.result.steps += detail::count_if<T>(was_active);
+    m.result.evaluations += detail::count_if<T>(was_active);
+    const T threshold = options.threshold(m.t) + m.threshold_bias;
+    mask_t<T> accept = was_active, fail = was_active && !was_active;
+    if (options.omega > 1.0f) {
+        const mask_t<T> relaxed = m.omega > T(1);
+        const mask_t<T> overlap = (m.accepted_d + abs(d) - (m.t - m.accepted_t)) >= T(2) * threshold;
+        fail = was_active && relaxed && !overlap;
+        accept = was_active && !fail;
+        // Step back on failure (accepted_d is finite here: the first sample always overlaps).
+        m.t = select(fail, m.accepted_t + m.accepted_d, m.t);
+        m.omega = select(fail, T(1), m.omega);
+    }
+    const mask_t<T> close = accept && (d < threshold);
+    m.result.found = m.result.found || close;
+    m.result.t = select(close, m.t, m.result.t);
+    const mask_t<T> advance = accept && !close && is_finite(d);
+    m.accepted_t = select(advance, m.t, m.accepted_t);
+    m.accepted_d = select(advance, d, m.accepted_d);
+    m.t = select(advance, m.t + m.omega * d, m.t);
+    // A lane ends on a hit, a NaN field value, passing t_max, or its step budget.
+    m.active = (advance || fail) && (m.t <= m.t_max);
+    if constexpr (std::floating_point<T>)
+        m.active = m.active && m.result.steps < options.max_steps;
+    else
+        m.active = m.active && (m.result.steps < T(scalar_t<T>(options.max_steps)));
+}
+
 template <field F, class T>
 hit<T> sphere_trace(const F& f, const ray<T>& r, const trace_options& options)
 {
-    using S = scalar_t<T>;
-    const T inf(std::numeric_limits<S>::infinity());
-    hit<T> h;
-    const T dir_len2 = length_squared(r.direction);
-    h.invalid = !(is_finite(r.origin) && is_finite(r.direction) && dir_len2 > T(0));
-    mask_t<T> active = !h.invalid;
-    h.found = active && !active; // all false, in the mask's own type
-    T t(options.min_distance);
-    const T t_max(options.max_distance);
+    march_state<T> m = start_march(r, T(options.min_distance), T(options.max_distance), options);
+    while (any(m.active)) march_step(f, m, options);
+    return m.result;
+}
 
-    for (int step = 0; step < options.max_steps && any(active); ++step) {
-        const T d = f.distance(point_at(r, t));
-        h.steps += detail::count_if<T>(active);
-        h.evaluations += detail::count_if<T>(active);
-        const mask_t<T> close = active && (d < options.threshold(t));
-        h.found = h.found || close;
-        active = active && !close && is_finite(d);
-        t = select(active, t + d, t);
-        active = active && (t <= t_max);
-    }
-    h.t = select(h.found, t, inf);
-    return h;
+// The same with a per-lane start (a tile prepass gives every ray its own) and far limit.
+template <field F, class T>
+hit<T> sphere_trace(const F& f, const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options)
+{
+    march_state<T> m = start_march(r, t_start, t_max, options);
+    while (any(m.active)) march_step(f, m, options);
+    return m.result;
 }
 
 } // namespace krs

@@ -1,0 +1,177 @@
+#pragma once
+// Packet tracing with lane refill: a stream of rays traced W at a time (W = lane_count<P>).
+//
+// A plain packet (`sphere_trace(f, ray<packet_f>, ...)`) runs until its slowest lane is done, so
+// most lanes idle while one grazing ray creeps along a branch. Here a packet pulls a new ray from
+// the caller's queue into every lane that finished, and several packets are stepped in turn
+// (`Interleave`), so that one packet's distance evaluation hides another's latency. The step
+// itself is `march_step`, the template the scalar tracer runs: scheduling is the only thing this
+// header adds (DESIGN.md rule 1).
+//
+// Rays come from `next(ray_job&) -> bool` (false: the queue is empty) and leave through
+// `done(std::uint32_t id, const hit<float>&)`, in completion order, on the calling thread. The
+// library starts no thread; callers run one stream per thread (e.g. one per tile).
+
+#include "krs/trace/sphere_trace.hpp"
+
+#include <array>
+#include <cstdint>
+#include <limits>
+
+namespace krs {
+
+// One ray of a stream: where it starts (e.g. a tile prepass depth), where it ends, and the
+// caller's id for it (typically the pixel index).
+struct ray_job {
+    ray<float> r{};
+    float t_start = 0.0f;
+    float t_max = 1.0e4f;
+    std::uint32_t id = 0;
+};
+
+// What a stream did, for benchmarks: rays finished, field evaluations used by rays, packet steps
+// executed and how many of their lanes did useful work (utilization = busy_lanes / (steps * W)).
+struct stream_stats {
+    long long rays = 0;
+    long long evaluations = 0;
+    long long packet_steps = 0;
+    long long busy_lanes = 0;
+    double lane_utilization(std::size_t width) const
+    {
+        return packet_steps ? double(busy_lanes) / (double(packet_steps) * double(width)) : 0.0;
+    }
+    stream_stats& operator+=(const stream_stats& o)
+    {
+        rays += o.rays, evaluations += o.evaluations, packet_steps += o.packet_steps, busy_lanes += o.busy_lanes;
+        return *this;
+    }
+};
+
+namespace detail {
+
+// SoA staging of one packet's rays, so single lanes can be replaced between steps.
+template <class P>
+struct packet_lanes {
+    static constexpr std::size_t W = lane_count<P>;
+    alignas(64) float ox[W], oy[W], oz[W], dx[W], dy[W], dz[W], t0[W], t1[W];
+    alignas(64) bool fresh[W];
+    std::uint32_t id[W];
+    bool live[W];
+
+    // Fills lane i from the queue; a lane left empty gets a ray the tracer rejects at once.
+    template <class Next>
+    void pull(std::size_t i, Next& next, bool& queue_open)
+    {
+        ray_job job;
+        if (queue_open) queue_open = next(job);
+        live[i] = queue_open;
+        if (!live[i]) job = ray_job{{{0, 0, 0}, {0, 0, 1}}, std::numeric_limits<float>::infinity(), 0.0f, 0};
+        ox[i] = job.r.origin.x, oy[i] = job.r.origin.y, oz[i] = job.r.origin.z;
+        dx[i] = job.r.direction.x, dy[i] = job.r.direction.y, dz[i] = job.r.direction.z;
+        t0[i] = job.t_start, t1[i] = job.t_max, id[i] = job.id;
+        fresh[i] = true;
+    }
+    march_state<P> start(const trace_options& options) const
+    {
+        const ray<P> r{{P::load_aligned(ox), P::load_aligned(oy), P::load_aligned(oz)},
+                       {P::load_aligned(dx), P::load_aligned(dy), P::load_aligned(dz)}};
+        return start_march(r, P::load_aligned(t0), P::load_aligned(t1), options);
+    }
+};
+
+template <class T>
+void blend(const mask_t<T>& m, march_state<T>& into, const march_state<T>& from)
+{
+    into.r.origin = select(m, from.r.origin, into.r.origin);
+    into.r.direction = select(m, from.r.direction, into.r.direction);
+    into.t = select(m, from.t, into.t);
+    into.t_max = select(m, from.t_max, into.t_max);
+    into.accepted_t = select(m, from.accepted_t, into.accepted_t);
+    into.accepted_d = select(m, from.accepted_d, into.accepted_d);
+    into.omega = select(m, from.omega, into.omega);
+    into.threshold_bias = select(m, from.threshold_bias, into.threshold_bias);
+    into.active = (m && from.active) || (!m && into.active);
+    into.result.t = select(m, from.result.t, into.result.t);
+    into.result.found = (m && from.result.found) || (!m && into.result.found);
+    into.result.invalid = (m && from.result.invalid) || (!m && into.result.invalid);
+    into.result.steps = select(m, from.result.steps, into.result.steps);
+    into.result.evaluations = select(m, from.result.evaluations, into.result.evaluations);
+}
+
+} // namespace detail
+
+// Traces every ray `next` yields through f with packets of type P, refilling finished lanes.
+// A lane is refilled once at least `refill_at` lanes of its packet have finished (default: a
+// quarter of the width; refilling costs a spill of the packet to memory), or when none is left
+// running. Results equal per-ray `sphere_trace` calls up to float rounding of the packet math.
+template <class P = packet_f, int Interleave = 2, field F, class Next, class Done>
+stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_options& options, int refill_at = 0)
+{
+    static_assert(Interleave >= 1, "trace_stream needs at least one packet");
+    constexpr std::size_t W = lane_count<P>;
+    if (refill_at <= 0) refill_at = int(W >= 4 ? W / 4 : 1);
+    stream_stats stats;
+    std::array<detail::packet_lanes<P>, Interleave> lanes;
+    std::array<march_state<P>, Interleave> state;
+    bool queue_open = true;
+    for (int k = 0; k < Interleave; ++k) {
+        for (std::size_t i = 0; i < W; ++i) lanes[k].pull(i, next, queue_open);
+        state[k] = lanes[k].start(options);
+    }
+    // Reports the finished lanes of packet k and refills them. Lanes whose ray was rejected at
+    // start (invalid input) finish without a step and are reported like any other.
+    auto harvest = [&](int k, bool force) {
+        detail::packet_lanes<P>& L = lanes[k];
+        march_state<P>& m = state[k];
+        alignas(64) bool running[W];
+        m.active.store_aligned(running);
+        int finished = 0;
+        for (std::size_t i = 0; i < W; ++i) finished += (L.live[i] && !running[i]) ? 1 : 0;
+        if (finished == 0 || (finished < refill_at && !force)) return;
+        alignas(64) float t[W], steps[W], evaluations[W];
+        alignas(64) bool found[W], invalid[W];
+        m.result.t.store_aligned(t);
+        m.result.steps.store_aligned(steps);
+        m.result.evaluations.store_aligned(evaluations);
+        m.result.found.store_aligned(found);
+        m.result.invalid.store_aligned(invalid);
+        bool any_fresh = false;
+        for (std::size_t i = 0; i < W; ++i) {
+            L.fresh[i] = false;
+            if (!L.live[i] || running[i]) continue;
+            hit<float> h;
+            h.t = t[i], h.found = found[i], h.invalid = invalid[i];
+            h.steps = int(steps[i]), h.evaluations = int(evaluations[i]);
+            ++stats.rays;
+            stats.evaluations += h.evaluations;
+            stats.busy_lanes += h.steps;
+            done(L.id[i], h);
+            L.live[i] = false;
+            L.pull(i, next, queue_open);
+            any_fresh = true;
+        }
+        if (any_fresh) {
+            const mask_t<P> fresh = mask_t<P>::load_aligned(L.fresh);
+            detail::blend(fresh, m, L.start(options));
+        }
+    };
+    for (;;) {
+        for (int k = 0; k < Interleave; ++k) harvest(k, !any(state[k].active));
+        bool running = false;
+        for (int k = 0; k < Interleave; ++k) {
+            if (!any(state[k].active)) continue;
+            running = true;
+            march_step(f, state[k], options);
+            ++stats.packet_steps;
+        }
+        if (running) continue;
+        // Nothing runs: done unless a lane still holds an unreported (rejected) ray.
+        bool pending = false;
+        for (int k = 0; k < Interleave; ++k)
+            for (std::size_t i = 0; i < W; ++i) pending = pending || lanes[k].live[i];
+        if (!pending) break;
+    }
+    return stats;
+}
+
+} // namespace krs

@@ -1,0 +1,373 @@
+// Packet tracing with lane refill, tile prepass, over-relaxation and axis-aligned mirrors, each
+// against the plain scalar tracer or the general-plane sequence as the independent reference.
+
+#include "krs/kernels/capsule.hpp"
+#include "krs/kernels/plane.hpp"
+#include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus_capsule.hpp"
+#include "krs/trace/camera.hpp"
+#include "krs/trace/packet_shade.hpp"
+#include "krs/trace/packet_trace.hpp"
+#include "krs/trace/tile_prepass.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace {
+
+using krs::vec3d;
+using krs::vec3f;
+using P = krs::packet_f;
+constexpr std::size_t lanes = krs::lane_count<P>;
+
+double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
+
+using scene = krs::sequence<krs::sphere, krs::torus_capsule, krs::plane>;
+// Trees of curved branches and leaves on a 2 x 2 grid of mirrors, over a ground plane: rays end
+// on leaves, on the ground, graze branches, or miss, so lanes finish at very different steps.
+scene grove()
+{
+    scene::builder b;
+    b.kernel(krs::sphere({0.3f, 1.2f, 0.1f}, 0.25f));
+    b.kernel(krs::torus_capsule({0, 0, 0}, {0.3f, 1.0f, 0.1f}, {0.05f, 0.5f, 0.1f}, 0.06f));
+    b.mirror(krs::mirror({1, 0, 0.2f}, 0.8f));
+    b.mirror(krs::mirror({0.1f, 0, 1}, 0.9f));
+    b.kernel(krs::sphere({0, -0.5f, 0}, 0.2f));
+    b.mirror(krs::mirror({1, 0, -0.3f}, 2.5f));
+    b.mirror(krs::mirror({-0.2f, 0, 1}, 2.6f));
+    b.kernel(krs::plane({0, 1, 0}, -0.6f));
+    return b.build();
+}
+
+krs::pinhole_camera view(int k, int width, int height)
+{
+    const float a = 0.6f * float(k);
+    const vec3f eye{6.0f * std::sin(a) + 1.5f, 1.0f + 0.4f * float(k % 3), -6.0f * std::cos(a) + 1.5f};
+    return krs::pinhole_camera(eye, {1.5f, 0.3f, 1.5f}, {0, 1, 0}, 55.0f, width, height);
+}
+
+krs::trace_options primary_options(const krs::pinhole_camera& c)
+{
+    krs::trace_options o;
+    o.pixel_footprint = c.pixel_footprint();
+    o.max_distance = 40.0f;
+    o.threshold_floor = 1e-5f;
+    return o;
+}
+
+} // namespace
+
+TEST_CASE("refilling packet stream equals the scalar tracer per ray")
+{
+    const scene s = grove();
+    // 37 x 29: no row is a multiple of the lane count, so packets straddle rows and the stream
+    // ends on a partial packet.
+    const int width = 37, height = 29;
+    long long rays = 0, compared_hits = 0, refilled = 0;
+    for (float omega : {1.0f, 1.6f})
+        for (int k = 0; k < 6; ++k) {
+            const krs::pinhole_camera camera = view(k, width, height);
+            krs::trace_options o = primary_options(camera);
+            o.omega = omega;
+            std::vector<krs::hit<float>> stream(std::size_t(width * height));
+            std::vector<int> reported(stream.size(), 0);
+            std::uint32_t next_id = 0;
+            auto next = [&](krs::ray_job& job) {
+                if (next_id >= stream.size()) return false;
+                job.id = next_id++;
+                job.r = camera.primary_ray(float(job.id % width) + 0.5f, float(job.id / width) + 0.5f);
+                job.t_start = o.min_distance;
+                job.t_max = o.max_distance;
+                return true;
+            };
+            std::vector<std::uint32_t> order;
+            auto done = [&](std::uint32_t id, const krs::hit<float>& h) {
+                stream[id] = h;
+                ++reported[id];
+                order.push_back(id);
+            };
+            const krs::stream_stats stats = krs::trace_stream<P, 2>(s, next, done, o);
+            CHECK(stats.rays == width * height);
+            int min_steps = 1 << 30, max_steps = 0;
+            for (std::size_t id = 0; id < stream.size(); ++id) {
+                REQUIRE(reported[id] == 1);
+                const krs::ray<float> r = camera.primary_ray(float(id % width) + 0.5f, float(id / width) + 0.5f);
+                const krs::hit<float> h = krs::sphere_trace(s, r, o);
+                REQUIRE(stream[id].found == h.found);
+                REQUIRE(stream[id].steps == h.steps);
+                if (h.found) {
+                    REQUIRE(std::abs(stream[id].t - h.t) <= o.threshold(h.t));
+                    ++compared_hits;
+                }
+                min_steps = std::min(min_steps, h.steps);
+                max_steps = std::max(max_steps, h.steps);
+                ++rays;
+            }
+            // Lanes really did finish at different steps, and rays finished out of issue order
+            // (a lane was refilled while others of its packet still ran).
+            CHECK(max_steps > 2 * min_steps);
+            for (std::size_t i = 1; i < order.size(); ++i) refilled += order[i] < order[i - 1] ? 1 : 0;
+        }
+    CHECK(rays >= 10000);
+    CHECK(compared_hits > 2000);
+    CHECK(refilled > 100);
+}
+
+TEST_CASE("plain packets with partial lanes at the image edge equal the scalar tracer")
+{
+    const scene s = grove();
+    const int width = 45, height = 23; // 45 = 2 * 16 + 13: the last packet of a row is partial
+    long long rays = 0;
+    for (int k = 0; k < 4; ++k) {
+        const krs::pinhole_camera camera = view(k + 7, width, height);
+        const krs::trace_options o = primary_options(camera);
+        for (int y = 0; y < height; ++y)
+            for (int x0 = 0; x0 < width; x0 += int(lanes)) {
+                alignas(64) float xs[lanes], start[lanes];
+                for (std::size_t i = 0; i < lanes; ++i) {
+                    xs[i] = float(std::min(x0 + int(i), width - 1)) + 0.5f;
+                    // Lanes past the edge get an infinite start: rejected, they cost no step.
+                    start[i] = x0 + int(i) < width ? 0.0f : INFINITY;
+                }
+                const krs::ray<P> r = camera.primary_ray(P::load_aligned(xs), P(float(y) + 0.5f));
+                const krs::hit<P> hp = krs::sphere_trace(s, r, P::load_aligned(start), P(o.max_distance), o);
+                for (std::size_t i = 0; i < lanes; ++i) {
+                    if (x0 + int(i) >= width) {
+                        REQUIRE(krs::mask_lane<P>(hp.invalid, i));
+                        REQUIRE(!krs::mask_lane<P>(hp.found, i));
+                        continue;
+                    }
+                    const krs::hit<float> h = krs::sphere_trace(s, camera.primary_ray(xs[i], float(y) + 0.5f), o);
+                    REQUIRE(krs::mask_lane<P>(hp.found, i) == h.found);
+                    if (h.found) REQUIRE(std::abs(krs::lane_at(hp.t, i) - h.t) <= o.threshold(h.t));
+                    ++rays;
+                }
+            }
+    }
+    CHECK(rays > 4000);
+}
+
+TEST_CASE("tile prepass never starts a ray past its first hit")
+{
+    const scene s = grove();
+    const int width = 61, height = 45, tile = 8;
+    long long rays = 0, advanced = 0, hits = 0, near_misses = 0;
+    double skipped = 0;
+    for (int k = 0; k < 4; ++k) {
+        const krs::pinhole_camera camera = view(k + 3, width, height);
+        const krs::trace_options o = primary_options(camera);
+        for (int y0 = 0; y0 < height; y0 += tile)
+            for (int x0 = 0; x0 < width; x0 += tile) {
+                const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
+                const krs::tile_prepass pre = krs::prepass_tile(s, camera, x0, y0, x1, y1, o);
+                for (int y = y0; y < y1; ++y)
+                    for (int x = x0; x < x1; ++x) {
+                        const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+                        const float start = pre.start_for(r);
+                        const krs::hit<float> h = krs::sphere_trace(s, r, o);
+                        // Independent check: march the segment [0, start] in tiny steps; the
+                        // field stays above the hit threshold everywhere on it.
+                        for (float t = 0; t < start; t += 0.02f)
+                            REQUIRE(s.distance(krs::point_at(r, t)) >= o.threshold(t));
+                        REQUIRE(s.distance(krs::point_at(r, start)) >= o.threshold(start));
+                        if (h.found) {
+                            REQUIRE(start <= h.t);
+                            ++hits;
+                        }
+                        // The prepass-started ray may step over a near miss where plain tracing
+                        // stopped (their samples differ), but never through the surface: the
+                        // field stays positive on everything it skipped.
+                        const krs::hit<float> hp = krs::sphere_trace(s, r, start, o.max_distance, o);
+                        if (h.found && (!hp.found || hp.t > h.t + 2 * o.threshold(h.t))) {
+                            ++near_misses;
+                            // Steps of half the distance (at least 1e-4, thinner than any kernel)
+                            // would land inside a surface the ray crossed.
+                            const float end = hp.found ? hp.t : o.max_distance;
+                            for (float t = h.t; t < end;) {
+                                const float d = s.distance(krs::point_at(r, t));
+                                REQUIRE(d > 0.0f);
+                                t += std::max(0.5f * d, 1e-4f);
+                            }
+                        }
+                        advanced += start > o.min_distance ? 1 : 0;
+                        skipped += start;
+                        ++rays;
+                    }
+                // The packet walk of the stored spheres equals the scalar one.
+                alignas(64) float xs[lanes];
+                for (std::size_t i = 0; i < lanes; ++i) xs[i] = float(x0 + int(i) % (x1 - x0)) + 0.5f;
+                const float yc = float(y0) + 0.5f;
+                const P sp = pre.start_for(camera.primary_ray(P::load_aligned(xs), P(yc)));
+                for (std::size_t i = 0; i < lanes; ++i)
+                    REQUIRE(krs::lane_at(sp, i) == doctest::Approx(pre.start_for(camera.primary_ray(xs[i], yc))).epsilon(1e-5));
+            }
+    }
+    CHECK(rays >= 10000);
+    CHECK(hits > 2000);
+    CHECK(advanced > rays / 2); // the prepass does skip empty space
+    CHECK(skipped / double(rays) > 1.0);
+    CHECK(near_misses < rays / 100);
+}
+
+TEST_CASE("over-relaxation with its fallback never misses a hit of plain tracing")
+{
+    // Thin kernels (tubes of radius 0.004 ... 0.02) and rays grazing them: aimed at points just
+    // off the tube surface, nearly along the tube.
+    using thin_scene = krs::sequence<krs::capsule, krs::torus_capsule>;
+    thin_scene::builder b;
+    b.kernel(krs::capsule({0, 0, 0}, {0, 2, 0}, 0.02f));
+    b.kernel(krs::torus_capsule({0, 2, 0}, {1, 3, 0.3f}, {0.6f, 2.3f, 0}, 0.004f));
+    b.mirror(krs::mirror({1, 0, 0.1f}, 1.3f));
+    b.mirror(krs::mirror({0, 0, 1}, 1.1f));
+    const thin_scene s = b.build();
+    std::mt19937_64 g(11);
+    krs::trace_options plain;
+    plain.pixel_footprint = 2e-4f;
+    plain.threshold_floor = 1e-5f;
+    plain.max_distance = 30.0f;
+    plain.max_steps = 4000;
+    int plain_hits = 0, fallbacks = 0;
+    long long plain_evaluations = 0, relaxed_evaluations = 0;
+    for (int k = 0; k < 12000; ++k) {
+        // A point near a kernel instance: pick a height on the trunk or the twig, offset it by
+        // about the tube radius, and shoot a ray at it from afar at a grazing angle.
+        const double u = uniform(g, 0, 1);
+        vec3d target = k % 2 ? vec3d{0, 2 * u, 0} : vec3d{0.6 * u, 2 + u, 0.15 * u};
+        target = target + vec3d{uniform(g, -0.03, 0.03), 0, uniform(g, -0.03, 0.03)};
+        if (k % 3 == 0) target.x = 2.6 - target.x; // a mirrored instance
+        const vec3d along = k % 2 ? vec3d{0, 1, 0} : krs::normalize(vec3d{0.6, 1, 0.15});
+        const vec3d side = krs::normalize(vec3d{uniform(g, -1, 1), uniform(g, -0.2, 0.2), uniform(g, -1, 1)});
+        const vec3d dir = krs::normalize(along * uniform(g, -1, 1) + side * uniform(g, 0.05, 1));
+        const vec3d origin = target - dir * uniform(g, 3, 8);
+        const krs::ray<float> r{vec3f{float(origin.x), float(origin.y), float(origin.z)},
+                                vec3f{float(dir.x), float(dir.y), float(dir.z)}};
+        const krs::hit<float> h = krs::sphere_trace(s, r, plain);
+        plain_evaluations += h.evaluations;
+        for (float omega : {1.3f, 1.6f, 1.9f}) {
+            krs::trace_options relaxed = plain;
+            relaxed.omega = omega;
+            const krs::hit<float> hr = krs::sphere_trace(s, r, relaxed);
+            if (omega == 1.6f) relaxed_evaluations += hr.evaluations;
+            if (h.found) {
+                REQUIRE(hr.found);
+                // It stopped where the field is within its threshold, no later than plain.
+                REQUIRE(s.distance(krs::point_at(r, hr.t)) < relaxed.threshold(hr.t));
+                REQUIRE(hr.t <= h.t + plain.threshold(h.t));
+            }
+            fallbacks += hr.steps > h.steps ? 1 : 0;
+        }
+        plain_hits += h.found ? 1 : 0;
+    }
+    CHECK(plain_hits > 3000);
+    CHECK(fallbacks > 0); // the fallback path was exercised
+    MESSAGE("evaluations: plain ", plain_evaluations, ", omega 1.6 ", relaxed_evaluations);
+}
+
+TEST_CASE_TEMPLATE("axis-aligned mirrors give the distances of the same general planes", T, float, P)
+{
+    std::mt19937_64 g(5);
+    using axis_scene = krs::axis_sequence<krs::sphere, krs::capsule>;
+    using general_scene = krs::sequence<krs::sphere, krs::capsule>;
+    int compared = 0;
+    for (int trial = 0; trial < 20; ++trial) {
+        axis_scene::builder a;
+        general_scene::builder b;
+        const krs::sphere leaf({float(uniform(g, -1, 1)), float(uniform(g, -1, 1)), float(uniform(g, -1, 1))}, 0.3f);
+        const krs::capsule stem({0, 0, 0}, {float(uniform(g, -1, 1)), 1.5f, float(uniform(g, -1, 1))}, 0.1f);
+        a.kernel(leaf), b.kernel(leaf);
+        a.kernel(stem), b.kernel(stem);
+        const int n = 3 + trial % 10;
+        for (int i = 0; i < n; ++i) {
+            const krs::axis_mirror m(int(g() % 3), float(uniform(g, -3, 3)), (g() & 1) != 0);
+            // Independent check of the stored plane: points on it have zero signed distance, and
+            // the general fold keeps the side the axis fold keeps.
+            REQUIRE(krs::length(m.normal) == doctest::Approx(1.0));
+            a.mirror(m);
+            b.mirror(m.general());
+            if (i == n / 2) {
+                const krs::sphere extra({float(uniform(g, -2, 2)), 0.5f, float(uniform(g, -2, 2))}, 0.2f);
+                a.kernel(extra), b.kernel(extra);
+            }
+        }
+        const axis_scene sa = a.build();
+        const general_scene sb = b.build();
+        for (int k = 0; k < 500; ++k) {
+            alignas(64) float px[lanes], py[lanes], pz[lanes];
+            for (std::size_t i = 0; i < lanes; ++i)
+                px[i] = float(uniform(g, -8, 8)), py[i] = float(uniform(g, -8, 8)), pz[i] = float(uniform(g, -8, 8));
+            krs::vec3<T> p;
+            if constexpr (std::is_same_v<T, float>)
+                p = {px[0], py[0], pz[0]};
+            else
+                p = {T::load_aligned(px), T::load_aligned(py), T::load_aligned(pz)};
+            const T da = sa.distance(p), db = sb.distance(p);
+            for (std::size_t i = 0; i < krs::lane_count<T>; ++i) {
+                // Each fold rounds a coordinate of size <= ~20 differently (2c - x versus
+                // x - 2(x - c)): a few ulps of 20 per level.
+                const float tolerance = float(n) * 8.0f * 20.0f * 1.2e-7f;
+                REQUIRE(std::abs(krs::lane_at(da, i) - krs::lane_at(db, i)) <= tolerance);
+                ++compared;
+            }
+            // Both folds reflect the same points (away from the planes, where rounding can flip it).
+            const vec3f q{px[0], py[0], pz[0]};
+            const krs::location<float> la = sa.locate(q), lb = sb.locate(q);
+            if (std::abs(la.distance - lb.distance) < 1e-6f && la.kernel == lb.kernel)
+                CHECK(krs::length(la.kernel_point - lb.kernel_point) < 1e-3f);
+        }
+    }
+    CHECK(compared >= 10000);
+}
+
+TEST_CASE("packet shadow query and Lambert shade equal the scalar ones")
+{
+    using ground_scene = krs::sequence<krs::sphere, krs::plane>;
+    ground_scene::builder b;
+    b.kernel(krs::sphere({0, 1, 0}, 0.5f));
+    b.mirror(krs::mirror({1, 0, 0}, 1.0f));
+    b.kernel(krs::plane({0, 1, 0}, 0.0f));
+    const ground_scene s = b.build();
+    const vec3f to_light = krs::normalize(vec3f{0.4f, 1.0f, 0.2f});
+    std::mt19937_64 g(3);
+    int shadowed = 0, lit = 0;
+    for (int k = 0; k < 400; ++k) {
+        alignas(64) float px[lanes], pz[lanes], th[lanes];
+        for (std::size_t i = 0; i < lanes; ++i)
+            px[i] = float(uniform(g, -1.5, 3.5)), pz[i] = float(uniform(g, -2, 2)), th[i] = float(uniform(g, 1e-4, 1e-2));
+        const krs::vec3<P> p{P::load_aligned(px), P(0.0f), P::load_aligned(pz)};
+        const krs::vec3<P> n{P(0.0f), P(1.0f), P(0.0f)};
+        const P threshold = P::load_aligned(th);
+        const auto visible = krs::light_visible(s, p, n, to_light, threshold, 20.0f, P(0.0f) == P(0.0f));
+        std::array<krs::location<float>, lanes> where;
+        const krs::vec3<P> located = krs::locate_lanes(s, p + n * P(1e-3f), P(0.0f) == P(0.0f), where);
+        for (std::size_t i = 0; i < lanes; ++i) {
+            // Independent reference: the closed-form ray/sphere test against both instances.
+            const vec3d o{px[i], 2.0 * th[i], pz[i]};
+            bool blocked = false;
+            for (double cx : {0.0, 2.0}) {
+                const vec3d oc = o - vec3d{cx, 1, 0};
+                const double bq = krs::dot(oc, vec3d(to_light)), c = krs::dot(oc, oc) - 0.25;
+                const double disc = bq * bq - c;
+                // Rays passing within the threshold of the sphere count as blocked either way.
+                if (disc > 0.01 && -bq - std::sqrt(disc) > 0) blocked = true;
+            }
+            const bool v = krs::mask_lane<P>(visible, i);
+            if (blocked) REQUIRE(!v);
+            shadowed += v ? 0 : 1;
+            lit += v ? 1 : 0;
+            REQUIRE(krs::lane_at(located.y, i) == doctest::Approx(1.0f));
+            REQUIRE(where[i].kernel == 1); // the plane (level 1's only kernel)
+        }
+        const krs::vec3<P> color = krs::shade_lambert_lanes(s, p, n, to_light, {1, 1, 1}, krs::vec3<P>(vec3f{1, 1, 1}),
+                                                            0.1f, threshold, 20.0f, P(0.0f) == P(0.0f));
+        for (std::size_t i = 0; i < lanes; ++i) {
+            const float expected = 0.1f + (krs::mask_lane<P>(visible, i) ? to_light.y : 0.0f);
+            REQUIRE(krs::lane_at(color.x, i) == doctest::Approx(expected));
+        }
+    }
+    CHECK(shadowed > 50);
+    CHECK(lit > 50);
+}
