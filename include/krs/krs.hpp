@@ -16,5 +16,8 @@
 #include "krs/shade/normal.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/located_hit.hpp"
+#include "krs/trace/packet_shade.hpp"
+#include "krs/trace/packet_trace.hpp"
 #include "krs/trace/ray.hpp"
 #include "krs/trace/sphere_trace.hpp"
+#include "krs/trace/tile_prepass.hpp"
