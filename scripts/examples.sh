@@ -18,4 +18,9 @@ if [ -x "$build_dir/examples/krs_tree" ]; then
     "$build_dir/examples/krs_tree" --output "$out_dir/krs_tree.png"
     ran=$((ran + 1))
 fi
+if [ -x "$build_dir/examples/krs_scenes" ]; then
+    echo "examples.sh: krs_scenes -> out/{forest,terrain,rock,coral,sponge,grass}.png"
+    "$build_dir/examples/krs_scenes" --output-dir "$out_dir"
+    ran=$((ran + 1))
+fi
 echo "examples.sh: $ran example(s) rendered into $out_dir"

@@ -2,6 +2,8 @@
 // krs: the umbrella header. Including it gives every public piece of the library; include the
 // individual headers instead to keep compile times down in large projects.
 
+#include "krs/collision.hpp"
+#include "krs/compose.hpp"
 #include "krs/core/glm_interop.hpp"
 #include "krs/core/lanes.hpp"
 #include "krs/core/validate.hpp"
@@ -10,10 +12,17 @@
 #include "krs/field.hpp"
 #include "krs/kernels/kernels.hpp"
 #include "krs/mirror.hpp"
+#include "krs/model/coral.hpp"
+#include "krs/model/forest.hpp"
+#include "krs/model/grass.hpp"
+#include "krs/model/terrain.hpp"
 #include "krs/model/tree.hpp"
 #include "krs/sequence.hpp"
+#include "krs/shade/global.hpp"
+#include "krs/shade/kernel_light.hpp"
 #include "krs/shade/lambert.hpp"
 #include "krs/shade/normal.hpp"
+#include "krs/shade/texture.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/located_hit.hpp"
 #include "krs/trace/packet_shade.hpp"

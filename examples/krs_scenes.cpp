@@ -1,0 +1,476 @@
+// krs_scenes: the paper's section 7 scenes built from intuitive parameters, shaded with the
+// section 6 techniques, written to PNG files:
+//
+//     forest.png   two forests (different trees and seeds) traced together as a union with
+//                  per-component free distances (5.1); bark textured by torus-capsule uv (6.2)
+//     terrain.png  plane kernels, smooth shading by light interpolation (Algorithm 2, 6.1),
+//                  triplanar noise texture in world space (6.2)
+//     rock.png     a faceted rock, smooth shaded, inside a procedural bound (4.2)
+//     coral.png    capsules and spheres, displaced by a Lipschitz noise warp (5.2)
+//     sponge.png   a Menger-like sponge of box kernels and mirrors, with ambient occlusion (6.5)
+//     grass.png    a clump of blades scattered by unaligned mirrors
+//
+// Every scene has soft shadows and ambient occlusion from sphere-traced secondary rays (6.5).
+//
+//     krs_scenes [--width W] [--height H] [--threads N] [--seed S] [--only NAME] [--output-dir DIR]
+//
+// Threads render 16x16 tiles taken from a shared counter; the library itself starts no threads.
+
+#include "krs/compose.hpp"
+#include "krs/kernels/capsule.hpp"
+#include "krs/model/coral.hpp"
+#include "krs/model/forest.hpp"
+#include "krs/model/grass.hpp"
+#include "krs/model/terrain.hpp"
+#include "krs/shade/global.hpp"
+#include "krs/shade/kernel_light.hpp"
+#include "krs/shade/normal.hpp"
+#include "krs/shade/texture.hpp"
+#include "krs/trace/camera.hpp"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+using krs::vec3f;
+
+struct options {
+    int width = 480, height = 360, threads = 0;
+    unsigned seed = 1;
+    std::string only, output_dir = ".";
+};
+
+options parse(int argc, char** argv)
+{
+    options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto value = [&](const char* name) -> std::string {
+            if (i + 1 >= argc) {
+                std::fprintf(stderr, "krs_scenes: %s needs a value\n", name);
+                std::exit(2);
+            }
+            return argv[++i];
+        };
+        auto number = [&](const char* name, int lo, int hi) {
+            const std::string v = value(name);
+            char* end = nullptr;
+            const long n = std::strtol(v.c_str(), &end, 10);
+            if (end == v.c_str() || *end != '\0' || n < lo || n > hi) {
+                std::fprintf(stderr, "krs_scenes: %s must be an integer in [%d, %d] (got '%s')\n", name, lo, hi, v.c_str());
+                std::exit(2);
+            }
+            return int(n);
+        };
+        if (a == "--width") o.width = number("--width", 1, 8192);
+        else if (a == "--height") o.height = number("--height", 1, 8192);
+        else if (a == "--threads") o.threads = number("--threads", 0, 1024);
+        else if (a == "--seed") o.seed = unsigned(number("--seed", 0, 1 << 30));
+        else if (a == "--only") o.only = value("--only");
+        else if (a == "--output-dir") o.output_dir = value("--output-dir");
+        else {
+            std::fprintf(stderr, "usage: krs_scenes [--width W] [--height H] [--threads N] [--seed S] "
+                                 "[--only forest|terrain|rock|coral|sponge|grass] [--output-dir DIR]\n");
+            std::exit(2);
+        }
+    }
+    if (o.threads == 0) o.threads = int(std::max(1u, std::thread::hardware_concurrency()));
+    return o;
+}
+
+vec3f sky(const vec3f& d)
+{
+    const float t = std::clamp(0.5f + 0.5f * d.y, 0.0f, 1.0f);
+    return vec3f{0.70f, 0.78f, 0.90f} * (1.0f - t) + vec3f{0.30f, 0.48f, 0.82f} * t;
+}
+vec3f mul(const vec3f& a, const vec3f& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
+vec3f mix3(const vec3f& a, const vec3f& b, float t) { return a + (b - a) * std::clamp(t, 0.0f, 1.0f); }
+
+// A field moved by `offset` (the second forest stands beside the first).
+template <class F>
+struct shifted {
+    F field;
+    vec3f offset;
+    template <class T>
+    T distance(const krs::vec3<T>& p) const
+    {
+        return field.distance(p - krs::vec3<T>(offset));
+    }
+};
+
+const vec3f sun_direction = krs::normalize(vec3f{0.55f, 0.65f, -0.35f});
+const vec3f sun_color{1.0f, 0.95f, 0.85f}, sky_light{0.30f, 0.36f, 0.45f};
+
+// Direct sun (diffuse * soft shadow) plus sky light weighted by ambient occlusion.
+template <class F>
+vec3f light_surface(const F& field, const vec3f& p, const vec3f& n, float diffuse, float threshold, float shadow_reach,
+                    float ao_step)
+{
+    krs::soft_shadow_options s;
+    s.hardness = 12.0f;
+    s.threshold = threshold;
+    s.max_distance = shadow_reach;
+    s.max_steps = 160;
+    const float shadow = diffuse > 0.0f ? krs::soft_shadow(field, p, n, sun_direction, s) : 0.0f;
+    krs::ambient_occlusion_options a;
+    a.step = ao_step;
+    a.samples = 5;
+    const float ao = krs::ambient_occlusion(field, p, n, a);
+    return sun_color * (diffuse * shadow) + sky_light * ao;
+}
+
+// Renders `pixel(ray) -> color` into dir/name.png with tiles over threads; returns seconds.
+double render(const options& opt, const std::string& name, const krs::pinhole_camera& camera,
+              const std::function<vec3f(const krs::ray<float>&)>& pixel)
+{
+    std::vector<float> pixels(std::size_t(opt.width) * opt.height * 3);
+    constexpr int tile = 16;
+    const int tiles_x = (opt.width + tile - 1) / tile, tiles_y = (opt.height + tile - 1) / tile;
+    const int tiles = tiles_x * tiles_y;
+    std::atomic<int> next{0};
+    auto worker = [&] {
+        for (int k; (k = next.fetch_add(1)) < tiles;) {
+            const int x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
+            for (int y = y0; y < std::min(y0 + tile, opt.height); ++y)
+                for (int x = x0; x < std::min(x0 + tile, opt.width); ++x) {
+                    const vec3f c = pixel(camera.primary_ray(x + 0.5f, y + 0.5f));
+                    float* out = &pixels[(std::size_t(y) * opt.width + x) * 3];
+                    out[0] = c.x, out[1] = c.y, out[2] = c.z;
+                }
+        }
+    };
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<std::thread> pool;
+    for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
+    for (std::thread& t : pool) t.join();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    std::vector<unsigned char> bytes(pixels.size());
+    for (std::size_t i = 0; i < pixels.size(); ++i)
+        bytes[i] = (unsigned char)std::lround(255.0f * std::pow(std::clamp(pixels[i], 0.0f, 1.0f), 1.0f / 2.2f));
+    const std::string path = opt.output_dir + "/" + name + ".png";
+    auto file = OIIO::ImageOutput::create(path);
+    const OIIO::ImageSpec spec(opt.width, opt.height, 3, OIIO::TypeDesc::UINT8);
+    if (!file || !file->open(path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, bytes.data())) {
+        std::fprintf(stderr, "krs_scenes: cannot write %s: %s\n", path.c_str(), OIIO::geterror().c_str());
+        std::exit(1);
+    }
+    file->close();
+    std::printf("%-8s %7.2f s  (%dx%d, %d threads, %.1f core-us per pixel) -> %s\n", name.c_str(), seconds, opt.width,
+                opt.height, opt.threads, 1e6 * seconds * opt.threads / (double(opt.width) * opt.height), path.c_str());
+    std::fflush(stdout);
+    return seconds;
+}
+
+krs::trace_options tracing(const krs::pinhole_camera& camera, float max_distance)
+{
+    krs::trace_options t;
+    t.pixel_footprint = camera.pixel_footprint() * 0.5f;
+    t.max_distance = max_distance;
+    t.threshold_floor = 1e-5f;
+    t.max_steps = 400;
+    return t.validate(), t;
+}
+
+// ---- scenes ---------------------------------------------------------------------------------------
+
+double forest_scene(const options& opt)
+{
+    krs::model::forest_parameters a;
+    a.tree.levels = 9;
+    a.tree.leaves_per_twig = 3;
+    a.tree.leaf_radius = 0.12f;
+    a.tree.seed = opt.seed;
+    a.doublings = 5;
+    a.ground_height.reset();
+    a.seed = opt.seed;
+    krs::model::forest_parameters b = a;
+    b.tree.seed = opt.seed + 17;
+    b.tree.spread_degrees = 38.0f;
+    b.tree.twist_degrees = 100.0f;
+    b.seed = opt.seed + 5;
+    const krs::model::forest fa = krs::model::build_forest(a), fb = krs::model::build_forest(b);
+    const vec3f offset{fa.bound.radius + fb.bound.radius * 0.6f, 0, fb.bound.radius * 0.4f};
+    // One tree of the first forest is "broken off" (section 6.4): an empty zone removes it from the
+    // KRS, and user geometry (a fallen trunk and crown, which a physics engine could move) stands
+    // in for it.
+    const vec3f look = (fa.bound.center + fb.bound.center + offset) * 0.5f;
+    krs::bounding_sphere removed = fa.trees[0]; // the tree of the first forest nearest the view center
+    for (const krs::bounding_sphere& t : fa.trees)
+        if (krs::length(t.center - look) < krs::length(removed.center - look)) removed = t;
+    const vec3f base{removed.center.x, 0.0f, removed.center.z};
+    const vec3f fallen = base + krs::normalize(vec3f{1, 0, -0.4f}) * (1.4f * removed.radius);
+    const krs::capsule trunk(base + vec3f{0, 0.25f, 0}, fallen + vec3f{0, 0.2f, 0}, 0.2f);
+    const krs::sphere crown(fallen + vec3f{0, 0.8f, 0}, 0.35f * removed.radius);
+    using zoned = krs::with_empty_zones<krs::model::tree_sequence>;
+    const zoned forest_a(fa.sequence, {removed});
+    using forest_field = krs::bounded<zoned>;
+    using moved_field = krs::bounded<shifted<krs::model::tree_sequence>>;
+    const krs::union_of<forest_field, moved_field, krs::plane, krs::capsule, krs::sphere> scene(
+        forest_field(forest_a, fa.bound, 1.0f),
+        moved_field({fb.sequence, offset}, {fb.bound.center + offset, fb.bound.radius}, 1.0f),
+        krs::plane({0, 1, 0}, 0.0f), trunk, crown);
+    // Secondary rays (soft shadows, ambient occlusion) use the fields without their bounds: the
+    // bound's distance is a valid but loose underestimate, and a penumbra or occlusion estimate
+    // computed from it would show the bounding sphere.
+    const krs::union_of<zoned, shifted<krs::model::tree_sequence>, krs::plane, krs::capsule, krs::sphere> exact(
+        forest_a, {fb.sequence, offset}, krs::plane({0, 1, 0}, 0.0f), trunk, crown);
+    std::printf("forest: 2 x %zu trees of %.0f kernel instances each\n", fa.tree_count, fa.tree_instances);
+
+    const float span = fa.bound.radius + fb.bound.radius;
+    const vec3f eye = look + vec3f{-0.2f * span, 0.28f * span, -0.75f * span};
+    const krs::pinhole_camera camera(eye, look - vec3f{0, 0.1f * span, 0}, {0, 1, 0}, 45.0f, opt.width, opt.height);
+    const krs::trace_options trace = tracing(camera, 6 * span);
+    const krs::fractal_noise ground_noise(4, 0.3f);
+
+    return render(opt, "forest", camera, [&](const krs::ray<float>& r) {
+        const auto h = krs::union_trace(scene, r, trace);
+        if (!h.found) return sky(r.direction);
+        const vec3f p = krs::point_at(r, h.t);
+        const float threshold = trace.threshold(h.t);
+        vec3f n{0, 1, 0}, albedo{0.35f, 0.30f, 0.18f};
+        if (h.nearest == 2) {
+            albedo = mix3(albedo, vec3f{0.22f, 0.32f, 0.12f}, 0.5f + 0.5f * ground_noise(p));
+        } else if (h.nearest == 3) {
+            n = krs::normalize(trunk.normal(p));
+            albedo = {0.40f, 0.25f, 0.15f};
+        } else if (h.nearest == 4) {
+            n = crown.normal(p);
+            albedo = {0.55f, 0.45f, 0.10f};
+        } else {
+            const krs::model::tree_sequence& s = h.nearest == 0 ? fa.sequence : fb.sequence;
+            const vec3f local = h.nearest == 0 ? p : p - offset;
+            const krs::location<float> where = s.locate(local);
+            n = s.normal(where);
+            if (krs::dot(n, r.direction) > 0) n = -n;
+            const auto& kernel = s.kernels()[where.kernel];
+            if (const auto* branch = std::get_if<krs::torus_capsule>(&kernel)) {
+                // Bark: grooves along the branch from the kernel's own (u, v) (section 6.2).
+                const krs::surface_uv<float> uv = branch->uv(where.kernel_point);
+                const float groove = 0.5f + 0.5f * std::sin(uv.v * 6.2831853f * 7.0f + 9.0f * uv.u);
+                albedo = vec3f{0.30f, 0.21f, 0.14f} * (0.7f + 0.3f * groove);
+            } else {
+                const float v = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
+                albedo = h.nearest == 0 ? vec3f{0.16f + 0.1f * v, 0.38f + 0.12f * v, 0.08f}
+                                        : vec3f{0.32f + 0.1f * v, 0.36f + 0.1f * v, 0.07f};
+            }
+        }
+        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        return mul(albedo, light_surface(exact, p, n, diffuse, threshold, span, 0.3f));
+    });
+}
+
+double terrain_scene(const options& opt)
+{
+    krs::model::terrain_parameters t;
+    t.levels = 28;
+    t.size = 60.0f;
+    t.slope = 0.32f;
+    t.seed = opt.seed;
+    const krs::model::plane_sequence terrain = krs::model::build_terrain(t);
+    const vec3f eye{-18.0f, 0.0f, -22.0f};
+    const float ground = -terrain.distance(eye); // terrain height under the eye, roughly
+    const vec3f eye_up = eye + vec3f{0, ground + 7.0f, 0};
+    const krs::pinhole_camera camera(eye_up, vec3f{6.0f, ground - 2.0f, 10.0f}, {0, 1, 0}, 55.0f, opt.width, opt.height);
+    const krs::trace_options trace = tracing(camera, 200.0f);
+    const krs::fractal_noise detail(5, 0.5f);
+
+    return render(opt, "terrain", camera, [&](const krs::ray<float>& r) {
+        const krs::hit<float> h = krs::sphere_trace(terrain, r, trace);
+        if (!h.found) return sky(r.direction);
+        const vec3f p = krs::point_at(r, h.t);
+        // Algorithm 2: light and view carried into the plane kernel's space, blended over a band
+        // a few pixels wide at this depth, so creases shade smoothly at every distance.
+        const float band = krs::smoothing_threshold(h.t, camera.pixel_footprint(), 6.0f) + 0.03f;
+        const auto k = krs::shade_in_kernel_space(terrain, p, sun_direction, -r.direction, band);
+        const float diffuse = std::max(krs::dot(k.normal, k.light), 0.0f);
+        const vec3f n = terrain.normal(p);
+        // World-space texture (triplanar noise): steep faces are rock, flat ones grass.
+        auto pattern = [&](float u, float v) { return detail(vec3f{u, v, 0.37f * (u - v)}); };
+        const float rock = krs::triplanar(pattern, p * 0.8f, n);
+        const vec3f grass{0.22f, 0.34f, 0.10f}, stone{0.45f, 0.41f, 0.36f};
+        const vec3f albedo = mix3(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
+        const vec3f c = mul(albedo, light_surface(terrain, p, n, diffuse, trace.threshold(h.t), 60.0f, 0.6f));
+        const float fog = 1.0f - std::exp(-h.t / 400.0f);
+        return mix3(c, sky(r.direction), fog);
+    });
+}
+
+double rock_scene(const options& opt)
+{
+    krs::model::rock_parameters rp;
+    rp.radius = 1.0f;
+    rp.center = {0, 0.6f, 0};
+    rp.folds = 16;
+    rp.seed = opt.seed;
+    const krs::model::rock rock = krs::model::build_rock(rp);
+    using rock_field = krs::bounded<krs::model::plane_sequence>;
+    const krs::union_of<rock_field, krs::plane> scene(rock_field(rock.sequence, rock.bound, 0.2f),
+                                                      krs::plane({0, 1, 0}, 0.0f));
+    const krs::union_of<krs::model::plane_sequence, krs::plane> exact(rock.sequence, krs::plane({0, 1, 0}, 0.0f));
+    const krs::pinhole_camera camera({2.6f, 2.2f, -3.6f}, {0, 0.5f, 0}, {0, 1, 0}, 40.0f, opt.width, opt.height);
+    const krs::trace_options trace = tracing(camera, 60.0f);
+    const krs::fractal_noise grain(4, 3.0f);
+
+    return render(opt, "rock", camera, [&](const krs::ray<float>& r) {
+        const auto h = krs::union_trace(scene, r, trace);
+        if (!h.found) return sky(r.direction);
+        const vec3f p = krs::point_at(r, h.t);
+        if (h.nearest == 1) {
+            const vec3f sand = vec3f{0.55f, 0.50f, 0.40f} * (0.9f + 0.1f * grain(p));
+            return mul(sand, light_surface(exact, p, {0, 1, 0}, sun_direction.y, trace.threshold(h.t), 10.0f, 0.15f));
+        }
+        // Smooth shading of the planar facets (figure 7): a wide band blends the creases.
+        const auto k = krs::shade_in_kernel_space(rock.sequence, p, sun_direction, -r.direction, 0.08f);
+        const krs::phong_terms ph = krs::phong(k, 24.0f);
+        const vec3f n = rock.sequence.normal(p);
+        const vec3f albedo = vec3f{0.45f, 0.42f, 0.40f} * (0.75f + 0.25f * grain(p));
+        const vec3f lit = light_surface(exact, p, n, ph.diffuse, trace.threshold(h.t), 10.0f, 0.1f);
+        return mul(albedo, lit) + sun_color * (0.15f * ph.specular);
+    });
+}
+
+double coral_scene(const options& opt)
+{
+    krs::model::coral_parameters cp;
+    cp.levels = 11;
+    cp.seed = opt.seed;
+    const krs::model::coral_sequence coral = krs::model::build_coral(cp);
+    // Symmetry broken by a noise warp (section 5.2); the distance is divided by its bound.
+    using warped = krs::lipschitz_warp<krs::model::coral_sequence, krs::noise_warp>;
+    const warped bent(coral, krs::noise_warp(0.02f, 4.0f));
+    const krs::union_of<warped, krs::plane> scene(bent, krs::plane({0, 1, 0}, 0.0f));
+    const krs::bounding_sphere b = coral.bound();
+    const vec3f look = b.center;
+    const krs::pinhole_camera camera(look + vec3f{0.3f, 0.35f, -1.0f} * (1.15f * b.radius), look, {0, 1, 0}, 42.0f,
+                                     opt.width, opt.height);
+    krs::trace_options trace = tracing(camera, 8 * b.radius);
+    trace.max_steps = 600;
+    const krs::fractal_noise spots(3, 6.0f);
+
+    return render(opt, "coral", camera, [&](const krs::ray<float>& r) {
+        const auto h = krs::union_trace(scene, r, trace);
+        if (!h.found) return vec3f{0.05f, 0.22f, 0.35f} * (0.6f + 0.4f * r.direction.y);
+        const vec3f p = krs::point_at(r, h.t);
+        const float threshold = trace.threshold(h.t);
+        vec3f n{0, 1, 0}, albedo{0.60f, 0.55f, 0.42f};
+        if (h.nearest == 0) {
+            n = krs::gradient_normal(bent, p, 2.0f * threshold);
+            albedo = mix3(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
+        }
+        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        return mul(albedo, light_surface(scene, p, n, diffuse, threshold, 2 * b.radius, 0.04f * b.radius));
+    });
+}
+
+double sponge_scene(const options& opt)
+{
+    krs::model::sponge_parameters sp;
+    sp.levels = 3;
+    sp.size = 2.0f;
+    sp.center = {0, 1.0f, 0};
+    const krs::model::sponge sponge = krs::model::build_sponge(sp);
+    using sponge_field = krs::bounded<krs::model::sponge_sequence>;
+    const krs::union_of<sponge_field, krs::plane> scene(
+        sponge_field(sponge.sequence, {sp.center, 0.5f * sp.size * 1.7321f}, 0.1f), krs::plane({0, 1, 0}, 0.0f));
+    const krs::union_of<krs::model::sponge_sequence, krs::plane> exact(sponge.sequence, krs::plane({0, 1, 0}, 0.0f));
+    const krs::pinhole_camera camera({2.4f, 2.9f, -3.3f}, {0, 0.9f, 0}, {0, 1, 0}, 42.0f, opt.width, opt.height);
+    const krs::trace_options trace = tracing(camera, 60.0f);
+
+    return render(opt, "sponge", camera, [&](const krs::ray<float>& r) {
+        const auto h = krs::union_trace(scene, r, trace);
+        if (!h.found) return sky(r.direction);
+        const vec3f p = krs::point_at(r, h.t);
+        const float threshold = trace.threshold(h.t);
+        vec3f n{0, 1, 0}, albedo{0.55f, 0.55f, 0.52f};
+        if (h.nearest == 0) {
+            n = sponge.sequence.normal(p);
+            albedo = {0.75f, 0.62f, 0.45f};
+        }
+        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        krs::ambient_occlusion_options a;
+        a.step = 0.03f;
+        a.samples = 6;
+        a.strength = 1.4f;
+        const float ao = krs::ambient_occlusion(exact, p, n, a);
+        krs::soft_shadow_options s;
+        s.threshold = threshold;
+        s.max_distance = 6.0f;
+        s.hardness = 16.0f;
+        const float shadow = diffuse > 0 ? krs::soft_shadow(exact, p, n, sun_direction, s) : 0.0f;
+        return mul(albedo, sun_color * (diffuse * shadow) + vec3f{0.45f, 0.5f, 0.6f} * ao);
+    });
+}
+
+double grass_scene(const options& opt)
+{
+    krs::model::grass_parameters gp;
+    gp.doublings = 12;
+    gp.blades_per_clump = 10;
+    gp.seed = opt.seed;
+    const krs::model::grass_field grass = krs::model::build_grass(gp);
+    std::printf("grass: %zu clumps, %zu blades\n", grass.clump_count, grass.blade_count);
+    // From beside the first clump (at the origin), looking into the field.
+    vec3f into = grass.bound.center;
+    into.y = 0;
+    into = krs::length(into) > 1e-3f ? krs::normalize(into) : vec3f{0, 0, 1};
+    const vec3f eye = vec3f{0, gp.ground_height + 0.7f, 0} - into * 0.8f;
+    const krs::pinhole_camera camera(eye, eye + into * 3.0f - vec3f{0, 0.9f, 0}, {0, 1, 0}, 50.0f, opt.width,
+                                     opt.height);
+    krs::trace_options trace = tracing(camera, 40.0f);
+    trace.max_steps = 600;
+    const krs::fractal_noise tint(3, 0.8f);
+
+    return render(opt, "grass", camera, [&](const krs::ray<float>& r) {
+        const krs::hit<float> h = krs::sphere_trace(grass.sequence, r, trace);
+        if (!h.found) return sky(r.direction);
+        const vec3f p = krs::point_at(r, h.t);
+        const krs::location<float> where = grass.sequence.locate(p);
+        vec3f n = grass.sequence.normal(where);
+        if (krs::dot(n, r.direction) > 0) n = -n;
+        vec3f albedo{0.30f, 0.26f, 0.16f};
+        if (std::holds_alternative<krs::torus_capsule>(grass.sequence.kernels()[where.kernel])) {
+            const float height = std::clamp((p.y - gp.ground_height) / gp.blade_height, 0.0f, 1.0f);
+            albedo = mix3(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
+        }
+        const float diffuse = std::abs(krs::dot(n, sun_direction)); // thin blades pass light through
+        return mul(albedo, light_surface(grass.sequence, p, n, diffuse, trace.threshold(h.t), 3.0f, 0.03f));
+    });
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    const options opt = parse(argc, argv);
+    struct entry {
+        const char* name;
+        double (*run)(const options&);
+    };
+    const entry scenes[] = {{"forest", forest_scene}, {"terrain", terrain_scene}, {"rock", rock_scene},
+                            {"coral", coral_scene},   {"sponge", sponge_scene},   {"grass", grass_scene}};
+    double total = 0;
+    int rendered = 0;
+    for (const entry& e : scenes) {
+        if (!opt.only.empty() && opt.only != e.name) continue;
+        total += e.run(opt);
+        ++rendered;
+    }
+    if (rendered == 0) {
+        std::fprintf(stderr, "krs_scenes: no scene named '%s'\n", opt.only.c_str());
+        return 2;
+    }
+    std::printf("total: %.2f s for %d scene(s)\n", total, rendered);
+    return 0;
+}

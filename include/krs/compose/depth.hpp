@@ -1,0 +1,87 @@
+#pragma once
+// Depth composition (paper section 6.3): a sphere-traced field inside a rasterized scene.
+//
+// A hit at ray parameter t, on a unit ray direction d from the eye, lies at view depth
+//     z = t * (d . forward)
+// (forward the camera's unit view axis). An OpenGL-style perspective projection with near n and
+// far f stores it in the [0, 1] depth buffer as
+//     depth(z) = f (z - n) / (z (f - n))      (window depth of NDC z_ndc = (f+n)/(f-n) - 2fn/((f-n) z)),
+// which is 0 at the near plane and 1 at the far plane; the inverse is z = f n / (f - depth (f - n)).
+// Reading a depth buffer back into t gives each ray a maximum distance: rays stop where the
+// rasterized geometry already covers the pixel (early termination), and written depths let
+// transparent or deferred passes run after the ray caster.
+
+#include "krs/core/validate.hpp"
+#include "krs/field.hpp"
+#include "krs/trace/sphere_trace.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace krs {
+
+struct depth_projection {
+    float near_plane = 0.1f; // > 0
+    float far_plane = 1e3f;  // > near_plane
+
+    depth_projection() = default;
+    depth_projection(float near_, float far_) : near_plane(near_), far_plane(far_) { validate(); }
+    const depth_projection& validate() const
+    {
+        require_positive("depth_projection.near_plane", near_plane);
+        require_positive("depth_projection.far_plane", far_plane);
+        if (!(far_plane > near_plane))
+            throw invalid_parameter("depth_projection.far_plane", "must exceed near_plane", detail::to_text(far_plane));
+        return *this;
+    }
+
+    // [0, 1] buffer value of view depth z (clamped to the near/far range).
+    template <std::floating_point S>
+    S buffer_depth(S z) const
+    {
+        const S n = S(near_plane), f = S(far_plane);
+        z = std::clamp(z, n, f);
+        return std::clamp(f * (z - n) / (z * (f - n)), S(0), S(1));
+    }
+    // View depth of a [0, 1] buffer value.
+    template <std::floating_point S>
+    S view_depth(S depth) const
+    {
+        const S n = S(near_plane), f = S(far_plane);
+        depth = std::clamp(depth, S(0), S(1));
+        return f * n / (f - depth * (f - n));
+    }
+};
+
+// View depth of ray parameter t on a unit direction. `forward` is the camera's unit view axis.
+template <std::floating_point S>
+S view_depth_of(S t, const vec3<S>& direction, const vec3<S>& forward)
+{
+    return t * dot(direction, forward);
+}
+// Ray parameter at view depth z (infinite for a ray parallel to the image plane).
+template <std::floating_point S>
+S t_of_view_depth(S z, const vec3<S>& direction, const vec3<S>& forward)
+{
+    const S c = dot(direction, forward);
+    return c > S(0) ? z / c : std::numeric_limits<S>::infinity();
+}
+
+// Sphere traces with the ray's far limit taken from a depth-buffer value: the ray misses where
+// the rasterized scene is nearer than the field. options.max_distance still caps the limit.
+template <field F, std::floating_point S>
+hit<S> trace_against_depth(const F& f, const ray<S>& r, trace_options options, const depth_projection& projection,
+                           const vec3<S>& forward, S buffer_value)
+{
+    projection.validate();
+    const S limit = t_of_view_depth(projection.view_depth(buffer_value), r.direction, forward);
+    options.max_distance = float(std::min<S>(limit, S(options.max_distance)));
+    if (!(options.max_distance > options.min_distance)) {
+        hit<S> h;
+        h.t = std::numeric_limits<S>::infinity();
+        return h; // the raster is in front of where marching would start
+    }
+    return sphere_trace(f, r, options.validate());
+}
+
+} // namespace krs

@@ -1,0 +1,100 @@
+#pragma once
+// Global shading by sphere tracing secondary rays (paper section 6.5): soft shadows and ambient
+// occlusion. Both only need a field's distance, so they work for a KRS, a union, a warp alike.
+//
+// Soft shadow (the penumbra estimate popularized for distance fields): march toward the light as a
+// shadow ray would, and keep the smallest ratio k * d(t) / t seen on the way. d(t) / t is the
+// tangent of the widest cone around the ray that the field proves empty at t, so the minimum over
+// the ray estimates how much of a light of angular radius ~ 1/k is visible. The result is in
+// [0, 1]; a ray that meets the surface (d below the threshold) returns 0 exactly as the hard
+// shadow does, and as k -> infinity every ratio of a non-hitting ray exceeds 1 and the estimate
+// becomes the hard shadow.
+//
+// Ambient occlusion from distance samples along the normal: at s_j = j * step (j = 1..N) an
+// unoccluded surface has d(p + n s_j) = s_j (the distance grows as fast as we leave it); the
+// shortfall (s_j - d) / s_j measures how much nearby geometry closes in. Samples are weighted by
+// falloff^(j-1) (near samples matter more) and normalized, and the result is
+// clamp(1 - strength * sum w_j (s_j - d_j) / s_j, 0, 1): 1 open, 0 fully enclosed.
+
+#include "krs/core/validate.hpp"
+#include "krs/field.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace krs {
+
+struct soft_shadow_options {
+    float hardness = 16.0f;     // k: larger gives sharper penumbrae (light of angular radius ~ 1/k), > 0
+    float threshold = 1e-4f;    // the hit threshold of the shadow ray (use the primary hit's), > 0
+    float max_distance = 1e3f;  // how far toward the light occluders are searched, > 0
+    int max_steps = 256;        // >= 1; an unfinished march keeps the estimate found so far
+
+    const soft_shadow_options& validate() const
+    {
+        require_positive("soft_shadow_options.hardness", hardness);
+        require_positive("soft_shadow_options.threshold", threshold);
+        require_positive("soft_shadow_options.max_distance", max_distance);
+        if (max_steps < 1)
+            throw invalid_parameter("soft_shadow_options.max_steps", "must be >= 1", std::to_string(max_steps));
+        return *this;
+    }
+};
+
+// Visible fraction of the light from surface point p with normal n. The march starts at p lifted
+// by two thresholds along n (as krs::hard_shadow does), so it does not re-hit the surface it
+// leaves; t counts from that lifted point.
+template <field F, std::floating_point S>
+S soft_shadow(const F& f, const vec3<S>& p, const vec3<S>& n, const vec3<S>& to_light, const soft_shadow_options& o)
+{
+    o.validate();
+    const S k = S(o.hardness), threshold = S(o.threshold), t_max = S(o.max_distance);
+    const vec3<S> origin = p + n * (S(2) * threshold);
+    S visible = S(1), t = S(0);
+    for (int step = 0; step < o.max_steps; ++step) {
+        const S d = f.distance(origin + to_light * t);
+        if (!(d >= threshold)) return S(0); // reached the surface (or NaN: treat as blocked)
+        if (t > S(0)) visible = std::min(visible, k * d / t);
+        t += d;
+        if (t > t_max) break;
+    }
+    return std::clamp(visible, S(0), S(1));
+}
+
+struct ambient_occlusion_options {
+    float step = 0.05f;      // spacing of the samples along the normal, > 0 (about the size of
+                             // the crevices that should darken)
+    int samples = 5;         // in [1, 32]
+    float falloff = 0.7f;    // weight ratio of consecutive samples, in (0, 1]
+    float strength = 1.0f;   // >= 0
+
+    const ambient_occlusion_options& validate() const
+    {
+        require_positive("ambient_occlusion_options.step", step);
+        if (samples < 1 || samples > 32)
+            throw invalid_parameter("ambient_occlusion_options.samples", "must be in [1, 32]", std::to_string(samples));
+        require_positive("ambient_occlusion_options.falloff", falloff);
+        if (falloff > 1.0f)
+            throw invalid_parameter("ambient_occlusion_options.falloff", "must be <= 1", detail::to_text(falloff));
+        require_non_negative("ambient_occlusion_options.strength", strength);
+        return *this;
+    }
+};
+
+template <field F, std::floating_point S>
+S ambient_occlusion(const F& f, const vec3<S>& p, const vec3<S>& n, const ambient_occlusion_options& o)
+{
+    o.validate();
+    S occlusion = 0, total = 0, weight = 1;
+    for (int j = 1; j <= o.samples; ++j) {
+        const S s = S(j) * S(o.step);
+        const S d = f.distance(p + n * s);
+        occlusion += weight * (s - d) / s;
+        total += weight;
+        weight *= S(o.falloff);
+    }
+    const S ao = S(1) - S(o.strength) * occlusion / total;
+    return std::isfinite(ao) ? std::clamp(ao, S(0), S(1)) : S(1);
+}
+
+} // namespace krs

@@ -1,0 +1,299 @@
+// Composition: unions and the union tracer, Lipschitz warps, bounds and empty zones, collision
+// queries; each against brute force or a closed form.
+
+#include "krs/collision.hpp"
+#include "krs/compose.hpp"
+#include "krs/expansion.hpp"
+#include "krs/kernels/box.hpp"
+#include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus_capsule.hpp"
+#include "krs/model/terrain.hpp"
+#include "krs/model/tree.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+using krs::vec3d;
+using krs::vec3f;
+
+double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
+vec3d random_direction(std::mt19937_64& g)
+{
+    for (;;) {
+        const vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
+        const double l = krs::length(v);
+        if (l > 0.1 && l <= 1) return v / l;
+    }
+}
+
+using blobs = krs::sequence<krs::sphere, krs::torus_capsule>;
+// A small KRS "bush" shifted to `at`.
+blobs bush(const vec3f& at, float turn)
+{
+    blobs::builder b;
+    b.kernel(krs::sphere(at + vec3f{0.3f, 0.9f, 0.1f}, 0.18f));
+    b.kernel(krs::torus_capsule(at, at + vec3f{0.3f, 0.8f, 0.1f}, at + vec3f{0.05f, 0.4f, 0.1f}, 0.05f));
+    b.mirror(krs::mirror::through(at, {std::cos(turn), 0, std::sin(turn)}));
+    b.mirror(krs::mirror::through(at, {-std::sin(turn), 0.1f, std::cos(turn)}));
+    return b.build();
+}
+
+// A KRS whose kernels lie on the negative side of every mirror (separated: its distance is exact,
+// so the brute-force expansion is its reference).
+blobs separated_bush()
+{
+    blobs::builder b;
+    b.kernel(krs::sphere({-1.0f, 0.9f, -1.2f}, 0.3f));
+    b.kernel(krs::torus_capsule({-0.8f, 0, -0.9f}, {-1.0f, 0.8f, -1.2f}, {-0.7f, 0.4f, -1.0f}, 0.06f));
+    b.mirror(krs::mirror({1, 0, 0.1f}, 0.0f));
+    b.mirror(krs::mirror({0.1f, 0, 1}, 0.0f));
+    b.mirror(krs::mirror({1, 0.1f, 0.2f}, 2.0f));
+    return b.build();
+}
+
+// The min of the three, written out (the reference for union_of).
+struct three_bushes_by_hand {
+    blobs a, b, c;
+    template <class T>
+    T distance(const krs::vec3<T>& p) const
+    {
+        return krs::min(krs::min(a.distance(p), b.distance(p)), c.distance(p));
+    }
+};
+
+// A warp that claims a bound below 1 (rejected).
+struct shrinking_warp {
+    template <class T>
+    krs::vec3<T> apply(const krs::vec3<T>& p) const
+    {
+        return p * T(0.5f);
+    }
+    double lipschitz() const { return 0.5; }
+    krs::bounding_sphere domain() const { return krs::bounding_sphere::unbounded(); }
+};
+
+// Points on the zero set of g(x) = f(W(x)) in the ball B: bisection between sampled inside and
+// outside points (the surface is then known exactly, without trusting the warped distance).
+template <class F, class W>
+std::vector<vec3d> warped_surface_points(const F& f, const W& w, double radius, std::mt19937_64& g, int count)
+{
+    std::vector<vec3d> points;
+    auto value = [&](const vec3d& x) { return f.distance(w.apply(x)); };
+    while (int(points.size()) < count) {
+        const vec3d a = random_direction(g) * (radius * std::cbrt(uniform(g, 0, 1)));
+        const vec3d b = a + random_direction(g) * uniform(g, 0.05, 0.5);
+        if (krs::length(b) > radius) continue;
+        double fa = value(a), fb = value(b);
+        if ((fa <= 0) == (fb <= 0)) continue;
+        vec3d lo = a, hi = b;
+        if (fa > 0) std::swap(lo, hi); // lo inside
+        for (int i = 0; i < 50; ++i) {
+            const vec3d mid = (lo + hi) * 0.5;
+            (value(mid) <= 0 ? lo : hi) = mid;
+        }
+        points.push_back((lo + hi) * 0.5);
+    }
+    return points;
+}
+
+template <class F, class W>
+void check_warp(const F& f, const W& w, double radius)
+{
+    const krs::lipschitz_warp<F, W> g(f, w);
+    std::mt19937_64 rng(17);
+    // 1-Lipschitz on sampled pairs (inside, across and outside the domain).
+    for (int k = 0; k < 20000; ++k) {
+        const vec3d a = random_direction(rng) * uniform(rng, 0, 1.6 * radius);
+        const vec3d b = a + random_direction(rng) * uniform(rng, 1e-3, 0.5);
+        REQUIRE(std::abs(g.distance(a) - g.distance(b)) <= krs::length(a - b) * (1 + 1e-6) + 1e-9);
+    }
+    // Never overestimates the distance to the warped surface (found by bisection).
+    const std::vector<vec3d> surface = warped_surface_points(f, w, radius, rng, 1500);
+    double undivided_worst = 0;
+    for (int k = 0; k < 1500; ++k) {
+        const vec3d x = random_direction(rng) * uniform(rng, 0, 1.5 * radius);
+        double nearest = INFINITY;
+        for (const vec3d& s : surface) nearest = std::min(nearest, krs::length(x - s));
+        REQUIRE(g.distance(x) <= nearest + 1e-9);
+        if (krs::length(x) < radius) undivided_worst = std::max(undivided_worst, f.distance(w.apply(x)) - nearest);
+    }
+    // Without the division the warped distance does overestimate: the bound is needed.
+    CHECK(undivided_worst > 0.0);
+}
+
+} // namespace
+
+TEST_CASE("union_of equals the min of its components")
+{
+    const krs::union_of<blobs, blobs, krs::sphere> u(bush({0, 0, 0}, 0.3f), bush({2, 0, 1}, 1.1f),
+                                                      krs::sphere({-1, 0.5f, 2}, 0.4f));
+    std::mt19937_64 g(1);
+    for (int k = 0; k < 5000; ++k) {
+        const vec3d p{uniform(g, -3, 4), uniform(g, -1, 2), uniform(g, -2, 4)};
+        const double expected = std::min(std::min(u.component<0>().distance(p), u.component<1>().distance(p)),
+                                         u.component<2>().distance(p));
+        REQUIRE(u.distance(p) == expected);
+        REQUIRE(u.component_distance(2, p) == u.component<2>().distance(p));
+        const vec3f pf(p);
+        REQUIRE(u.distance(pf) == std::min(std::min(u.component<0>().distance(pf), u.component<1>().distance(pf)),
+                                           u.component<2>().distance(pf)));
+    }
+}
+
+TEST_CASE("the union tracer finds the hits of the min field with fewer evaluations")
+{
+    const vec3f at[3] = {{0, 0, 0}, {6, 0, 1}, {-5, 0, 3}};
+    const blobs a = bush(at[0], 0.3f), b = bush(at[1], 1.1f), c = bush(at[2], 2.0f);
+    const krs::union_of<blobs, blobs, blobs> u(a, b, c);
+    const three_bushes_by_hand reference{a, b, c};
+    krs::trace_options o;
+    o.pixel_footprint = 1e-4f;
+    o.max_distance = 40.0f;
+    std::mt19937_64 g(21);
+    long long union_evaluations = 0, plain_component_evaluations = 0;
+    int hits = 0, nearest_ok = 0;
+    for (int k = 0; k < 1000; ++k) {
+        const vec3d origin{uniform(g, -8, 8), uniform(g, 0, 3), uniform(g, -12, -8)};
+        const vec3d target = vec3d(at[k % 3]) + vec3d{uniform(g, -0.7, 0.7), uniform(g, 0, 1.1), uniform(g, -0.7, 0.7)};
+        const krs::ray<double> r{origin, krs::normalize(target - origin)};
+        const krs::hit<double> plain = krs::sphere_trace(reference, r, o);
+        const auto h = krs::union_trace(u, r, o);
+        REQUIRE(bool(h.found) == bool(plain.found));
+        if (plain.found) {
+            ++hits;
+            REQUIRE(h.t == doctest::Approx(plain.t).epsilon(1e-9));
+            const double d[3] = {a.distance(krs::point_at(r, h.t)), b.distance(krs::point_at(r, h.t)),
+                                 c.distance(krs::point_at(r, h.t))};
+            nearest_ok += d[h.nearest] <= std::min(d[0], std::min(d[1], d[2]));
+        }
+        union_evaluations += h.evaluations;
+        plain_component_evaluations += 3LL * plain.steps;
+    }
+    CHECK(hits > 40);
+    CHECK(nearest_ok == hits);
+    CHECK(union_evaluations < plain_component_evaluations * 3 / 4);
+    MESSAGE("union tracer: " << union_evaluations << " component evaluations vs " << plain_component_evaluations
+                             << " for plain tracing");
+}
+
+TEST_CASE("lipschitz_warp stays 1-Lipschitz and never overestimates")
+{
+    const krs::box slab({0, 0, 0}, {0.9f, 0.25f, 0.4f});
+    SUBCASE("twist") { check_warp(slab, krs::twist_warp(2.0f, 1.2f), 1.2); }
+    SUBCASE("bend") { check_warp(slab, krs::bend_warp(1.2f, 1.2f), 1.2); }
+    SUBCASE("noise") { check_warp(krs::sphere({0, 0, 0}, 0.6f), krs::noise_warp(0.25f, 3.0f), 1.0); }
+    CHECK_THROWS_WITH_AS(krs::lipschitz_warp(slab, shrinking_warp{}), doctest::Contains("lipschitz_warp.lipschitz"),
+                         krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::twist_warp(1.0f, 0.0f), doctest::Contains("twist_warp.radius"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::noise_warp(-1.0f, 1.0f), doctest::Contains("noise_warp.amplitude"), krs::invalid_parameter);
+}
+
+TEST_CASE("bounded never overestimates and skips the field far away")
+{
+    const blobs a = separated_bush();
+    const auto e = krs::expand(a);
+    const krs::bounded<blobs> bounded_a(a, 0.5f);
+    std::mt19937_64 g(8);
+    for (int k = 0; k < 4000; ++k) {
+        const vec3d p = vec3d(a.bound().center) + random_direction(g) * uniform(g, 0, 6 * a.bound().radius);
+        const double exact = e.distance(p);
+        REQUIRE(bounded_a.distance(p) <= exact + 1e-6);
+        // Where the field is evaluated the result is at least as tight as the field itself.
+        if (krs::length(p - vec3d(a.bound().center)) < a.bound().radius) REQUIRE(bounded_a.distance(p) >= a.distance(p));
+    }
+    CHECK_THROWS_WITH_AS(krs::bounded<krs::model::plane_sequence>(krs::model::build_terrain({}), 1.0f),
+                         doctest::Contains("bounded.bound"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::bounded<blobs>(a, -1.0f), doctest::Contains("bounded.margin"), krs::invalid_parameter);
+    // Tracing the bounded field: same hits, fewer steps for rays starting far away.
+    krs::trace_options o;
+    o.pixel_footprint = 1e-4f;
+    int hits = 0;
+    for (int k = 0; k < 500; ++k) {
+        const vec3d origin = random_direction(g) * 30.0;
+        const vec3d target = vec3d(a.bound().center) + random_direction(g) * uniform(g, 0, a.bound().radius);
+        const krs::ray<double> r{origin, krs::normalize(target - origin)};
+        const krs::hit<double> plain = krs::sphere_trace(a, r, o), fast = krs::sphere_trace(bounded_a, r, o);
+        REQUIRE(bool(plain.found) == bool(fast.found));
+        if (plain.found) REQUIRE(std::abs(plain.t - fast.t) <= o.threshold(plain.t) * 2);
+        hits += plain.found;
+    }
+    CHECK(hits > 50);
+}
+
+TEST_CASE("empty zones remove geometry conservatively and rays cross them")
+{
+    // Three spheres on a line; the middle one lies inside the zone.
+    krs::sequence<krs::sphere>::builder b;
+    b.kernel(krs::sphere({-2, 0, 0}, 0.5f));
+    b.kernel(krs::sphere({0, 0, 0}, 0.5f));
+    b.kernel(krs::sphere({2, 0, 0}, 0.5f));
+    const auto s = b.build();
+    const krs::with_empty_zones<decltype(s)> z(s, {krs::bounding_sphere{{0, 0, 0}, 1.0f}});
+    std::mt19937_64 g(12);
+    for (int k = 0; k < 5000; ++k) {
+        const vec3d p{uniform(g, -4, 4), uniform(g, -2, 2), uniform(g, -2, 2)};
+        // Exact distance to what remains: the two outer spheres.
+        const double exact = std::min(krs::length(p - vec3d{-2, 0, 0}), krs::length(p - vec3d{2, 0, 0})) - 0.5;
+        REQUIRE(z.distance(p) <= exact + 1e-9);
+    }
+    // A ray straight through the zone misses the removed sphere and hits the one behind it.
+    krs::trace_options o;
+    o.pixel_footprint = 0;
+    o.threshold_floor = 1e-6f;
+    const krs::ray<double> r{{-0.9, 0, 0}, {1, 0, 0}};
+    const krs::hit<double> h = krs::sphere_trace(z, r, o);
+    REQUIRE(h.found);
+    CHECK(h.t == doctest::Approx(2.4).epsilon(1e-5));
+    CHECK(h.steps < 60);
+    // A ray across the zone from outside passes through it too.
+    const krs::ray<double> r2{{0, -3, 0}, {0, 1, 0}};
+    CHECK_FALSE(krs::sphere_trace(z, r2, o).found);
+    CHECK(krs::sphere_trace(s, r2, o).found);
+    CHECK_THROWS_WITH_AS(krs::with_empty_zones<decltype(s)>(s, {krs::bounding_sphere{{0, 0, 0}, -1.0f}}),
+                         doctest::Contains("with_empty_zones.zones[0].radius"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::with_empty_zones<decltype(s)>(s, {}, 0.0f),
+                         doctest::Contains("with_empty_zones.skip_depth_fraction"), krs::invalid_parameter);
+}
+
+TEST_CASE("closest_point matches the sphere closed form and lands on the zero set")
+{
+    const krs::sphere ball({0.5f, -0.2f, 1.0f}, 0.8f);
+    std::mt19937_64 g(6);
+    for (int k = 0; k < 1000; ++k) {
+        const vec3d p = vec3d(ball.center) + random_direction(g) * uniform(g, 0.05, 5.0);
+        const auto r = krs::closest_point(ball, p);
+        REQUIRE(r.converged);
+        const vec3d expected = vec3d(ball.center) + krs::normalize(p - vec3d(ball.center)) * double(ball.radius);
+        REQUIRE(krs::length(r.point - expected) < 1e-6);
+    }
+    // A tree KRS (clipped, underestimating): the walk still ends on the surface.
+    krs::model::tree_style style;
+    style.levels = 6;
+    const auto tree = krs::model::build_tree(krs::model::grow_tree(style));
+    krs::closest_point_options o;
+    o.tolerance = 1e-5f;
+    o.max_iterations = 200;
+    int converged = 0;
+    for (int k = 0; k < 300; ++k) {
+        const vec3d p{uniform(g, -2, 2), uniform(g, 0.1, 4), uniform(g, -2, 2)};
+        const auto r = krs::closest_point(tree, p, o);
+        REQUIRE(std::isfinite(r.distance));
+        if (r.converged) {
+            ++converged;
+            REQUIRE(std::abs(tree.distance(r.point)) <= 1e-5);
+            // A surface point is never nearer to p than the field's (under)estimate said.
+            REQUIRE(krs::length(r.point - p) >= std::abs(tree.distance(p)) - 1e-6);
+        }
+    }
+    CHECK(converged > 250);
+    const krs::contact c = krs::contact_at(ball, vec3f{0.5f, 2.0f, 1.0f});
+    CHECK(c.distance == doctest::Approx(1.4));
+    CHECK(krs::length(c.normal - vec3f{0, 1, 0}) < 1e-6f);
+    o.max_iterations = 0;
+    CHECK_THROWS_WITH_AS(krs::closest_point(ball, vec3d{0, 0, 0}, o), doctest::Contains("closest_point_options.max_iterations"),
+                         krs::invalid_parameter);
+}

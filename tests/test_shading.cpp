@@ -1,0 +1,367 @@
+// Shading (Algorithm 2, Phong), soft shadows, ambient occlusion, texturing and depth composition
+// against closed forms and brute-force references.
+
+#include "krs/compose/depth.hpp"
+#include "krs/kernels/plane.hpp"
+#include "krs/kernels/sphere.hpp"
+#include "krs/model/terrain.hpp"
+#include "krs/shade/global.hpp"
+#include "krs/shade/kernel_light.hpp"
+#include "krs/shade/lambert.hpp"
+#include "krs/shade/texture.hpp"
+#include "krs/trace/camera.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+using krs::vec3d;
+using krs::vec3f;
+
+double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
+vec3d random_direction(std::mt19937_64& g)
+{
+    for (;;) {
+        const vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
+        const double l = krs::length(v);
+        if (l > 0.1 && l <= 1) return v / l;
+    }
+}
+
+// A KRS of spheres and planes whose mirrors are unaligned (and cross some kernels).
+using mixed = krs::sequence<krs::sphere, krs::plane>;
+mixed mixed_scene()
+{
+    mixed::builder b;
+    b.kernel(krs::sphere({0.4f, 0.3f, 0.2f}, 0.3f));
+    b.kernel(krs::plane({0.2f, 1, 0.1f}, -0.6f));
+    b.mirror(krs::mirror({1, 0.3f, 0.2f}, 0.9f));
+    b.kernel(krs::sphere({-0.5f, 0.8f, 0.1f}, 0.25f));
+    b.mirror(krs::mirror({0.1f, -0.2f, 1}, 0.7f));
+    b.mirror(krs::mirror({-0.6f, 0.1f, 1}, 1.5f));
+    b.kernel(krs::sphere({1.5f, 0.2f, -1.0f}, 0.4f));
+    b.mirror(krs::mirror({1, 0, -0.4f}, 2.2f));
+    return b.build();
+}
+
+// Independent reference of the light in the nearest kernel's space: walk the mirrors from the
+// top with explicit reflections, record every plane distance, and reflect the light exactly where
+// the point was reflected, down to the nearest kernel's level.
+struct reference_light {
+    vec3d light;
+    double nearest_plane_distance;
+    std::uint32_t level;
+};
+reference_light reflect_by_bits(const mixed& s, const vec3d& x, const vec3d& to_light)
+{
+    const std::size_t n = s.mirror_count();
+    vec3d p = x, w = to_light;
+    double best = INFINITY, nearest_plane = INFINITY;
+    reference_light out{to_light, INFINITY, 0};
+    for (std::size_t i = n + 1; i-- > 0;) {
+        if (i < n) {
+            const vec3d m(s.mirrors()[i].normal);
+            const double e = krs::dot(m, p) - double(s.mirrors()[i].offset);
+            nearest_plane = std::min(nearest_plane, std::abs(e));
+            if (e > 0) {
+                p = p - m * (2 * e);
+                w = w - m * (2 * krs::dot(m, w));
+            }
+        }
+        for (std::uint32_t k = s.level_begin(i); k < s.level_begin(i + 1); ++k) {
+            const double d = std::visit([&](const auto& kernel) { return kernel.distance(p); }, s.kernels()[k]);
+            if (d < best) {
+                best = d;
+                out.light = w;
+                out.level = std::uint32_t(i);
+                out.nearest_plane_distance = nearest_plane;
+            }
+        }
+    }
+    // Only the planes above the nearest kernel's level affect its light.
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("Algorithm 2: far from mirror planes the light is the light reflected by the recorded bits")
+{
+    const mixed s = mixed_scene();
+    std::mt19937_64 g(11);
+    const double threshold = 0.02;
+    int compared = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const vec3d x{uniform(g, -4, 4), uniform(g, -1, 2), uniform(g, -4, 4)};
+        const vec3d l = random_direction(g), v = random_direction(g);
+        const reference_light ref = reflect_by_bits(s, x, l);
+        const auto k_space = krs::shade_in_kernel_space(s, x, l, v, threshold);
+        if (ref.nearest_plane_distance <= threshold) continue; // inside a blending band
+        ++compared;
+        REQUIRE(k_space.where.level == ref.level);
+        REQUIRE(krs::length(k_space.light - ref.light) < 1e-9);
+        // Shading in kernel space equals shading in world space: n_kernel . l_kernel = n_world . l_world.
+        const vec3d n_world = s.normal(s.locate(x));
+        REQUIRE(krs::dot(k_space.normal, k_space.light) == doctest::Approx(krs::dot(n_world, l)).epsilon(1e-9));
+    }
+    CHECK(compared > 1500);
+}
+
+TEST_CASE("Algorithm 2: the interpolated light is continuous across a mirror plane")
+{
+    // A terrain: one plane kernel at level 0, so the nearest kernel never changes and the light is
+    // a composition of ramps: each level changes by at most 2 |dx| / threshold (see kernel_light.hpp),
+    // so a step of h moves the light by at most 2 n h / threshold.
+    krs::model::terrain_parameters tp;
+    tp.levels = 10;
+    tp.extra_planes = 0;
+    tp.size = 4.0f;
+    const krs::model::plane_sequence s = krs::model::build_terrain(tp);
+    const std::size_t n = s.mirror_count();
+    const double threshold = 0.05, h = threshold / 64;
+    const vec3d light = krs::normalize(vec3d{0.3, 1, 0.5}), view{0, 1, 0};
+    std::mt19937_64 g(5);
+    double largest_smooth = 0, largest_step = 0;
+    for (int line = 0; line < 20; ++line) {
+        // A line crossing the top mirror plane.
+        const krs::mirror& m = s.mirrors().back();
+        const vec3d on_plane = vec3d(m.normal) * double(m.offset) + vec3d{0, uniform(g, -0.5, 0.5), 0} +
+                               krs::cross(vec3d(m.normal), vec3d{0, 1, 0}) * uniform(g, -2, 2);
+        const vec3d dir = krs::normalize(vec3d(m.normal) + random_direction(g) * 0.3);
+        vec3d prev_smooth{}, prev_step{};
+        for (int i = 0; i <= 400; ++i) {
+            const vec3d x = on_plane + dir * (h * (i - 200));
+            const vec3d smooth = krs::shade_in_kernel_space(s, x, light, view, threshold).light;
+            const vec3d step = krs::shade_in_kernel_space(s, x, light, view, 0.0).light;
+            if (i > 0) {
+                const double change = krs::length(smooth - prev_smooth);
+                REQUIRE(change <= 2.0 * double(n) * h / threshold + 1e-9);
+                largest_smooth = std::max(largest_smooth, change);
+                largest_step = std::max(largest_step, krs::length(step - prev_step));
+            }
+            prev_smooth = smooth;
+            prev_step = step;
+        }
+    }
+    // Without interpolation the light jumps at the plane (what the bound above rules out).
+    CHECK(largest_step > 0.2);
+    CHECK(largest_smooth > 0.0);
+}
+
+TEST_CASE("Algorithm 2 gives axis-aligned mirrors the light of the equivalent general mirrors")
+{
+    // The same terrain-like KRS with axis_mirror and with general mirrors: same interpolated light.
+    krs::axis_sequence<krs::plane>::builder a;
+    krs::sequence<krs::plane>::builder g;
+    const krs::plane ground({0.3f, 1, -0.2f}, 0.0f);
+    a.kernel(ground);
+    g.kernel(ground);
+    const float positions[4] = {0.4f, -0.7f, 1.3f, 0.2f};
+    for (int i = 0; i < 4; ++i) {
+        const krs::axis_mirror m(i % 2 == 0 ? 0 : 2, positions[i], i < 2);
+        a.mirror(m);
+        g.mirror(m.general());
+    }
+    const auto sa = a.build();
+    const auto sg = g.build();
+    std::mt19937_64 rng(8);
+    for (int k = 0; k < 2000; ++k) {
+        const vec3d x{uniform(rng, -3, 3), uniform(rng, -1, 1), uniform(rng, -3, 3)};
+        const vec3d l = random_direction(rng);
+        const auto ka = krs::shade_in_kernel_space(sa, x, l, l, 0.3);
+        const auto kg = krs::shade_in_kernel_space(sg, x, l, l, 0.3);
+        REQUIRE(krs::length(ka.light - kg.light) < 1e-6);
+        REQUIRE(ka.where.reflections == kg.where.reflections);
+    }
+}
+
+TEST_CASE("Phong terms match the closed form")
+{
+    krs::sequence<krs::plane>::builder b;
+    b.kernel(krs::plane({0, 0, 1}, 0.0f));
+    const auto s = b.build();
+    const double a = 30.0 * 3.14159265358979 / 180.0;
+    const vec3d l{std::sin(a), 0, std::cos(a)};
+    const vec3d mirrored{-std::sin(a), 0, std::cos(a)};
+    const auto k1 = krs::shade_in_kernel_space(s, vec3d{0, 0, 0.1}, l, mirrored, 0.01);
+    const krs::phong_terms t1 = krs::phong(k1, 20.0);
+    CHECK(t1.diffuse == doctest::Approx(std::cos(a)));
+    CHECK(t1.specular == doctest::Approx(1.0));
+    const auto k2 = krs::shade_in_kernel_space(s, vec3d{0, 0, 0.1}, l, l, 0.01);
+    // r . v = cos(2a) for a view along the light.
+    CHECK(krs::phong(k2, 8.0).specular == doctest::Approx(std::pow(std::cos(2 * a), 8.0)).epsilon(1e-5));
+    CHECK_THROWS_AS(krs::phong(k2, 0.0), krs::invalid_parameter);
+    CHECK_THROWS_AS(krs::shade_in_kernel_space(s, vec3d{0, 0, 0.1}, l, l, -1.0), krs::invalid_parameter);
+}
+
+TEST_CASE("soft shadow stays in [0 1] and equals the hard shadow as hardness grows")
+{
+    krs::sequence<krs::sphere, krs::plane>::builder b;
+    b.kernel(krs::sphere({0, 1.0f, 0}, 0.4f));
+    b.mirror(krs::mirror({1, 0, 0.3f}, 1.2f));
+    b.kernel(krs::plane({0, 1, 0}, 0.0f));
+    const auto s = b.build();
+    const vec3d to_light = krs::normalize(vec3d{0.2, 1, 0.1});
+    std::mt19937_64 g(3);
+    krs::soft_shadow_options soft;
+    soft.threshold = 1e-4f;
+    soft.max_distance = 20.0f;
+    soft.max_steps = 512;
+    soft.hardness = 8.0f;
+    krs::soft_shadow_options sharp = soft;
+    sharp.hardness = 1e9f;
+    int penumbra = 0, shadowed = 0, lit = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const vec3d p{uniform(g, -2, 4), 0.0, uniform(g, -2, 2)};
+        const vec3d n{0, 1, 0};
+        const double v = krs::soft_shadow(s, p, n, to_light, soft);
+        REQUIRE(v >= 0.0);
+        REQUIRE(v <= 1.0);
+        const double hard = krs::hard_shadow(s, p, n, to_light, 1e-4, 20.0);
+        REQUIRE(krs::soft_shadow(s, p, n, to_light, sharp) == hard);
+        // The soft estimate is never brighter where the light is blocked.
+        if (hard == 0.0) REQUIRE(v == 0.0);
+        penumbra += v > 0.05 && v < 0.95;
+        shadowed += hard == 0.0;
+        lit += hard == 1.0;
+    }
+    CHECK(penumbra > 20);
+    CHECK(shadowed > 20);
+    CHECK(lit > 20);
+    soft.hardness = 0.0f;
+    CHECK_THROWS_WITH_AS(soft.validate(), doctest::Contains("soft_shadow_options.hardness"), krs::invalid_parameter);
+}
+
+TEST_CASE("ambient occlusion above an infinite plane kernel matches the closed form")
+{
+    // Half-space y <= 0 inside a KRS whose vertical mirror leaves it unchanged. At p = (0, h0, 0)
+    // sampling along a unit direction w with w . y = cos(theta): d(s) = h0 + s cos(theta).
+    krs::sequence<krs::plane>::builder b;
+    b.kernel(krs::plane({0, 1, 0}, 0.0f));
+    b.mirror(krs::mirror({1, 0, 0.2f}, 30.0f));
+    const auto s = b.build();
+    krs::ambient_occlusion_options o;
+    o.step = 0.1f;
+    o.samples = 6;
+    o.falloff = 0.6f;
+    o.strength = 1.5f;
+    for (double h0 : {0.0, 0.02, 0.1}) {
+        for (double theta_degrees : {0.0, 30.0, 60.0, 85.0}) {
+            const double theta = theta_degrees * 3.14159265358979 / 180.0;
+            const vec3d w{std::sin(theta), std::cos(theta), 0};
+            double occlusion = 0, total = 0, weight = 1;
+            for (int j = 1; j <= o.samples; ++j) {
+                const double sj = j * double(o.step);
+                occlusion += weight * (sj - (h0 + sj * std::cos(theta))) / sj;
+                total += weight;
+                weight *= double(o.falloff);
+            }
+            const double expected = std::clamp(1.0 - double(o.strength) * occlusion / total, 0.0, 1.0);
+            CHECK(krs::ambient_occlusion(s, vec3d{0, h0, 0}, w, o) == doctest::Approx(expected).epsilon(1e-9));
+        }
+    }
+    // Straight up from the surface nothing occludes; in a corner something does.
+    CHECK(krs::ambient_occlusion(s, vec3d{0, 0, 0}, vec3d{0, 1, 0}, o) == doctest::Approx(1.0));
+    krs::sequence<krs::plane>::builder corner;
+    corner.kernel(krs::plane({0, 1, 0}, 0.0f));
+    corner.kernel(krs::plane({-1, 0, 0}, 0.0f)); // x >= 0 is solid
+    const auto c = corner.build();
+    CHECK(krs::ambient_occlusion(c, vec3d{-0.01, 0, 0}, vec3d{0, 1, 0}, o) < 0.9);
+    o.samples = 0;
+    CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("ambient_occlusion_options.samples"), krs::invalid_parameter);
+}
+
+TEST_CASE_TEMPLATE("value noise is bounded and obeys its declared gradient bound", T, float, krs::packet_f)
+{
+    std::mt19937_64 g(9);
+    constexpr std::size_t lanes = krs::lane_count<T>;
+    for (int k = 0; k < 4000; ++k) {
+        alignas(64) float xs[lanes], ys[lanes], zs[lanes];
+        for (std::size_t i = 0; i < lanes; ++i)
+            xs[i] = float(uniform(g, -50, 50)), ys[i] = float(uniform(g, -50, 50)), zs[i] = float(uniform(g, -50, 50));
+        T x, y, z;
+        if constexpr (std::floating_point<T>)
+            x = xs[0], y = ys[0], z = zs[0];
+        else
+            x = T::load_aligned(xs), y = T::load_aligned(ys), z = T::load_aligned(zs);
+        const T v = krs::value_noise(krs::vec3<T>{x, y, z});
+        for (std::size_t i = 0; i < lanes; ++i) {
+            const float scalar = krs::value_noise(vec3f{xs[i], ys[i], zs[i]});
+            REQUIRE(krs::lane_at(v, i) == doctest::Approx(scalar).epsilon(1e-4));
+            REQUIRE(scalar >= -1.0f);
+            REQUIRE(scalar <= 1.0f);
+            // Lipschitz: a nearby pair never differs by more than the bound allows.
+            const vec3d a{xs[i], ys[i], zs[i]};
+            const vec3d b = a + random_direction(g) * uniform(g, 1e-3, 0.3);
+            const double dv = std::abs(krs::value_noise(a) - krs::value_noise(b));
+            REQUIRE(dv <= krs::value_noise_gradient_bound * krs::length(a - b) + 1e-9);
+        }
+    }
+}
+
+TEST_CASE("fractal noise and triplanar projection")
+{
+    const krs::fractal_noise fbm(5, 0.7f);
+    std::mt19937_64 g(2);
+    double lo = 1, hi = -1;
+    for (int k = 0; k < 5000; ++k) {
+        const vec3d p{uniform(g, -20, 20), uniform(g, -20, 20), uniform(g, -20, 20)};
+        const double v = fbm(p);
+        lo = std::min(lo, v), hi = std::max(hi, v);
+        REQUIRE(std::abs(v) <= 1.0);
+    }
+    CHECK(hi - lo > 0.8); // it varies
+    CHECK_THROWS_WITH_AS(krs::fractal_noise(0, 1.0f), doctest::Contains("fractal_noise.octaves"), krs::invalid_parameter);
+    // Triplanar: along an axis normal only that axis's projection is seen.
+    auto pattern = [](double u, double v) { return u + 10 * v; };
+    const vec3d p{1, 2, 3};
+    CHECK(krs::triplanar(pattern, p, vec3d{1, 0, 0}) == doctest::Approx(2 + 30));
+    CHECK(krs::triplanar(pattern, p, vec3d{0, -1, 0}) == doctest::Approx(3 + 10));
+    CHECK(krs::triplanar(pattern, p, vec3d{0, 0, 1}) == doctest::Approx(1 + 20));
+    // A diagonal normal averages all three.
+    CHECK(krs::triplanar(pattern, p, krs::normalize(vec3d{1, 1, 1})) == doctest::Approx((32 + 13 + 21) / 3.0));
+}
+
+TEST_CASE("depth round trip t to buffer depth and back")
+{
+    const krs::depth_projection proj(0.1f, 500.0f);
+    const krs::pinhole_camera camera({0, 1, -5}, {0.3f, 0.8f, 0}, {0, 1, 0}, 60.0f, 64, 48);
+    std::mt19937_64 g(4);
+    const vec3d forward(camera.forward());
+    CHECK(proj.buffer_depth(0.1) == doctest::Approx(0.0));
+    CHECK(proj.buffer_depth(500.0) == doctest::Approx(1.0));
+    for (int k = 0; k < 2000; ++k) {
+        const krs::ray<float> r = camera.primary_ray(float(uniform(g, 0, 64)), float(uniform(g, 0, 48)));
+        const vec3d d(r.direction);
+        const double t = std::exp(uniform(g, std::log(0.2), std::log(400.0)));
+        const double z = krs::view_depth_of(t, d, forward);
+        const double depth = proj.buffer_depth(z);
+        REQUIRE(depth >= 0.0);
+        REQUIRE(depth <= 1.0);
+        const double back = krs::t_of_view_depth(proj.view_depth(depth), d, forward);
+        REQUIRE(back == doctest::Approx(t).epsilon(1e-9));
+    }
+    // Monotonic: farther is deeper.
+    for (double z = 0.1; z < 500; z *= 1.5) REQUIRE(proj.buffer_depth(z * 1.5 < 500 ? z * 1.5 : 500.0) >= proj.buffer_depth(z));
+    CHECK_THROWS_WITH_AS(krs::depth_projection(1.0f, 0.5f), doctest::Contains("depth_projection.far_plane"),
+                         krs::invalid_parameter);
+}
+
+TEST_CASE("a depth buffer value limits each ray")
+{
+    const krs::sphere s({0, 0, 5}, 1.0f);
+    const krs::depth_projection proj(0.1f, 100.0f);
+    krs::trace_options o;
+    o.pixel_footprint = 0;
+    o.threshold_floor = 1e-6f;
+    const krs::ray<double> r{{0, 0, 0}, {0, 0, 1}};
+    const vec3d forward{0, 0, 1};
+    // Raster geometry at depth 3 hides the sphere (surface at t = 4); at depth 4.5 it does not.
+    const krs::hit<double> hidden = krs::trace_against_depth(s, r, o, proj, forward, proj.buffer_depth(3.0));
+    CHECK_FALSE(hidden.found);
+    const krs::hit<double> seen = krs::trace_against_depth(s, r, o, proj, forward, proj.buffer_depth(4.5));
+    REQUIRE(seen.found);
+    CHECK(seen.t == doctest::Approx(4.0).epsilon(1e-5));
+}
