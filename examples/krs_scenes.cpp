@@ -1,16 +1,22 @@
 // krs_scenes: the paper's section 7 scenes built from intuitive parameters, shaded with the
 // section 6 techniques, written to PNG files:
 //
-//     forest.png   two forests (different trees and seeds) traced together as a union with
-//                  per-component free distances (5.1); bark textured by torus-capsule uv (6.2)
+//     forest.png   a forest standing on a terrain folded by the forest's own mirrors (7.2), the
+//                  two KRSs traced together as a union with per-component free distances (5.1);
+//                  bark textured by torus-capsule uv (6.2); one tree replaced by user geometry (6.4)
 //     terrain.png  plane kernels, smooth shading by light interpolation (Algorithm 2, 6.1),
 //                  triplanar noise texture in world space (6.2)
-//     rock.png     a faceted rock, smooth shaded, inside a procedural bound (4.2)
+//     rock.png     a faceted rock, flat (left) and smooth (right, Algorithm 2) shaded, figure 7;
+//                  inside a procedural bound (4.2)
+//     mirrors.png  512 spheres from 9 mirrors: axis-aligned (left) and unaligned (right), figure 5
 //     coral.png    capsules and spheres, displaced by a Lipschitz noise warp (5.2)
 //     sponge.png   a Menger-like sponge of box kernels and mirrors, with ambient occlusion (6.5)
 //     grass.png    a clump of blades scattered by unaligned mirrors
 //
 // Every scene has soft shadows and ambient occlusion from sphere-traced secondary rays (6.5).
+// Each prints its kernel-instance count and triangle equivalent (the paper's results table; the
+// tessellation assumed is at `complexity` below), its time per ray (primary and secondary rays,
+// in core-microseconds) and the mean march steps of a primary ray.
 //
 //     krs_scenes [--width W] [--height H] [--threads N] [--seed S] [--only NAME] [--output-dir DIR]
 //
@@ -20,6 +26,7 @@
 #include "krs/kernels/capsule.hpp"
 #include "krs/model/coral.hpp"
 #include "krs/model/forest.hpp"
+#include "krs/model/forest_ground.hpp"
 #include "krs/model/grass.hpp"
 #include "krs/model/terrain.hpp"
 #include "krs/shade/global.hpp"
@@ -37,6 +44,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -81,7 +89,7 @@ options parse(int argc, char** argv)
         else if (a == "--output-dir") o.output_dir = value("--output-dir");
         else {
             std::fprintf(stderr, "usage: krs_scenes [--width W] [--height H] [--threads N] [--seed S] "
-                                 "[--only forest|terrain|rock|coral|sponge|grass] [--output-dir DIR]\n");
+                                 "[--only forest|terrain|rock|mirrors|coral|sponge|grass] [--output-dir DIR]\n");
             std::exit(2);
         }
     }
@@ -112,16 +120,24 @@ struct shifted {
 const vec3f sun_direction = krs::normalize(vec3f{0.55f, 0.65f, -0.35f});
 const vec3f sun_color{1.0f, 0.95f, 0.85f}, sky_light{0.30f, 0.36f, 0.45f};
 
+// Per-thread counters: rays traced (primary, and secondary: one per soft-shadow march and one per
+// ambient-occlusion probe along the normal) and the march steps of primary rays.
+struct ray_counts {
+    long long primary = 0, secondary = 0, primary_steps = 0;
+    void add(const ray_counts& o) { primary += o.primary, secondary += o.secondary, primary_steps += o.primary_steps; }
+};
+
 // Direct sun (diffuse * soft shadow) plus sky light weighted by ambient occlusion.
 template <class F>
 vec3f light_surface(const F& field, const vec3f& p, const vec3f& n, float diffuse, float threshold, float shadow_reach,
-                    float ao_step)
+                    float ao_step, ray_counts& counts)
 {
     krs::soft_shadow_options s;
     s.hardness = 12.0f;
     s.threshold = threshold;
     s.max_distance = shadow_reach;
     s.max_steps = 160;
+    counts.secondary += 1 + (diffuse > 0.0f);
     const float shadow = diffuse > 0.0f ? krs::soft_shadow(field, p, n, sun_direction, s) : 0.0f;
     krs::ambient_occlusion_options a;
     a.step = ao_step;
@@ -130,47 +146,30 @@ vec3f light_surface(const F& field, const vec3f& p, const vec3f& n, float diffus
     return sun_color * (diffuse * shadow) + sky_light * ao;
 }
 
-// Renders `pixel(ray) -> color` into dir/name.png with tiles over threads; returns seconds.
-double render(const options& opt, const std::string& name, const krs::pinhole_camera& camera,
-              const std::function<vec3f(const krs::ray<float>&)>& pixel)
+// Scene complexity as the paper's results table counts it: kernel instances of the full
+// expansion, and the triangles a mesh would need for the same result. Assumption: every instance
+// tessellated on its own, a torus capsule as a 16 x 8 quad tube (256 triangles), a sphere as a
+// twice-subdivided icosahedron (320), a capsule as a 16 x 6 tube with caps (192), a box as 12,
+// and a plane instance (a facet clipped by the mirrors) as 2.
+struct complexity {
+    double instances = 0, triangles = 0;
+    complexity& operator+=(const complexity& o) { return instances += o.instances, triangles += o.triangles, *this; }
+};
+constexpr double triangles_of(const krs::torus_capsule&) { return 256; }
+constexpr double triangles_of(const krs::sphere&) { return 320; }
+constexpr double triangles_of(const krs::capsule&) { return 192; }
+constexpr double triangles_of(const krs::box&) { return 12; }
+constexpr double triangles_of(const krs::plane&) { return 2; }
+template <class Mirror, class... Kinds>
+complexity complexity_of(const krs::basic_sequence<Mirror, Kinds...>& s)
 {
-    std::vector<float> pixels(std::size_t(opt.width) * opt.height * 3);
-    constexpr int tile = 16;
-    const int tiles_x = (opt.width + tile - 1) / tile, tiles_y = (opt.height + tile - 1) / tile;
-    const int tiles = tiles_x * tiles_y;
-    std::atomic<int> next{0};
-    auto worker = [&] {
-        for (int k; (k = next.fetch_add(1)) < tiles;) {
-            const int x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
-            for (int y = y0; y < std::min(y0 + tile, opt.height); ++y)
-                for (int x = x0; x < std::min(x0 + tile, opt.width); ++x) {
-                    const vec3f c = pixel(camera.primary_ray(x + 0.5f, y + 0.5f));
-                    float* out = &pixels[(std::size_t(y) * opt.width + x) * 3];
-                    out[0] = c.x, out[1] = c.y, out[2] = c.z;
-                }
-        }
-    };
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<std::thread> pool;
-    for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
-    for (std::thread& t : pool) t.join();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-    std::vector<unsigned char> bytes(pixels.size());
-    for (std::size_t i = 0; i < pixels.size(); ++i)
-        bytes[i] = (unsigned char)std::lround(255.0f * std::pow(std::clamp(pixels[i], 0.0f, 1.0f), 1.0f / 2.2f));
-    const std::string path = opt.output_dir + "/" + name + ".png";
-    auto file = OIIO::ImageOutput::create(path);
-    const OIIO::ImageSpec spec(opt.width, opt.height, 3, OIIO::TypeDesc::UINT8);
-    if (!file || !file->open(path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, bytes.data())) {
-        std::fprintf(stderr, "krs_scenes: cannot write %s: %s\n", path.c_str(), OIIO::geterror().c_str());
-        std::exit(1);
+    complexity c;
+    for (std::size_t k = 0; k < s.kernels().size(); ++k) {
+        const double copies = std::ldexp(1.0, int(s.mirror_count() - s.kernel_level(k)));
+        c.instances += copies;
+        c.triangles += copies * std::visit([](const auto& kernel) { return triangles_of(kernel); }, s.kernels()[k]);
     }
-    file->close();
-    std::printf("%-8s %7.2f s  (%dx%d, %d threads, %.1f core-us per pixel) -> %s\n", name.c_str(), seconds, opt.width,
-                opt.height, opt.threads, 1e6 * seconds * opt.threads / (double(opt.width) * opt.height), path.c_str());
-    std::fflush(stdout);
-    return seconds;
+    return c;
 }
 
 krs::trace_options tracing(const krs::pinhole_camera& camera, float max_distance)
@@ -183,78 +182,138 @@ krs::trace_options tracing(const krs::pinhole_camera& camera, float max_distance
     return t.validate(), t;
 }
 
+// Renders `pixel(x, y, counts) -> color` into dir/name.png with tiles over threads and reports
+// the scene's complexity, its time per ray and steps per primary ray; returns seconds.
+double render(const options& opt, const std::string& name, const complexity& scene,
+              const std::function<vec3f(float, float, ray_counts&)>& pixel)
+{
+    std::vector<float> pixels(std::size_t(opt.width) * opt.height * 3);
+    constexpr int tile = 16;
+    const int tiles_x = (opt.width + tile - 1) / tile, tiles_y = (opt.height + tile - 1) / tile;
+    const int tiles = tiles_x * tiles_y;
+    std::atomic<int> next{0};
+    std::vector<ray_counts> counts(std::size_t(opt.threads));
+    auto worker = [&](ray_counts& mine) {
+        for (int k; (k = next.fetch_add(1)) < tiles;) {
+            const int x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
+            for (int y = y0; y < std::min(y0 + tile, opt.height); ++y)
+                for (int x = x0; x < std::min(x0 + tile, opt.width); ++x) {
+                    const vec3f c = pixel(float(x), float(y), mine);
+                    float* out = &pixels[(std::size_t(y) * opt.width + x) * 3];
+                    out[0] = c.x, out[1] = c.y, out[2] = c.z;
+                }
+        }
+    };
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<std::thread> pool;
+    for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker, std::ref(counts[std::size_t(i)]));
+    for (std::thread& t : pool) t.join();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ray_counts total;
+    for (const ray_counts& c : counts) total.add(c);
+
+    std::vector<unsigned char> bytes(pixels.size());
+    for (std::size_t i = 0; i < pixels.size(); ++i)
+        bytes[i] = (unsigned char)std::lround(255.0f * std::pow(std::clamp(pixels[i], 0.0f, 1.0f), 1.0f / 2.2f));
+    const std::string path = opt.output_dir + "/" + name + ".png";
+    auto file = OIIO::ImageOutput::create(path);
+    const OIIO::ImageSpec spec(opt.width, opt.height, 3, OIIO::TypeDesc::UINT8);
+    if (!file || !file->open(path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, bytes.data())) {
+        std::fprintf(stderr, "krs_scenes: cannot write %s: %s\n", path.c_str(), OIIO::geterror().c_str());
+        std::exit(1);
+    }
+    file->close();
+    const double rays = double(total.primary + total.secondary);
+    std::printf("%-8s %7.2f s  (%dx%d, %d threads) -> %s\n", name.c_str(), seconds, opt.width, opt.height, opt.threads,
+                path.c_str());
+    std::printf("%-8s %.4g kernel instances, ~%.3g triangles equivalent; %lld primary + %lld secondary rays, "
+                "%.2f core-us per ray, %.1f steps per primary ray\n",
+                name.c_str(), scene.instances, scene.triangles, total.primary, total.secondary,
+                1e6 * seconds * opt.threads / std::max(rays, 1.0),
+                double(total.primary_steps) / double(std::max(total.primary, 1LL)));
+    std::fflush(stdout);
+    return seconds;
+}
+
 // ---- scenes ---------------------------------------------------------------------------------------
 
 double forest_scene(const options& opt)
 {
-    krs::model::forest_parameters a;
-    a.tree.levels = 9;
-    a.tree.leaves_per_twig = 3;
-    a.tree.leaf_radius = 0.12f;
-    a.tree.seed = opt.seed;
-    a.doublings = 5;
-    a.ground_height.reset();
-    a.seed = opt.seed;
-    krs::model::forest_parameters b = a;
-    b.tree.seed = opt.seed + 17;
-    b.tree.spread_degrees = 38.0f;
-    b.tree.twist_degrees = 100.0f;
-    b.seed = opt.seed + 5;
-    const krs::model::forest fa = krs::model::build_forest(a), fb = krs::model::build_forest(b);
-    const vec3f offset{fa.bound.radius + fb.bound.radius * 0.6f, 0, fb.bound.radius * 0.4f};
-    // One tree of the first forest is "broken off" (section 6.4): an empty zone removes it from the
-    // KRS, and user geometry (a fallen trunk and crown, which a physics engine could move) stands
-    // in for it.
-    const vec3f look = (fa.bound.center + fb.bound.center + offset) * 0.5f;
-    krs::bounding_sphere removed = fa.trees[0]; // the tree of the first forest nearest the view center
-    for (const krs::bounding_sphere& t : fa.trees)
+    krs::model::forest_parameters fp;
+    fp.tree.levels = 9;
+    fp.tree.leaves_per_twig = 3;
+    fp.tree.leaf_radius = 0.12f;
+    fp.tree.seed = opt.seed;
+    fp.doublings = 6;
+    fp.ground_height.reset(); // the ground is the terrain below
+    fp.seed = opt.seed;
+    const krs::model::forest forest = krs::model::build_forest(fp);
+    // The terrain folded by the forest's own mirrors (section 7.2): every trunk base on the ground.
+    krs::model::terrain_parameters tp;
+    tp.levels = 12;
+    tp.size = 3.0f * forest.crown.radius;
+    tp.slope = 0.22f;
+    tp.extra_planes = 2;
+    tp.seed = opt.seed + 3;
+    const krs::model::plane_sequence ground = krs::model::build_forest_ground(fp, forest, tp);
+    // One tree is "broken off" (section 6.4): an empty zone removes it from the KRS, and user
+    // geometry (a fallen trunk and crown, which a physics engine could move) stands in for it.
+    const vec3f look = forest.bound.center;
+    krs::bounding_sphere removed = forest.trees[0];
+    for (const krs::bounding_sphere& t : forest.trees)
         if (krs::length(t.center - look) < krs::length(removed.center - look)) removed = t;
     const vec3f base{removed.center.x, 0.0f, removed.center.z};
     const vec3f fallen = base + krs::normalize(vec3f{1, 0, -0.4f}) * (1.4f * removed.radius);
-    const krs::capsule trunk(base + vec3f{0, 0.25f, 0}, fallen + vec3f{0, 0.2f, 0}, 0.2f);
-    const krs::sphere crown(fallen + vec3f{0, 0.8f, 0}, 0.35f * removed.radius);
+    const float fallen_ground = -ground.distance(fallen + vec3f{0, 2.0f, 0}) + 2.0f; // roughly: the slopes are gentle
+    const krs::capsule trunk(base + vec3f{0, 0.2f, 0}, fallen + vec3f{0, fallen_ground + 0.15f, 0}, 0.2f);
+    const krs::sphere crown(fallen + vec3f{0, fallen_ground + 0.6f, 0}, 0.35f * removed.radius);
     using zoned = krs::with_empty_zones<krs::model::tree_sequence>;
-    const zoned forest_a(fa.sequence, {removed});
-    using forest_field = krs::bounded<zoned>;
-    using moved_field = krs::bounded<shifted<krs::model::tree_sequence>>;
-    const krs::union_of<forest_field, moved_field, krs::plane, krs::capsule, krs::sphere> scene(
-        forest_field(forest_a, fa.bound, 1.0f),
-        moved_field({fb.sequence, offset}, {fb.bound.center + offset, fb.bound.radius}, 1.0f),
-        krs::plane({0, 1, 0}, 0.0f), trunk, crown);
+    const zoned trees(forest.sequence, {removed});
+    using trees_field = krs::bounded<zoned>;
+    const krs::union_of<trees_field, krs::model::plane_sequence, krs::capsule, krs::sphere> scene(
+        trees_field(trees, forest.bound, 1.0f), ground, trunk, crown);
     // Secondary rays (soft shadows, ambient occlusion) use the fields without their bounds: the
     // bound's distance is a valid but loose underestimate, and a penumbra or occlusion estimate
     // computed from it would show the bounding sphere.
-    const krs::union_of<zoned, shifted<krs::model::tree_sequence>, krs::plane, krs::capsule, krs::sphere> exact(
-        forest_a, {fb.sequence, offset}, krs::plane({0, 1, 0}, 0.0f), trunk, crown);
-    std::printf("forest: 2 x %zu trees of %.0f kernel instances each\n", fa.tree_count, fa.tree_instances);
+    const krs::union_of<zoned, krs::model::plane_sequence, krs::capsule, krs::sphere> exact(trees, ground, trunk, crown);
+    std::printf("forest: %zu trees of %.0f kernel instances each, standing on a %zu-mirror terrain\n", forest.tree_count,
+                forest.tree_instances, ground.mirror_count());
 
-    const float span = fa.bound.radius + fb.bound.radius;
-    const vec3f eye = look + vec3f{-0.2f * span, 0.28f * span, -0.75f * span};
-    const krs::pinhole_camera camera(eye, look - vec3f{0, 0.1f * span, 0}, {0, 1, 0}, 45.0f, opt.width, opt.height);
+    const float span = forest.bound.radius;
+    const vec3f eye = look + vec3f{-0.25f * span, 0.45f * span, -1.05f * span};
+    const krs::pinhole_camera camera(eye, look - vec3f{0, 0.15f * span, 0}, {0, 1, 0}, 45.0f, opt.width, opt.height);
     const krs::trace_options trace = tracing(camera, 6 * span);
     const krs::fractal_noise ground_noise(4, 0.3f);
+    complexity c = complexity_of(forest.sequence);
+    c += complexity_of(ground);
 
-    return render(opt, "forest", camera, [&](const krs::ray<float>& r) {
+    return render(opt, "forest", c, [&](float x, float y, ray_counts& counts) {
+        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const auto h = krs::union_trace(scene, r, trace);
+        ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         const float threshold = trace.threshold(h.t);
         vec3f n{0, 1, 0}, albedo{0.35f, 0.30f, 0.18f};
-        if (h.nearest == 2) {
+        float diffuse = 0;
+        if (h.nearest == 1) {
+            // Terrain: Algorithm 2 smooths the creases of the folded planes.
+            const float band = krs::smoothing_threshold(h.t, camera.pixel_footprint(), 6.0f) + 0.05f;
+            const auto k = krs::shade_in_kernel_space(ground, p, sun_direction, -r.direction, band);
+            diffuse = std::max(krs::dot(k.normal, k.light), 0.0f);
+            n = ground.normal(p);
             albedo = mix3(albedo, vec3f{0.22f, 0.32f, 0.12f}, 0.5f + 0.5f * ground_noise(p));
-        } else if (h.nearest == 3) {
+        } else if (h.nearest == 2) {
             n = krs::normalize(trunk.normal(p));
             albedo = {0.40f, 0.25f, 0.15f};
-        } else if (h.nearest == 4) {
+        } else if (h.nearest == 3) {
             n = crown.normal(p);
             albedo = {0.55f, 0.45f, 0.10f};
         } else {
-            const krs::model::tree_sequence& s = h.nearest == 0 ? fa.sequence : fb.sequence;
-            const vec3f local = h.nearest == 0 ? p : p - offset;
-            const krs::location<float> where = s.locate(local);
-            n = s.normal(where);
+            const krs::location<float> where = forest.sequence.locate(p);
+            n = forest.sequence.normal(where);
             if (krs::dot(n, r.direction) > 0) n = -n;
-            const auto& kernel = s.kernels()[where.kernel];
+            const auto& kernel = forest.sequence.kernels()[where.kernel];
             if (const auto* branch = std::get_if<krs::torus_capsule>(&kernel)) {
                 // Bark: grooves along the branch from the kernel's own (u, v) (section 6.2).
                 const krs::surface_uv<float> uv = branch->uv(where.kernel_point);
@@ -262,12 +321,11 @@ double forest_scene(const options& opt)
                 albedo = vec3f{0.30f, 0.21f, 0.14f} * (0.7f + 0.3f * groove);
             } else {
                 const float v = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
-                albedo = h.nearest == 0 ? vec3f{0.16f + 0.1f * v, 0.38f + 0.12f * v, 0.08f}
-                                        : vec3f{0.32f + 0.1f * v, 0.36f + 0.1f * v, 0.07f};
+                albedo = vec3f{0.16f + 0.12f * v, 0.38f + 0.1f * v, 0.08f};
             }
         }
-        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
-        return mul(albedo, light_surface(exact, p, n, diffuse, threshold, span, 0.3f));
+        if (h.nearest != 1) diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        return mul(albedo, light_surface(exact, p, n, diffuse, threshold, span, 0.3f, counts));
     });
 }
 
@@ -286,8 +344,10 @@ double terrain_scene(const options& opt)
     const krs::trace_options trace = tracing(camera, 200.0f);
     const krs::fractal_noise detail(5, 0.5f);
 
-    return render(opt, "terrain", camera, [&](const krs::ray<float>& r) {
+    return render(opt, "terrain", complexity_of(terrain), [&](float x, float y, ray_counts& counts) {
+        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const krs::hit<float> h = krs::sphere_trace(terrain, r, trace);
+        ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         // Algorithm 2: light and view carried into the plane kernel's space, blended over a band
@@ -301,12 +361,15 @@ double terrain_scene(const options& opt)
         const float rock = krs::triplanar(pattern, p * 0.8f, n);
         const vec3f grass{0.22f, 0.34f, 0.10f}, stone{0.45f, 0.41f, 0.36f};
         const vec3f albedo = mix3(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
-        const vec3f c = mul(albedo, light_surface(terrain, p, n, diffuse, trace.threshold(h.t), 60.0f, 0.6f));
+        const vec3f c = mul(albedo, light_surface(terrain, p, n, diffuse, trace.threshold(h.t), 60.0f, 0.6f, counts));
         const float fog = 1.0f - std::exp(-h.t / 400.0f);
         return mix3(c, sky(r.direction), fog);
     });
 }
 
+// Figure 7: the same rock, flat shaded (left: the kernel normal carried back by the recorded
+// reflections, no interpolation) and smooth shaded (right: Algorithm 2, the light interpolated
+// across each mirror over a band proportional to the hit's depth, i.e. to the pixel footprint).
 double rock_scene(const options& opt)
 {
     krs::model::rock_parameters rp;
@@ -319,25 +382,117 @@ double rock_scene(const options& opt)
     const krs::union_of<rock_field, krs::plane> scene(rock_field(rock.sequence, rock.bound, 0.2f),
                                                       krs::plane({0, 1, 0}, 0.0f));
     const krs::union_of<krs::model::plane_sequence, krs::plane> exact(rock.sequence, krs::plane({0, 1, 0}, 0.0f));
-    const krs::pinhole_camera camera({2.6f, 2.2f, -3.6f}, {0, 0.5f, 0}, {0, 1, 0}, 40.0f, opt.width, opt.height);
+    const int half = std::max(1, opt.width / 2);
+    const krs::pinhole_camera camera({3.4f, 2.9f, -4.7f}, {0, 0.6f, 0}, {0, 1, 0}, 40.0f, half, opt.height);
     const krs::trace_options trace = tracing(camera, 60.0f);
     const krs::fractal_noise grain(4, 3.0f);
+    // The smoothing band: this many pixel footprints wide at the hit's depth (paper: e_threshold
+    // inversely proportional to depth resolution), so the look does not change with distance.
+    const float band_pixels = 0.1f * float(opt.height);
+    complexity c = complexity_of(rock.sequence);
+    c.instances += 1, c.triangles += 2;
 
-    return render(opt, "rock", camera, [&](const krs::ray<float>& r) {
+    return render(opt, "rock", c, [&](float x, float y, ray_counts& counts) {
+        const bool smooth = x >= float(half);
+        const krs::ray<float> r = camera.primary_ray((smooth ? x - float(half) : x) + 0.5f, y + 0.5f);
+        if (int(x) == half) return vec3f{1, 1, 1}; // the divider
         const auto h = krs::union_trace(scene, r, trace);
+        ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         if (h.nearest == 1) {
             const vec3f sand = vec3f{0.55f, 0.50f, 0.40f} * (0.9f + 0.1f * grain(p));
-            return mul(sand, light_surface(exact, p, {0, 1, 0}, sun_direction.y, trace.threshold(h.t), 10.0f, 0.15f));
+            return mul(sand, light_surface(exact, p, {0, 1, 0}, sun_direction.y, trace.threshold(h.t), 10.0f, 0.15f, counts));
         }
-        // Smooth shading of the planar facets (figure 7): a wide band blends the creases.
-        const auto k = krs::shade_in_kernel_space(rock.sequence, p, sun_direction, -r.direction, 0.08f);
+        const float band = smooth ? krs::smoothing_threshold(h.t, camera.pixel_footprint(), band_pixels) : 0.0f;
+        const auto k = krs::shade_in_kernel_space(rock.sequence, p, sun_direction, -r.direction, band);
         const krs::phong_terms ph = krs::phong(k, 24.0f);
         const vec3f n = rock.sequence.normal(p);
         const vec3f albedo = vec3f{0.45f, 0.42f, 0.40f} * (0.75f + 0.25f * grain(p));
-        const vec3f lit = light_surface(exact, p, n, ph.diffuse, trace.threshold(h.t), 10.0f, 0.1f);
+        const vec3f lit = light_surface(exact, p, n, ph.diffuse, trace.threshold(h.t), 10.0f, 0.1f, counts);
         return mul(albedo, lit) + sun_color * (0.15f * ph.specular);
+    });
+}
+
+// Figure 5: one sphere multiplied by 9 mirrors into 512 spheres. Left: the mirrors alternate
+// between the x, y and z axes, and the copies form a lattice whose symmetry the eye sees at once.
+// Right: each mirror's normal is random, and the same 512 spheres read as a natural cluster.
+template <class Mirror>
+using sphere_cloud = krs::basic_sequence<Mirror, krs::sphere>;
+
+template <class Mirror, class MakeMirror>
+sphere_cloud<Mirror> build_cloud(const krs::sphere& seed, int doublings, float gap, MakeMirror make)
+{
+    typename sphere_cloud<Mirror>::builder b;
+    b.kernel(seed);
+    std::vector<vec3f> copies{seed.center};
+    for (int k = 0; k < doublings; ++k) {
+        // Just beyond the copies along the normal: every copy stays on the negative side (separated).
+        const Mirror m = make(k, copies, seed.radius + 0.5f * gap);
+        b.mirror(m);
+        const std::size_t count = copies.size();
+        for (std::size_t i = 0; i < count; ++i) copies.push_back(m.reflect(copies[i]));
+    }
+    return b.build();
+}
+
+double mirrors_scene(const options& opt)
+{
+    const krs::sphere ball({0, 0.4f, 0}, 0.4f);
+    constexpr int doublings = 9;
+    auto extent = [](const std::vector<vec3f>& copies, const vec3f& n) {
+        float e = -1e30f;
+        for (const vec3f& p : copies) e = std::max(e, krs::dot(n, p));
+        return e;
+    };
+    const auto aligned = build_cloud<krs::axis_mirror>(ball, doublings, 0.3f, [&](int k, const std::vector<vec3f>& copies,
+                                                                                   float margin) {
+        const int axis = k % 3;
+        vec3f n{0, 0, 0};
+        (axis == 0 ? n.x : axis == 1 ? n.y : n.z) = 1;
+        return krs::axis_mirror(axis, extent(copies, n) + margin, true);
+    });
+    std::mt19937 random(opt.seed);
+    std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+    const auto unaligned = build_cloud<krs::mirror>(ball, doublings, 0.3f, [&](int k, const std::vector<vec3f>& copies,
+                                                                                float margin) {
+        // The same alternation of axes (a compact cluster, not a chain), each turned at random.
+        vec3f n{uniform(random), uniform(random), uniform(random)};
+        (k % 3 == 0 ? n.x : k % 3 == 1 ? n.y : n.z) += 1.3f;
+        n = krs::normalize(n);
+        return krs::mirror(n, extent(copies, n) + margin);
+    });
+    const int half = std::max(1, opt.width / 2);
+    struct view {
+        krs::pinhole_camera camera;
+        krs::trace_options trace;
+    };
+    auto view_of = [&](const krs::bounding_sphere& b) {
+        const krs::pinhole_camera camera(b.center + vec3f{0.55f, 0.5f, -1.0f} * (1.9f * b.radius), b.center, {0, 1, 0},
+                                         40.0f, half, opt.height);
+        return view{camera, tracing(camera, 8 * b.radius)};
+    };
+    const view left = view_of(aligned.bound()), right = view_of(unaligned.bound());
+    complexity c = complexity_of(aligned);
+    c += complexity_of(unaligned);
+
+    auto shade = [&](const auto& cloud, const view& v, const krs::ray<float>& r, ray_counts& counts) {
+        const krs::hit<float> h = krs::sphere_trace(cloud, r, v.trace);
+        ++counts.primary, counts.primary_steps += h.steps;
+        if (!h.found) return sky(r.direction);
+        const vec3f p = krs::point_at(r, h.t);
+        const krs::location<float> where = cloud.locate(p);
+        const vec3f n = cloud.normal(where);
+        const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
+        const vec3f albedo = mix3(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
+        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        return mul(albedo, light_surface(cloud, p, n, diffuse, v.trace.threshold(h.t), 4.0f * cloud.bound().radius,
+                                         0.1f, counts));
+    };
+    return render(opt, "mirrors", c, [&](float x, float y, ray_counts& counts) {
+        if (int(x) == half) return vec3f{1, 1, 1};
+        if (x < float(half)) return shade(aligned, left, left.camera.primary_ray(x + 0.5f, y + 0.5f), counts);
+        return shade(unaligned, right, right.camera.primary_ray(x - float(half) + 0.5f, y + 0.5f), counts);
     });
 }
 
@@ -359,8 +514,13 @@ double coral_scene(const options& opt)
     trace.max_steps = 600;
     const krs::fractal_noise spots(3, 6.0f);
 
-    return render(opt, "coral", camera, [&](const krs::ray<float>& r) {
+    complexity c = complexity_of(coral);
+    c.instances += 1, c.triangles += 2;
+
+    return render(opt, "coral", c, [&](float x, float y, ray_counts& counts) {
+        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const auto h = krs::union_trace(scene, r, trace);
+        ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return vec3f{0.05f, 0.22f, 0.35f} * (0.6f + 0.4f * r.direction.y);
         const vec3f p = krs::point_at(r, h.t);
         const float threshold = trace.threshold(h.t);
@@ -370,7 +530,7 @@ double coral_scene(const options& opt)
             albedo = mix3(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
         }
         const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
-        return mul(albedo, light_surface(scene, p, n, diffuse, threshold, 2 * b.radius, 0.04f * b.radius));
+        return mul(albedo, light_surface(scene, p, n, diffuse, threshold, 2 * b.radius, 0.04f * b.radius, counts));
     });
 }
 
@@ -388,8 +548,16 @@ double sponge_scene(const options& opt)
     const krs::pinhole_camera camera({2.4f, 2.9f, -3.3f}, {0, 0.9f, 0}, {0, 1, 0}, 42.0f, opt.width, opt.height);
     const krs::trace_options trace = tracing(camera, 60.0f);
 
-    return render(opt, "sponge", camera, [&](const krs::ray<float>& r) {
+    // The KRS has 2^21 box instances, but the sign and sorting folds make them coincide in groups:
+    // the sponge shows 20^levels distinct cubes, which is what a mesh would need.
+    const complexity c{sponge.cube_count + 1, sponge.cube_count * triangles_of(krs::box{}) + 2};
+    std::printf("sponge: %.0f KRS box instances, %.0f distinct cubes\n", complexity_of(sponge.sequence).instances,
+                sponge.cube_count);
+
+    return render(opt, "sponge", c, [&](float x, float y, ray_counts& counts) {
+        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const auto h = krs::union_trace(scene, r, trace);
+        ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         const float threshold = trace.threshold(h.t);
@@ -404,6 +572,7 @@ double sponge_scene(const options& opt)
         a.samples = 6;
         a.strength = 1.4f;
         const float ao = krs::ambient_occlusion(exact, p, n, a);
+        counts.secondary += 1 + (diffuse > 0);
         krs::soft_shadow_options s;
         s.threshold = threshold;
         s.max_distance = 6.0f;
@@ -432,8 +601,10 @@ double grass_scene(const options& opt)
     trace.max_steps = 600;
     const krs::fractal_noise tint(3, 0.8f);
 
-    return render(opt, "grass", camera, [&](const krs::ray<float>& r) {
+    return render(opt, "grass", complexity_of(grass.sequence), [&](float x, float y, ray_counts& counts) {
+        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const krs::hit<float> h = krs::sphere_trace(grass.sequence, r, trace);
+        ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         const krs::location<float> where = grass.sequence.locate(p);
@@ -445,7 +616,7 @@ double grass_scene(const options& opt)
             albedo = mix3(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
         }
         const float diffuse = std::abs(krs::dot(n, sun_direction)); // thin blades pass light through
-        return mul(albedo, light_surface(grass.sequence, p, n, diffuse, trace.threshold(h.t), 3.0f, 0.03f));
+        return mul(albedo, light_surface(grass.sequence, p, n, diffuse, trace.threshold(h.t), 3.0f, 0.03f, counts));
     });
 }
 
@@ -459,6 +630,7 @@ int main(int argc, char** argv)
         double (*run)(const options&);
     };
     const entry scenes[] = {{"forest", forest_scene}, {"terrain", terrain_scene}, {"rock", rock_scene},
+                            {"mirrors", mirrors_scene},
                             {"coral", coral_scene},   {"sponge", sponge_scene},   {"grass", grass_scene}};
     double total = 0;
     int rendered = 0;

@@ -7,6 +7,7 @@
 #include "krs/kernels/box.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
+#include "krs/model/forest_ground.hpp"
 #include "krs/model/terrain.hpp"
 #include "krs/model/tree.hpp"
 
@@ -178,6 +179,82 @@ TEST_CASE("the union tracer finds the hits of the min field with fewer evaluatio
     CHECK(union_evaluations < plain_component_evaluations * 3 / 4);
     MESSAGE("union tracer: " << union_evaluations << " component evaluations vs " << plain_component_evaluations
                              << " for plain tracing");
+}
+
+TEST_CASE("the union tracer finds the nearest of the components' own first hits")
+{
+    // A forest on its folded terrain, and a rock-like sphere among the trees: three components of
+    // different kinds whose silhouettes overlap. Reference: each component traced alone by
+    // plain sphere tracing, the nearest first hit taken.
+    krs::model::forest_parameters fp;
+    fp.tree.levels = 6;
+    fp.tree.leaves_per_twig = 2;
+    fp.tree.leaf_radius = 0.1f;
+    fp.doublings = 3;
+    fp.ground_height.reset();
+    const krs::model::forest forest = krs::model::build_forest(fp);
+    krs::model::terrain_parameters tp;
+    tp.levels = 8;
+    tp.size = 4.0f;
+    tp.slope = 0.3f;
+    const krs::model::plane_sequence ground = krs::model::build_forest_ground(fp, forest, tp);
+    const krs::sphere boulder({forest.bound.center.x, 0.3f, forest.bound.center.z - 0.5f * forest.bound.radius}, 0.8f);
+    const krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u(forest.sequence, ground,
+                                                                                              boulder);
+    krs::trace_options o;
+    o.pixel_footprint = 2e-4f;
+    o.threshold_floor = 1e-5f;
+    o.max_steps = 4000;
+    o.max_distance = 6 * forest.bound.radius;
+    std::mt19937_64 g(33);
+    const vec3d c(forest.bound.center);
+    const double radius = forest.bound.radius;
+    int found = 0, grazing = 0, by_component[3] = {0, 0, 0};
+    for (int k = 0; k < 10000; ++k) {
+        const vec3d origin = c + vec3d{uniform(g, -1, 1) * radius, uniform(g, 0.2, 1.2) * radius, -1.6 * radius};
+        // Aim at a tree, the ground, or the boulder in turn.
+        vec3d target = c + vec3d{uniform(g, -1, 1) * radius, uniform(g, -0.3, 0.2) * radius, uniform(g, -1, 1) * radius};
+        if (k % 3 == 0) {
+            const krs::bounding_sphere& tree = forest.trees[std::size_t(g() % forest.trees.size())];
+            target = vec3d(tree.center) + random_direction(g) * (0.5 * tree.radius);
+        } else if (k % 3 == 2) {
+            target = vec3d(boulder.center) + random_direction(g) * double(boulder.radius);
+        }
+        const krs::ray<double> r{origin, krs::normalize(target - origin)};
+        const krs::hit<double> alone[3] = {krs::sphere_trace(u.component<0>(), r, o),
+                                           krs::sphere_trace(u.component<1>(), r, o),
+                                           krs::sphere_trace(u.component<2>(), r, o)};
+        int nearest = -1;
+        for (int i = 0; i < 3; ++i)
+            if (alone[i].found && (nearest < 0 || alone[i].t < alone[nearest].t)) nearest = i;
+        const auto h = krs::union_trace(u, r, o);
+        // A component traced alone never finds a hit the union tracer misses.
+        if (nearest >= 0) REQUIRE(h.found);
+        if (!h.found) continue;
+        ++found;
+        CAPTURE(k);
+        if (nearest >= 0 && std::abs(h.t - alone[nearest].t) <= o.threshold(alone[nearest].t)) {
+            ++by_component[nearest];
+            // The component hit is the nearest one, unless two components' surfaces are within one
+            // threshold of each other there (then either is a correct answer).
+            if (h.nearest != nearest) REQUIRE(std::abs(alone[h.nearest].t - alone[nearest].t) <= o.threshold(h.t));
+            continue;
+        }
+        // Otherwise the ray grazes a surface: sphere tracing stops wherever a sample falls within
+        // the threshold, and the union's denser samples (steps of the minimum over components) may
+        // land in a near-miss band that the component's own longer steps jumped over. Such a hit
+        // must come first, be a genuine threshold hit of the component named, and be rare.
+        ++grazing;
+        REQUIRE(h.t < (nearest >= 0 ? alone[nearest].t : INFINITY));
+        REQUIRE(u.component_distance(std::size_t(h.nearest), krs::point_at(r, h.t)) < o.threshold(h.t));
+    }
+    MESSAGE("grazing hits: " << grazing);
+    CHECK(grazing <= found / 200);
+    MESSAGE("union tracer vs components: " << found << " hits (trees " << by_component[0] << ", ground "
+                                           << by_component[1] << ", boulder " << by_component[2] << ")");
+    CHECK(by_component[0] > 500);
+    CHECK(by_component[1] > 1000);
+    CHECK(by_component[2] > 100);
 }
 
 TEST_CASE("lipschitz_warp stays 1-Lipschitz and never overestimates")

@@ -5,6 +5,7 @@
 #include "krs/kernels/box.hpp"
 #include "krs/model/coral.hpp"
 #include "krs/model/forest.hpp"
+#include "krs/model/forest_ground.hpp"
 #include "krs/model/grass.hpp"
 #include "krs/model/terrain.hpp"
 #include "krs/trace/sphere_trace.hpp"
@@ -270,4 +271,180 @@ TEST_CASE("sponge: the KRS equals the Menger construction")
     CHECK(outside > 1000);
     require_rejects([&] { auto b = p; b.levels = 10; krs::model::build_sponge(b); }, "sponge.levels");
     require_rejects([&] { auto b = p; b.size = -1; krs::model::build_sponge(b); }, "sponge.size");
+}
+
+TEST_CASE("forest on terrain: every trunk base lies on the ground surface")
+{
+    krs::model::forest_parameters f;
+    f.tree.levels = 6;
+    f.doublings = 5;
+    f.ground_height.reset();
+    const krs::model::forest forest = krs::model::build_forest(f);
+    krs::model::terrain_parameters t;
+    t.levels = 10;
+    t.size = 6.0f;
+    t.slope = 0.35f;
+    t.extra_planes = 2;
+    const krs::model::plane_sequence ground = krs::model::build_forest_ground(f, forest, t);
+    // Reference trunk bases: the tree's base (the origin, where grow_tree starts the trunk)
+    // reflected by every combination of the forest's top mirrors.
+    const auto& mirrors = forest.sequence.mirrors();
+    std::vector<vec3d> bases{vec3d{0, 0, 0}};
+    for (std::size_t j = mirrors.size() - std::size_t(f.doublings); j < mirrors.size(); ++j) {
+        const std::size_t count = bases.size();
+        for (std::size_t i = 0; i < count; ++i) bases.push_back(mirrors[j].reflect(bases[i]));
+    }
+    REQUIRE(bases.size() == forest.tree_count);
+    double lowest = INFINITY, highest = -INFINITY;
+    for (const vec3d& base : bases) {
+        // The ground's height above the base: bisection on the vertical line (a height field).
+        double lo = base.y - 20, hi = base.y + 20;
+        REQUIRE(ground.distance(vec3d{base.x, lo, base.z}) <= 0.0);
+        REQUIRE(ground.distance(vec3d{base.x, hi, base.z}) > 0.0);
+        for (int i = 0; i < 80; ++i) {
+            const double mid = 0.5 * (lo + hi);
+            (ground.distance(vec3d{base.x, mid, base.z}) <= 0 ? lo : hi) = mid;
+        }
+        CHECK(std::abs(0.5 * (lo + hi) - base.y) < 1e-3);
+        // A trunk stands there: solid just above the base, inside the trunk.
+        CHECK(forest.sequence.distance(base + vec3d{0, 0.2, 0}) < 0.0);
+        // The ground elsewhere is not flat: sample beside the tree.
+        for (double dx : {-2.0, 2.0}) {
+            double a = -20, b = 20;
+            for (int i = 0; i < 60; ++i) {
+                const double mid = 0.5 * (a + b);
+                (ground.distance(vec3d{base.x + dx, mid, base.z + dx}) <= 0 ? a : b) = mid;
+            }
+            lowest = std::min(lowest, a), highest = std::max(highest, a);
+        }
+    }
+    CHECK(highest - lowest > 0.2);
+    CHECK_THROWS_WITH_AS(krs::model::build_forest_ground(f, krs::model::build_forest([&] {
+                             auto g = f;
+                             g.doublings = 3;
+                             return g;
+                         }()), t),
+                         doctest::Contains("forest_ground.doublings"), krs::invalid_parameter);
+}
+
+#define KRS_REJECTS(builder, params, field, value, name)                                                          \
+    do {                                                                                                           \
+        auto p_ = params;                                                                                          \
+        p_.field = value;                                                                                          \
+        CHECK_THROWS_WITH_AS(builder(p_), doctest::Contains(name), krs::invalid_parameter);                        \
+    } while (false)
+
+TEST_CASE("every builder rejects out-of-range parameters and names them")
+{
+    const float nan = std::nanf("");
+    using namespace krs::model;
+    // forest
+    forest_parameters f;
+    f.tree.levels = 4;
+    f.doublings = 2;
+    KRS_REJECTS(build_forest, f, doublings, -1, "forest.doublings");
+    KRS_REJECTS(build_forest, f, doublings, 21, "forest.doublings");
+    KRS_REJECTS(build_forest, f, spacing, -0.01f, "forest.spacing");
+    KRS_REJECTS(build_forest, f, spacing, 4.01f, "forest.spacing");
+    KRS_REJECTS(build_forest, f, spacing, nan, "forest.spacing");
+    KRS_REJECTS(build_forest, f, angle_jitter_degrees, -1.0f, "forest.angle_jitter_degrees");
+    KRS_REJECTS(build_forest, f, angle_jitter_degrees, 90.5f, "forest.angle_jitter_degrees");
+    KRS_REJECTS(build_forest, f, ground_height, nan, "forest.ground_height");
+    KRS_REJECTS(build_forest, f, ground_height, INFINITY, "forest.ground_height");
+    // tree_style (through grow_tree, and through the forest that holds one)
+    tree_style t;
+    t.levels = 4;
+    KRS_REJECTS(grow_tree, t, levels, 0, "tree_style.levels");
+    KRS_REJECTS(grow_tree, t, levels, 66, "tree_style.levels");
+    KRS_REJECTS(grow_tree, t, trunk_length, 0.0f, "tree_style.trunk_length");
+    KRS_REJECTS(grow_tree, t, trunk_length, nan, "tree_style.trunk_length");
+    KRS_REJECTS(grow_tree, t, trunk_radius, -0.1f, "tree_style.trunk_radius");
+    KRS_REJECTS(grow_tree, t, length_ratio, 0.0f, "tree_style.length_ratio");
+    KRS_REJECTS(grow_tree, t, length_ratio, 1.6f, "tree_style.length_ratio");
+    KRS_REJECTS(grow_tree, t, radius_ratio, 0.0f, "tree_style.radius_ratio");
+    KRS_REJECTS(grow_tree, t, radius_ratio, 1.1f, "tree_style.radius_ratio");
+    KRS_REJECTS(grow_tree, t, spread_degrees, 0.0f, "tree_style.spread_degrees");
+    KRS_REJECTS(grow_tree, t, spread_degrees, 90.0f, "tree_style.spread_degrees");
+    KRS_REJECTS(grow_tree, t, twist_degrees, -361.0f, "tree_style.twist_degrees");
+    KRS_REJECTS(grow_tree, t, twist_degrees, 361.0f, "tree_style.twist_degrees");
+    KRS_REJECTS(grow_tree, t, bend, -0.6f, "tree_style.bend");
+    KRS_REJECTS(grow_tree, t, bend, 0.6f, "tree_style.bend");
+    KRS_REJECTS(grow_tree, t, upward, -0.1f, "tree_style.upward");
+    KRS_REJECTS(grow_tree, t, upward, 1.1f, "tree_style.upward");
+    KRS_REJECTS(grow_tree, t, leaves_per_twig, -1, "tree_style.leaves_per_twig");
+    KRS_REJECTS(grow_tree, t, leaves_per_twig, 65, "tree_style.leaves_per_twig");
+    KRS_REJECTS(grow_tree, t, leaf_radius, -0.01f, "tree_style.leaf_radius");
+    KRS_REJECTS(grow_tree, t, jitter, -0.01f, "tree_style.jitter");
+    KRS_REJECTS(grow_tree, t, jitter, 0.51f, "tree_style.jitter");
+    KRS_REJECTS(build_forest, f, tree.jitter, 0.51f, "tree_style.jitter");
+    // grass
+    grass_parameters g;
+    g.doublings = 2;
+    KRS_REJECTS(build_grass, g, blades_per_clump, 0, "grass.blades_per_clump");
+    KRS_REJECTS(build_grass, g, blades_per_clump, 65, "grass.blades_per_clump");
+    KRS_REJECTS(build_grass, g, blade_height, 0.0f, "grass.blade_height");
+    KRS_REJECTS(build_grass, g, blade_width, 0.0f, "grass.blade_width");
+    KRS_REJECTS(build_grass, g, blade_width, 0.3f * g.blade_height, "grass.blade_width");
+    KRS_REJECTS(build_grass, g, lean, -0.1f, "grass.lean");
+    KRS_REJECTS(build_grass, g, lean, 1.1f, "grass.lean");
+    KRS_REJECTS(build_grass, g, clump_radius, 0.0f, "grass.clump_radius");
+    KRS_REJECTS(build_grass, g, doublings, -1, "grass.doublings");
+    KRS_REJECTS(build_grass, g, doublings, 21, "grass.doublings");
+    KRS_REJECTS(build_grass, g, spacing, -0.1f, "grass.spacing");
+    KRS_REJECTS(build_grass, g, spacing, 4.1f, "grass.spacing");
+    KRS_REJECTS(build_grass, g, ground_height, nan, "grass.ground_height");
+    // terrain
+    terrain_parameters tr;
+    tr.levels = 4;
+    KRS_REJECTS(build_terrain, tr, levels, 0, "terrain.levels");
+    KRS_REJECTS(build_terrain, tr, levels, 61, "terrain.levels");
+    KRS_REJECTS(build_terrain, tr, size, 0.0f, "terrain.size");
+    KRS_REJECTS(build_terrain, tr, size, nan, "terrain.size");
+    KRS_REJECTS(build_terrain, tr, detail_ratio, 0.49f, "terrain.detail_ratio");
+    KRS_REJECTS(build_terrain, tr, detail_ratio, 0.995f, "terrain.detail_ratio");
+    KRS_REJECTS(build_terrain, tr, slope, -0.1f, "terrain.slope");
+    KRS_REJECTS(build_terrain, tr, slope, 2.1f, "terrain.slope");
+    KRS_REJECTS(build_terrain, tr, extra_planes, -1, "terrain.extra_planes");
+    KRS_REJECTS(build_terrain, tr, extra_planes, 17, "terrain.extra_planes");
+    KRS_REJECTS(build_terrain, tr, height, nan, "terrain.height");
+    // rock
+    rock_parameters r;
+    KRS_REJECTS(build_rock, r, center, (vec3f{nan, 0, 0}), "rock.center");
+    KRS_REJECTS(build_rock, r, radius, 0.0f, "rock.radius");
+    KRS_REJECTS(build_rock, r, facets, 0, "rock.facets");
+    KRS_REJECTS(build_rock, r, facets, 17, "rock.facets");
+    KRS_REJECTS(build_rock, r, folds, -1, "rock.folds");
+    KRS_REJECTS(build_rock, r, folds, 59, "rock.folds");
+    KRS_REJECTS(build_rock, r, fold_offset, -0.1f, "rock.fold_offset");
+    KRS_REJECTS(build_rock, r, fold_offset, 0.6f, "rock.fold_offset");
+    // coral
+    coral_parameters c;
+    c.levels = 3;
+    KRS_REJECTS(build_coral, c, levels, 0, "coral.levels");
+    KRS_REJECTS(build_coral, c, levels, 41, "coral.levels");
+    KRS_REJECTS(build_coral, c, base_radius, 0.0f, "coral.base_radius");
+    KRS_REJECTS(build_coral, c, segment_length, -1.0f, "coral.segment_length");
+    KRS_REJECTS(build_coral, c, taper, 0.49f, "coral.taper");
+    KRS_REJECTS(build_coral, c, taper, 1.01f, "coral.taper");
+    KRS_REJECTS(build_coral, c, spread_degrees, 4.9f, "coral.spread_degrees");
+    KRS_REJECTS(build_coral, c, spread_degrees, 80.1f, "coral.spread_degrees");
+    KRS_REJECTS(build_coral, c, knot, 0.99f, "coral.knot");
+    KRS_REJECTS(build_coral, c, knot, 3.01f, "coral.knot");
+    KRS_REJECTS(build_coral, c, tip_blob, 0.99f, "coral.tip_blob");
+    KRS_REJECTS(build_coral, c, tip_blob, 4.01f, "coral.tip_blob");
+    // sponge
+    sponge_parameters sp;
+    sp.levels = 1;
+    KRS_REJECTS(build_sponge, sp, center, (vec3f{0, INFINITY, 0}), "sponge.center");
+    KRS_REJECTS(build_sponge, sp, size, 0.0f, "sponge.size");
+    KRS_REJECTS(build_sponge, sp, levels, 0, "sponge.levels");
+    KRS_REJECTS(build_sponge, sp, levels, 10, "sponge.levels");
+    // The bounds themselves are accepted (the checks above are not rejecting everything).
+    CHECK_NOTHROW(build_forest([&] { auto p = f; p.spacing = 4.0f; p.angle_jitter_degrees = 90.0f; return p; }()));
+    CHECK_NOTHROW(grow_tree([&] { auto p = t; p.jitter = 0.5f; p.bend = -0.5f; p.leaves_per_twig = 64; return p; }()));
+    CHECK_NOTHROW(build_grass([&] { auto p = g; p.lean = 1.0f; p.spacing = 4.0f; p.blades_per_clump = 64; return p; }()));
+    CHECK_NOTHROW(build_terrain([&] { auto p = tr; p.detail_ratio = 0.5f; p.slope = 2.0f; p.extra_planes = 16; return p; }()));
+    CHECK_NOTHROW(build_rock([&] { auto p = r; p.facets = 16; p.fold_offset = 0.5f; return p; }()));
+    CHECK_NOTHROW(build_coral([&] { auto p = c; p.taper = 1.0f; p.knot = 3.0f; p.tip_blob = 4.0f; return p; }()));
+    CHECK_NOTHROW(build_sponge([&] { auto p = sp; p.levels = 9; return p; }()));
 }

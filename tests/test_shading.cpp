@@ -150,6 +150,70 @@ TEST_CASE("Algorithm 2: the interpolated light is continuous across a mirror pla
     CHECK(largest_smooth > 0.0);
 }
 
+TEST_CASE("Algorithm 2: the Lambert shaded value is continuous across a mirror that crosses its kernel")
+{
+    // A steep plane kernel crossed by two vertical mirrors (not separated: the surface is creased
+    // along each). Along a line on the surface crossing the top mirror, the shaded value
+    // max(n . l, 0) with the interpolated light l changes between neighbouring samples by at most
+    // C |dx| / threshold with C = 2 * mirrors: each level's weight is a clamp of e / threshold
+    // with e 1-Lipschitz in x, moves the light by at most 2 |dweight| (M w - w, |w| <= 1), later
+    // levels are convex combinations of orthogonal maps (norm <= 1), and max(n . l, 0) is
+    // 1-Lipschitz in l for a unit n.
+    krs::sequence<krs::plane>::builder b;
+    b.kernel(krs::plane(krs::normalize(vec3f{0.9f, 1, 0.4f}), 0.0f));
+    b.mirror(krs::mirror(krs::normalize(vec3f{0.3f, 0, 1}), 0.35f));
+    b.mirror(krs::mirror(krs::normalize(vec3f{1, 0, -0.2f}), 0.1f));
+    const auto s = b.build();
+    const double C = 2.0 * double(s.mirror_count());
+    const vec3d light = krs::normalize(vec3d{0.8, 0.6, 0.3}), view{0, 1, 0};
+    const double threshold = 0.1, h = threshold / 100;
+    // The surface point above (x, z): the field's one crossing of the vertical line (bisection).
+    auto surface = [&](double x, double z) {
+        double lo = -20, hi = 20;
+        for (int i = 0; i < 100; ++i) {
+            const double mid = 0.5 * (lo + hi);
+            (s.distance(vec3d{x, mid, z}) <= 0 ? lo : hi) = mid;
+        }
+        return vec3d{x, 0.5 * (lo + hi), z};
+    };
+    auto lambert = [&](const vec3d& p, double band) {
+        const auto k = krs::shade_in_kernel_space(s, p, light, view, band);
+        return std::max(krs::dot(k.normal, k.light), 0.0);
+    };
+    const krs::mirror& top = s.mirrors().back();
+    const vec3d m(top.normal);
+    const vec3d along = krs::normalize(krs::cross(m, vec3d{0, 1, 0}));
+    std::mt19937_64 g(13);
+    double largest_ratio = 0, largest_step_jump = 0;
+    int in_band = 0;
+    for (int line = 0; line < 20; ++line) {
+        const vec3d start = m * double(top.offset) + along * uniform(g, -1.5, 1.5);
+        const vec3d dir = krs::normalize(m + along * uniform(g, -0.4, 0.4));
+        vec3d previous{};
+        double previous_smooth = 0, previous_step = 0;
+        for (int i = 0; i <= 300; ++i) {
+            const vec3d q = start + dir * (h * (i - 150));
+            const vec3d p = surface(q.x, q.z);
+            const double smooth = lambert(p, threshold), step = lambert(p, 0.0);
+            in_band += std::abs(krs::dot(m, p) - double(top.offset)) < 0.5 * threshold;
+            if (i > 0) {
+                const double dx = krs::length(p - previous);
+                const double change = std::abs(smooth - previous_smooth);
+                REQUIRE(change <= C * dx / threshold + 1e-9);
+                largest_ratio = std::max(largest_ratio, change * threshold / dx);
+                largest_step_jump = std::max(largest_step_jump, std::abs(step - previous_step));
+            }
+            previous = p, previous_smooth = smooth, previous_step = step;
+        }
+    }
+    MESSAGE("largest |d shade| * threshold / |dx|: " << largest_ratio << " (bound " << C
+                                                     << "); flat shading's largest jump " << largest_step_jump);
+    CHECK(in_band > 1000);           // the samples did cross the band on both sides of the plane
+    CHECK(largest_ratio > 0.05);     // and the shading does turn there
+    // Without interpolation the shaded value jumps at the plane far beyond what the bound allows.
+    CHECK(largest_step_jump > 10 * C * h / threshold);
+}
+
 TEST_CASE("Algorithm 2 gives axis-aligned mirrors the light of the equivalent general mirrors")
 {
     // The same terrain-like KRS with axis_mirror and with general mirrors: same interpolated light.

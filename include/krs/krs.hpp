@@ -14,6 +14,7 @@
 #include "krs/mirror.hpp"
 #include "krs/model/coral.hpp"
 #include "krs/model/forest.hpp"
+#include "krs/model/forest_ground.hpp"
 #include "krs/model/grass.hpp"
 #include "krs/model/terrain.hpp"
 #include "krs/model/tree.hpp"
