@@ -38,6 +38,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -219,7 +220,8 @@ double render(const options& opt, const std::string& name, const complexity& sce
     auto file = OIIO::ImageOutput::create(path);
     const OIIO::ImageSpec spec(opt.width, opt.height, 3, OIIO::TypeDesc::UINT8);
     if (!file || !file->open(path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, bytes.data())) {
-        std::fprintf(stderr, "krs_scenes: cannot write %s: %s\n", path.c_str(), OIIO::geterror().c_str());
+        const std::string why = file ? file->geterror() : OIIO::geterror();
+        std::fprintf(stderr, "krs_scenes: cannot write %s: %s\n", path.c_str(), why.c_str());
         std::exit(1);
     }
     file->close();
@@ -625,6 +627,12 @@ double grass_scene(const options& opt)
 int main(int argc, char** argv)
 {
     const options opt = parse(argc, argv);
+    std::error_code made;
+    std::filesystem::create_directories(opt.output_dir, made);
+    if (made) {
+        std::fprintf(stderr, "krs_scenes: cannot create --output-dir %s: %s\n", opt.output_dir.c_str(), made.message().c_str());
+        return 1;
+    }
     struct entry {
         const char* name;
         double (*run)(const options&);

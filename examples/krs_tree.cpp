@@ -20,6 +20,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <array>
 #include <cmath>
 #include <atomic>
@@ -248,10 +249,14 @@ int main(int argc, char** argv)
     std::vector<unsigned char> bytes(pixels.size());
     for (std::size_t i = 0; i < pixels.size(); ++i)
         bytes[i] = (unsigned char)std::lround(255.0f * std::pow(std::clamp(pixels[i], 0.0f, 1.0f), 1.0f / 2.2f));
+    const std::filesystem::path folder = std::filesystem::path(opt.output).parent_path();
+    std::error_code made;
+    if (!folder.empty()) std::filesystem::create_directories(folder, made);
     auto file = OIIO::ImageOutput::create(opt.output);
     const OIIO::ImageSpec spec(opt.width, opt.height, 3, OIIO::TypeDesc::UINT8);
     if (!file || !file->open(opt.output, spec) || !file->write_image(OIIO::TypeDesc::UINT8, bytes.data())) {
-        std::fprintf(stderr, "krs_tree: cannot write %s: %s\n", opt.output.c_str(), OIIO::geterror().c_str());
+        const std::string why = file ? file->geterror() : OIIO::geterror();
+        std::fprintf(stderr, "krs_tree: cannot write %s: %s\n", opt.output.c_str(), why.c_str());
         return 1;
     }
     file->close();
