@@ -9,6 +9,8 @@
 #include "krs/shade/kernel_light.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/random.hpp"
+
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -19,15 +21,8 @@ namespace {
 
 using krs::vec3d;
 
-double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
-vec3d random_direction(std::mt19937_64& g)
-{
-    for (;;) {
-        const vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
-        const double l = krs::length(v);
-        if (l > 0.1 && l <= 1) return v / l;
-    }
-}
+using krs_test::random_direction;
+using krs_test::uniform;
 
 double angle_degrees(const vec3d& a, const vec3d& b)
 {

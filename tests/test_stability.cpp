@@ -8,6 +8,8 @@
 #include "krs/sequence.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/random.hpp"
+
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -18,14 +20,8 @@ using krs::vec3d;
 using krs::vec3f;
 using scene = krs::sequence<krs::sphere, krs::torus_capsule, krs::plane>;
 
-double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
-vec3d in_ball(std::mt19937_64& g, double r)
-{
-    for (;;) {
-        const vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
-        if (krs::length_squared(v) <= 1) return v * r;
-    }
-}
+using krs_test::in_ball;
+using krs_test::uniform;
 
 } // namespace
 

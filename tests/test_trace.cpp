@@ -7,6 +7,8 @@
 #include "krs/shade/lambert.hpp"
 #include "krs/trace/camera.hpp"
 
+#include "support/random.hpp"
+
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -17,15 +19,8 @@ namespace {
 using krs::vec3d;
 using krs::vec3f;
 
-double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
-vec3d random_direction(std::mt19937_64& g)
-{
-    for (;;) {
-        const vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
-        const double l = krs::length(v);
-        if (l > 0.1 && l <= 1) return v / l;
-    }
-}
+using krs_test::random_direction;
+using krs_test::uniform;
 
 // Closed-form first intersection of a ray with a sphere (infinity if none ahead).
 double ray_sphere(const vec3d& o, const vec3d& d, const vec3d& c, double r)

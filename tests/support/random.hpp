@@ -1,0 +1,36 @@
+#pragma once
+// Random sampling shared by the tests: platform-independent (std distributions are not), so a
+// failing case reproduces everywhere from its seed.
+
+#include "krs/core/vec3.hpp"
+
+#include <random>
+
+namespace krs_test {
+
+// Uniform in [lo, hi) from the top 53 bits of the engine.
+inline double uniform(std::mt19937_64& g, double lo, double hi)
+{
+    return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53;
+}
+
+// Uniform in the ball of the given radius (rejection from the cube).
+inline krs::vec3d in_ball(std::mt19937_64& g, double radius)
+{
+    for (;;) {
+        const krs::vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
+        if (krs::length_squared(v) <= 1) return v * radius;
+    }
+}
+
+// Uniform unit direction (normalized from the ball, avoiding the center's poor precision).
+inline krs::vec3d random_direction(std::mt19937_64& g)
+{
+    for (;;) {
+        const krs::vec3d v = in_ball(g, 1);
+        const double l = krs::length(v);
+        if (l > 0.1) return v / l;
+    }
+}
+
+} // namespace krs_test
