@@ -35,7 +35,7 @@
 #include "krs/shade/texture.hpp"
 #include "krs/trace/camera.hpp"
 
-#include <OpenImageIO/imageio.h>
+#include "support/example_io.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -63,38 +63,19 @@ struct options {
 options parse(int argc, char** argv)
 {
     options o;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&](const char* name) -> std::string {
-            if (i + 1 >= argc) {
-                std::fprintf(stderr, "krs_scenes: %s needs a value\n", name);
-                std::exit(2);
-            }
-            return argv[++i];
-        };
-        auto number = [&](const char* name, int lo, int hi) {
-            const std::string v = value(name);
-            char* end = nullptr;
-            const long n = std::strtol(v.c_str(), &end, 10);
-            if (end == v.c_str() || *end != '\0' || n < lo || n > hi) {
-                std::fprintf(stderr, "krs_scenes: %s must be an integer in [%d, %d] (got '%s')\n", name, lo, hi, v.c_str());
-                std::exit(2);
-            }
-            return int(n);
-        };
-        if (a == "--width") o.width = number("--width", 1, 8192);
-        else if (a == "--height") o.height = number("--height", 1, 8192);
-        else if (a == "--threads") o.threads = number("--threads", 0, 1024);
-        else if (a == "--seed") o.seed = unsigned(number("--seed", 0, 1 << 30));
-        else if (a == "--only") o.only = value("--only");
-        else if (a == "--output-dir") o.output_dir = value("--output-dir");
-        else {
-            std::fprintf(stderr, "usage: krs_scenes [--width W] [--height H] [--threads N] [--seed S] "
-                                 "[--only forest|terrain|rock|mirrors|coral|sponge|grass] [--output-dir DIR]\n");
-            std::exit(2);
-        }
+    example::arguments args(argc, argv,
+                            "krs_scenes [--width W] [--height H] [--threads N] [--seed S] "
+                            "[--only forest|terrain|rock|mirrors|coral|sponge|grass] [--output-dir DIR]");
+    for (std::string a; args.next(a);) {
+        if (a == "--width") o.width = args.integer("--width", 1, 8192);
+        else if (a == "--height") o.height = args.integer("--height", 1, 8192);
+        else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
+        else if (a == "--seed") o.seed = unsigned(args.integer("--seed", 0, 1 << 30));
+        else if (a == "--only") o.only = args.text("--only");
+        else if (a == "--output-dir") o.output_dir = args.text("--output-dir");
+        else args.unknown(a);
     }
-    if (o.threads == 0) o.threads = int(std::max(1u, std::thread::hardware_concurrency()));
+    o.threads = example::thread_count(o.threads);
     return o;
 }
 
@@ -213,18 +194,8 @@ double render(const options& opt, const std::string& name, const complexity& sce
     ray_counts total;
     for (const ray_counts& c : counts) total.add(c);
 
-    std::vector<unsigned char> bytes(pixels.size());
-    for (std::size_t i = 0; i < pixels.size(); ++i)
-        bytes[i] = (unsigned char)std::lround(255.0f * std::pow(std::clamp(pixels[i], 0.0f, 1.0f), 1.0f / 2.2f));
     const std::string path = opt.output_dir + "/" + name + ".png";
-    auto file = OIIO::ImageOutput::create(path);
-    const OIIO::ImageSpec spec(opt.width, opt.height, 3, OIIO::TypeDesc::UINT8);
-    if (!file || !file->open(path, spec) || !file->write_image(OIIO::TypeDesc::UINT8, bytes.data())) {
-        const std::string why = file ? file->geterror() : OIIO::geterror();
-        std::fprintf(stderr, "krs_scenes: cannot write %s: %s\n", path.c_str(), why.c_str());
-        std::exit(1);
-    }
-    file->close();
+    if (!example::write_png(path, opt.width, opt.height, pixels)) std::exit(1);
     const double rays = double(total.primary + total.secondary);
     std::printf("%-8s %7.2f s  (%dx%d, %d threads) -> %s\n", name.c_str(), seconds, opt.width, opt.height, opt.threads,
                 path.c_str());

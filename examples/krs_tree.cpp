@@ -17,7 +17,7 @@
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
 
-#include <OpenImageIO/imageio.h>
+#include "support/example_io.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -43,37 +43,17 @@ struct options {
 options parse(int argc, char** argv)
 {
     options o;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&](const char* name) -> std::string {
-            if (i + 1 >= argc) {
-                std::fprintf(stderr, "krs_tree: %s needs a value\n", name);
-                std::exit(2);
-            }
-            return argv[++i];
-        };
-        auto number = [&](const char* name, int lo, int hi) {
-            const std::string v = value(name);
-            char* end = nullptr;
-            const long n = std::strtol(v.c_str(), &end, 10);
-            if (end == v.c_str() || *end != '\0' || n < lo || n > hi) {
-                std::fprintf(stderr, "krs_tree: %s must be an integer in [%d, %d] (got '%s')\n", name, lo, hi, v.c_str());
-                std::exit(2);
-            }
-            return int(n);
-        };
-        if (a == "--width") o.width = number("--width", 1, 16384);
-        else if (a == "--height") o.height = number("--height", 1, 16384);
-        else if (a == "--threads") o.threads = number("--threads", 0, 1024);
-        else if (a == "--levels") o.levels = number("--levels", 1, 30);
-        else if (a == "--seed") o.seed = unsigned(number("--seed", 0, 1 << 30));
-        else if (a == "--output") o.output = value("--output");
-        else {
-            std::fprintf(stderr, "usage: krs_tree [--width W] [--height H] [--threads N] [--levels L] [--seed S] [--output FILE]\n");
-            std::exit(2);
-        }
+    example::arguments args(argc, argv, "krs_tree [--width W] [--height H] [--threads N] [--levels L] [--seed S] [--output FILE]");
+    for (std::string a; args.next(a);) {
+        if (a == "--width") o.width = args.integer("--width", 1, 16384);
+        else if (a == "--height") o.height = args.integer("--height", 1, 16384);
+        else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
+        else if (a == "--levels") o.levels = args.integer("--levels", 1, 30);
+        else if (a == "--seed") o.seed = unsigned(args.integer("--seed", 0, 1 << 30));
+        else if (a == "--output") o.output = args.text("--output");
+        else args.unknown(a);
     }
-    if (o.threads == 0) o.threads = int(std::max(1u, std::thread::hardware_concurrency()));
+    o.threads = example::thread_count(o.threads);
     return o;
 }
 
@@ -245,21 +225,7 @@ int main(int argc, char** argv)
                 seconds, opt.threads, 1e6 * seconds * opt.threads / rays, double(steps.load()) / rays, W,
                 100.0 * double(hits.load()) / rays);
 
-    // Gamma-encode to 8 bits.
-    std::vector<unsigned char> bytes(pixels.size());
-    for (std::size_t i = 0; i < pixels.size(); ++i)
-        bytes[i] = (unsigned char)std::lround(255.0f * std::pow(std::clamp(pixels[i], 0.0f, 1.0f), 1.0f / 2.2f));
-    const std::filesystem::path folder = std::filesystem::path(opt.output).parent_path();
-    std::error_code made;
-    if (!folder.empty()) std::filesystem::create_directories(folder, made);
-    auto file = OIIO::ImageOutput::create(opt.output);
-    const OIIO::ImageSpec spec(opt.width, opt.height, 3, OIIO::TypeDesc::UINT8);
-    if (!file || !file->open(opt.output, spec) || !file->write_image(OIIO::TypeDesc::UINT8, bytes.data())) {
-        const std::string why = file ? file->geterror() : OIIO::geterror();
-        std::fprintf(stderr, "krs_tree: cannot write %s: %s\n", opt.output.c_str(), why.c_str());
-        return 1;
-    }
-    file->close();
+    if (!example::write_png(opt.output, opt.width, opt.height, pixels)) return 1;
     std::printf("wrote %s (%dx%d)\n", opt.output.c_str(), opt.width, opt.height);
     return 0;
 }
