@@ -10,6 +10,7 @@
 #include "krs/core/vec3.hpp"
 #include "krs/expansion.hpp"
 #include "krs/field.hpp"
+#include "krs/glsl/glsl.hpp"
 #include "krs/kernels/kernels.hpp"
 #include "krs/mirror.hpp"
 #include "krs/model/coral.hpp"

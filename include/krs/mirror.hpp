@@ -14,6 +14,7 @@
 #include <concepts>
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace krs {
 
@@ -60,6 +61,20 @@ struct mirror {
     vec3<T> reflect_direction(const vec3<T>& w) const
     {
         return krs::reflect_direction(w, vec3<T>(normal));
+    }
+
+    // GLSL (krs/glsl/emitter.hpp): the same four operations on one vec4 (normal, offset).
+    static constexpr std::string_view glsl_name = "krs_mirror";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(float krs_mirror_signed_distance(vec3 p, vec4 m) { return dot(m.xyz, p) - m.w; }
+vec3 krs_mirror_reflect(vec3 p, vec4 m) { return p - m.xyz * (2.0 * krs_mirror_signed_distance(p, m)); }
+vec3 krs_mirror_fold(vec3 p, vec4 m) { return p - m.xyz * (2.0 * max(krs_mirror_signed_distance(p, m), 0.0)); }
+vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {normal.x, normal.y, normal.z, offset};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
     }
 };
 
@@ -139,6 +154,37 @@ struct axis_mirror {
         case 1: return {w.x, -w.y, w.z};
         default: return {w.x, w.y, -w.z};
         }
+    }
+
+    // GLSL: one vec4 (axis, above ? 1 : 0, 2 position, position); the fold is one min or max of
+    // the indexed coordinate, as above.
+    static constexpr std::string_view glsl_name = "krs_axis_mirror";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(float krs_axis_mirror_signed_distance(vec3 p, vec4 m) {
+    float x = p[int(m.x)];
+    return m.y != 0.0 ? x - m.w : m.w - x;
+}
+vec3 krs_axis_mirror_reflect(vec3 p, vec4 m) {
+    int a = int(m.x);
+    p[a] = m.z - p[a];
+    return p;
+}
+vec3 krs_axis_mirror_fold(vec3 p, vec4 m) {
+    int a = int(m.x);
+    float r = m.z - p[a];
+    p[a] = m.y != 0.0 ? min(p[a], r) : max(p[a], r);
+    return p;
+}
+vec3 krs_axis_mirror_reflect_direction(vec3 w, vec4 m) {
+    int a = int(m.x);
+    w[a] = -w[a];
+    return w;
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {float(axis), above ? 1.0f : 0.0f, twice_position, position()};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
     }
 };
 

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <concepts>
 #include <string>
+#include <string_view>
 #include <utility>
 
 namespace krs {
@@ -78,6 +79,22 @@ struct twist_warp {
         return 0.5 * (a + std::sqrt(a * a + 4.0));
     }
     bounding_sphere domain() const { return {{0, 0, 0}, radius}; }
+
+    // GLSL: one vec4 (rate, 0, 0, 0).
+    static constexpr std::string_view glsl_name = "krs_twist_warp";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_twist_warp_apply(vec3 p, vec4 w) {
+    float a = p.y * w.x;
+    float s = sin(a);
+    float c = cos(a);
+    return vec3(c * p.x - s * p.z, p.y, s * p.x + c * p.z);
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        out[0] = rate;
+        out[1] = out[2] = out[3] = 0.0f;
+    }
 };
 
 // Bend in the xy plane: the point turns about the z axis by rate * x radians.
@@ -101,6 +118,22 @@ struct bend_warp {
     }
     double lipschitz() const { return 1.0 + std::abs(double(rate)) * double(radius); }
     bounding_sphere domain() const { return {{0, 0, 0}, radius}; }
+
+    // GLSL: one vec4 (rate, 0, 0, 0).
+    static constexpr std::string_view glsl_name = "krs_bend_warp";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_bend_warp_apply(vec3 p, vec4 w) {
+    float a = p.x * w.x;
+    float s = sin(a);
+    float c = cos(a);
+    return vec3(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        out[0] = rate;
+        out[1] = out[2] = out[3] = 0.0f;
+    }
 };
 
 // Noise displacement: W(x) = x + a * (N(f x), N(f x + o1), N(f x + o2)) with N = value_noise.

@@ -14,6 +14,7 @@
 #include "krs/kernels/capsule.hpp"
 
 #include <cmath>
+#include <string_view>
 
 namespace krs {
 
@@ -87,6 +88,41 @@ struct box {
     bounding_sphere bound() const
     {
         return bound_around(vec3d(center_), length(vec3d(half_extents_)));
+    }
+
+    // GLSL: five vec4s (center, oriented ? 1 : 0), (half extents, 0), (axis x, 0), (axis y, 0),
+    // (axis z, 0). The orientation test is uniform, as in C++.
+    static constexpr std::string_view glsl_name = "krs_box";
+    static constexpr int glsl_vec4_count = 5;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_box_local(vec3 p, vec4 c, vec4 ax, vec4 ay, vec4 az) {
+    vec3 d = p - c.xyz;
+    return c.w != 0.0 ? vec3(dot(d, ax.xyz), dot(d, ay.xyz), dot(d, az.xyz)) : d;
+}
+float krs_box_distance(vec3 p, vec4 c, vec4 h, vec4 ax, vec4 ay, vec4 az) {
+    vec3 q = abs(krs_box_local(p, c, ax, ay, az)) - h.xyz;
+    return length(max(q, vec3(0.0))) + min(max(q.x, max(q.y, q.z)), 0.0);
+}
+vec3 krs_box_normal(vec3 p, vec4 c, vec4 h, vec4 ax, vec4 ay, vec4 az) {
+    vec3 l = krs_box_local(p, c, ax, ay, az);
+    vec3 s = vec3(l.x < 0.0 ? -1.0 : 1.0, l.y < 0.0 ? -1.0 : 1.0, l.z < 0.0 ? -1.0 : 1.0);
+    vec3 q = abs(l) - h.xyz;
+    vec3 o = max(q, vec3(0.0));
+    float ol = length(o);
+    bool xl = q.x >= q.y && q.x >= q.z;
+    bool yl = !xl && q.y >= q.z;
+    vec3 face = vec3(xl ? 1.0 : 0.0, yl ? 1.0 : 0.0, (xl || yl) ? 0.0 : 1.0);
+    vec3 g = (ol > 0.0 ? o / ol : face) * s;
+    return c.w != 0.0 ? ax.xyz * g.x + ay.xyz * g.y + az.xyz * g.z : g;
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[20] = {center_.x, center_.y, center_.z, oriented_ ? 1.0f : 0.0f,
+                             half_extents_.x, half_extents_.y, half_extents_.z, 0.0f,
+                             axes_[0].x, axes_[0].y, axes_[0].z, 0.0f,
+                             axes_[1].x, axes_[1].y, axes_[1].z, 0.0f,
+                             axes_[2].x, axes_[2].y, axes_[2].z, 0.0f};
+        for (int i = 0; i < 20; ++i) out[i] = v[i];
     }
 
 private:

@@ -9,6 +9,8 @@
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
 
+#include <string_view>
+
 namespace krs {
 
 struct plane {
@@ -47,6 +49,18 @@ struct plane {
     }
 
     bounding_sphere bound() const { return bounding_sphere::unbounded(); }
+
+    // GLSL: one vec4 (unit normal, offset).
+    static constexpr std::string_view glsl_name = "krs_plane";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(float krs_plane_distance(vec3 p, vec4 n) { return dot(n.xyz, p) - n.w; }
+vec3 krs_plane_normal(vec3 p, vec4 n) { return n.xyz; }
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {normal_direction.x, normal_direction.y, normal_direction.z, offset};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
+    }
 };
 
 } // namespace krs

@@ -7,6 +7,8 @@
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
 
+#include <string_view>
+
 namespace krs {
 
 struct sphere {
@@ -37,6 +39,23 @@ struct sphere {
     }
 
     bounding_sphere bound() const { return {center, radius}; }
+
+    // GLSL (krs/glsl/emitter.hpp): the same distance and normal, parameters packed as one vec4
+    // (center, radius).
+    static constexpr std::string_view glsl_name = "krs_sphere";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(float krs_sphere_distance(vec3 p, vec4 s) { return length(p - s.xyz) - s.w; }
+vec3 krs_sphere_normal(vec3 p, vec4 s) {
+    vec3 q = p - s.xyz;
+    float len = length(q);
+    return len > 0.0 ? q / len : vec3(0.0, 0.0, 1.0);
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {center.x, center.y, center.z, radius};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
+    }
 };
 
 } // namespace krs

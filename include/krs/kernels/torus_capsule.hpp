@@ -29,6 +29,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string_view>
 
 namespace krs {
 
@@ -205,6 +206,60 @@ public:
     }
 
     bounding_sphere bound() const { return bound_; }
+
+    // GLSL: the chord-midpoint evaluation above, line for line. Seven vec4s:
+    // (chord middle, kappa), (plane normal, cos alpha), (toward control, h sin alpha),
+    // (start, radius), (end, major ? 1 : 0), (start tangent, 0), (end tangent, 0).
+    static constexpr std::string_view glsl_name = "krs_torus_capsule";
+    static constexpr int glsl_vec4_count = 7;
+    static constexpr std::string_view glsl_source = R"(float krs_torus_capsule_distance(vec3 p, vec4 t0, vec4 t1, vec4 t2, vec4 t3, vec4 t4, vec4 t5, vec4 t6) {
+    vec3 u = p - t0.xyz;
+    float h = dot(u, t1.xyz);
+    vec3 up = u - t1.xyz * h;
+    float wl = length(up * t0.w + t2.xyz * t1.w);
+    float radial = (t0.w * dot(up, up) + 2.0 * t1.w * dot(up, t2.xyz) - t2.w) / (wl + 1.0);
+    float torus = sqrt(radial * radial + h * h);
+    vec3 fs = p - t3.xyz;
+    vec3 fe = p - t4.xyz;
+    bool is = dot(fs, t5.xyz) >= 0.0;
+    bool ie = dot(fe, t6.xyz) >= 0.0;
+    bool inArc = t4.w != 0.0 ? (is || ie) : (is && ie);
+    float ends = sqrt(min(dot(fs, fs), dot(fe, fe)));
+    return (inArc ? torus : ends) - t3.w;
+}
+vec3 krs_torus_capsule_normal(vec3 p, vec4 t0, vec4 t1, vec4 t2, vec4 t3, vec4 t4, vec4 t5, vec4 t6) {
+    vec3 u = p - t0.xyz;
+    float h = dot(u, t1.xyz);
+    vec3 up = u - t1.xyz * h;
+    vec3 w = up * t0.w + t2.xyz * t1.w;
+    float wl = length(w);
+    float radial = (t0.w * dot(up, up) + 2.0 * t1.w * dot(up, t2.xyz) - t2.w) / (wl + 1.0);
+    vec3 rd = wl > 0.0 ? w / wl : t2.xyz;
+    float torus = sqrt(radial * radial + h * h);
+    vec3 torusDir = torus > 0.0 ? (rd * radial + t1.xyz * h) / torus : rd;
+    vec3 fs = p - t3.xyz;
+    vec3 fe = p - t4.xyz;
+    bool is = dot(fs, t5.xyz) >= 0.0;
+    bool ie = dot(fe, t6.xyz) >= 0.0;
+    bool inArc = t4.w != 0.0 ? (is || ie) : (is && ie);
+    float ls = length(fs);
+    float le = length(fe);
+    vec3 sd = ls > 0.0 ? fs / ls : -t5.xyz;
+    vec3 ed = le > 0.0 ? fe / le : -t6.xyz;
+    return inArc ? torusDir : (ls <= le ? sd : ed);
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[28] = {chord_middle_.x, chord_middle_.y, chord_middle_.z, curvature_,
+                             plane_normal_.x, plane_normal_.y, plane_normal_.z, cos_half_angle_,
+                             toward_control_.x, toward_control_.y, toward_control_.z, chord_offset_,
+                             start_.x, start_.y, start_.z, radius_,
+                             end_.x, end_.y, end_.z, major_ ? 1.0f : 0.0f,
+                             start_tangent_.x, start_tangent_.y, start_tangent_.z, 0.0f,
+                             end_tangent_.x, end_tangent_.y, end_tangent_.z, 0.0f};
+        for (int i = 0; i < 28; ++i) out[i] = v[i];
+    }
 
 private:
     template <class T>

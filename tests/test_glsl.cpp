@@ -1,0 +1,128 @@
+// krs::glsl without a GPU: the shipped glsl/ files are what the emitter writes today, literals read
+// back as the same floats, only the kinds a scene uses are emitted, and pack() agrees with the
+// emitter's layout. (Execution on llvmpipe: test_glsl_gpu.cpp.)
+
+#include "krs/glsl/example_scenes.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace ex = krs::glsl::examples;
+
+std::string read_file(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return "<missing file " + path + ">";
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+std::size_t occurrences(const std::string& text, const std::string& what)
+{
+    std::size_t count = 0;
+    for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
+    return count;
+}
+
+} // namespace
+
+TEST_CASE("glsl folder is up to date with the emitter")
+{
+    int files = 0;
+    ex::for_each_scene([&](const auto& s) {
+        for (const ex::file_kind& kind : ex::files) {
+            const std::string path = std::string(KRS_SOURCE_DIR) + "/glsl/" + s.name + std::string(kind.suffix);
+            const std::string expected = ex::file_text(s, kind);
+            INFO(path << " is stale: regenerate with `cmake --build <build> --target krs_glsl_regenerate` "
+                         "(or glsl_export --all glsl)");
+            CHECK(read_file(path) == expected);
+            ++files;
+        }
+    });
+    CHECK(files == 20);
+}
+
+TEST_CASE("glsl float literals read back as the same float")
+{
+    const float values[] = {0.0f, -0.0f, 1.0f, -2.5f, 0.1f, 1e-30f, 3.4e38f, 1.17549435e-38f, 0.70710677f,
+                            123456.79f, 7e-6f, 16777216.0f};
+    for (float v : values) {
+        const std::string s = krs::glsl::float_literal(v);
+        CHECK(s.find_first_of(".e") != std::string::npos);
+        CHECK(std::strtof(s.c_str(), nullptr) == v);
+    }
+}
+
+TEST_CASE("glsl emits each kernel kind once and only the kinds a scene uses")
+{
+    // tree_sequence holds torus_capsule, sphere and plane; a tree without leaves or ground uses
+    // only torus capsules.
+    krs::model::tree_style style;
+    style.levels = 4;
+    style.leaves_per_twig = 0;
+    style.ground_height.reset();
+    const auto bare = krs::model::build_tree(krs::model::grow_tree(style));
+    const std::string text = krs::glsl::emit(bare, "bare");
+    CHECK(occurrences(text, "float krs_torus_capsule_distance(") == 1);
+    CHECK(occurrences(text, "krs_sphere_distance") == 0);
+    CHECK(occurrences(text, "krs_plane_distance") == 0);
+    CHECK(occurrences(text, "float krs_mirror_signed_distance(") == 1);
+    CHECK(occurrences(text, "struct krs_location") == 1);
+    CHECK(occurrences(text, "float bare(vec3 p)") == 1);
+    CHECK(occurrences(text, "krs_location bare_locate(vec3 p)") == 1);
+    CHECK(occurrences(text, "krs_kernel_shading bare_shade(") == 1);
+
+    // Two fields in one program share the library.
+    krs::glsl::emitter e;
+    e.add(ex::tree().field, "a");
+    e.add(ex::forest().field, "b");
+    const std::string both = e.source();
+    CHECK(occurrences(both, "float krs_torus_capsule_distance(") == 1);
+    CHECK(occurrences(both, "float krs_sphere_distance(") == 1);
+    CHECK(occurrences(both, "float a(vec3 p)") == 1);
+    CHECK(occurrences(both, "float b(vec3 p)") == 1);
+}
+
+TEST_CASE("glsl data layout: pack equals the emitter data and the documented vec4 order")
+{
+    const auto s = ex::sponge();
+    krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, "d", 0});
+    e.add(s.field, "sponge");
+    const std::vector<float> packed = krs::glsl::pack(s.field, "sponge");
+    CHECK(packed == e.data());
+    // Mirrors first (vec4 normal, offset), then the kernels.
+    REQUIRE(packed.size() == 4 * (s.field.mirror_count() + 5));
+    for (std::size_t i = 0; i < s.field.mirror_count(); ++i) {
+        const krs::mirror& m = s.field.mirrors()[i];
+        CHECK(packed[4 * i] == m.normal.x);
+        CHECK(packed[4 * i + 1] == m.normal.y);
+        CHECK(packed[4 * i + 2] == m.normal.z);
+        CHECK(packed[4 * i + 3] == m.offset);
+    }
+    const std::string text = e.source();
+    CHECK(text.find("layout(std140) uniform d_block {\n    vec4 d[26];\n};") != std::string::npos);
+    krs::glsl::emitter ssbo({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "d", 3});
+    ssbo.add(s.field, "sponge");
+    CHECK(ssbo.source().find("layout(std430, binding = 3) readonly buffer d_block {") != std::string::npos);
+    CHECK_THROWS_AS(krs::glsl::emitter({krs::glsl::target::shadertoy, krs::glsl::data_mode::buffer}),
+                    krs::invalid_parameter);
+}
+
+TEST_CASE("glsl es300 snippets declare precision and the version line is optional")
+{
+    const auto s = ex::terrain();
+    const krs::glsl::options es{krs::glsl::target::es300, krs::glsl::data_mode::constants, "t", 0};
+    const std::string without = krs::glsl::emit(s.field, "terrain", es);
+    const std::string with = krs::glsl::emit(s.field, "terrain", es, true);
+    CHECK(without.find("#version") == std::string::npos);
+    CHECK(with.rfind("#version 300 es\n", 0) == 0);
+    CHECK(without.find("precision highp float;") != std::string::npos);
+    CHECK(with.substr(16) == without);
+}
