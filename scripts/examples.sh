@@ -23,4 +23,9 @@ if [ -x "$build_dir/examples/krs_scenes" ]; then
     "$build_dir/examples/krs_scenes" --output-dir "$out_dir"
     ran=$((ran + 1))
 fi
+if [ -x "$build_dir/examples/krs_fractals" ]; then
+    echo "examples.sh: krs_fractals -> out/{kifs_*,zoom_*}.png"
+    "$build_dir/examples/krs_fractals" --output-dir "$out_dir"
+    ran=$((ran + 1))
+fi
 echo "examples.sh: $ran example(s) rendered into $out_dir"

@@ -10,6 +10,8 @@
 #include "krs/core/vec3.hpp"
 #include "krs/expansion.hpp"
 #include "krs/field.hpp"
+#include "krs/fractal/kifs.hpp"
+#include "krs/fractal/log_spherical.hpp"
 #include "krs/glsl/glsl.hpp"
 #include "krs/kernels/kernels.hpp"
 #include "krs/mirror.hpp"

@@ -1,0 +1,393 @@
+#pragma once
+// Log-polar and log-spherical warps: infinite self-similarity without loops.
+//
+// The forward log-polar map (rho, theta) = (log r, atan2) turns scaling about the origin into a
+// translation along rho, so a field tiled along rho becomes, mapped back, a geometry repeated at
+// every scale. The map scales space locally by 1/r, so a tile's distance is multiplied by r (by
+// r / S when the tile coordinates are stretched by S). This header gives three such fields, each a
+// template over the user's tile (any krs field) and over the lane type:
+//
+//   log_polar_tiling<Tile>      2D log-polar cells on the xz plane; the third axis y is divided by
+//                               the same factor r / S so the scaling stays uniform.
+//   log_spherical_tiling<Tile>  (log r, theta, phi) cells: spheres of cells at every scale.
+//   similar_shell<Shell>        forward then inverse log-spherical map with the tiling in between,
+//                               which reduces to p' = p / s^k for the shell k holding p: any field
+//                               placed in the prototype shell 1 <= |p| <= s, s = e^(1/density),
+//                               repeated inside and outside itself.
+//
+// Bounds. The tilings are not isometries: with m(x) = r / S the field is h(u(x)) m(x), whose
+// gradient is m J^T grad h + h grad m. m J is a rotation except along the third axis (log-polar:
+// a shear of size |y| / r) or the azimuth (log-spherical: 1 / sin theta), and |grad m| = 1 / S. So
+// each tiling bounds the cell field |h| by a margin mu (h = clamp(min(max(F, mu - b), mu), -mu, mu),
+// b the distance to the cell's border: equal to mu on every border, so the cells join
+// continuously), keeps geometry away from where the shear grows without bound (log-polar: within
+// |y| <= (Y / S) r; log-spherical: out of the two polar rows of cells), and divides by the
+// resulting Lipschitz bound, as lipschitz_warp does: the fields are 1-Lipschitz and never
+// overestimate. A tile's geometry closer than mu to its cell border is clipped there.
+//
+// The similar shell is a similarity inside each shell (exactly 1-Lipschitz there) but jumps
+// between shells: each shell sees only its own copy. shell_options picks the document's fixes:
+//   seams::none              the document's field: 1 shell evaluation; rays may overshoot at seams.
+//   seams::adjacent_shells   min over shells k-1, k, k+1 (each clamped below by the distance to
+//                            its shell) and r (1 - 1/s), a lower bound of the distance to every
+//                            other shell that is continuous in r: the three-shell windows of
+//                            neighbouring shells then agree at their common boundary, and the field
+//                            is 1-Lipschitz and never overestimates. 3 shell evaluations.
+//   seams::hidden_boundary   hidden geometry: the shell's two boundary spheres, cut off below
+//                            cutoff * r so they are never hit, brought into the min. Rays stop
+//                            short of the seam and enter the next shell; 1 shell evaluation plus
+//                            a sphere, but the field may still overestimate by up to cutoff * r.
+//   step_factor              multiplies the distance (shorter steps: more of them, fewer
+//                            overshoots); combines with any seam mode.
+// The prototype geometry must lie in the shell 1 <= |p| <= s; what leaves it is clipped by the
+// adjacent-shells fix and repeated overlapping by the others.
+
+#include "krs/core/validate.hpp"
+#include "krs/field.hpp"
+#include "krs/kernels/box.hpp"
+#include "krs/kernels/capsule.hpp"
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <utility>
+
+namespace krs {
+
+namespace detail {
+// Transcendentals over lanes: std:: for scalars, xsimd for packets.
+template <class T>
+inline T lane_log(const T& x)
+{
+    if constexpr (std::floating_point<T>) return std::log(x);
+    else return xsimd::log(x);
+}
+template <class T>
+inline T lane_exp(const T& x)
+{
+    if constexpr (std::floating_point<T>) return std::exp(x);
+    else return xsimd::exp(x);
+}
+template <class T>
+inline T lane_floor(const T& x)
+{
+    if constexpr (std::floating_point<T>) return std::floor(x);
+    else return xsimd::floor(x);
+}
+template <class T>
+inline T lane_atan2(const T& y, const T& x)
+{
+    if constexpr (std::floating_point<T>) return std::atan2(y, x);
+    else return xsimd::atan2(y, x);
+}
+
+// The smallest radius the warps take a logarithm of: keeps r = 0 (the singularity) finite; every
+// distance there is multiplied by r or a shell scale of this size, so the result is ~0.
+inline constexpr float smallest_radius = 1e-30f;
+
+// The cell field h of the header comment, on cell coordinates (x, z) in [-1/2, 1/2).
+template <class Tile, class T>
+inline T margin_clamped_cell(const Tile& tile, const vec3<T>& u, float margin)
+{
+    const T mu(margin);
+    const T border = T(0.5f) - max(abs(u.x), abs(u.z));
+    const T h = min(max(tile.distance(u), mu - border), mu);
+    return max(h, -mu);
+}
+
+// A float no larger than 1 / bound (dividing by a rounded-down bound would overestimate).
+inline float inverse_bound(double bound)
+{
+    float f = float(1.0 / bound);
+    if (double(f) > 1.0 / bound) f = std::nextafter(f, 0.0f);
+    return f;
+}
+} // namespace detail
+
+// ---- log-polar tiling of the xz plane ----------------------------------------------------------
+
+// Cells: u = (S log r, S (theta + pi)) with S = cells / (2 pi), so `cells` cells go around the
+// circle (an integer count: the seam at theta = +-pi is then a cell border) and each cell is e^(1/S) times
+// larger than the one inside it. The tile is evaluated at (u_rho - cell center, y S / r,
+// u_theta - cell center): tile x is radial, y is height, z is around. Tile geometry must lie in
+// |y| <= height and at least `margin` inside the cell's square [-1/2, 1/2]^2.
+template <field Tile>
+class log_polar_tiling {
+public:
+    log_polar_tiling(Tile tile, int cells, float height, float margin = 0.1f) : tile_(std::move(tile))
+    {
+        if (cells < 1 || cells > 4096)
+            throw invalid_parameter("log_polar_tiling.cells", "must be an integer in [1, 4096]", std::to_string(cells));
+        height_ = require_non_negative("log_polar_tiling.height", height);
+        margin_ = require_positive("log_polar_tiling.margin", margin);
+        if (!(margin_ <= 0.5f))
+            throw invalid_parameter("log_polar_tiling.margin", "must be <= 0.5 (half a cell)", detail::to_text(margin));
+        cells_ = cells;
+        const double s = double(cells) / (2.0 * std::numbers::pi);
+        scale_ = float(s);
+        const double a = double(height_) / s; // largest |y| / r where the tile is evaluated
+        const double sheared = 0.5 * (a + std::sqrt(a * a + 4.0)) + double(margin_) / s;
+        const double cone = std::sqrt(1.0 + a * a);
+        bound_ = std::max(sheared, cone);
+        inverse_bound_ = detail::inverse_bound(bound_);
+    }
+    int cells() const { return cells_; }
+    // The field's Lipschitz bound before normalization (its distance is already divided by it).
+    double lipschitz() const { return bound_; }
+    const Tile& tile() const { return tile_; }
+
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        const T s(scale_);
+        const T r = sqrt(p.x * p.x + p.z * p.z);
+        const T rs = max(r, T(detail::smallest_radius));
+        const T theta = detail::lane_atan2(p.z, select(r > T(0), p.x, T(1)));
+        const T cu = s * detail::lane_log(rs), cv = s * (theta + T(std::numbers::pi_v<float>));
+        const T h(height_);
+        const vec3<T> u{cu - detail::lane_floor(cu) - T(0.5f), clamp(p.y * s / rs, -h, h),
+                        cv - detail::lane_floor(cv) - T(0.5f)};
+        const T sheared = detail::margin_clamped_cell(tile_, u, margin_) * r / s;
+        const T cone = abs(p.y) - h * r / s; // height limit, |y| <= (Y / S) r
+        return max(sheared, cone) * T(inverse_bound_);
+    }
+
+private:
+    Tile tile_;
+    int cells_ = 1;
+    float height_ = 0, margin_ = 0.1f, scale_ = 1;
+    double bound_ = 1;
+    float inverse_bound_ = 1;
+};
+
+// ---- log-spherical tiling ------------------------------------------------------------------------
+
+// Cells: u = S (log r, theta, phi), S = cells / (2 pi) with an even `cells` >= 6, so cells go
+// around in phi, cells / 2 from pole to pole, and the cell at the seam phi = pi and the poles are
+// borders. The two rows of cells touching the poles stay empty (there the azimuth stretches
+// without bound). Tile x is radial, y polar, z azimuthal.
+template <field Tile>
+class log_spherical_tiling {
+public:
+    log_spherical_tiling(Tile tile, int cells, float margin = 0.1f) : tile_(std::move(tile))
+    {
+        if (cells < 6 || cells > 4096 || cells % 2 != 0)
+            throw invalid_parameter("log_spherical_tiling.cells", "must be an even integer in [6, 4096]",
+                                    std::to_string(cells));
+        margin_ = require_positive("log_spherical_tiling.margin", margin);
+        if (!(margin_ <= 0.5f))
+            throw invalid_parameter("log_spherical_tiling.margin", "must be <= 0.5 (half a cell)",
+                                    detail::to_text(margin));
+        cells_ = cells;
+        const double s = double(cells) / (2.0 * std::numbers::pi);
+        scale_ = float(s);
+        bound_ = 1.0 / std::sin(1.0 / s) + double(margin_) / s;
+        inverse_bound_ = detail::inverse_bound(bound_);
+    }
+    int cells() const { return cells_; }
+    double lipschitz() const { return bound_; }
+    const Tile& tile() const { return tile_; }
+
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        const T s(scale_);
+        const T planar = sqrt(p.x * p.x + p.y * p.y);
+        const T r = sqrt(planar * planar + p.z * p.z);
+        const T rs = max(r, T(detail::smallest_radius));
+        const T theta = detail::lane_atan2(planar, select(r > T(0), p.z, T(1)));
+        const T phi = detail::lane_atan2(p.y, select(planar > T(0), p.x, T(1)));
+        const T cu = s * detail::lane_log(rs), cv = s * theta, cw = s * (phi + T(std::numbers::pi_v<float>));
+        const T row = detail::lane_floor(cv);
+        const vec3<T> u{cu - detail::lane_floor(cu) - T(0.5f), cv - row - T(0.5f), cw - detail::lane_floor(cw) - T(0.5f)};
+        // Cell field with the border clamp in both the polar (y) and azimuth (z) directions.
+        const T mu(margin_);
+        const T border = T(0.5f) - max(abs(u.x), max(abs(u.y), abs(u.z)));
+        T h = max(min(max(tile_.distance(u), mu - border), mu), -mu);
+        const T last_row(float(cells_ / 2 - 1));
+        h = select(row >= T(1) && row < last_row, h, mu);
+        return h * r / s * T(inverse_bound_);
+    }
+
+private:
+    Tile tile_;
+    int cells_ = 6;
+    float margin_ = 0.1f, scale_ = 1;
+    double bound_ = 1;
+    float inverse_bound_ = 1;
+};
+
+// ---- similar log-spherical shell -----------------------------------------------------------------
+
+enum class shell_seams { none, adjacent_shells, hidden_boundary };
+
+struct shell_options {
+    shell_seams seams = shell_seams::adjacent_shells;
+    float hidden_cutoff = 0.02f; // hidden_boundary: the boundary spheres' field floor, times r
+    float step_factor = 1.0f;    // in (0, 1]: multiplies the distance
+
+    const shell_options& validate() const
+    {
+        require_positive("shell_options.hidden_cutoff", hidden_cutoff);
+        require_positive("shell_options.step_factor", step_factor);
+        if (!(step_factor <= 1.0f))
+            throw invalid_parameter("shell_options.step_factor", "must be in (0, 1]", detail::to_text(step_factor));
+        return *this;
+    }
+};
+
+template <field Shell>
+class similar_shell {
+public:
+    // density: shells per unit of log r (> 0); the prototype shell is 1 <= |p| <= e^(1/density).
+    similar_shell(Shell shell, float density, shell_options options = {})
+        : shell_(std::move(shell)), options_(options.validate())
+    {
+        density_ = require_positive("similar_shell.density", density);
+        if (!(density_ <= 1e3f))
+            throw invalid_parameter("similar_shell.density", "must be <= 1000", detail::to_text(density));
+        ratio_ = float(std::exp(1.0 / double(density_)));
+        const double w = 1.0 - 1.0 / std::exp(1.0 / double(density_));
+        other_shells_ = float(w);
+        if (double(other_shells_) > w) other_shells_ = std::nextafter(other_shells_, 0.0f);
+    }
+
+    float density() const { return density_; }
+    // s = e^(1 / density): the outer radius of the prototype shell, and the ratio between shells.
+    float ratio() const { return ratio_; }
+    const shell_options& options() const { return options_; }
+    const Shell& shell() const { return shell_; }
+
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        const T r = length(p);
+        const T rs = max(r, T(detail::smallest_radius));
+        const T inv_density(1.0f / density_);
+        const T k = detail::lane_floor(detail::lane_log(rs) * T(density_));
+        T d;
+        switch (options_.seams) {
+        case shell_seams::none: d = in_shell(p, k, inv_density); break;
+        case shell_seams::hidden_boundary: {
+            const T inner = detail::lane_exp(k * inv_density), outer = inner * T(ratio_);
+            const T boundary = max(min(r - inner, outer - r), T(options_.hidden_cutoff) * r);
+            d = min(in_shell(p, k, inv_density), boundary);
+            break;
+        }
+        default: {
+            d = T(other_shells_) * r;
+            for (int j = -1; j <= 1; ++j) {
+                const T kj = k + T(float(j));
+                const T inner = detail::lane_exp(kj * inv_density), outer = inner * T(ratio_);
+                const T to_shell = max(max(inner - r, r - outer), T(0));
+                d = min(d, max(in_shell(p, kj, inv_density), to_shell));
+            }
+            break;
+        }
+        }
+        return d * T(options_.step_factor);
+    }
+
+private:
+    // The prototype's distance seen from shell k: f(p / s^k) s^k.
+    template <class T>
+    T in_shell(const vec3<T>& p, const T& k, const T& inv_density) const
+    {
+        const T scale = detail::lane_exp(k * inv_density);
+        return shell_.distance(p / scale) * scale;
+    }
+
+    Shell shell_;
+    shell_options options_{};
+    float density_ = 1, ratio_ = float(std::numbers::e);
+    float other_shells_ = 0; // 1 - 1/s, rounded down
+};
+
+// ---- presets -------------------------------------------------------------------------------------
+
+// One ring of `petals` capsule petals in the shell 1 <= |p| <= s (s = e^(1/density)), rising from
+// near the inner sphere at 15 degrees above the xy plane to near the outer one at 55 degrees; the
+// similar shell makes it a lotus with rings of petals at every scale.
+struct lotus_shell {
+    static constexpr int max_petals = 16;
+    std::array<capsule, max_petals> petal{};
+    int petals = 0;
+
+    lotus_shell() = default;
+    lotus_shell(float ratio, int petals_)
+    {
+        if (petals_ < 1 || petals_ > max_petals)
+            throw invalid_parameter("lotus_shell.petals", "must be in [1, 16]", std::to_string(petals_));
+        const double s = require_finite("lotus_shell.ratio", ratio);
+        if (!(s > 1.0)) throw invalid_parameter("lotus_shell.ratio", "must be > 1", detail::to_text(ratio));
+        const double rb = std::pow(s, 0.2), rt = std::pow(s, 0.8);
+        const double radius = std::min({0.15 * (rt - rb), rb - 1.0, s - rt}) * 0.95;
+        const double low = 15.0 * std::numbers::pi / 180.0, high = 55.0 * std::numbers::pi / 180.0;
+        petals = petals_;
+        for (int i = 0; i < petals; ++i) {
+            const double a = 2.0 * std::numbers::pi * (i + 0.5) / petals;
+            const vec3d base = vec3d{std::cos(a) * std::cos(low), std::sin(a) * std::cos(low), std::sin(low)} * rb;
+            const vec3d tip = vec3d{std::cos(a) * std::cos(high), std::sin(a) * std::cos(high), std::sin(high)} * rt;
+            petal[std::size_t(i)] = capsule(vec3f(base), vec3f(tip), float(radius));
+        }
+    }
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        T d = petal[0].distance(p);
+        for (int i = 1; i < petals; ++i) d = min(d, petal[std::size_t(i)].distance(p));
+        return d;
+    }
+};
+
+// Fourteen cubes in the shell: on the six axes and the eight diagonals, at the shell's middle
+// radius s^(1/2); the similar shell makes them a cube singularity, cubes around cubes down to the
+// origin and out to infinity.
+struct cube_shell {
+    std::array<box, 14> cube{};
+
+    cube_shell() = default;
+    explicit cube_shell(float ratio)
+    {
+        const double s = require_finite("cube_shell.ratio", ratio);
+        if (!(s > 1.0)) throw invalid_parameter("cube_shell.ratio", "must be > 1", detail::to_text(ratio));
+        const double rc = std::sqrt(s);
+        const double h = 0.8 * std::min(rc - 1.0, s - rc) / std::sqrt(3.0);
+        int n = 0;
+        for (int axis = 0; axis < 3; ++axis)
+            for (int sign = -1; sign <= 1; sign += 2) {
+                vec3d c{0, 0, 0};
+                (axis == 0 ? c.x : axis == 1 ? c.y : c.z) = sign * rc;
+                cube[std::size_t(n++)] = box(vec3f(c), vec3f(vec3d{h, h, h}));
+            }
+        for (int i = 0; i < 8; ++i) {
+            const vec3d c = vec3d{(i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : -1.0} * (rc / std::sqrt(3.0));
+            cube[std::size_t(n++)] = box(vec3f(c), vec3f(vec3d{h, h, h}));
+        }
+    }
+    template <class T>
+    T distance(const vec3<T>& p) const
+    {
+        T d = cube[0].distance(p);
+        for (std::size_t i = 1; i < cube.size(); ++i) d = min(d, cube[i].distance(p));
+        return d;
+    }
+};
+
+using recursive_lotus = similar_shell<lotus_shell>;
+inline recursive_lotus make_recursive_lotus(float density = 1.0f, int petals = 8, shell_options options = {})
+{
+    require_positive("recursive_lotus.density", density);
+    return {lotus_shell(float(std::exp(1.0 / double(density))), petals), density, options};
+}
+
+using cube_singularity = similar_shell<cube_shell>;
+inline cube_singularity make_cube_singularity(float density = 1.0f, shell_options options = {})
+{
+    require_positive("cube_singularity.density", density);
+    return {cube_shell(float(std::exp(1.0 / double(density)))), density, options};
+}
+
+} // namespace krs
