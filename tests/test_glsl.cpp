@@ -6,10 +6,12 @@
 
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -125,4 +127,43 @@ TEST_CASE("glsl es300 snippets declare precision and the version line is optiona
     CHECK(with.rfind("#version 300 es\n", 0) == 0);
     CHECK(without.find("precision highp float;") != std::string::npos);
     CHECK(with.substr(16) == without);
+}
+
+TEST_CASE("glsl fractals: KIFS and similar shells emit by recursion, pack agrees")
+{
+    const auto sponge = krs::make_menger_sponge(4);
+    krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, "m", 0});
+    e.add(sponge, "menger");
+    e.add(krs::make_cube_fractal(3), "cubes"); // shares abs_fold, plane_fold, scale_about and box
+    const std::string text = e.source();
+    CHECK(occurrences(text, "vec3 krs_abs_fold_apply(") == 1);
+    CHECK(occurrences(text, "vec3 krs_sort_fold_apply(") == 1);
+    CHECK(occurrences(text, "vec3 krs_plane_fold_apply(") == 1);
+    CHECK(occurrences(text, "float krs_box_distance(") == 1);
+    CHECK(occurrences(text, "float menger_kernel(vec3 p)") == 1);
+    CHECK(occurrences(text, "vec3 menger_program(vec3 p)") == 1);
+    CHECK(occurrences(text, "for (int i = 0; i < 4; ++i) p = menger_program(p);") == 1); // last_iteration taps
+    CHECK(occurrences(text, "float cubes(vec3 p)") == 1);
+    CHECK(krs::glsl::pack(sponge, "menger") ==
+          std::vector<float>(e.data().begin(), e.data().begin() + std::ptrdiff_t(krs::glsl::pack(sponge, "menger").size())));
+    // Box (5 vec4s), abs (1), sort (none), scale (1), plane (1), then 1 / 3^i for i = 0..4.
+    const std::vector<float> packed = krs::glsl::pack(sponge, "menger");
+    REQUIRE(packed.size() == 4 * (5 + 3 + 11));
+    const float* inverse = packed.data() + 4 * 8;
+    CHECK(inverse[0] == 1.0f);
+    for (int i = 1; i <= 4; ++i) {
+        CHECK(inverse[i] > 0.0f);
+        CHECK(double(inverse[i]) <= std::pow(3.0, -i));
+    }
+    CHECK(inverse[5] == 0.0f);
+
+    const auto lotus = krs::make_recursive_lotus(1.0f, 8, {krs::shell_seams::none, 0.02f, 1.0f});
+    const std::string shell = krs::glsl::emit(lotus, "lotus");
+    CHECK(occurrences(shell, "float lotus_shell_7(vec3 p)") == 1);
+    CHECK(occurrences(shell, "float lotus_scale(float k)") == 1);
+    CHECK(occurrences(shell, "for (int j = -1; j <= 1; ++j)") == 0); // seams::none: one shell
+    const std::string adjacent = krs::glsl::emit(krs::make_cube_singularity(), "cubes");
+    CHECK(occurrences(adjacent, "for (int j = -1; j <= 1; ++j)") == 1);
+    CHECK(occurrences(adjacent, "float krs_box_distance(") == 1);
+    CHECK(adjacent.find("inf") == std::string::npos);
 }

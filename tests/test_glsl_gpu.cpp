@@ -11,6 +11,7 @@
 #include <GL/glcorearb.h>
 
 #include "krs/glsl/example_scenes.hpp"
+#include "krs/kernels/sphere.hpp"
 
 #include <doctest/doctest.h>
 
@@ -470,4 +471,203 @@ TEST_CASE("Shadertoy terrain frame on llvmpipe matches the CPU render")
 TEST_CASE("Shadertoy sponge frame on llvmpipe matches the CPU render")
 {
     check_frame(ex::sponge());
+}
+
+// ---- fractal fields (krs/fractal) ---------------------------------------------------------------
+
+namespace {
+
+// The fractal presets, each with the box the tests sample (center 0, these half extents).
+template <class F>
+struct fractal_case {
+    std::string name;
+    F field;
+    vec3f sample_half;
+    float extent() const { return krs::length(sample_half); }
+};
+
+template <class Fn>
+void for_each_kifs_preset(Fn&& fn)
+{
+    fn(fractal_case<krs::square_fractal>{"square", krs::make_square_fractal(5), {3.2f, 3.2f, 0.6f}});
+    fn(fractal_case<krs::cube_fractal>{"cube", krs::make_cube_fractal(4), {3.2f, 3.2f, 3.2f}});
+    fn(fractal_case<krs::menger_sponge>{"menger", krs::make_menger_sponge(4), {1.3f, 1.3f, 1.3f}});
+    fn(fractal_case<krs::sierpinski_tetrahedron>{"sierpinski", krs::make_sierpinski_tetrahedron(8), {1.3f, 1.3f, 1.3f}});
+    fn(fractal_case<krs::koch_curve>{"koch", krs::make_koch_curve(5, 0.004f), {1.3f, 0.6f, 0.2f}});
+}
+
+struct shell_case_options {
+    const char* label;
+    krs::shell_options options;
+};
+const shell_case_options shell_variants[] = {
+    {"adjacent_shells", {krs::shell_seams::adjacent_shells, 0.02f, 1.0f}},
+    {"none", {krs::shell_seams::none, 0.02f, 1.0f}},
+    {"hidden_boundary", {krs::shell_seams::hidden_boundary, 0.02f, 1.0f}},
+    {"adjacent_shells, step_factor 0.7", {krs::shell_seams::adjacent_shells, 0.02f, 0.7f}},
+};
+
+template <class Fn>
+void for_each_log_spherical_preset(Fn&& fn)
+{
+    for (const shell_case_options& v : shell_variants) {
+        fn("lotus", v.label, krs::make_recursive_lotus(1.0f, 8, v.options));
+        fn("cube_singularity", v.label, krs::make_cube_singularity(1.0f, v.options));
+    }
+}
+
+std::string fractal_main(const std::string& name)
+{
+    return "out vec4 krs_out;\nvoid main() { krs_out = vec4(" + name + "(vec3(0.5, 0.25, 0.125)), 0.0, 0.0, 1.0); }\n";
+}
+
+template <class F>
+int validate_fractal(const std::string& dir, const std::string& name, const F& field)
+{
+    int files = 0;
+    for (const auto t : {krs::glsl::target::glsl330, krs::glsl::target::glsl450, krs::glsl::target::es300})
+        for (const auto m : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
+            krs::glsl::emitter e({t, m, name + "_data", 0});
+            e.add(field, name);
+            validate(dir + "/" + name + "." + std::string(krs::glsl::target_name(t)) +
+                         (m == krs::glsl::data_mode::buffer ? ".buffer" : ".constants") + ".frag",
+                     e.source(true) + fractal_main(name));
+            ++files;
+        }
+    return files;
+}
+
+// Runs NAME(p) alone (the compute wrapper also calls NAME_locate: a stub reports nothing).
+template <class F>
+std::vector<float> gpu_distances(const F& field, const std::string& name, const std::vector<vec3f>& points,
+                                 krs::glsl::data_mode mode)
+{
+    krs::glsl::emitter e({krs::glsl::target::glsl450, mode, name + "_data", 0});
+    e.add(field, name);
+    const bool buffer = mode == krs::glsl::data_mode::buffer;
+    std::vector<float> data;
+    if (buffer) {
+        data = krs::glsl::pack(field, name);
+        CHECK(data == e.data());
+    }
+    const std::string snippet = e.source() + "krs_location " + name +
+                                "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
+    const auto gpu = run_points(snippet, name, points, data, false, name + "_data");
+    std::vector<float> d(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) d[i] = gpu[i].distance;
+    return d;
+}
+
+// Points with radii log-uniform in [1e-3, 1e2] and uniform directions. (Kept out of line: the
+// float rounding of each coordinate must happen, GCC 12 may fold (double)(float)x otherwise.)
+[[gnu::noinline]] float to_float(double x)
+{
+    return float(x);
+}
+std::vector<vec3f> log_radial_points(std::size_t count)
+{
+    std::mt19937 random(4242);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::uniform_real_distribution<double> u(std::log(1e-3), std::log(1e2));
+    std::vector<vec3f> points(count);
+    for (vec3f& p : points) {
+        double x = 0, y = 0, z = 0, n = 0;
+        while (n < 1e-6) {
+            x = g(random), y = g(random), z = g(random);
+            n = std::sqrt(x * x + y * y + z * z);
+        }
+        const double r = std::exp(u(random)) / n;
+        p = {to_float(x * r), to_float(y * r), to_float(z * r)};
+    }
+    return points;
+}
+
+} // namespace
+
+TEST_CASE("glslangValidator accepts every fractal preset for every target")
+{
+    REQUIRE(std::system("\"" KRS_GLSLANG_VALIDATOR "\" --version > /dev/null 2>&1") == 0);
+    const std::string dir = std::string(KRS_BINARY_DIR) + "/glsl-check";
+    std::system(("mkdir -p \"" + dir + "\"").c_str());
+    int files = 0;
+    for_each_kifs_preset([&](const auto& c) { files += validate_fractal(dir, c.name, c.field); });
+    // Every KIFS step kind and both taps: a rotate and a translate step in one program too.
+    using spiral_program = krs::fold_program<krs::abs_fold<krs::fold_x | krs::fold_z>, krs::rotate_step,
+                                             krs::translate_step, krs::scale_about>;
+    const krs::kifs<spiral_program, krs::sphere> spiral(
+        spiral_program({}, krs::rotate_step({0.0f, 1.0f, 0.0f}, 0.4f), krs::translate_step({0.1f, 0.0f, -0.2f}),
+                       krs::scale_about(1.5f, {1.0f, 0.5f, 0.0f})),
+        krs::sphere({0.0f, 0.0f, 0.0f}, 0.5f), 6);
+    files += validate_fractal(dir, "spiral", spiral);
+    for_each_log_spherical_preset([&](const std::string& name, const char* label, const auto& f) {
+        std::string id = name + "_" + label;
+        for (char& ch : id)
+            if (ch == ' ' || ch == ',' || ch == '.') ch = '_';
+        files += validate_fractal(dir, id, f);
+    });
+    files += validate_fractal(dir, "log_polar",
+                              krs::log_polar_tiling<krs::sphere>(krs::sphere({0.0f, 0.0f, 0.0f}, 0.3f), 12, 0.3f));
+    files += validate_fractal(dir, "log_spherical",
+                              krs::log_spherical_tiling<krs::box>(krs::box({0.0f, 0.0f, 0.0f}, {0.3f, 0.2f, 0.2f}), 16));
+    std::printf("glslangValidator: %d fractal shaders checked\n", files);
+}
+
+TEST_CASE("GLSL KIFS presets match the C++ field on llvmpipe")
+{
+    for_each_kifs_preset([&](const auto& c) {
+        std::mt19937 random(777);
+        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::vector<vec3f> points(16384);
+        for (vec3f& p : points) p = {u(random) * c.sample_half.x, u(random) * c.sample_half.y, u(random) * c.sample_half.z};
+        for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
+            const std::vector<float> gpu = gpu_distances(c.field, c.name, points, mode);
+            float worst = 0;
+            std::size_t exact = 0;
+            for (std::size_t i = 0; i < points.size(); ++i) {
+                const float d = c.field.distance(points[i]);
+                worst = std::max(worst, std::abs(gpu[i] - d));
+                exact += gpu[i] == d;
+            }
+            std::printf("%-10s %-9s points %zu  max |d_gpu - d_cpu| %.3g = %.3g of extent %.3g  bit-equal %zu\n",
+                        c.name.c_str(), mode == krs::glsl::data_mode::buffer ? "buffer" : "constants", points.size(),
+                        double(worst), double(worst / c.extent()), double(c.extent()), exact);
+            INFO(c.name);
+            CHECK(worst <= 1e-5f * c.extent());
+        }
+    });
+}
+
+TEST_CASE("GLSL log-spherical presets match the C++ field on llvmpipe")
+{
+    // The field scales with r, so the error is relative: |d_gpu - d_cpu| / max(|d_cpu|, 1e-3 r),
+    // r = |p| log-uniform in [1e-3, 1e2]. Seams: with seams::none the field jumps across a shell
+    // boundary, and the GPU's log (~5e-7 off) may pick the neighbouring shell within ~1e-6 of it;
+    // points within 1e-5 (relative in r) of a boundary are counted and, for that mode only, left out.
+    const std::vector<vec3f> points = log_radial_points(16384);
+    for_each_log_spherical_preset([&](const std::string& name, const char* label, const auto& f) {
+        const std::vector<float> gpu = gpu_distances(f, name, points, krs::glsl::data_mode::buffer);
+        const bool jumps = f.options().seams != krs::shell_seams::adjacent_shells;
+        double worst = 0;
+        std::size_t near_seam = 0, exact = 0, compared = 0;
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            const double r = double(krs::length(points[i]));
+            const double t = std::log(r) * double(f.density());
+            if (std::abs(t - std::round(t)) < 1e-5 * double(f.density())) {
+                ++near_seam;
+                if (jumps) continue;
+            }
+            const float d = f.distance(points[i]);
+            const double e = std::abs(double(gpu[i]) - double(d)) / std::max(std::abs(double(d)), 1e-3 * r);
+            worst = std::max(worst, e);
+            exact += gpu[i] == d;
+            ++compared;
+        }
+        std::printf("%-16s %-32s points %zu  max |d_gpu - d_cpu| / max(|d|, 1e-3 r) %.3g  bit-equal %zu/%zu  "
+                    "within 1e-5 of a seam %zu%s\n",
+                    name.c_str(), label, points.size(), worst, exact, compared, near_seam,
+                    jumps ? " (not compared)" : " (compared)");
+        INFO(name << " " << label);
+        CHECK(worst <= 1e-5);
+        CHECK(near_seam <= points.size() / 100);
+    });
 }

@@ -42,6 +42,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <utility>
 
@@ -69,6 +70,21 @@ struct abs_fold {
                 (Axes & fold_z) ? abs(p.z) : p.z};
     }
     double scale() const { return 1.0; }
+
+    // GLSL (krs/glsl/emitter.hpp): one vec4, 1 on the folded axes, 0 elsewhere.
+    static constexpr std::string_view glsl_name = "krs_abs_fold";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_abs_fold_apply(vec3 p, vec4 m) {
+    return vec3(m.x != 0.0 ? abs(p.x) : p.x, m.y != 0.0 ? abs(p.y) : p.y, m.z != 0.0 ? abs(p.z) : p.z);
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        out[0] = (Axes & fold_x) ? 1.0f : 0.0f;
+        out[1] = (Axes & fold_y) ? 1.0f : 0.0f;
+        out[2] = (Axes & fold_z) ? 1.0f : 0.0f;
+        out[3] = 0.0f;
+    }
 };
 
 // Reflection on the plane normal . p = offset, applied only to points on its negative side: the
@@ -94,6 +110,20 @@ struct plane_fold {
         return p - n * (T(2) * min(dot(n, p) - T(offset), T(0)));
     }
     double scale() const { return 1.0; }
+
+    // GLSL: one vec4 (normal, offset); the dot product spelled out in the C++ order.
+    static constexpr std::string_view glsl_name = "krs_plane_fold";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_plane_fold_apply(vec3 p, vec4 m) {
+    float e = m.x * p.x + m.y * p.y + m.z * p.z - m.w;
+    return p - m.xyz * (2.0 * min(e, 0.0));
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {normal.x, normal.y, normal.z, offset};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
+    }
 };
 
 // Sorts the coordinates so that x >= y >= z: three conditional swaps, each the fold on a plane
@@ -107,6 +137,18 @@ struct sort_fold {
         return {max(a, p.z), max(b, c), min(b, c)};
     }
     double scale() const { return 1.0; }
+
+    // GLSL: no parameters.
+    static constexpr std::string_view glsl_name = "krs_sort_fold";
+    static constexpr int glsl_vec4_count = 0;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_sort_fold_apply(vec3 p) {
+    float a = max(p.x, p.y);
+    float b = min(p.x, p.y);
+    float c = min(a, p.z);
+    return vec3(max(a, p.z), max(b, c), min(b, c));
+}
+)";
+    void glsl_constants(float*) const {}
 };
 
 // Rotation by `angle` radians about `axis` (right-handed), an isometry.
@@ -129,6 +171,23 @@ struct rotate_step {
     }
     // Rounding the matrix to float can make it stretch by a few ulps; the scale covers that.
     double scale() const { return 1.0 + 1e-6; }
+
+    // GLSL: three vec4s, the matrix rows (w unused).
+    static constexpr std::string_view glsl_name = "krs_rotate_step";
+    static constexpr int glsl_vec4_count = 3;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_rotate_step_apply(vec3 p, vec4 a, vec4 b, vec4 c) {
+    return vec3(a.x * p.x + a.y * p.y + a.z * p.z, b.x * p.x + b.y * p.y + b.z * p.z, c.x * p.x + c.y * p.y + c.z * p.z);
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        for (int i = 0; i < 3; ++i) {
+            out[4 * i] = rows_[i].x;
+            out[4 * i + 1] = rows_[i].y;
+            out[4 * i + 2] = rows_[i].z;
+            out[4 * i + 3] = 0.0f;
+        }
+    }
 
 private:
     vec3f rows_[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -153,6 +212,17 @@ struct scale_about {
     }
     double scale() const { return double(factor_); }
 
+    // GLSL: one vec4 ((factor - 1) center, factor).
+    static constexpr std::string_view glsl_name = "krs_scale_about";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_scale_about_apply(vec3 p, vec4 m) { return p * m.w - m.xyz; }
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {shift_.x, shift_.y, shift_.z, factor_};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
+    }
+
 private:
     float factor_ = 1.0f;
     vec3f center_{};
@@ -170,6 +240,17 @@ struct translate_step {
         return p + vec3<T>(offset);
     }
     double scale() const { return 1.0; }
+
+    // GLSL: one vec4 (offset, 0).
+    static constexpr std::string_view glsl_name = "krs_translate_step";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_translate_step_apply(vec3 p, vec4 m) { return p + m.xyz; }
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {offset.x, offset.y, offset.z, 0.0f};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
+    }
 };
 
 // The steps of one KIFS iteration, applied in order.
@@ -252,6 +333,19 @@ public:
         return min(d, kernel_.distance(p) * T(inverse_scale_[std::size_t(iterations_)]));
     }
 
+    // GLSL (krs/glsl/emitter.hpp, which emits the kernel and the program's steps by recursion and
+    // unrolls nothing: the loop runs `iterations` times, fixed in the code with the taps). The
+    // parameters are the table 1 / s^i, i = 0 .. max_iterations, four per vec4 (zeros past
+    // `iterations`), so the GPU multiplies by the same rounded-down floats as the C++.
+    static constexpr std::string_view glsl_name = "krs_kifs";
+    static constexpr int glsl_vec4_count = (max_iterations + 1 + 3) / 4;
+    static constexpr std::string_view glsl_source = "";
+    void glsl_constants(float* out) const
+    {
+        for (int i = 0; i < 4 * glsl_vec4_count; ++i)
+            out[i] = i <= iterations_ ? inverse_scale_[std::size_t(i)] : 0.0f;
+    }
+
 private:
     Program program_;
     Kernel kernel_;
@@ -271,6 +365,17 @@ struct tetrahedron {
         const T b = max(-p.x + p.y + p.z, p.x - p.y + p.z);
         return (max(a, b) - T(1)) * T(std::numbers::inv_sqrt3_v<float>);
     }
+
+    // GLSL: no parameters (0.57735026 is inv_sqrt3_v<float>).
+    static constexpr std::string_view glsl_name = "krs_tetrahedron";
+    static constexpr int glsl_vec4_count = 0;
+    static constexpr std::string_view glsl_source = R"(float krs_tetrahedron_distance(vec3 p) {
+    float a = max(-p.x - p.y - p.z, p.x + p.y - p.z);
+    float b = max(-p.x + p.y + p.z, p.x - p.y + p.z);
+    return (max(a, b) - 1.0) * 0.57735026;
+}
+)";
+    void glsl_constants(float*) const {}
 };
 
 // ---- presets -------------------------------------------------------------------------------------

@@ -47,12 +47,15 @@
 #include "krs/kernels/box.hpp"
 #include "krs/kernels/capsule.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <string>
+#include <string_view>
 #include <utility>
+#include <vector>
 
 namespace krs {
 
@@ -154,6 +157,34 @@ public:
         return max(sheared, cone) * T(inverse_bound_);
     }
 
+    // GLSL (krs/glsl/emitter.hpp, which emits the tile by recursion as NAME_tile and writes
+    // `NAME(p) = finish(p, u, NAME_tile(u = cell(p)))`): one vec4 (S, height, margin, 1 / bound),
+    // the same operations in the same order as distance() (atan and log are the GPU's own).
+    static constexpr std::string_view glsl_name = "krs_log_polar_tiling";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_log_polar_tiling_cell(vec3 p, vec4 c) {
+    float r = sqrt(p.x * p.x + p.z * p.z);
+    float rs = max(r, 1e-30);
+    float theta = atan(p.z, r > 0.0 ? p.x : 1.0);
+    float cu = c.x * log(rs);
+    float cv = c.x * (theta + 3.1415927);
+    return vec3(cu - floor(cu) - 0.5, clamp(p.y * c.x / rs, -c.y, c.y), cv - floor(cv) - 0.5);
+}
+float krs_log_polar_tiling_finish(vec3 p, vec3 u, float tile, vec4 c) {
+    float r = sqrt(p.x * p.x + p.z * p.z);
+    float border = 0.5 - max(abs(u.x), abs(u.z));
+    float h = max(min(max(tile, c.z - border), c.z), -c.z);
+    float sheared = h * r / c.x;
+    float cone = abs(p.y) - c.y * r / c.x;
+    return max(sheared, cone) * c.w;
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {scale_, height_, margin_, inverse_bound_};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
+    }
+
 private:
     Tile tile_;
     int cells_ = 1;
@@ -209,6 +240,37 @@ public:
         const T last_row(float(cells_ / 2 - 1));
         h = select(row >= T(1) && row < last_row, h, mu);
         return h * r / s * T(inverse_bound_);
+    }
+
+    // GLSL: as log_polar_tiling; one vec4 (S, margin, 1 / bound, cells / 2 - 1).
+    static constexpr std::string_view glsl_name = "krs_log_spherical_tiling";
+    static constexpr int glsl_vec4_count = 1;
+    static constexpr std::string_view glsl_source = R"(vec3 krs_log_spherical_tiling_cell(vec3 p, vec4 c) {
+    float planar = sqrt(p.x * p.x + p.y * p.y);
+    float r = sqrt(planar * planar + p.z * p.z);
+    float rs = max(r, 1e-30);
+    float theta = atan(planar, r > 0.0 ? p.z : 1.0);
+    float phi = atan(p.y, planar > 0.0 ? p.x : 1.0);
+    float cu = c.x * log(rs);
+    float cv = c.x * theta;
+    float cw = c.x * (phi + 3.1415927);
+    return vec3(cu - floor(cu) - 0.5, cv - floor(cv) - 0.5, cw - floor(cw) - 0.5);
+}
+float krs_log_spherical_tiling_finish(vec3 p, vec3 u, float tile, vec4 c) {
+    float planar = sqrt(p.x * p.x + p.y * p.y);
+    float r = sqrt(planar * planar + p.z * p.z);
+    float theta = atan(planar, r > 0.0 ? p.z : 1.0);
+    float row = floor(c.x * theta);
+    float border = 0.5 - max(abs(u.x), max(abs(u.y), abs(u.z)));
+    float h = max(min(max(tile, c.y - border), c.y), -c.y);
+    h = row >= 1.0 && row < c.w ? h : c.y;
+    return h * r / c.x * c.z;
+}
+)";
+    void glsl_constants(float* out) const
+    {
+        const float v[4] = {scale_, margin_, inverse_bound_, float(cells_ / 2 - 1)};
+        for (int i = 0; i < 4; ++i) out[i] = v[i];
     }
 
 private:
@@ -290,6 +352,34 @@ public:
         return d * T(options_.step_factor);
     }
 
+    // GLSL (krs/glsl/emitter.hpp emits the shell field by recursion as NAME_shell and the seam mode
+    // into the code). Two vec4s: (density, 1 / density, s, 1 - 1/s rounded down) and
+    // (hidden_cutoff, step_factor, first k of the scale table, its length). The emitter appends
+    // the scale table glsl_scale_table(): e^(k / density) for the shells k = k0 .. k0 + n - 1 (as
+    // many as the float radii 1e-30 .. 3.4e38 reach, at most glsl_max_table), computed by the C++
+    // expression, so the GPU scales each shell by the very float the CPU does (its own exp is
+    // ~10 ulp off); shells past the table fall back to the GPU's exp.
+    static constexpr std::string_view glsl_name = "krs_similar_shell";
+    static constexpr int glsl_vec4_count = 2;
+    static constexpr std::string_view glsl_source = "";
+    static constexpr int glsl_max_table = 256;
+    void glsl_constants(float* out) const
+    {
+        const auto [k0, n] = glsl_table_range();
+        const float v[8] = {density_,      1.0f / density_,         ratio_,   other_shells_,
+                            options_.hidden_cutoff, options_.step_factor, float(k0), float(n)};
+        for (int i = 0; i < 8; ++i) out[i] = v[i];
+    }
+    // The table, padded with zeros to whole vec4s.
+    std::vector<float> glsl_scale_table() const
+    {
+        const auto [k0, n] = glsl_table_range();
+        std::vector<float> t(std::size_t((n + 3) / 4 * 4), 0.0f);
+        const float inv_density = 1.0f / density_;
+        for (int i = 0; i < n; ++i) t[std::size_t(i)] = detail::lane_exp(float(k0 + i) * inv_density);
+        return t;
+    }
+
 private:
     // The prototype's distance seen from shell k: f(p / s^k) s^k.
     template <class T>
@@ -303,6 +393,20 @@ private:
     shell_options options_{};
     float density_ = 1, ratio_ = float(std::numbers::e);
     float other_shells_ = 0; // 1 - 1/s, rounded down
+
+    // Shells the float radii reach (floor(log r density) for r in [1e-30, 3.4e38], one more
+    // inside for the adjacent shells, none whose scale overflows), cut to glsl_max_table around 0.
+    std::pair<int, int> glsl_table_range() const
+    {
+        const double d = double(density_);
+        int lo = int(std::floor(std::log(double(detail::smallest_radius)) * d)) - 1;
+        // The top shells' scales overflow float: the table stops short of them (the GPU's exp
+        // gives inf there, as the C++ does).
+        int hi = int(std::floor(std::log(double(std::numeric_limits<float>::max())) * d)) - 1;
+        lo = std::max(lo, -glsl_max_table / 2);
+        hi = std::min(hi, glsl_max_table / 2 - 1);
+        return {lo, hi - lo + 1};
+    }
 };
 
 // ---- presets -------------------------------------------------------------------------------------
@@ -340,6 +444,12 @@ struct lotus_shell {
         for (int i = 1; i < petals; ++i) d = min(d, petal[std::size_t(i)].distance(p));
         return d;
     }
+    // GLSL (krs/glsl/emitter.hpp): the min over these parts in this order, each emitted as a kernel.
+    template <class F>
+    void glsl_for_each_part(F&& f) const
+    {
+        for (int i = 0; i < petals; ++i) f(petal[std::size_t(i)]);
+    }
 };
 
 // Fourteen cubes in the shell: on the six axes and the eight diagonals, at the shell's middle
@@ -373,6 +483,12 @@ struct cube_shell {
         T d = cube[0].distance(p);
         for (std::size_t i = 1; i < cube.size(); ++i) d = min(d, cube[i].distance(p));
         return d;
+    }
+    // GLSL (krs/glsl/emitter.hpp): the min over these parts in this order, each emitted as a kernel.
+    template <class F>
+    void glsl_for_each_part(F&& f) const
+    {
+        for (const box& b : cube) f(b);
     }
 };
 

@@ -35,6 +35,8 @@
 #include "krs/compose/union.hpp"
 #include "krs/compose/warp.hpp"
 #include "krs/core/validate.hpp"
+#include "krs/fractal/kifs.hpp"
+#include "krs/fractal/log_spherical.hpp"
 #include "krs/sequence.hpp"
 
 #include <charconv>
@@ -44,6 +46,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -94,6 +97,16 @@ concept glsl_parameters = requires(const X& x, float* out) {
 };
 template <class K>
 concept glsl_kernel = kernel<K> && glsl_parameters<K>;
+// A field with GLSL of its own (every glsl_kernel, and distance-only fields such as tetrahedron):
+// its source defines `float NAME_distance(vec3 p, vec4...)`.
+template <class F>
+concept glsl_field = field<F> && glsl_parameters<F>;
+// A KIFS fold step: its source defines `vec3 NAME_apply(vec3 p, vec4...)`.
+template <class S>
+concept glsl_fold_step = fold_step<S> && glsl_parameters<S>;
+// A field that is the min of parts, in the order it visits them (lotus_shell, cube_shell).
+template <class F>
+concept glsl_part_union = field<F> && requires(const F& f) { f.glsl_for_each_part([](const auto&) {}); };
 template <class M>
 concept glsl_mirror = mirror_kind<M> && glsl_parameters<M>;
 template <class W>
@@ -111,6 +124,24 @@ template <class F>
 struct is_warp : std::false_type {};
 template <class F, class W>
 struct is_warp<lipschitz_warp<F, W>> : std::true_type {};
+template <class F>
+struct is_kifs : std::false_type {};
+template <class P, class K>
+struct is_kifs<kifs<P, K>> : std::true_type {};
+template <class P>
+struct is_fold_program : std::false_type {};
+template <class... S>
+struct is_fold_program<fold_program<S...>> : std::true_type {};
+template <class F>
+struct is_log_tiling : std::false_type {};
+template <class T>
+struct is_log_tiling<log_polar_tiling<T>> : std::true_type {};
+template <class T>
+struct is_log_tiling<log_spherical_tiling<T>> : std::true_type {};
+template <class F>
+struct is_similar_shell : std::false_type {};
+template <class S>
+struct is_similar_shell<similar_shell<S>> : std::true_type {};
 
 // Shortest decimal that reads back as the same float, always with a '.' or an exponent (a GLSL
 // float literal). Parameters are validated finite, so no inf/NaN reaches here.
@@ -187,6 +218,11 @@ private:
     std::size_t push(const X& x, const std::string& what)
     {
         const std::size_t index = vec4_count();
+        if constexpr (X::glsl_vec4_count == 0) {
+            (void)x;
+            (void)what;
+            return index;
+        }
         data_.resize(data_.size() + 4 * std::size_t(X::glsl_vec4_count));
         x.glsl_constants(data_.data() + 4 * index);
         constants_comments_ += "// " + options_.data_name + "[" + std::to_string(index) + "..." +
@@ -248,15 +284,146 @@ private:
             emit_union(f, name, std::make_index_sequence<F::size>{});
         } else if constexpr (is_warp<F>::value) {
             emit_warp(f, name);
-        } else if constexpr (glsl_kernel<F>) {
+        } else if constexpr (is_kifs<F>::value) {
+            emit_kifs(f, name);
+        } else if constexpr (is_log_tiling<F>::value) {
+            emit_log_tiling(f, name);
+        } else if constexpr (is_similar_shell<F>::value) {
+            emit_similar_shell(f, name);
+        } else if constexpr (glsl_field<F>) {
             use_library<F>();
             const std::size_t k = push(f, name);
             functions_ += "float " + name + "(vec3 p) { return " + std::string(F::glsl_name) + "_distance(p" +
                           args<F>(k) + "); }\n";
         } else {
-            static_assert(sizeof(F) == 0, "krs::glsl: this field type has no GLSL (kernels, sequences, union_of and "
-                                          "lipschitz_warp with a GLSL warp are supported)");
+            if constexpr (glsl_part_union<F>) {
+                emit_parts(f, name);
+            } else {
+                static_assert(sizeof(F) == 0, "krs::glsl: this field type has no GLSL (kernels, sequences, union_of, "
+                                              "lipschitz_warp with a GLSL warp, kifs and the log-spherical fields "
+                                              "are supported)");
+            }
         }
+    }
+
+    // min over the parts a field visits, in its order (the C++ `d = part0; d = min(d, part_i)`).
+    template <class F>
+    void emit_parts(const F& f, const std::string& name)
+    {
+        std::size_t count = 0;
+        f.glsl_for_each_part([&](const auto& part) { emit_field(part, name + "_" + std::to_string(count++)); });
+        if (count == 0) throw invalid_parameter("glsl.parts", "a part union must have at least one part", name);
+        std::string body = "float " + name + "(vec3 p) {\n    float d = " + name + "_0(p);\n";
+        for (std::size_t i = 1; i < count; ++i) body += "    d = min(d, " + name + "_" + std::to_string(i) + "(p));\n";
+        functions_ += body + "    return d;\n}\n";
+    }
+
+    // ---- fractals (krs/fractal) -----------------------------------------------------------------
+    // KIFS: the kernel as NAME_kernel, one iteration of the program as NAME_program, and the loop
+    // of kifs::distance with the iteration count and the taps fixed in the code; 1 / s^i is read
+    // from the kifs's table in the data.
+    template <class P, class K>
+    void emit_kifs(const kifs<P, K>& f, const std::string& name)
+    {
+        static_assert(is_fold_program<P>::value, "krs::glsl: a kifs program must be a fold_program");
+        emit_field(f.kernel(), name + "_kernel");
+        std::string program = "vec3 " + name + "_program(vec3 p) {\n";
+        std::size_t step_index = 0;
+        std::apply(
+            [&](const auto&... step) {
+                (
+                    [&](const auto& st) {
+                        using S = std::remove_cvref_t<decltype(st)>;
+                        static_assert(glsl_fold_step<S>, "krs::glsl: this fold step type has no GLSL");
+                        use_library<S>();
+                        const std::size_t at = push(st, name + " step " + std::to_string(step_index++));
+                        std::string a = args<S>(at);
+                        program += "    p = " + std::string(S::glsl_name) + "_apply(p" + a + ");\n";
+                    }(step),
+                    ...);
+            },
+            f.program().steps());
+        functions_ += program + "    return p;\n}\n";
+        const std::size_t table = push(f, name + " 1 / scale^i, i = 0.." + std::to_string(f.iterations()));
+        const int n = f.iterations();
+        auto inverse_scale = [&](const std::string& i) {
+            return options_.data_name + "[" + std::to_string(table) + " + (" + i + " >> 2)][" + i + " & 3]";
+        };
+        const std::string last = ref(table + std::size_t(n / 4)) + "." + "xyzw"[n % 4];
+        std::string body = "float " + name + "(vec3 p) {\n";
+        if (f.taps() == kifs_taps::every_iteration) {
+            body += "    float d = 3.0e38;\n";
+            if (n > 0)
+                body += "    for (int i = 0; i < " + std::to_string(n) + "; ++i) {\n"
+                        "        d = min(d, " + name + "_kernel(p) * " + inverse_scale("i") + ");\n"
+                        "        p = " + name + "_program(p);\n    }\n";
+            body += "    return min(d, " + name + "_kernel(p) * " + last + ");\n}\n";
+        } else {
+            if (n > 0) body += "    for (int i = 0; i < " + std::to_string(n) + "; ++i) p = " + name + "_program(p);\n";
+            body += "    return " + name + "_kernel(p) * " + last + ";\n}\n";
+        }
+        functions_ += body;
+    }
+
+    // log_polar_tiling / log_spherical_tiling: the tile as NAME_tile at the cell coordinates.
+    template <class F>
+    void emit_log_tiling(const F& f, const std::string& name)
+    {
+        emit_field(f.tile(), name + "_tile");
+        use_library<F>();
+        const std::string c = ref(push(f, name));
+        const std::string kind(F::glsl_name);
+        functions_ += "float " + name + "(vec3 p) {\n    vec3 u = " + kind + "_cell(p, " + c + ");\n    return " + kind +
+                      "_finish(p, u, " + name + "_tile(u), " + c + ");\n}\n";
+    }
+
+    // similar_shell: the prototype shell as NAME_shell, the shell scales from the table
+    // (NAME_scale), the seam mode fixed in the code.
+    template <class S>
+    void emit_similar_shell(const similar_shell<S>& f, const std::string& name)
+    {
+        emit_field(f.shell(), name + "_shell");
+        const std::size_t header = push(f, name + " (density, 1 / density, s, 1 - 1/s), (cutoff, step, k0, n)");
+        const std::vector<float> table = f.glsl_scale_table();
+        const std::size_t first = vec4_count();
+        for (std::size_t i = 0; i < table.size(); i += 4) {
+            const float v[4] = {table[i], table[i + 1], table[i + 2], table[i + 3]};
+            push_raw(v, i == 0 ? name + " shell scales e^(k / density), k = k0.." : name + " shell scales");
+        }
+        const std::string c = ref(header), o = ref(header + 1);
+        std::string body = "float " + name + "_scale(float k) {\n"
+                           "    float i = k - " + o + ".z;\n"
+                           "    if (i >= 0.0 && i < " + o + ".w) {\n"
+                           "        int j = int(i);\n"
+                           "        return " + options_.data_name + "[" + std::to_string(first) + " + (j >> 2)][j & 3];\n"
+                           "    }\n"
+                           "    return exp(k * " + c + ".y);\n}\n";
+        body += "float " + name + "_in_shell(vec3 p, float k) {\n    float scale = " + name + "_scale(k);\n"
+                "    return " + name + "_shell(p / scale) * scale;\n}\n";
+        body += "float " + name + "(vec3 p) {\n"
+                "    vec4 c = " + c + ";\n"
+                "    float r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);\n"
+                "    float k = floor(log(max(r, 1e-30)) * c.x);\n";
+        switch (f.options().seams) {
+        case shell_seams::none: body += "    float d = " + name + "_in_shell(p, k);\n"; break;
+        case shell_seams::hidden_boundary:
+            body += "    float inner = " + name + "_scale(k);\n"
+                    "    float outer = inner * c.z;\n"
+                    "    float boundary = max(min(r - inner, outer - r), " + o + ".x * r);\n"
+                    "    float d = min(" + name + "_in_shell(p, k), boundary);\n";
+            break;
+        default:
+            body += "    float d = c.w * r;\n"
+                    "    for (int j = -1; j <= 1; ++j) {\n"
+                    "        float kj = k + float(j);\n"
+                    "        float inner = " + name + "_scale(kj);\n"
+                    "        float outer = inner * c.z;\n"
+                    "        float to_shell = max(max(inner - r, r - outer), 0.0);\n"
+                    "        d = min(d, max(" + name + "_in_shell(p, kj), to_shell));\n"
+                    "    }\n";
+            break;
+        }
+        functions_ += body + "    return d * " + o + ".y;\n}\n";
     }
 
     template <class U, std::size_t... I>
