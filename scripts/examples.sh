@@ -19,7 +19,7 @@ if [ -x "$build_dir/examples/krs_tree" ]; then
     ran=$((ran + 1))
 fi
 if [ -x "$build_dir/examples/krs_scenes" ]; then
-    echo "examples.sh: krs_scenes -> out/{forest,terrain,rock,coral,sponge,grass}.png"
+    echo "examples.sh: krs_scenes -> out/{forest,terrain,rock,mirrors,coral,sponge,grass}.png"
     "$build_dir/examples/krs_scenes" --output-dir "$out_dir"
     ran=$((ran + 1))
 fi
