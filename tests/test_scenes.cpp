@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 
 namespace {
@@ -447,4 +448,15 @@ TEST_CASE("every builder rejects out-of-range parameters and names them")
     CHECK_NOTHROW(build_rock([&] { auto p = r; p.facets = 16; p.fold_offset = 0.5f; return p; }()));
     CHECK_NOTHROW(build_coral([&] { auto p = c; p.taper = 1.0f; p.knot = 3.0f; p.tip_blob = 4.0f; return p; }()));
     CHECK_NOTHROW(build_sponge([&] { auto p = sp; p.levels = 9; return p; }()));
+}
+
+TEST_CASE("forest with an absurd tree level count is rejected without integer overflow")
+{
+    // Found by fuzz/fuzz_builders: levels - 1 overflowed for INT_MIN before validation (UBSan
+    // in the sanitized build turns a regression into a failure here).
+    krs::model::forest_parameters f;
+    f.tree.levels = std::numeric_limits<int>::min();
+    CHECK_THROWS_WITH_AS(krs::model::build_forest(f), doctest::Contains("tree_style.levels"), krs::invalid_parameter);
+    f.tree.levels = std::numeric_limits<int>::max();
+    CHECK_THROWS_AS(krs::model::build_forest(f), krs::invalid_parameter);
 }

@@ -45,7 +45,8 @@ inline forest build_forest(const forest_parameters& f)
     detail::require_range("forest.spacing", f.spacing, 0.0, 4.0);
     detail::require_range("forest.angle_jitter_degrees", f.angle_jitter_degrees, 0.0, 90.0);
     if (f.ground_height) require_finite("forest.ground_height", *f.ground_height);
-    const std::size_t tree_mirrors = std::size_t(std::max(0, f.tree.levels - 1));
+    // (levels - 1 would overflow for INT_MIN, found by fuzzing; grow_tree rejects such levels later.)
+    const std::size_t tree_mirrors = f.tree.levels > 1 ? std::size_t(f.tree.levels) - 1 : 0;
     if (tree_mirrors + std::size_t(f.doublings) > tree_sequence::max_levels)
         throw invalid_parameter("forest.doublings", "tree.levels - 1 + doublings must be <= 64",
                                 std::to_string(tree_mirrors + std::size_t(f.doublings)));
