@@ -7,73 +7,15 @@
 // would repeat the symmetry, so textures are evaluated in *world* space instead: procedural 3D
 // noise, or a 2D pattern projected along the three axes and blended by the normal (triplanar).
 //
-// value_noise is lattice value noise: a pseudo-random value in [-1, 1] at every integer point,
-// blended with the quintic fade 6t^5 - 15t^4 + 10t^3 (C2, so lighting on displaced surfaces shows
-// no lattice creases). Its derivative along an axis is at most max|fade'| * max|v_a - v_b| =
-// (30/16) * 2 = 3.75, so |grad| <= 3.75 sqrt(3): `value_noise_gradient_bound`, which the noise
-// warp uses to declare its Lipschitz bound. The lattice hash uses only float arithmetic (fract of
-// products), so it is one template for float, double and packets; it is accurate for lattice
-// coordinates of magnitude below about 2^16.
+// Value noise itself lives in krs/core/noise.hpp.
 
+#include "krs/core/noise.hpp"
 #include "krs/core/validate.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 namespace krs {
-
-// max over space of |grad value_noise| (see above).
-inline constexpr double value_noise_axis_slope_bound = 3.75;
-inline constexpr double value_noise_gradient_bound = 3.75 * 1.7320508075688772;
-
-namespace detail {
-template <class T>
-inline T floor_lane(const T& x)
-{
-    if constexpr (std::floating_point<T>)
-        return std::floor(x);
-    else
-        return xsimd::floor(x);
-}
-template <class T>
-inline T fract(const T& x)
-{
-    return x - floor_lane(x);
-}
-// Hash of a lattice point to [0, 1): scramble each coordinate by an irrational multiplier, mix the
-// three with a dot product against a shifted copy, and take the fractional part of a product.
-template <class T>
-inline T lattice_hash(const T& x, const T& y, const T& z)
-{
-    T a = fract(x * T(0.1031f)), b = fract(y * T(0.11369f)), c = fract(z * T(0.13787f));
-    const T m = a * (b + T(19.19f)) + b * (c + T(19.19f)) + c * (a + T(19.19f));
-    a = a + m, b = b + m, c = c + m;
-    return fract((a + b) * c);
-}
-template <class T>
-inline T fade(const T& t)
-{
-    return t * t * t * (t * (t * T(6) - T(15)) + T(10));
-}
-} // namespace detail
-
-// Value noise in [-1, 1] at p (any lane type).
-template <class T>
-T value_noise(const vec3<T>& p)
-{
-    using detail::lattice_hash;
-    const T ix = detail::floor_lane(p.x), iy = detail::floor_lane(p.y), iz = detail::floor_lane(p.z);
-    const T fx = detail::fade(p.x - ix), fy = detail::fade(p.y - iy), fz = detail::fade(p.z - iz);
-    const T one(1);
-    auto corner = [&](const T& dx, const T& dy, const T& dz) { return lattice_hash(ix + dx, iy + dy, iz + dz); };
-    const T zero(0);
-    const T x00 = mix(corner(zero, zero, zero), corner(one, zero, zero), fx);
-    const T x10 = mix(corner(zero, one, zero), corner(one, one, zero), fx);
-    const T x01 = mix(corner(zero, zero, one), corner(one, zero, one), fx);
-    const T x11 = mix(corner(zero, one, one), corner(one, one, one), fx);
-    const T v = mix(mix(x00, x10, fy), mix(x01, x11, fy), fz);
-    return v * T(2) - one;
-}
 
 // Fractal sum of `octaves` noise layers, each at `lacunarity` times the frequency and `gain`
 // times the amplitude of the previous; normalized by the amplitude sum so the result stays in
