@@ -1,7 +1,17 @@
 #pragma once
 // hypertree: volumetric IFS trees (paper "Modeling Trees with Hypertextures"). The umbrella
-// header; the transforms, generator, stores and raymarcher land here as they are built. It uses
-// krs's lane types and rays, never the other way round.
+// header. It uses krs's lane types, noise and rays, never the other way round.
+//
+// Flow: an `ifs` (C++ pipelines or a definition file) -> `generate` (seeded, deterministic) ->
+// `compact` (validation: one entry per voxel) -> `density_classes` -> a store (dense, index
+// list, index list + bit array, partitioned) -> operations, level of detail, rendering.
 
+#include "hypertree/generate.hpp"
+#include "hypertree/ifs.hpp"
+#include "hypertree/random.hpp"
+#include "hypertree/transform/condensation.hpp"
+#include "hypertree/transform/pipeline.hpp"
+#include "hypertree/volume.hpp"
+#include "hypertree/voxel.hpp"
 #include "krs/core/vec3.hpp"
 #include "krs/trace/ray.hpp"

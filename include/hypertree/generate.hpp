@@ -1,0 +1,271 @@
+#pragma once
+// The hypertree generator (paper section 6): the random iteration algorithm with condensation,
+// recording every voxel each generator occupies with the generator's depth and first-level part.
+//
+// One cycle: X = a condensation sample (depth 0, the trunk); then for s = 1 .. k-1 a newly
+// selected transformation w_s extends the pipeline, and the depth-s generator is
+//     Y_s = w_s^1( w_{s-1}^2( w_{s-2}^3( ... w_1^s(X) ) ) )
+// (upper index: level of execution, figure 2). Parameter values differ only for levels 1, 2 and
+// 3+, so the innermost part w_{s-2}^3 ... w_1^s(X) is the previous row's innermost part with one
+// more level-3+ map applied: each row costs three chain applications instead of s ("only the last
+// m transformations in each row need to be recalculated", section 3.4).
+//
+// Determinism and threads: cycles are cut into chunks of `chunk_cycles`; chunk c draws from its
+// own stream derive(seed, c + 1), and chunk results are concatenated in chunk order. So the hit
+// list is the same bit for bit whether the chunks run on one thread or many. The library starts
+// no thread itself (DESIGN rule 6): pass `generation_options::parallel_for` to run chunks on yours.
+
+#include "hypertree/ifs.hpp"
+#include "hypertree/voxel.hpp"
+#include "krs/core/noise.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+namespace hypertree {
+
+struct generation_options {
+    std::uint64_t chunk_cycles = 8192;
+    memory_budget budget{};
+    // Runs body(0) .. body(count - 1), in any order and on any threads; empty = serially here.
+    std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)> parallel_for;
+};
+
+struct generation_stats {
+    std::uint64_t cycles = 0;
+    std::uint64_t generators = 0; // generated (including dummies)
+    std::uint64_t recorded = 0;   // recorded (not dummy)
+    std::uint64_t escaped = 0;    // recorded generators with an end outside the hypervolume
+    std::vector<std::uint64_t> recorded_per_depth;
+};
+
+struct generated_hits {
+    hypervolume volume;
+    std::vector<hit> hits; // in generation order, before validation (compact.hpp)
+    generation_stats stats;
+};
+
+// What a test observer sees of each generator: its depth, the selected transformations w_1 .. w_s
+// (innermost first), its segment (start == end for points) and whether it was recorded.
+struct generator_event {
+    int depth;
+    std::span<const std::uint8_t> selected;
+    vec3d start, end;
+    bool recorded;
+};
+
+// Calls visit(index) for each voxel the segment [a, b] passes through, in order from a, each once
+// (a 3D digital differential analyser over the part of the segment inside the box). A point
+// (a == b) visits its voxel. Outside parts visit nothing.
+template <class Visit>
+void for_each_voxel_on_segment(const hypervolume& volume, const vec3d& a, const vec3d& b, Visit&& visit)
+{
+    const vec3d d = b - a;
+    if (d.x == 0 && d.y == 0 && d.z == 0) {
+        if (const auto i = volume.voxel_at(a)) visit(*i);
+        return;
+    }
+    const double start[3] = {a.x, a.y, a.z}, dir[3] = {d.x, d.y, d.z};
+    const vec3d lo = volume.origin(), hi = volume.maximum(), size = volume.voxel_size();
+    const double low[3] = {lo.x, lo.y, lo.z}, high[3] = {hi.x, hi.y, hi.z}, side[3] = {size.x, size.y, size.z};
+    const int n[3] = {volume.grid().x, volume.grid().y, volume.grid().z};
+    double t0 = 0, t1 = 1;
+    for (int i = 0; i < 3; ++i) {
+        if (dir[i] == 0) {
+            if (start[i] < low[i] || start[i] > high[i]) return;
+            continue;
+        }
+        double ta = (low[i] - start[i]) / dir[i], tb = (high[i] - start[i]) / dir[i];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta), t1 = std::min(t1, tb);
+    }
+    if (!(t0 <= t1)) return;
+    int cell[3], last[3], step[3];
+    double next[3], delta[3];
+    for (int i = 0; i < 3; ++i) {
+        const auto cell_of = [&](double t) {
+            const double c = std::floor((start[i] + dir[i] * t - low[i]) / side[i]);
+            return int(std::clamp(c, 0.0, double(n[i] - 1)));
+        };
+        cell[i] = cell_of(t0), last[i] = cell_of(t1);
+        step[i] = dir[i] > 0 ? 1 : dir[i] < 0 ? -1 : 0;
+        if (step[i] == 0) {
+            next[i] = delta[i] = INFINITY;
+            continue;
+        }
+        const double boundary = low[i] + (cell[i] + (step[i] > 0 ? 1 : 0)) * side[i];
+        next[i] = (boundary - start[i]) / dir[i];
+        delta[i] = side[i] / std::abs(dir[i]);
+    }
+    // The walk ends at the last cell, the Manhattan distance away: finite whatever rounding does.
+    int budget = std::abs(last[0] - cell[0]) + std::abs(last[1] - cell[1]) + std::abs(last[2] - cell[2]);
+    for (;;) {
+        visit(volume.index(cell[0], cell[1], cell[2]));
+        if (budget-- <= 0) return;
+        // The nearest boundary crossing among the axes that still have cells to go: each step
+        // moves one axis one cell toward the last cell, so the walk takes exactly `budget` steps.
+        int i = -1;
+        for (int k = 0; k < 3; ++k)
+            if (cell[k] != last[k] && (i < 0 || next[k] < next[i])) i = k;
+        cell[i] += step[i];
+        next[i] += delta[i];
+    }
+}
+
+namespace detail {
+
+struct no_observer {
+    void operator()(const generator_event&) const {}
+};
+
+inline vec3d perturbed(const perturbation& perturb, const vec3d& p)
+{
+    const vec3d q = p * perturb.frequency;
+    return {p.x + perturb.amplitude.x * krs::value_noise(q),
+            p.y + perturb.amplitude.y * krs::value_noise(vec3d{q.x + 31.7, q.y - 17.3, q.z + 5.9}),
+            p.z + perturb.amplitude.z * krs::value_noise(vec3d{q.x - 11.1, q.y + 23.9, q.z - 41.3})};
+}
+
+// A generator in flight: its two ends (equal for points).
+struct segment {
+    vec3d a, b;
+};
+
+template <transform_pipeline P, class Observer>
+void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
+                    std::vector<hit>& out, generation_stats& stats, Observer& observer)
+{
+    const ifs<P>& def = tree.definition();
+    const hypervolume& volume = def.volume;
+    const int depth = def.tree_depth;
+    const bool is_line = !def.generator.is_point();
+    const vec3d half = (def.generator.end - def.generator.start) * 0.5;
+    const double half_length = krs::length(half);
+    random_stream random = random_stream::derive(seed, chunk + 1);
+    std::uint8_t selected[max_tree_depth];
+
+    const auto inside = [&](const vec3d& p) {
+        const vec3d lo = volume.origin(), hi = volume.maximum();
+        return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y && p.z <= hi.z;
+    };
+    const auto record = [&](segment g, int s, std::uint8_t part) {
+        if (def.perturb.enabled()) {
+            // The whole generator moves with its midpoint, so a line keeps its length.
+            const vec3d mid = (g.a + g.b) * 0.5, shift = perturbed(def.perturb, mid) - mid;
+            g.a += shift, g.b += shift;
+        }
+        ++stats.recorded;
+        ++stats.recorded_per_depth[s];
+        if (!inside(g.a) || !inside(g.b)) ++stats.escaped;
+        const std::uint8_t level = std::uint8_t(s);
+        if (!is_line) {
+            if (const auto i = volume.voxel_at(g.a)) out.push_back({*i, level, part});
+        } else {
+            for_each_voxel_on_segment(volume, g.a, g.b, [&](voxel_index i) { out.push_back({i, level, part}); });
+        }
+        return g;
+    };
+    const auto apply = [&](const auto& chain, const segment& g) {
+        if (is_line) return segment{chain(g.a), chain(g.b)};
+        const vec3d p = chain(g.a);
+        return segment{p, p};
+    };
+    // A transformed line is rescaled about its midpoint to the generator's length (section 4).
+    const auto keep_length = [&](segment g) {
+        if (!is_line) return g;
+        const vec3d mid = (g.a + g.b) * 0.5, dir = g.b - g.a;
+        const double len = krs::length(dir);
+        const vec3d h = len > 0 ? dir * (half_length / len) : half;
+        return segment{mid - h, mid + h};
+    };
+
+    for (std::uint64_t c = 0; c < cycles; ++c) {
+        ++stats.cycles;
+        const vec3d stem = tree.sample_stem(random);
+        const segment x{stem - half, stem + half};
+        ++stats.generators;
+        const segment trunk = record(x, 0, 0);
+        if constexpr (!std::is_same_v<Observer, no_observer>) observer(generator_event{0, {}, trunk.a, trunk.b, true});
+
+        // `inner` holds w_{s-2}^3 ... w_1^s (X): the part of row s that row s + 1 reuses.
+        segment inner = x;
+        int cycle_end = depth - 1; // the deepest row this cycle may make (last-level rule)
+        for (int s = 1; s < depth; ++s) {
+            const std::size_t w = tree.select(random.uniform());
+            selected[s - 1] = std::uint8_t(w);
+            const auto& rule = def.transforms[w];
+            // w_j executes at level s - j + 1 in row s: its last level is passed once s > m + j - 1.
+            cycle_end = std::min(cycle_end, rule.last_level + s - 1);
+            if (s > cycle_end) break;
+            if (s >= 3) inner = apply(tree.chain_of(selected[s - 3], 3), inner);
+            segment y = inner;
+            if (s >= 2) y = apply(tree.chain_of(selected[s - 2], 2), y);
+            y = keep_length(apply(tree.chain_of(w, 1), y));
+            ++stats.generators;
+            const bool recorded = s < rule.dummy_from;
+            if (recorded) y = record(y, s, std::uint8_t(w + 1));
+            if constexpr (!std::is_same_v<Observer, no_observer>)
+                observer(generator_event{s, std::span<const std::uint8_t>(selected, std::size_t(s)), y.a, y.b, recorded});
+        }
+    }
+}
+
+} // namespace detail
+
+// Runs the IFS: N = ifs.iterations iterations in cycles of tree_depth, deterministic for `seed`.
+// Refuses, before allocating, a run whose hit list would exceed the memory budget.
+template <transform_pipeline P, class Observer = detail::no_observer>
+generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const generation_options& options = {},
+                        Observer observer = {})
+{
+    const drawn_ifs<P> tree(definition, seed);
+    const std::uint64_t depth = std::uint64_t(definition.tree_depth);
+    const std::uint64_t cycles = (definition.iterations + depth - 1) / depth;
+    const double voxels_per_generator =
+        definition.generator.is_point()
+            ? 1.0
+            : 3.0 * std::ceil(definition.generator.length() / definition.volume.smallest_voxel_side()) + 3.0;
+    const double worst_bytes = double(cycles) * double(depth) * voxels_per_generator * double(sizeof(hit));
+    if (worst_bytes > double(options.budget.bytes))
+        throw krs::invalid_parameter("ifs.iterations",
+                                     "would record up to " + std::to_string(std::uint64_t(worst_bytes)) + " bytes of hits, over the memory budget of " +
+                                         std::to_string(options.budget.bytes) + " bytes",
+                                     std::to_string(definition.iterations));
+    if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
+
+    const std::uint64_t chunks = (cycles + options.chunk_cycles - 1) / options.chunk_cycles;
+    std::vector<std::vector<hit>> chunk_hits(chunks);
+    std::vector<generation_stats> chunk_stats(chunks);
+    const auto run = [&](std::size_t c) {
+        const std::uint64_t first = c * options.chunk_cycles;
+        const std::uint64_t count = std::min(options.chunk_cycles, cycles - first);
+        chunk_stats[c].recorded_per_depth.assign(depth, 0);
+        chunk_hits[c].reserve(std::size_t(double(count) * double(depth) * (definition.generator.is_point() ? 1.0 : voxels_per_generator / 3.0)));
+        detail::generate_chunk(tree, seed, c, count, chunk_hits[c], chunk_stats[c], observer);
+    };
+    if (options.parallel_for && chunks > 1)
+        options.parallel_for(std::size_t(chunks), run);
+    else
+        for (std::size_t c = 0; c < chunks; ++c) run(c);
+
+    generated_hits result{definition.volume, {}, {}};
+    std::size_t total = 0;
+    for (const auto& h : chunk_hits) total += h.size();
+    result.hits.reserve(total);
+    result.stats.recorded_per_depth.assign(depth, 0);
+    for (std::size_t c = 0; c < chunks; ++c) {
+        result.hits.insert(result.hits.end(), chunk_hits[c].begin(), chunk_hits[c].end());
+        std::vector<hit>().swap(chunk_hits[c]);
+        const auto& s = chunk_stats[c];
+        result.stats.cycles += s.cycles, result.stats.generators += s.generators;
+        result.stats.recorded += s.recorded, result.stats.escaped += s.escaped;
+        for (std::size_t d = 0; d < depth; ++d) result.stats.recorded_per_depth[d] += s.recorded_per_depth[d];
+    }
+    return result;
+}
+
+} // namespace hypertree

@@ -1,0 +1,76 @@
+#pragma once
+// Condensation (paper section 3.3): the resetting transformation that maps any generator into the
+// stem volume, limiting the fractal depth and making the trunk that later transformations
+// replicate as branches.
+//
+// `cone` is the CONE of definition files: a truncated cone along a major axis, from `bottom` to
+// `top` (positions along the axis) with radii `bottom_radius` and `top_radius`, centred on the
+// axis. A condensation samples a point uniformly in the cone's volume (so the stem's density is
+// even), then applies its own pipeline (`then`: a shear bends the stem, a rotation tilts one stem
+// of a dichotomous fork, a translation moves it). The generator's midpoint is placed there; a line
+// generator keeps its orientation.
+//
+// Uniform in volume: along the axis the cross-section area grows as r(t)^2 with r linear in t, so
+// the inverse of the cumulative r^3 law gives t; within the disc, radius r sqrt(u) and a uniform
+// angle.
+
+#include "hypertree/random.hpp"
+#include "hypertree/transform/pipeline.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace hypertree {
+
+struct cone {
+    int axis = 1; // 0 = x, 1 = y, 2 = z
+    double bottom = 0, top = 1;
+    double bottom_radius = 0.05, top_radius = 0.02;
+
+    void validate() const
+    {
+        if (axis < 0 || axis > 2) throw krs::invalid_parameter("cone.axis", "must be 0 (x), 1 (y) or 2 (z)", std::to_string(axis));
+        krs::require_finite("cone.bottom", bottom);
+        krs::require_finite("cone.top", top);
+        if (!(top > bottom)) throw krs::invalid_parameter("cone.top", "must be above cone.bottom", krs::detail::to_text(top));
+        krs::require_non_negative("cone.bottom_radius", bottom_radius);
+        krs::require_non_negative("cone.top_radius", top_radius);
+        if (!(bottom_radius > 0 || top_radius > 0))
+            throw krs::invalid_parameter("cone.bottom_radius", "and cone.top_radius must not both be 0 (the stem would have no volume)", "0");
+    }
+    double volume() const
+    {
+        return std::numbers::pi * (top - bottom) *
+               (bottom_radius * bottom_radius + bottom_radius * top_radius + top_radius * top_radius) / 3.0;
+    }
+    vec3d sample(random_stream& random) const
+    {
+        const double u = random.uniform(), r0 = bottom_radius, r1 = top_radius;
+        double t = u;
+        if (std::abs(r1 - r0) > 1e-9 * std::max(r0, r1)) {
+            const double r = std::cbrt(r0 * r0 * r0 + u * (r1 * r1 * r1 - r0 * r0 * r0));
+            t = std::clamp((r - r0) / (r1 - r0), 0.0, 1.0);
+        }
+        const double radius = (r0 + (r1 - r0) * t) * std::sqrt(random.uniform());
+        const double angle = 2.0 * std::numbers::pi * random.uniform();
+        const double along = bottom + (top - bottom) * t, a = radius * std::cos(angle), b = radius * std::sin(angle);
+        if (axis == 0) return {along, a, b};
+        if (axis == 1) return {a, along, b};
+        return {a, b, along};
+    }
+};
+
+struct condensation {
+    cone stem;
+    runtime_pipeline then;
+
+    void validate() const
+    {
+        stem.validate();
+        then.validate();
+    }
+    condensation draw(random_stream& random) const { return {stem, then.draw(random)}; }
+};
+
+} // namespace hypertree

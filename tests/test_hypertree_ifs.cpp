@@ -1,0 +1,405 @@
+// Hypertree transforms, IFS rules and the generator (paper sections 3, 4 and 6), each against an
+// independent reference: closed forms for the maps, a from-scratch recomposition of every
+// generator's pipeline for the row reuse of figure 2, brute-force sampling for the voxel walk.
+
+#include "hypertree/hypertree.hpp"
+#include "support/random.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <set>
+#include <thread>
+
+using namespace hypertree;
+using krs_test::uniform;
+
+namespace {
+
+constexpr double degrees = std::numbers::pi / 180.0;
+
+using branch_pipeline = pipeline<scale, rotate, rotate, translate>;
+
+// A small tree: a stem along y and three branches around it, each a scaled, tilted, turned copy.
+ifs<branch_pipeline> small_tree(int depth = 6)
+{
+    ifs<branch_pipeline> t;
+    t.name = "small";
+    for (int k = 0; k < 3; ++k)
+        t.transforms.push_back({branch_pipeline(scale(parameter::per_level(0.55, 0.5, 0.45)), rotate({0, 0, 1}, 35 * degrees),
+                                                rotate({0, 1, 0}, (120 * k + 20) * degrees), translate(0, 0.45 + 0.2 * k, 0)),
+                                1.0});
+    t.transforms.push_back({branch_pipeline(scale(0.6), rotate({0, 0, 1}, 5 * degrees), rotate({0, 1, 0}, 0), translate(0, 0.75, 0)), 1.0});
+    t.condensations = {condensation{cone{1, 0.0, 0.6, 0.05, 0.02}, {}}};
+    t.tree_depth = depth;
+    t.branch_depth = 1;
+    t.iterations = 60000;
+    t.volume = hypervolume({-1, -0.05, -1}, {2, 2, 2}, resolution::cube(64));
+    return t;
+}
+
+// Applies a chain by its elements one at a time (no canonical merging): the reference for chain_at.
+template <class... E>
+vec3d apply_elements(const pipeline<E...>& p, int level, vec3d x)
+{
+    std::apply([&](const auto&... e) { ((x = e.map_at(level)(x)), ...); }, p.elements);
+    return x;
+}
+
+} // namespace
+
+TEST_CASE("hypertree shear matches its formula")
+{
+    std::mt19937_64 g(7);
+    for (int axis = 0; axis < 3; ++axis) {
+        const shear s(axis, 0.3, -0.2, 2.5, 0.8);
+        const shear_map m = s.map_at(1);
+        for (int i = 0; i < 200; ++i) {
+            const vec3d p{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
+            const double c[3] = {p.x, p.y, p.z};
+            const double h = std::min(std::abs(c[axis]) / 0.8, 1.0);
+            double expect[3] = {p.x, p.y, p.z};
+            const int a = axis == 0 ? 1 : 0, b = axis == 2 ? 1 : 2;
+            expect[a] += 0.3 * std::pow(h, 2.5);
+            expect[b] += -0.2 * std::pow(h, 2.5);
+            const vec3d q = m(p);
+            CHECK(q.x == doctest::Approx(expect[0]).epsilon(1e-14));
+            CHECK(q.y == doctest::Approx(expect[1]).epsilon(1e-14));
+            CHECK(q.z == doctest::Approx(expect[2]).epsilon(1e-14));
+        }
+    }
+    // The Lipschitz bound holds on random pairs.
+    const shear_map m = shear(1, 0.3, -0.2, 2.5, 0.8).map_at(1);
+    for (int i = 0; i < 2000; ++i) {
+        const vec3d p{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
+        const vec3d q = p + krs_test::random_direction(g) * 1e-3;
+        CHECK(krs::length(m(p) - m(q)) <= m.lipschitz() * krs::length(p - q) * (1 + 1e-9));
+    }
+}
+
+TEST_CASE("hypertree pipelines compose to canonical chains")
+{
+    std::mt19937_64 g(11);
+    const pipeline<translate, rotate, shear, scale, rotate> p(translate(0.1, parameter::per_level(0.2, 0.3, 0.4), 0),
+                                                              rotate({1, 2, 3}, parameter::per_level(0.3, -0.4, 0.9)),
+                                                              shear(1, 0.1, 0.05, 2), scale(0.5, 0.4, 0.45), rotate({0, 1, 0}, 1.1));
+    static_assert(decltype(p)::shear_count == 1);
+    runtime_pipeline r({translate(0.1, parameter::per_level(0.2, 0.3, 0.4), 0), rotate({1, 2, 3}, parameter::per_level(0.3, -0.4, 0.9)),
+                        shear(1, 0.1, 0.05, 2), scale(0.5, 0.4, 0.45), rotate({0, 1, 0}, 1.1)});
+    for (int level = 1; level <= 5; ++level) {
+        const auto chain = p.chain_at(level);
+        const auto runtime_chain = r.chain_at(level);
+        CHECK(runtime_chain.shears == 1);
+        for (int i = 0; i < 100; ++i) {
+            const vec3d x{uniform(g, -1, 1), uniform(g, 0, 1), uniform(g, -1, 1)};
+            const vec3d expect = apply_elements(p, level, x);
+            CHECK(krs::length(chain(x) - expect) < 1e-14);
+            CHECK(krs::length(runtime_chain(x) - expect) < 1e-14);
+        }
+    }
+    // Level 3 and deeper share their values: the generator's row reuse depends on it.
+    CHECK(krs::length(p.chain_at(3)(vec3d{0.3, 0.2, 0.1}) - p.chain_at(9)(vec3d{0.3, 0.2, 0.1})) == 0);
+}
+
+TEST_CASE("hypertree affine Lipschitz bound is the spectral norm")
+{
+    std::mt19937_64 g(5);
+    for (int trial = 0; trial < 200; ++trial) {
+        affine_map a;
+        for (double& v : a.m) v = uniform(g, -1, 1);
+        // Reference: power iteration on m^T m from many starts (converges from below).
+        double best = 0;
+        for (int start = 0; start < 4; ++start) {
+            vec3d v = krs_test::random_direction(g);
+            for (int it = 0; it < 300; ++it) {
+                const vec3d mv = a(v) - a.t;
+                const vec3d mtmv{a.m[0] * mv.x + a.m[3] * mv.y + a.m[6] * mv.z, a.m[1] * mv.x + a.m[4] * mv.y + a.m[7] * mv.z,
+                                 a.m[2] * mv.x + a.m[5] * mv.y + a.m[8] * mv.z};
+                v = mtmv / krs::length(mtmv);
+            }
+            best = std::max(best, krs::length(a(v) - a.t));
+        }
+        CHECK(a.lipschitz() >= best);
+        CHECK(a.lipschitz() == doctest::Approx(best).epsilon(1e-6));
+    }
+}
+
+TEST_CASE("hypertree randomized parameters are drawn once per tree")
+{
+    const parameter p = parameter::random(0.5, 0.1);
+    random_stream r1(42), r2(42);
+    const parameter a = p.draw(r1), b = p.draw(r2);
+    CHECK(a.mean == b.mean);
+    CHECK(a.is_fixed());
+    for (double v : a.mean) CHECK((v >= 0.4 && v <= 0.6));
+
+    auto tree = small_tree();
+    std::get<0>(tree.transforms[0].transform.elements) = scale(parameter::random(0.55, 0.05));
+    std::get<1>(tree.transforms[1].transform.elements) = rotate({0, 0, 1}, parameter::random(35 * degrees, 10 * degrees));
+    tree.iterations = 20000;
+    const auto first = generate(tree, 1234), again = generate(tree, 1234), other = generate(tree, 999);
+    REQUIRE(first.hits.size() == again.hits.size());
+    bool same = true;
+    for (std::size_t i = 0; i < first.hits.size(); ++i)
+        same = same && first.hits[i].voxel == again.hits[i].voxel && first.hits[i].level == again.hits[i].level &&
+               first.hits[i].part == again.hits[i].part;
+    CHECK(same);
+    const bool differs = other.hits.size() != first.hits.size() ||
+                         !std::equal(first.hits.begin(), first.hits.end(), other.hits.begin(),
+                                     [](const hit& x, const hit& y) { return x.voxel == y.voxel; });
+    CHECK(differs);
+    // One draw per tree: two drawn IFS from one seed have identical chains, and the drawn
+    // randomized scale lies in its range.
+    const drawn_ifs<branch_pipeline> d1(tree, 77), d2(tree, 77);
+    for (int level = 1; level <= 3; ++level) {
+        CHECK(d1.chain_of(0, level).affine[0].m == d2.chain_of(0, level).affine[0].m);
+        const double s = d1.chain_of(0, level).lipschitz();
+        CHECK((s >= 0.5 && s <= 0.6 + 1e-12));
+    }
+}
+
+TEST_CASE("hypertree generator rows equal their pipelines recomposed from scratch")
+{
+    // Figure 2: row s applies w_j at level s - j + 1. The generator reuses the deep part of each
+    // row; this recomputes every generator from the condensation point with no reuse.
+    auto tree = small_tree(7);
+    tree.iterations = 7 * 300;
+    const drawn_ifs<branch_pipeline> drawn(tree, 5);
+    vec3d trunk{};
+    std::size_t checked = 0;
+    double worst = 0;
+    generate(tree, 5, {}, [&](const generator_event& e) {
+        if (e.depth == 0) {
+            trunk = e.start;
+            return;
+        }
+        vec3d x = trunk;
+        for (int j = 1; j <= e.depth; ++j) x = drawn.chain_of(e.selected[j - 1], e.depth - j + 1)(x);
+        worst = std::max(worst, krs::length(x - e.start));
+        ++checked;
+    });
+    CHECK(checked > 1000);
+    CHECK(worst < 1e-12);
+}
+
+TEST_CASE("hypertree line generators keep their length")
+{
+    auto tree = small_tree();
+    tree.generator = generator_shape::line({0, -0.025, 0}, {0, 0.025, 0});
+    tree.iterations = 30000;
+    tree.perturb.amplitude = {0.01, 0.02, 0.01};
+    double worst = 0;
+    std::size_t lines = 0;
+    generate(tree, 3, {}, [&](const generator_event& e) {
+        worst = std::max(worst, std::abs(krs::length(e.end - e.start) - 0.05));
+        ++lines;
+    });
+    CHECK(lines > 20000);
+    CHECK(worst < 1e-5);
+}
+
+TEST_CASE("hypertree dummy and last level rules")
+{
+    SUBCASE("dummy from level d leaves that branch without generators at depth d or deeper")
+    {
+        auto tree = small_tree(6);
+        tree.transforms[1].dummy_from = 3;
+        const auto result = generate(tree, 21);
+        std::map<int, std::size_t> deep_per_part;
+        for (const hit& h : result.hits)
+            if (h.level >= 3) ++deep_per_part[h.part];
+        CHECK(deep_per_part[2] == 0); // part 2 = transform 1
+        CHECK(deep_per_part[1] > 100);
+        CHECK(deep_per_part[3] > 100);
+        // The dummy still transforms: deeper generators of other branches pass through it.
+        std::size_t through_dummy = 0;
+        generate(tree, 21, {}, [&](const generator_event& e) {
+            if (e.recorded && e.depth >= 2 && e.selected[0] == 1 && e.selected[e.depth - 1] != 1) ++through_dummy;
+        });
+        CHECK(through_dummy > 100);
+    }
+    SUBCASE("a plain dummy draws nothing of its own branch")
+    {
+        auto tree = small_tree(5);
+        tree.transforms[3].dummy_from = 1;
+        const auto result = generate(tree, 8);
+        CHECK(std::none_of(result.hits.begin(), result.hits.end(), [](const hit& h) { return h.part == 4; }));
+    }
+    SUBCASE("last level m: the transformation never executes deeper than m")
+    {
+        auto tree = small_tree(7);
+        tree.transforms[0].last_level = 2;
+        std::size_t violations = 0, events = 0, uses_at_two = 0;
+        generate(tree, 4, {}, [&](const generator_event& e) {
+            ++events;
+            for (int j = 1; j <= e.depth; ++j) {
+                const int level = e.depth - j + 1;
+                if (e.selected[j - 1] == 0 && level > 2) ++violations;
+                if (e.selected[j - 1] == 0 && level == 2) ++uses_at_two;
+            }
+        });
+        CHECK(events > 10000);
+        CHECK(violations == 0);
+        CHECK(uses_at_two > 100);
+    }
+}
+
+TEST_CASE("hypertree transformations are selected by their relative probabilities")
+{
+    auto tree = small_tree(2); // one transformation per cycle
+    tree.transforms[0].probability = 3;
+    tree.transforms[1].probability = 0;
+    tree.transforms[2].probability = 1;
+    tree.transforms[3].probability = 4;
+    tree.iterations = 2 * 80000;
+    std::array<std::size_t, 4> count{};
+    generate(tree, 99, {}, [&](const generator_event& e) {
+        if (e.depth == 1) ++count[e.selected[0]];
+    });
+    const double n = 80000;
+    CHECK(count[1] == 0);
+    CHECK(double(count[0]) / n == doctest::Approx(3.0 / 8).epsilon(0.03));
+    CHECK(double(count[2]) / n == doctest::Approx(1.0 / 8).epsilon(0.05));
+    CHECK(double(count[3]) / n == doctest::Approx(4.0 / 8).epsilon(0.03));
+}
+
+TEST_CASE("hypertree generation is the same on one thread and many")
+{
+    auto tree = small_tree();
+    tree.iterations = 100000;
+    generation_options serial;
+    serial.chunk_cycles = 1000;
+    generation_options threaded = serial;
+    threaded.parallel_for = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::vector<std::thread> workers;
+        for (unsigned w = 0; w < 3; ++w)
+            workers.emplace_back([&, w] {
+                for (std::size_t i = w; i < count; i += 3) body(i);
+            });
+        for (auto& t : workers) t.join();
+    };
+    const auto a = generate(tree, 17, serial), b = generate(tree, 17, threaded);
+    REQUIRE(a.hits.size() == b.hits.size());
+    CHECK(std::equal(a.hits.begin(), a.hits.end(), b.hits.begin(),
+                     [](const hit& x, const hit& y) { return x.voxel == y.voxel && x.level == y.level && x.part == y.part; }));
+    CHECK(a.stats.recorded == b.stats.recorded);
+    CHECK(a.stats.recorded_per_depth == b.stats.recorded_per_depth);
+}
+
+TEST_CASE("hypertree condensation samples the cone uniformly")
+{
+    const cone c{1, 0.2, 1.2, 0.3, 0.1};
+    random_stream r(3);
+    const int n = 200000;
+    int lower_half = 0, outside = 0;
+    for (int i = 0; i < n; ++i) {
+        const vec3d p = c.sample(r);
+        const double t = (p.y - 0.2) / 1.0, radius = 0.3 + (0.1 - 0.3) * t;
+        if (t < 0 || t > 1 || std::hypot(p.x, p.z) > radius * (1 + 1e-12)) ++outside;
+        if (t < 0.5) ++lower_half;
+    }
+    CHECK(outside == 0);
+    // Closed form: the lower half's share of the frustum volume.
+    const cone lower{1, 0.2, 0.7, 0.3, 0.2};
+    CHECK(double(lower_half) / n == doctest::Approx(lower.volume() / c.volume()).epsilon(0.01));
+}
+
+TEST_CASE("hypertree segment voxel walk")
+{
+    const hypervolume v({-1, -2, 0.5}, {2, 3, 1.5}, {17, 23, 11});
+    std::mt19937_64 g(13);
+    for (int trial = 0; trial < 500; ++trial) {
+        // Segments partly outside the box too.
+        const vec3d a{uniform(g, -1.3, 1.3), uniform(g, -2.3, 1.3), uniform(g, 0.3, 2.2)};
+        const vec3d b = trial % 3 == 0 ? a + krs_test::random_direction(g) * 0.2 : vec3d{uniform(g, -1.3, 1.3), uniform(g, -2.3, 1.3), uniform(g, 0.3, 2.2)};
+        std::vector<voxel_index> walk;
+        for_each_voxel_on_segment(v, a, b, [&](voxel_index i) { walk.push_back(i); });
+        const std::set<voxel_index> unique(walk.begin(), walk.end());
+        CHECK(unique.size() == walk.size());
+        // Every voxel dense sampling finds is walked...
+        const int samples = 20000;
+        for (int s = 0; s <= samples; ++s)
+            if (const auto i = v.voxel_at(a + (b - a) * (double(s) / samples))) CHECK(unique.count(*i) == 1);
+        // ...and every walked voxel's box meets the segment (slab test, widened by 1e-9).
+        for (voxel_index i : walk) {
+            const vec3d c = v.voxel_center(i), h = v.voxel_size() * 0.5;
+            double t0 = 0, t1 = 1;
+            const double s0[3] = {a.x, a.y, a.z}, d[3] = {b.x - a.x, b.y - a.y, b.z - a.z}, cc[3] = {c.x, c.y, c.z}, hh[3] = {h.x, h.y, h.z};
+            for (int k = 0; k < 3; ++k) {
+                const double lo = cc[k] - hh[k] - 1e-9, hi = cc[k] + hh[k] + 1e-9;
+                if (d[k] == 0) {
+                    if (s0[k] < lo || s0[k] > hi) t0 = 2;
+                    continue;
+                }
+                double ta = (lo - s0[k]) / d[k], tb = (hi - s0[k]) / d[k];
+                if (ta > tb) std::swap(ta, tb);
+                t0 = std::max(t0, ta), t1 = std::min(t1, tb);
+            }
+            CHECK(t0 <= t1);
+        }
+    }
+}
+
+TEST_CASE("hypertree refuses impossible definitions with named parameters")
+{
+    const auto refuses = [](auto&& make, const char* name) {
+        try {
+            make();
+        } catch (const krs::invalid_parameter& e) {
+            CHECK(std::string(e.what()).find(name) != std::string::npos);
+            return;
+        }
+        FAIL("no error for " << name);
+    };
+    refuses([] { shear(1, 0.1, 0.1, 0.5); }, "shear.exponent");
+    refuses([] { rotate({0, 0, 0}, 1.0); }, "rotate.axis");
+    refuses([] { hypervolume({0, 0, 0}, {1, 1, 1}, {0, 10, 10}); }, "hypervolume.resolution.x");
+    refuses([] { hypervolume({0, 0, 0}, {1, 1, 1}, {2000, 2000, 2000}); }, "hypervolume.resolution");
+    refuses([] { hypervolume({0, 0, 0}, {1, -1, 1}, {10, 10, 10}); }, "hypervolume.extent.y");
+    refuses([] { scale(std::nan("")); }, "scale.x");
+    refuses([] { (cone{1, 1.0, 0.5, 0.1, 0.1}).validate(); }, "cone.top");
+    refuses([] {
+        auto t = small_tree();
+        for (auto& w : t.transforms) w.probability = 0;
+        generate(t, 1);
+    }, "probabilities");
+    refuses([] {
+        auto t = small_tree();
+        t.transforms[2].probability = -1;
+        generate(t, 1);
+    }, "ifs.transforms[2].probability");
+    refuses([] {
+        auto t = small_tree();
+        t.tree_depth = 0;
+        generate(t, 1);
+    }, "ifs.tree_depth");
+    refuses([] {
+        auto t = small_tree();
+        t.branch_depth = 6;
+        generate(t, 1);
+    }, "ifs.branch_depth");
+    refuses([] {
+        auto t = small_tree();
+        std::get<0>(t.transforms[1].transform.elements) = scale(1.2);
+        generate(t, 1);
+    }, "ifs.transforms[1]");
+    refuses([] {
+        auto t = small_tree();
+        t.iterations = std::uint64_t(1) << 40;
+        generate(t, 1);
+    }, "ifs.iterations");
+}
+
+TEST_CASE("hypertree non-contractive transforms run when allowed and count escapes")
+{
+    auto t = small_tree(8);
+    std::get<0>(t.transforms[3].transform.elements) = scale(1.3);
+    t.require_contraction = false;
+    t.iterations = 20000;
+    const auto result = generate(t, 2);
+    CHECK(result.stats.escaped > 0);
+    CHECK(result.stats.escaped < result.stats.recorded);
+    for (const hit& h : result.hits) CHECK(std::uint64_t(h.voxel) < t.volume.voxel_count());
+}
