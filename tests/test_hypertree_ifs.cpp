@@ -3,6 +3,7 @@
 // generator's pipeline for the row reuse of figure 2, brute-force sampling for the voxel walk.
 
 #include "hypertree/hypertree.hpp"
+#include "hypertree/presets.hpp"
 #include "support/random.hpp"
 
 #include <doctest/doctest.h>
@@ -402,4 +403,18 @@ TEST_CASE("hypertree non-contractive transforms run when allowed and count escap
     CHECK(result.stats.escaped > 0);
     CHECK(result.stats.escaped < result.stats.recorded);
     for (const hit& h : result.hits) CHECK(std::uint64_t(h.voxel) < t.volume.voxel_count());
+}
+
+TEST_CASE("hypertree presets stay inside their hypervolumes")
+{
+    for (auto make : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+        auto t = make(60);
+        CAPTURE(t.name);
+        t.iterations = 20000;
+        const auto result = generate(t, 3);
+        CHECK(result.stats.escaped == 0);
+        CHECK(result.stats.recorded > 10000);
+        // Every depth of the tree is populated (the rules leave no level empty).
+        for (std::uint64_t n : result.stats.recorded_per_depth) CHECK(n > 0);
+    }
 }

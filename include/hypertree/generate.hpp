@@ -70,8 +70,9 @@ void for_each_voxel_on_segment(const hypervolume& volume, const vec3d& a, const 
         return;
     }
     const double start[3] = {a.x, a.y, a.z}, dir[3] = {d.x, d.y, d.z};
-    const vec3d lo = volume.origin(), hi = volume.maximum(), size = volume.voxel_size();
+    const vec3d lo = volume.origin(), hi = volume.maximum(), size = volume.voxel_size(), per = volume.cells_per_unit();
     const double low[3] = {lo.x, lo.y, lo.z}, high[3] = {hi.x, hi.y, hi.z}, side[3] = {size.x, size.y, size.z};
+    const double cells_per_unit[3] = {per.x, per.y, per.z};
     const int n[3] = {volume.grid().x, volume.grid().y, volume.grid().z};
     double t0 = 0, t1 = 1;
     for (int i = 0; i < 3; ++i) {
@@ -88,7 +89,7 @@ void for_each_voxel_on_segment(const hypervolume& volume, const vec3d& a, const 
     double next[3], delta[3];
     for (int i = 0; i < 3; ++i) {
         const auto cell_of = [&](double t) {
-            const double c = std::floor((start[i] + dir[i] * t - low[i]) / side[i]);
+            const double c = std::floor((start[i] + dir[i] * t - low[i]) * cells_per_unit[i]);
             return int(std::clamp(c, 0.0, double(n[i] - 1)));
         };
         cell[i] = cell_of(t0), last[i] = cell_of(t1);
@@ -147,6 +148,9 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
     const double half_length = krs::length(half);
     random_stream random = random_stream::derive(seed, chunk + 1);
     std::uint8_t selected[max_tree_depth];
+    // Counted in locals, not through `stats`: the compiler cannot keep a referenced counter in a
+    // register across the hit list's stores.
+    std::uint64_t generators = 0, recorded_count = 0, escaped = 0, per_depth[max_tree_depth] = {};
 
     const auto inside = [&](const vec3d& p) {
         const vec3d lo = volume.origin(), hi = volume.maximum();
@@ -158,9 +162,9 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
             const vec3d mid = (g.a + g.b) * 0.5, shift = perturbed(def.perturb, mid) - mid;
             g.a += shift, g.b += shift;
         }
-        ++stats.recorded;
-        ++stats.recorded_per_depth[s];
-        if (!inside(g.a) || !inside(g.b)) ++stats.escaped;
+        ++recorded_count;
+        ++per_depth[s];
+        escaped += !inside(g.a) || !inside(g.b);
         const std::uint8_t level = std::uint8_t(s);
         if (!is_line) {
             if (const auto i = volume.voxel_at(g.a)) out.push_back({*i, level, part});
@@ -184,10 +188,9 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
     };
 
     for (std::uint64_t c = 0; c < cycles; ++c) {
-        ++stats.cycles;
         const vec3d stem = tree.sample_stem(random);
         const segment x{stem - half, stem + half};
-        ++stats.generators;
+        ++generators;
         const segment trunk = record(x, 0, 0);
         if constexpr (!std::is_same_v<Observer, no_observer>) observer(generator_event{0, {}, trunk.a, trunk.b, true});
 
@@ -205,13 +208,15 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
             segment y = inner;
             if (s >= 2) y = apply(tree.chain_of(selected[s - 2], 2), y);
             y = keep_length(apply(tree.chain_of(w, 1), y));
-            ++stats.generators;
+            ++generators;
             const bool recorded = s < rule.dummy_from;
             if (recorded) y = record(y, s, std::uint8_t(w + 1));
             if constexpr (!std::is_same_v<Observer, no_observer>)
                 observer(generator_event{s, std::span<const std::uint8_t>(selected, std::size_t(s)), y.a, y.b, recorded});
         }
     }
+    stats.cycles += cycles, stats.generators += generators, stats.recorded += recorded_count, stats.escaped += escaped;
+    for (int d = 0; d < depth; ++d) stats.recorded_per_depth[std::size_t(d)] += per_depth[d];
 }
 
 } // namespace detail

@@ -141,9 +141,8 @@ public:
                 lipschitz_ = std::max(lipschitz_, bound);
             }
             chains_.push_back(per_level);
-            total_probability_ += definition.transforms[j].probability;
-            cumulative_.push_back(total_probability_);
         }
+        build_alias_table();
         for (const auto& c : definition.condensations) {
             const condensation drawn = c.draw(random);
             stems_.push_back(drawn.stem);
@@ -159,15 +158,16 @@ public:
     // The largest Lipschitz bound of any transformation at any level.
     double lipschitz() const { return lipschitz_; }
 
-    // Transformation j with probability p_j / sum(p), for u uniform in [0, 1).
+    // Transformation j with probability p_j / sum(p), for u uniform in [0, 1): one draw from
+    // Walker's alias table (column u * n, then the column's own entry or its alias), so selection
+    // costs the same for any number of transformations and has no data-dependent loop.
     std::size_t select(double u) const
     {
-        const double target = u * total_probability_;
-        std::size_t j = 0;
-        while (j + 1 < cumulative_.size() && !(target < cumulative_[j])) ++j;
-        // A zero-probability transformation at the end is never chosen: step back over it.
-        while (j > 0 && definition_.transforms[j].probability == 0) --j;
-        return j;
+        const double x = u * double(alias_.size());
+        const std::size_t column = std::min(std::size_t(x), alias_.size() - 1);
+        // Arithmetic rather than a branch: the comparison is a coin flip the predictor cannot learn.
+        const std::size_t keep = std::size_t(x - double(column) < keep_[column]);
+        return keep * column + (1 - keep) * alias_[column];
     }
     // A point of the stem: with two condensations, each is chosen in proportion to its volume so
     // the forked stem's density is even.
@@ -179,10 +179,48 @@ public:
     }
 
 private:
+    // Vose's construction: scale probabilities so they average 1, then repeatedly fill a column
+    // that is short (< 1) with the excess of one that is long (>= 1). A zero-probability
+    // transformation keeps nothing of its column, so it is never selected.
+    void build_alias_table()
+    {
+        const std::size_t n = definition_.transforms.size();
+        double total = 0;
+        for (const auto& t : definition_.transforms) total += t.probability;
+        std::vector<double> scaled(n);
+        std::vector<std::size_t> small, large;
+        for (std::size_t j = 0; j < n; ++j) {
+            scaled[j] = definition_.transforms[j].probability * double(n) / total;
+            (scaled[j] < 1.0 ? small : large).push_back(j);
+        }
+        keep_.assign(n, 1.0);
+        alias_.resize(n);
+        for (std::size_t j = 0; j < n; ++j) alias_[j] = j;
+        while (!small.empty() && !large.empty()) {
+            const std::size_t s = small.back(), l = large.back();
+            small.pop_back();
+            keep_[s] = scaled[s];
+            alias_[s] = l;
+            scaled[l] -= 1.0 - scaled[s];
+            if (scaled[l] < 1.0) {
+                large.pop_back();
+                small.push_back(l);
+            }
+        }
+        // Columns left over hold (up to rounding) exactly 1: they keep themselves, unless their
+        // probability is 0 (rounding left a zero-probability column unpaired): then they defer to
+        // the most probable transformation.
+        std::size_t most = 0;
+        for (std::size_t j = 0; j < n; ++j)
+            if (definition_.transforms[j].probability > definition_.transforms[most].probability) most = j;
+        for (std::size_t j : small)
+            if (definition_.transforms[j].probability == 0) keep_[j] = 0, alias_[j] = most;
+    }
+
     ifs<P> definition_;
     std::vector<std::array<chain, distinct_levels>> chains_;
-    std::vector<double> cumulative_;
-    double total_probability_ = 0;
+    std::vector<double> keep_;        // per column: the share of the column that is its own
+    std::vector<std::size_t> alias_; // per column: who takes the rest
     double lipschitz_ = 0;
     std::vector<cone> stems_;
     std::vector<runtime_pipeline::chain> stem_chains_;

@@ -10,6 +10,7 @@
 
 #include "krs/core/validate.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -51,6 +52,7 @@ public:
                                     std::to_string(res.x) + " x " + std::to_string(res.y) + " x " + std::to_string(res.z));
         origin_ = origin, extent_ = extent, res_ = res;
         voxel_size_ = {extent.x / res.x, extent.y / res.y, extent.z / res.z};
+        cells_per_unit_ = {res.x / extent.x, res.y / extent.y, res.z / extent.z};
     }
     // The paper's form: the box extent, and where the tree's origin lies measured from the box's
     // minimum corner.
@@ -79,20 +81,22 @@ public:
         return {x, int(i % voxel_index(res_.y)), int(i / voxel_index(res_.y))};
     }
     // The voxel holding p, or nothing when p lies outside the box (or is not finite). Cells are
-    // half-open [lo, hi) except that the box's maximum face belongs to the last cell.
+    // half-open [lo, hi) except that the box's maximum face belongs to the last cell. The cell
+    // coordinate is (p - origin) * cells_per_unit truncated: the voxel walk of generate.hpp
+    // computes cells the same way, so both agree on boundaries.
     std::optional<voxel_index> voxel_at(const vec3d& p) const
     {
-        const auto cell = [](double v, double o, double size, int n) -> int {
-            const double c = std::floor((v - o) / size);
-            if (!(c >= 0.0) || c > double(n)) return -1; // also rejects NaN
-            return c >= double(n) ? (v - o <= size * n ? n - 1 : -1) : int(c);
-        };
-        const int x = cell(p.x, origin_.x, voxel_size_.x, res_.x);
-        const int y = cell(p.y, origin_.y, voxel_size_.y, res_.y);
-        const int z = cell(p.z, origin_.z, voxel_size_.z, res_.z);
-        if (x < 0 || y < 0 || z < 0) return std::nullopt;
-        return index(x, y, z);
+        const vec3d f = cell_coordinates(p);
+        // Written so that NaN fails the test.
+        if (!(f.x >= 0 && f.y >= 0 && f.z >= 0 && f.x <= res_.x && f.y <= res_.y && f.z <= res_.z)) return std::nullopt;
+        return index(std::min(int(f.x), res_.x - 1), std::min(int(f.y), res_.y - 1), std::min(int(f.z), res_.z - 1));
     }
+    // p in units of voxels from the origin corner.
+    vec3d cell_coordinates(const vec3d& p) const
+    {
+        return {(p.x - origin_.x) * cells_per_unit_.x, (p.y - origin_.y) * cells_per_unit_.y, (p.z - origin_.z) * cells_per_unit_.z};
+    }
+    const vec3d& cells_per_unit() const { return cells_per_unit_; }
     vec3d voxel_center(voxel_index i) const
     {
         const auto c = coordinates(i);
@@ -108,7 +112,7 @@ public:
     }
 
 private:
-    vec3d origin_{}, extent_{1, 1, 1}, voxel_size_{1, 1, 1};
+    vec3d origin_{}, extent_{1, 1, 1}, voxel_size_{1, 1, 1}, cells_per_unit_{1, 1, 1};
     resolution res_{1, 1, 1};
 };
 

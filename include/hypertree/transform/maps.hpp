@@ -79,13 +79,30 @@ struct shear_map {
     double dmax_first = 0, dmax_second = 0;
     double exponent = 1; // >= 1: h^e is then Lipschitz with constant e on [0, 1]
     double inverse_height = 1;
+    int whole_exponent = 1; // the exponent when it is a whole number <= 64 (repeated squaring), else -1
+
+    void set_exponent(double e)
+    {
+        exponent = e;
+        whole_exponent = (e == std::floor(e) && e >= 1 && e <= 64) ? int(e) : -1;
+    }
 
     template <class L>
     vec3<L> operator()(const vec3<L>& p) const
     {
         using std::abs, std::min, std::pow;
         const L h = min(abs(component(p, axis)) * L(inverse_height), L(1));
-        const L f = pow(h, L(exponent));
+        // Whole exponents (the usual 2 or 3) by repeated squaring: pow() would cost more than the
+        // rest of the chain.
+        L f;
+        if (whole_exponent > 0) {
+            L base = h;
+            f = L(1);
+            for (int n = whole_exponent; n > 0; n >>= 1, base = base * base)
+                if (n & 1) f = f * base;
+        } else {
+            f = pow(h, L(exponent));
+        }
         vec3<L> r = p;
         component(r, first) = component(r, first) + L(dmax_first) * f;
         component(r, second) = component(r, second) + L(dmax_second) * f;

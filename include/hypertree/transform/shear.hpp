@@ -54,7 +54,7 @@ struct shear {
         m.first = axis == 0 ? 1 : 0;
         m.second = axis == 2 ? 1 : 2;
         m.dmax_first = first.at(level), m.dmax_second = second.at(level);
-        m.exponent = exponent.at(level);
+        m.set_exponent(exponent.at(level));
         m.inverse_height = 1.0 / height;
         return m;
     }
