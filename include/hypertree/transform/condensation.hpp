@@ -10,9 +10,6 @@
 // of a dichotomous fork, a translation moves it). The generator's midpoint is placed there; a line
 // generator keeps its orientation.
 //
-// Uniform in volume: along the axis the cross-section area grows as r(t)^2 with r linear in t, so
-// the inverse of the cumulative r^3 law gives t; within the disc, radius r sqrt(u) and a uniform
-// angle.
 
 #include "hypertree/random.hpp"
 #include "hypertree/transform/pipeline.hpp"
@@ -46,15 +43,22 @@ struct cone {
     }
     vec3d sample(random_stream& random) const
     {
-        const double u = random.uniform(), r0 = bottom_radius, r1 = top_radius;
-        double t = u;
-        if (std::abs(r1 - r0) > 1e-9 * std::max(r0, r1)) {
-            const double r = std::cbrt(r0 * r0 * r0 + u * (r1 * r1 * r1 - r0 * r0 * r0));
-            t = std::clamp((r - r0) / (r1 - r0), 0.0, 1.0);
-        }
-        const double radius = (r0 + (r1 - r0) * t) * std::sqrt(random.uniform());
-        const double angle = 2.0 * std::numbers::pi * random.uniform();
-        const double along = bottom + (top - bottom) * t, a = radius * std::cos(angle), b = radius * std::sin(angle);
+        // Rejection from the bounding cylinder: a height t is kept with probability
+        // (r(t) / r_max)^2, the cross-section's share, and a disc point comes from the square
+        // around it. Exactly uniform in volume, and cheaper than the inverse-CDF form (a cube root,
+        // a sine and a cosine per sample): the generator draws one sample per cycle.
+        const double r0 = bottom_radius, r1 = top_radius, r_max = std::max(r0, r1);
+        double t, radius;
+        do {
+            t = random.uniform();
+            radius = r0 + (r1 - r0) * t;
+        } while (random.uniform() * r_max * r_max >= radius * radius);
+        double a, b;
+        do {
+            a = random.symmetric(), b = random.symmetric();
+        } while (a * a + b * b >= 1.0);
+        a *= radius, b *= radius;
+        const double along = bottom + (top - bottom) * t;
         if (axis == 0) return {along, a, b};
         if (axis == 1) return {a, along, b};
         return {a, b, along};
