@@ -1,0 +1,89 @@
+#pragma once
+// index_list_store: the paper's compact hypertree (section 5).
+//
+// Only non-empty voxels are kept: their indices in increasing order (4 bytes each, as in the
+// paper) and beside them their density and level (2 bytes), 6 bytes per non-empty voxel. A tree
+// fills a few percent of its hypervolume, so this is a small fraction of a dense array, and
+// resolutions over 1000 fit in memory. A lookup bisects the index list: O(log n), and an index
+// that is not found is an empty voxel.
+
+#include "hypertree/store/store.hpp"
+
+#include <cstddef>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace hypertree {
+
+class index_list_store {
+public:
+    static constexpr std::size_t bytes_per_voxel = sizeof(voxel_index) + sizeof(voxel);
+
+    index_list_store() = default;
+
+    static std::size_t bytes_needed(const hypervolume&, std::span<const stored_voxel> voxels)
+    {
+        return bytes_per_voxel * voxels.size();
+    }
+
+    static index_list_store build(const hypervolume& volume, std::span<const stored_voxel> voxels,
+                                  memory_budget budget = {})
+    {
+        detail::require_storable("index_list_store", volume, voxels);
+        detail::require_within_budget("index_list_store", bytes_needed(volume, voxels), budget,
+                                      std::to_string(bytes_per_voxel) + " bytes x " + std::to_string(voxels.size()) +
+                                          " non-empty voxels");
+        return build_checked(volume, voxels);
+    }
+
+    const hypervolume& volume() const { return volume_; }
+    voxel at(voxel_index i) const
+    {
+        const std::size_t p = detail::lower_bound_position(indices_.data(), indices_.size(), i);
+        return p < indices_.size() && indices_[p] == i ? values_[p] : voxel{};
+    }
+    std::size_t memory_bytes() const
+    {
+        return indices_.capacity() * sizeof(voxel_index) + values_.capacity() * sizeof(voxel);
+    }
+    std::size_t nonempty_count() const { return indices_.size(); }
+    index_box bounds() const { return bounds_; }
+
+    template <class F>
+    void for_each(F&& visit) const
+    {
+        for (std::size_t k = 0; k < indices_.size(); ++k) visit(indices_[k], values_[k]);
+    }
+
+    // The lists themselves, for code that walks them in bulk (level of detail, the raymarcher).
+    std::span<const voxel_index> indices() const { return indices_; }
+    std::span<const voxel> values() const { return values_; }
+
+private:
+    friend class bit_array_store;
+
+    // For stores built on this one, which have checked the list and their own, larger budget.
+    static index_list_store build_checked(const hypervolume& volume, std::span<const stored_voxel> voxels)
+    {
+        index_list_store store;
+        store.volume_ = volume;
+        store.indices_.resize(voxels.size());
+        store.values_.resize(voxels.size());
+        for (std::size_t k = 0; k < voxels.size(); ++k) {
+            store.indices_[k] = voxels[k].index;
+            store.values_[k] = voxels[k].value;
+        }
+        store.bounds_ = detail::bounds_of(volume, voxels);
+        return store;
+    }
+
+    hypervolume volume_{};
+    std::vector<voxel_index> indices_;
+    std::vector<voxel> values_;
+    index_box bounds_{};
+};
+
+static_assert(voxel_store<index_list_store>);
+
+} // namespace hypertree

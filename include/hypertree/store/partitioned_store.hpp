@@ -1,0 +1,209 @@
+#pragma once
+// partitioned_store: one index list per first-level subpart (paper sections 5 and 8.2).
+//
+// A hypertree is a union of mostly disjoint subparts: the trunk (the condensation, part 0) and
+// one copy of the whole tree under each first-level transformation j (part j + 1). Keeping a
+// separate sorted list per part gives each part a tight description the raymarcher can use to
+// skip empty space: its bounding sphere (spheres, not boxes, because the paper derives secondary
+// bounds by transforming the primary sphere) and its index range. A lookup bisects only the parts
+// whose index range holds the index. Each voxel belongs to exactly one part, the part of its
+// shallowest hit as `compact` chose it, so the parts' lists are disjoint and together hold every
+// non-empty voxel once.
+//
+// Storage is the index list's 6 bytes per non-empty voxel (the parts' lists lie back to back in
+// one index array and one value array) plus one small record per part.
+
+#include "hypertree/store/store.hpp"
+
+#include "krs/core/bounds.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace hypertree {
+
+// One first-level subpart of a partitioned store.
+struct store_part {
+    std::uint8_t part = 0;       // stored_voxel::part: 0 trunk, j + 1 under transformation j
+    krs::bounding_sphere sphere; // world space; holds every cell (not only the center) of the part's voxels
+    index_box bounds;            // index-space box of its voxels
+    voxel_index first_index = 0; // lowest and highest voxel index in the part
+    voxel_index last_index = 0;
+    std::size_t offset = 0; // its voxels are entries offset .. offset + count - 1 of the store's lists
+    std::size_t count = 0;
+};
+
+class partitioned_store {
+public:
+    static constexpr std::size_t bytes_per_voxel = sizeof(voxel_index) + sizeof(voxel);
+
+    partitioned_store() = default;
+
+    static std::size_t bytes_needed(const hypervolume&, std::span<const stored_voxel> voxels)
+    {
+        std::array<bool, 256> present{};
+        std::size_t parts = 0;
+        for (const stored_voxel& v : voxels) parts += !std::exchange(present[v.part], true);
+        return bytes_per_voxel * voxels.size() + sizeof(store_part) * parts;
+    }
+
+    static partitioned_store build(const hypervolume& volume, std::span<const stored_voxel> voxels,
+                                   memory_budget budget = {})
+    {
+        detail::require_storable("partitioned_store", volume, voxels);
+        detail::require_within_budget("partitioned_store", bytes_needed(volume, voxels), budget,
+                                      std::to_string(bytes_per_voxel) + " bytes x " + std::to_string(voxels.size()) +
+                                          " non-empty voxels + " + std::to_string(sizeof(store_part)) +
+                                          " bytes per part");
+        partitioned_store store;
+        store.volume_ = volume;
+        store.bounds_ = detail::bounds_of(volume, voxels);
+
+        std::array<std::size_t, 256> population{};
+        for (const stored_voxel& v : voxels) ++population[v.part];
+        std::array<std::size_t, 256> next{};
+        std::size_t offset = 0;
+        std::size_t part_count = 0;
+        for (std::size_t p = 0; p < 256; ++p) part_count += population[p] != 0;
+        store.parts_.reserve(part_count);
+        for (std::size_t p = 0; p < 256; ++p) {
+            if (population[p] == 0) continue;
+            store_part part;
+            part.part = std::uint8_t(p);
+            part.offset = offset;
+            part.count = population[p];
+            store.parts_.push_back(part);
+            next[p] = offset;
+            offset += population[p];
+        }
+        // A stable scatter by part: each part's list stays sorted because the input is.
+        store.indices_.resize(voxels.size());
+        store.values_.resize(voxels.size());
+        for (const stored_voxel& v : voxels) {
+            const std::size_t k = next[v.part]++;
+            store.indices_[k] = v.index;
+            store.values_[k] = v.value;
+        }
+        for (store_part& part : store.parts_) store.describe(part);
+        return store;
+    }
+
+    const hypervolume& volume() const { return volume_; }
+    // Parts' index ranges overlap (a part spans many z slices, and so do its neighbours), so a
+    // part whose range holds the index is also tested against its index box before it is bisected:
+    // the two divisions that give the coordinates cost less than one needless bisection.
+    voxel at(voxel_index i) const
+    {
+        std::array<int, 3> c{};
+        bool have_coordinates = false;
+        for (std::size_t slot = 0; slot < parts_.size(); ++slot) {
+            const store_part& part = parts_[slot];
+            if (i < part.first_index || i > part.last_index) continue;
+            if (!have_coordinates) c = volume_.coordinates(i), have_coordinates = true;
+            if (!part.bounds.contains(c)) continue;
+            if (const voxel v = at_in_part(slot, i); v.density != 0) return v;
+        }
+        return voxel{};
+    }
+    // The voxel as part parts()[slot] holds it: empty when the voxel belongs to another part. For
+    // a raymarcher that already knows which part's sphere it is in.
+    voxel at_in_part(std::size_t slot, voxel_index i) const
+    {
+        const store_part& part = parts_[slot];
+        const voxel_index* list = indices_.data() + part.offset;
+        const std::size_t p = detail::lower_bound_position(list, part.count, i);
+        return p < part.count && list[p] == i ? values_[part.offset + p] : voxel{};
+    }
+    std::size_t memory_bytes() const
+    {
+        return indices_.capacity() * sizeof(voxel_index) + values_.capacity() * sizeof(voxel) +
+               parts_.capacity() * sizeof(store_part);
+    }
+    std::size_t nonempty_count() const { return indices_.size(); }
+    index_box bounds() const { return bounds_; }
+    std::span<const store_part> parts() const { return parts_; }
+
+    // In increasing index order across parts: a merge of the parts' sorted lists.
+    template <class F>
+    void for_each(F&& visit) const
+    {
+        for_each_stored([&](const stored_voxel& v) { visit(v.index, v.value); });
+    }
+    template <class F>
+    void for_each_stored(F&& visit) const
+    {
+        if (parts_.size() == 1) {
+            const std::uint8_t part = parts_.front().part;
+            for (std::size_t k = 0; k < indices_.size(); ++k) visit(stored_voxel{indices_[k], values_[k], part});
+            return;
+        }
+        // A min-heap of (next index, part slot); a part's next voxel replaces the one it gave.
+        using cursor = std::pair<voxel_index, std::size_t>;
+        std::vector<cursor> heap;
+        std::vector<std::size_t> position(parts_.size());
+        heap.reserve(parts_.size());
+        for (std::size_t s = 0; s < parts_.size(); ++s) {
+            position[s] = parts_[s].offset;
+            heap.emplace_back(indices_[position[s]], s);
+        }
+        const auto later = [](const cursor& a, const cursor& b) { return a.first > b.first; };
+        std::make_heap(heap.begin(), heap.end(), later);
+        while (!heap.empty()) {
+            std::pop_heap(heap.begin(), heap.end(), later);
+            const std::size_t s = heap.back().second;
+            const std::size_t k = position[s]++;
+            visit(stored_voxel{indices_[k], values_[k], parts_[s].part});
+            if (position[s] < parts_[s].offset + parts_[s].count) {
+                heap.back().first = indices_[position[s]];
+                std::push_heap(heap.begin(), heap.end(), later);
+            } else {
+                heap.pop_back();
+            }
+        }
+    }
+
+private:
+    // Index range, index box and bounding sphere of a part whose list is in place. The sphere is
+    // centered on the box of the voxel centers and reaches the farthest center plus half a voxel
+    // diagonal, so it holds every cell of the part whole.
+    void describe(store_part& part) const
+    {
+        const std::span<const voxel_index> list(indices_.data() + part.offset, part.count);
+        part.first_index = list.front();
+        part.last_index = list.back();
+        part.bounds = index_box::nothing();
+        detail::coordinate_walker coordinates(volume_);
+        for (const voxel_index i : list) part.bounds.include(coordinates(i));
+
+        const vec3d& size = volume_.voxel_size();
+        const vec3d& origin = volume_.origin();
+        const auto center_of = [&](const std::array<int, 3>& c) {
+            return vec3d{origin.x + (c[0] + 0.5) * size.x, origin.y + (c[1] + 0.5) * size.y,
+                         origin.z + (c[2] + 0.5) * size.z};
+        };
+        const vec3d center = (center_of(part.bounds.lo) + center_of(part.bounds.hi)) * 0.5;
+        double farthest_squared = 0;
+        detail::coordinate_walker again(volume_);
+        for (const voxel_index i : list)
+            farthest_squared = std::max(farthest_squared, krs::length_squared(center_of(again(i)) - center));
+        const double half_diagonal = 0.5 * krs::length(size);
+        part.sphere = krs::bound_around(center, std::sqrt(farthest_squared) + half_diagonal);
+    }
+
+    hypervolume volume_{};
+    std::vector<voxel_index> indices_;
+    std::vector<voxel> values_;
+    std::vector<store_part> parts_;
+    index_box bounds_{};
+};
+
+static_assert(voxel_store<partitioned_store>);
+
+} // namespace hypertree

@@ -1,0 +1,224 @@
+#pragma once
+// Voxel stores (paper section 5): what holds a hypertree's densities once it is generated.
+//
+// The paper weighs memory against lookup time and describes four organizations, which are the
+// four store kinds here, one header each:
+//   dense_store        a plain 3D array: fastest lookup, 2 bytes per voxel of the whole grid
+//                      (the paper's choice up to resolution ~300);
+//   index_list_store   sorted voxel indices with their densities and levels: 6 bytes per non-empty
+//                      voxel, lookup by bisection (resolutions over 1000 fit in memory);
+//   bit_array_store    the index list plus one occupancy bit per voxel between the first and last
+//                      non-empty index, so empty voxels (most lookups) cost one bit test
+//                      (the paper's compromise for resolutions 300-600);
+//   partitioned_store  one index list per first-level subpart, each with its index range and
+//                      bounding sphere, for shorter raymarching paths (sections 5 and 8.2).
+//
+// Every store satisfies `voxel_store`: it answers `at(index)` for any voxel of its hypervolume
+// (density 0 when empty), visits its non-empty voxels in increasing index order, reports its
+// memory from its containers' actual capacities, and knows the index-space bounding box of its
+// non-empty voxels (the box the paper marks during generation, section 8.2). Stores are immutable
+// values once built (DESIGN rule 6) and are all built the same way, from the sorted list of
+// `stored_voxel` that `classify` or an operation (ops.hpp) produces:
+//
+//     S::build(volume, voxels, budget)
+//
+// `build` checks the list (sorted, unique, inside the volume, no empty voxel) and refuses, before
+// allocating anything, a store whose memory would exceed the budget; `S::bytes_needed` tells in
+// advance, so a caller can pick the fastest kind that fits.
+
+#include "hypertree/voxel.hpp"
+
+#include <algorithm>
+#include <array>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hypertree {
+
+// Inclusive box of voxel coordinates; empty when lo > hi on any axis (the default).
+struct index_box {
+    std::array<int, 3> lo{0, 0, 0};
+    std::array<int, 3> hi{-1, -1, -1};
+
+    bool empty() const { return lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]; }
+    bool contains(const std::array<int, 3>& c) const
+    {
+        return lo[0] <= c[0] && c[0] <= hi[0] && lo[1] <= c[1] && c[1] <= hi[1] && lo[2] <= c[2] && c[2] <= hi[2];
+    }
+    void include(const std::array<int, 3>& c)
+    {
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
+    }
+    static index_box nothing()
+    {
+        constexpr int big = std::numeric_limits<int>::max();
+        return {{big, big, big}, {-big, -big, -big}};
+    }
+    friend bool operator==(const index_box&, const index_box&) = default;
+};
+
+// World-space corners of the voxels' cells: [minimum corner of lo's cell, maximum corner of hi's].
+struct world_box {
+    vec3d lo{}, hi{};
+};
+inline world_box world_bounds(const hypervolume& volume, const index_box& box)
+{
+    const vec3d& s = volume.voxel_size();
+    const vec3d& o = volume.origin();
+    return {{o.x + box.lo[0] * s.x, o.y + box.lo[1] * s.y, o.z + box.lo[2] * s.z},
+            {o.x + (box.hi[0] + 1) * s.x, o.y + (box.hi[1] + 1) * s.y, o.z + (box.hi[2] + 1) * s.z}};
+}
+
+namespace detail {
+
+// The coordinates of voxel indices met in (mostly) increasing order, with one division per row
+// of the grid instead of two per voxel: sorted lists of a sparse tree have about ten voxels per
+// row, and a division costs more than the rest of a lookup.
+class coordinate_walker {
+public:
+    explicit coordinate_walker(const hypervolume& volume)
+        : nx_(voxel_index(volume.grid().x)), ny_(voxel_index(volume.grid().y))
+    {
+    }
+    std::array<int, 3> operator()(voxel_index i)
+    {
+        if (i < row_start_ || i >= row_end_) {
+            const voxel_index row = i / nx_;
+            row_start_ = row * nx_;
+            row_end_ = std::uint64_t(row_start_) + nx_;
+            y_ = int(row % ny_);
+            z_ = int(row / ny_);
+        }
+        return {int(i - row_start_), y_, z_};
+    }
+
+private:
+    voxel_index nx_, ny_;
+    voxel_index row_start_ = 0;
+    std::uint64_t row_end_ = 0; // empty row: the first call divides
+    int y_ = 0, z_ = 0;
+};
+
+// Position of the first element of sorted[0, n) that is >= key (n when none), by a bisection
+// without data-dependent branches: it always takes ceil(log2 n) + 1 steps, and the compiler turns
+// the step into a conditional move, so a lookup never pays for a mispredicted branch (the paper's
+// bisection, section 5).
+inline std::size_t lower_bound_position(const voxel_index* sorted, std::size_t n, voxel_index key)
+{
+    if (n == 0) return 0;
+    const voxel_index* base = sorted;
+    // Invariant: the answer lies in [base, base + n].
+    while (n > 1) {
+        const std::size_t half = n / 2;
+        base = base[half] < key ? base + half : base;
+        n -= half;
+    }
+    return std::size_t(base - sorted) + (*base < key);
+}
+
+// A visitor of (index, voxel) with nothing in it, to state the for_each requirement.
+struct voxel_visitor_archetype {
+    void operator()(voxel_index, voxel) const {}
+};
+
+// The checks every build makes before it allocates: a list that breaks them is a caller's bug
+// that would otherwise surface as wrong lookups far from its cause.
+inline void require_storable(std::string_view store, const hypervolume& volume, std::span<const stored_voxel> voxels)
+{
+    const std::string name = std::string(store) + ".build voxels";
+    for (std::size_t i = 0; i < voxels.size(); ++i) {
+        const stored_voxel& v = voxels[i];
+        if (v.index >= volume.voxel_count())
+            throw invalid_parameter(
+                name, "must name voxels of the hypervolume (index < " + std::to_string(volume.voxel_count()) + ")",
+                std::to_string(v.index));
+        if (v.value.density == 0)
+            throw invalid_parameter(name, "must have density > 0 (empty voxels are not stored)",
+                                    "voxel " + std::to_string(v.index));
+        if (i > 0 && !(voxels[i - 1].index < v.index))
+            throw invalid_parameter(name, "must be sorted by index without duplicates",
+                                    "voxel " + std::to_string(v.index) + " after " +
+                                        std::to_string(voxels[i - 1].index));
+    }
+}
+
+inline void require_within_budget(std::string_view store, std::size_t needed, memory_budget budget,
+                                  std::string_view why)
+{
+    if (needed > budget.bytes)
+        throw invalid_parameter(std::string(store) + ".build memory_budget",
+                                "must allow the " + std::to_string(needed) + " bytes the store needs (" +
+                                    std::string(why) + ")",
+                                std::to_string(budget.bytes) + " bytes");
+}
+
+inline index_box bounds_of(const hypervolume& volume, std::span<const stored_voxel> voxels)
+{
+    if (voxels.empty()) return {};
+    index_box box = index_box::nothing();
+    coordinate_walker coordinates(volume);
+    for (const stored_voxel& v : voxels) box.include(coordinates(v.index));
+    return box;
+}
+
+} // namespace detail
+
+// What the raymarcher, the operations and the level-of-detail code need from a store.
+template <class S>
+concept voxel_store = requires(const S& store, voxel_index i, const hypervolume& volume,
+                               std::span<const stored_voxel> voxels, memory_budget budget,
+                               detail::voxel_visitor_archetype visit)
+{
+    {
+        store.volume()
+        } -> std::convertible_to<const hypervolume&>;
+    {
+        store.at(i)
+        } -> std::same_as<voxel>;
+    {
+        store.memory_bytes()
+        } -> std::same_as<std::size_t>;
+    {
+        store.nonempty_count()
+        } -> std::same_as<std::size_t>;
+    {
+        store.bounds()
+        } -> std::same_as<index_box>;
+    store.for_each(visit);
+    {
+        S::bytes_needed(volume, voxels)
+        } -> std::same_as<std::size_t>;
+    {
+        S::build(volume, voxels, budget)
+        } -> std::same_as<S>;
+};
+
+// Visits every non-empty voxel of a store as a stored_voxel, in increasing index order, with the
+// part it was built with where the store keeps parts (partitioned_store) and part 0 otherwise.
+template <voxel_store S, class F>
+void for_each_stored(const S& store, F&& visit)
+{
+    if constexpr (requires { store.for_each_stored(visit); })
+        store.for_each_stored(visit);
+    else
+        store.for_each([&](voxel_index i, voxel v) { visit(stored_voxel{i, v, 0}); });
+}
+
+// The list a store was built from (parts as for_each_stored gives them): rebuild it as another
+// kind with `T::build(store.volume(), stored_voxels(store))`.
+template <voxel_store S>
+std::vector<stored_voxel> stored_voxels(const S& store)
+{
+    std::vector<stored_voxel> voxels;
+    voxels.reserve(store.nonempty_count());
+    for_each_stored(store, [&](const stored_voxel& v) { voxels.push_back(v); });
+    return voxels;
+}
+
+} // namespace hypertree

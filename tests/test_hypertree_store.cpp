@@ -1,0 +1,796 @@
+// Hypertree validation, density classes, the four voxel stores and the volume operations
+// (paper sections 4, 5 and 7), each against a brute-force reference written here: a std::map for
+// compaction, counting by hand for classes, a plain array of every voxel of the grid for stores
+// and operations.
+
+#include "hypertree/compact.hpp"
+#include "hypertree/density.hpp"
+#include "hypertree/ops.hpp"
+#include "hypertree/store/bit_array_store.hpp"
+#include "hypertree/store/dense_store.hpp"
+#include "hypertree/store/index_list_store.hpp"
+#include "hypertree/store/partitioned_store.hpp"
+
+#include "support/random.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <iterator>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+using hypertree::hit;
+using hypertree::hypervolume;
+using hypertree::stored_voxel;
+using hypertree::voxel;
+using hypertree::voxel_entry;
+using hypertree::voxel_index;
+using krs::vec3d;
+
+// Uniform integer in [lo, hi], from the engine's bits only (platform-independent).
+std::uint32_t integer(std::mt19937_64& g, std::uint64_t lo, std::uint64_t hi)
+{
+    return std::uint32_t(lo + g() % (hi - lo + 1));
+}
+
+// ---- compaction reference ---------------------------------------------------------------------
+
+std::vector<voxel_entry> compact_with_map(const std::vector<hit>& hits)
+{
+    struct merged {
+        std::uint32_t hits = 0;
+        int level = 1000, part = 1000;
+    };
+    std::map<voxel_index, merged> by_voxel;
+    for (const hit& h : hits) {
+        merged& m = by_voxel[h.voxel];
+        ++m.hits;
+        if (h.level < m.level || (h.level == m.level && h.part < m.part)) m.level = h.level, m.part = h.part;
+    }
+    std::vector<voxel_entry> entries;
+    for (const auto& [v, m] : by_voxel) entries.push_back({v, m.hits, std::uint8_t(m.level), std::uint8_t(m.part)});
+    return entries;
+}
+
+void check_same_entries(const std::vector<voxel_entry>& got, const std::vector<voxel_entry>& expected)
+{
+    REQUIRE(got.size() == expected.size());
+    std::size_t wrong = 0, first_wrong = got.size();
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        const bool same = got[i].voxel == expected[i].voxel && got[i].hits == expected[i].hits &&
+                          got[i].level == expected[i].level && got[i].part == expected[i].part;
+        if (!same && wrong++ == 0) first_wrong = i;
+    }
+    INFO("first differing entry " << first_wrong);
+    CHECK(wrong == 0);
+}
+
+std::vector<hit> random_hits(std::mt19937_64& g, std::size_t count, voxel_index lowest, voxel_index highest, int levels,
+                             int parts)
+{
+    std::vector<hit> hits(count);
+    for (hit& h : hits)
+        h = {integer(g, lowest, highest), std::uint8_t(integer(g, 0, levels - 1)),
+             std::uint8_t(integer(g, 0, parts - 1))};
+    return hits;
+}
+
+// 1 + a geometric number of failures with success probability p (inverse transform).
+std::uint32_t geometric_hits(std::mt19937_64& g, double p)
+{
+    const double u = krs_test::uniform(g, 0, 1);
+    return 1 + std::uint32_t(std::floor(std::log1p(-u) / std::log1p(-p)));
+}
+
+// ---- store and operation reference: every voxel of the grid -------------------------------------
+
+std::vector<voxel> grid_of(const hypervolume& volume, const std::vector<stored_voxel>& voxels)
+{
+    std::vector<voxel> grid(std::size_t(volume.voxel_count()));
+    for (const stored_voxel& v : voxels) grid[v.index] = v.value;
+    return grid;
+}
+
+template <class S>
+std::vector<voxel> grid_of_store(const S& store)
+{
+    std::vector<voxel> grid(std::size_t(store.volume().voxel_count()));
+    for (std::size_t i = 0; i < grid.size(); ++i) grid[i] = store.at(voxel_index(i));
+    return grid;
+}
+
+// Each voxel of the grid non-empty with probability `fill`, with a random density, level, part.
+std::vector<stored_voxel> random_voxels(std::mt19937_64& g, const hypervolume& volume, double fill, int parts = 4)
+{
+    std::vector<stored_voxel> voxels;
+    for (voxel_index i = 0; i < volume.voxel_count(); ++i)
+        if (krs_test::uniform(g, 0, 1) < fill)
+            voxels.push_back({i, voxel{std::uint8_t(integer(g, 1, 255)), std::uint8_t(integer(g, 0, 7))},
+                              std::uint8_t(integer(g, 0, parts - 1))});
+    return voxels;
+}
+
+// A sparse "tree" at high resolution: one blob of voxels per part around its own center, the
+// trunk (part 0) a thin column, as the generator would produce.
+std::vector<stored_voxel> tree_like_voxels(std::mt19937_64& g, const hypervolume& volume, int parts,
+                                           std::size_t per_part)
+{
+    std::map<voxel_index, stored_voxel> unique;
+    const auto n = volume.grid();
+    for (int p = 0; p < parts; ++p) {
+        const vec3d c{krs_test::uniform(g, 0.2, 0.8) * n.x, krs_test::uniform(g, 0.2, 0.8) * n.y,
+                      krs_test::uniform(g, 0.2, 0.8) * n.z};
+        for (std::size_t k = 0; k < per_part; ++k) {
+            const vec3d d =
+                p == 0 ? vec3d{krs_test::uniform(g, -2, 2), krs_test::uniform(g, -2, 2), krs_test::uniform(g, -60, 60)}
+                       : krs_test::in_ball(g, 25.0);
+            const int x = std::clamp(int(c.x + d.x), 0, n.x - 1), y = std::clamp(int(c.y + d.y), 0, n.y - 1),
+                      z = std::clamp(int(c.z + d.z), 0, n.z - 1);
+            const voxel_index i = volume.index(x, y, z);
+            // The first part to claim a voxel keeps it: each voxel is in exactly one part.
+            unique.emplace(
+                i, stored_voxel{i, voxel{std::uint8_t(integer(g, 1, 255)), std::uint8_t(p == 0 ? 0 : integer(g, 1, 6))},
+                                std::uint8_t(p)});
+        }
+    }
+    std::vector<stored_voxel> voxels;
+    for (const auto& [i, v] : unique) voxels.push_back(v);
+    return voxels;
+}
+
+// Bounds by the definition: min and max coordinates of the voxels, computed by % and /.
+hypertree::index_box bounds_by_hand(const hypervolume& volume, const std::vector<stored_voxel>& voxels)
+{
+    hypertree::index_box box;
+    if (voxels.empty()) return box;
+    const auto n = volume.grid();
+    box.lo = {n.x, n.y, n.z};
+    box.hi = {-1, -1, -1};
+    for (const stored_voxel& v : voxels) {
+        const int c[3] = {int(v.index % voxel_index(n.x)), int(v.index / voxel_index(n.x) % voxel_index(n.y)),
+                          int(v.index / voxel_index(n.x) / voxel_index(n.y))};
+        for (int a = 0; a < 3; ++a) box.lo[a] = std::min(box.lo[a], c[a]), box.hi[a] = std::max(box.hi[a], c[a]);
+    }
+    return box;
+}
+
+template <class S>
+void check_visits_the_list(const S& store, const std::vector<stored_voxel>& voxels)
+{
+    std::vector<std::pair<voxel_index, voxel>> visited;
+    store.for_each([&](voxel_index i, voxel v) { visited.emplace_back(i, v); });
+    REQUIRE(visited.size() == voxels.size());
+    std::size_t wrong = 0;
+    for (std::size_t k = 0; k < voxels.size(); ++k)
+        wrong += visited[k].first != voxels[k].index || !(visited[k].second == voxels[k].value);
+    CHECK(wrong == 0);
+    CHECK(store.nonempty_count() == voxels.size());
+}
+
+std::size_t count_differences(const std::vector<voxel>& a, const std::vector<voxel>& b)
+{
+    REQUIRE(a.size() == b.size());
+    std::size_t different = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) different += !(a[i] == b[i]);
+    return different;
+}
+
+const hypervolume small_volume({-1.5, 0.25, 2.0}, {2.0, 1.2, 0.9}, {40, 30, 20});
+} // namespace
+
+// ---- compaction -----------------------------------------------------------------------------------
+
+TEST_CASE("compact: the shallowest level prevails and ties take the smallest part")
+{
+    const std::vector<hit> hits = {{5, 2, 3}, {9, 4, 1}, {5, 1, 4}, {5, 1, 2}, {5, 3, 0}, {2, 7, 7}, {9, 4, 0}};
+    const auto entries = hypertree::compact(hits);
+    REQUIRE(entries.size() == 3);
+    CHECK(entries[0].voxel == 2);
+    CHECK(entries[0].hits == 1);
+    CHECK(entries[1].voxel == 5);
+    CHECK(entries[1].hits == 4);
+    CHECK(entries[1].level == 1);
+    CHECK(entries[1].part == 2);
+    CHECK(entries[2].voxel == 9);
+    CHECK(entries[2].hits == 2);
+    CHECK(entries[2].level == 4);
+    CHECK(entries[2].part == 0);
+    CHECK(hypertree::compact({}).empty());
+}
+
+TEST_CASE("compact: random hit lists match a map-based reference")
+{
+    std::mt19937_64 g(20040601);
+    struct shape {
+        std::size_t hits;
+        voxel_index lowest, highest;
+    };
+    // Few voxels hit very often; a 300^3 volume; the full 32-bit index range (every radix digit
+    // in use); one voxel; huge indices only (leading digits constant, skipped passes); small sizes.
+    const shape shapes[] = {{20000, 0, 60},
+                            {200000, 0, 300 * 300 * 300 - 1},
+                            {50000, 0, 0xfffffffeu},
+                            {3000, 77, 77},
+                            {40000, 0xfff00000u, 0xfffffffeu},
+                            {1, 0, 10},
+                            {2, 10, 11},
+                            {300, 0, 255}};
+    for (const shape& s : shapes) {
+        INFO("hits " << s.hits << " in [" << s.lowest << ", " << s.highest << "]");
+        const auto hits = random_hits(g, s.hits, s.lowest, s.highest, 9, 6);
+        check_same_entries(hypertree::compact(hits), compact_with_map(hits));
+    }
+}
+
+// ---- density classes -------------------------------------------------------------------------------
+
+namespace {
+// Checks what density classes promise on entries, all by counting: contiguous increasing ranges
+// holding every hit voxel once, the reported populations, the densities round(255 c / K), and
+// classify's densities. Returns the populations.
+std::vector<std::size_t> check_classes(const std::vector<voxel_entry>& entries,
+                                       const hypertree::density_classes& classes)
+{
+    const auto k = classes.classes();
+    REQUIRE(!k.empty());
+    const std::size_t count = k.size();
+    for (std::size_t c = 0; c + 1 < count; ++c) CHECK(k[c].most_hits < k[c + 1].fewest_hits);
+    // The class holding a hit count: the last whose fewest_hits <= h, which must also reach h.
+    const auto holding = [&](std::uint32_t h) -> std::ptrdiff_t {
+        const auto after =
+            std::upper_bound(k.begin(), k.end(), h, [](std::uint32_t x, const auto& kc) { return x < kc.fewest_hits; });
+        if (after == k.begin() || h > std::prev(after)->most_hits) return -1;
+        return std::prev(after) - k.begin();
+    };
+    std::vector<std::size_t> population(count, 0);
+    std::size_t unclassed = 0;
+    for (const voxel_entry& e : entries) {
+        const std::ptrdiff_t c = holding(e.hits);
+        if (c < 0)
+            ++unclassed;
+        else
+            ++population[std::size_t(c)];
+    }
+    REQUIRE(unclassed == 0);
+    for (std::size_t c = 0; c < count; ++c) {
+        CHECK(k[c].population == population[c]);
+        CHECK(population[c] > 0);
+        // round(255 c / K) in integers: (2 * 255 * c + K) / (2 K), c = 1..K.
+        CHECK(int(k[c].density) == int((2 * 255 * (c + 1) + count) / (2 * count)));
+    }
+    CHECK(k.back().density == 255);
+
+    const auto stored = hypertree::classify(entries, classes, hypertree::no_branch_structure);
+    REQUIRE(stored.size() == entries.size());
+    std::size_t wrong = 0;
+    for (std::size_t i = 0; i < entries.size(); ++i)
+        wrong += stored[i].index != entries[i].voxel || stored[i].value.level != entries[i].level ||
+                 stored[i].part != entries[i].part ||
+                 stored[i].value.density != k[std::size_t(holding(entries[i].hits))].density;
+    CHECK(wrong == 0);
+    return population;
+}
+
+std::size_t largest_hit_count_population(const std::vector<voxel_entry>& entries, std::uint32_t from_hits = 0)
+{
+    std::map<std::uint32_t, std::size_t> by_hits;
+    for (const voxel_entry& e : entries)
+        if (e.hits >= from_hits) ++by_hits[e.hits];
+    std::size_t largest = 0;
+    for (const auto& [h, n] : by_hits) largest = std::max(largest, n);
+    return largest;
+}
+} // namespace
+
+TEST_CASE("density classes: near-equal populations on a geometric hit distribution")
+{
+    std::mt19937_64 g(3);
+    std::vector<voxel_entry> entries(200000);
+    for (std::size_t i = 0; i < entries.size(); ++i)
+        entries[i] = {voxel_index(3 * i), geometric_hits(g, 0.002), std::uint8_t(integer(g, 0, 6)),
+                      std::uint8_t(integer(g, 0, 4))};
+    // One hit count cannot be split between classes, so a class can miss its equal share by up to
+    // the largest number of voxels sharing one hit count.
+    const double bound = double(largest_hit_count_population(entries));
+    for (const int c : {3, 16, 64, 128, 255}) {
+        INFO("classes " << c);
+        const hypertree::density_classes classes(entries, c);
+        CHECK(classes.class_count() == c);
+        REQUIRE(classes.classes().size() == std::size_t(c - 1));
+        const double share = double(entries.size()) / double(c - 1);
+        for (const std::size_t population : check_classes(entries, classes))
+            CHECK(std::abs(double(population) - share) <= bound);
+    }
+}
+
+TEST_CASE("density classes: a figure 3 spike at one hit fills one class and the rest share evenly")
+{
+    std::mt19937_64 g(4);
+    std::vector<voxel_entry> entries(100000);
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+        const bool spike = krs_test::uniform(g, 0, 1) < 0.6;
+        entries[i] = {voxel_index(i), spike ? 1u : 1 + geometric_hits(g, 0.003), 3, 1};
+    }
+    const std::size_t spike =
+        std::size_t(std::count_if(entries.begin(), entries.end(), [](const voxel_entry& e) { return e.hits == 1; }));
+    const hypertree::density_classes classes(entries, 32);
+    const auto population = check_classes(entries, classes);
+    REQUIRE(population.size() == 31);
+    CHECK(classes.classes()[0].fewest_hits == 1);
+    CHECK(classes.classes()[0].most_hits == 1);
+    CHECK(population[0] == spike);
+    const double share = double(entries.size() - spike) / 30.0;
+    const double bound = double(largest_hit_count_population(entries, 2));
+    for (std::size_t c = 1; c < population.size(); ++c) CHECK(std::abs(double(population[c]) - share) <= bound);
+}
+
+TEST_CASE("density classes: two classes make a binary hypertree")
+{
+    std::mt19937_64 g(5);
+    std::vector<voxel_entry> entries;
+    for (voxel_index i = 0; i < 5000; ++i)
+        entries.push_back({i * 7, integer(g, 1, 400), std::uint8_t(integer(g, 0, 5)), 0});
+    const hypertree::density_classes classes(entries, 2);
+    REQUIRE(classes.classes().size() == 1);
+    for (const stored_voxel& v : hypertree::classify(entries, classes, hypertree::no_branch_structure))
+        CHECK(v.value.density == 255);
+    CHECK(classes.class_of(0) == 0);
+    CHECK(classes.density_of(0) == 0);
+}
+
+TEST_CASE("density classes: fewer distinct hit counts than classes spread densities up to 255")
+{
+    std::vector<voxel_entry> entries;
+    for (voxel_index i = 0; i < 300; ++i) entries.push_back({i, 1 + i % 3, 2, 0});
+    const hypertree::density_classes classes(entries, 128);
+    const auto population = check_classes(entries, classes);
+    REQUIRE(population.size() == 3);
+    CHECK(classes.classes()[0].density == 85);
+    CHECK(classes.classes()[1].density == 170);
+    CHECK(classes.classes()[2].density == 255);
+}
+
+TEST_CASE("density classes: hit counts absent from the entries fall in the neighbouring class")
+{
+    std::vector<voxel_entry> entries;
+    for (voxel_index i = 0; i < 40; ++i) entries.push_back({i, i < 20 ? 2u : 10u, 1, 0});
+    const hypertree::density_classes classes(entries, 3);
+    REQUIRE(classes.classes().size() == 2);
+    CHECK(classes.class_of(1) == 1); // below the first class
+    CHECK(classes.class_of(5) == 1); // between the classes: the lower one
+    CHECK(classes.class_of(10) == 2);
+    CHECK(classes.class_of(1000) == 2); // above the last class
+    CHECK(classes.density_of(1000) == 255);
+}
+
+TEST_CASE("classify: the branching structure gets full density")
+{
+    std::mt19937_64 g(6);
+    std::vector<voxel_entry> entries;
+    for (voxel_index i = 0; i < 4000; ++i)
+        entries.push_back({i * 5 + 1, geometric_hits(g, 0.05), std::uint8_t(i % 7), std::uint8_t(i % 3)});
+    const hypertree::density_classes classes(entries, 16);
+    for (const int depth : {hypertree::no_branch_structure, 0, 2, 6}) {
+        INFO("branch depth " << depth);
+        const auto stored = hypertree::classify(entries, classes, depth);
+        REQUIRE(stored.size() == entries.size());
+        for (std::size_t i = 0; i < entries.size(); ++i) {
+            if (entries[i].level <= depth)
+                CHECK(stored[i].value.density == 255);
+            else
+                CHECK(stored[i].value.density == classes.density_of(entries[i].hits));
+        }
+    }
+}
+
+TEST_CASE("density classes and classify refuse impossible parameters")
+{
+    const std::vector<voxel_entry> entries = {{1, 3, 0, 0}, {4, 1, 1, 0}};
+    for (const int bad : {-1, 0, 1, 256, 1000}) {
+        INFO("class count " << bad);
+        try {
+            hypertree::density_classes classes(entries, bad);
+            FAIL("accepted");
+        } catch (const krs::invalid_parameter& e) {
+            CHECK(e.parameter() == "density_classes.class_count");
+            CHECK(std::string(e.what()).find("between 2") != std::string::npos);
+        }
+    }
+    CHECK_NOTHROW(hypertree::density_classes(entries, 2));
+    CHECK_NOTHROW(hypertree::density_classes(entries, 255));
+    const hypertree::density_classes classes(entries, 4);
+    CHECK_THROWS_AS(hypertree::classify(entries, classes, -2), krs::invalid_parameter);
+    CHECK_THROWS_AS(hypertree::classify(entries, classes, 256), krs::invalid_parameter);
+    const std::vector<voxel_entry> unsorted = {{4, 1, 0, 0}, {1, 3, 0, 0}};
+    CHECK_THROWS_AS(hypertree::classify(unsorted, classes, 0), krs::invalid_parameter);
+    const std::vector<voxel_entry> repeated = {{4, 1, 0, 0}, {4, 3, 0, 0}};
+    CHECK_THROWS_AS(hypertree::classify(repeated, classes, 0), krs::invalid_parameter);
+}
+
+TEST_CASE("hypertree pipeline: hits through compact and classify give a store of every hit voxel")
+{
+    std::mt19937_64 g(7);
+    const auto hits = random_hits(g, 60000, 0, voxel_index(small_volume.voxel_count() - 1), 5, 3);
+    const auto entries = hypertree::compact(hits);
+    const auto stored = hypertree::classify(entries, hypertree::density_classes(entries, 8), 0);
+    const auto store = hypertree::bit_array_store::build(small_volume, stored);
+    const auto reference = compact_with_map(hits);
+    std::vector<bool> hit_voxel(std::size_t(small_volume.voxel_count()), false);
+    for (const voxel_entry& e : reference) hit_voxel[e.voxel] = true;
+    std::size_t wrong = 0;
+    for (voxel_index i = 0; i < small_volume.voxel_count(); ++i) wrong += (store.at(i).density != 0) != hit_voxel[i];
+    CHECK(wrong == 0);
+    CHECK(store.nonempty_count() == reference.size());
+}
+
+// ---- stores ------------------------------------------------------------------------------------------
+
+TEST_CASE("stores: all four kinds return the reference voxel for every voxel of a small grid")
+{
+    std::mt19937_64 g(8);
+    for (const double fill : {0.0, 0.002, 0.15, 1.0}) {
+        INFO("fill " << fill);
+        const auto voxels = random_voxels(g, small_volume, fill);
+        const auto reference = grid_of(small_volume, voxels);
+        const auto dense = hypertree::dense_store::build(small_volume, voxels);
+        const auto list = hypertree::index_list_store::build(small_volume, voxels);
+        const auto bits = hypertree::bit_array_store::build(small_volume, voxels);
+        const auto parts = hypertree::partitioned_store::build(small_volume, voxels);
+        CHECK(count_differences(grid_of_store(dense), reference) == 0);
+        CHECK(count_differences(grid_of_store(list), reference) == 0);
+        CHECK(count_differences(grid_of_store(bits), reference) == 0);
+        CHECK(count_differences(grid_of_store(parts), reference) == 0);
+        for (voxel_index i = 0; i < small_volume.voxel_count(); ++i)
+            if (bits.occupied(i) != (reference[i].density != 0)) FAIL("occupancy bit of voxel " << i);
+        check_visits_the_list(dense, voxels);
+        check_visits_the_list(list, voxels);
+        check_visits_the_list(bits, voxels);
+        check_visits_the_list(parts, voxels);
+        const auto box = bounds_by_hand(small_volume, voxels);
+        CHECK(dense.bounds() == box);
+        CHECK(list.bounds() == box);
+        CHECK(bits.bounds() == box);
+        CHECK(parts.bounds() == box);
+        CHECK(box.empty() == voxels.empty());
+        // The partitioned store gives back each voxel's part, and so the very list it was built from.
+        const auto again = hypertree::stored_voxels(parts);
+        REQUIRE(again.size() == voxels.size());
+        std::size_t wrong = 0;
+        for (std::size_t k = 0; k < voxels.size(); ++k)
+            wrong += again[k].index != voxels[k].index || again[k].part != voxels[k].part;
+        CHECK(wrong == 0);
+    }
+}
+
+TEST_CASE("stores: all four kinds match the reference on a sparse 300 cubed tree")
+{
+    std::mt19937_64 g(9);
+    const hypervolume volume({-5, 0, -5}, {10, 12, 10}, hypertree::resolution::cube(300));
+    const auto voxels = tree_like_voxels(g, volume, 6, 30000);
+    REQUIRE(voxels.size() > 50000);
+    const auto dense = hypertree::dense_store::build(volume, voxels);
+    const auto list = hypertree::index_list_store::build(volume, voxels);
+    const auto bits = hypertree::bit_array_store::build(volume, voxels);
+    const auto parts = hypertree::partitioned_store::build(volume, voxels);
+
+    const auto reference = [&](voxel_index i) {
+        const auto it = std::lower_bound(voxels.begin(), voxels.end(), i,
+                                         [](const stored_voxel& v, voxel_index k) { return v.index < k; });
+        return it != voxels.end() && it->index == i ? it->value : voxel{};
+    };
+    // Every non-empty voxel and its two row neighbours, then random voxels anywhere.
+    std::vector<voxel_index> probes;
+    for (const stored_voxel& v : voxels) {
+        probes.push_back(v.index);
+        if (v.index > 0) probes.push_back(v.index - 1);
+        if (v.index + 1 < volume.voxel_count()) probes.push_back(v.index + 1);
+    }
+    for (int k = 0; k < 200000; ++k) probes.push_back(integer(g, 0, volume.voxel_count() - 1));
+    probes.push_back(0);
+    probes.push_back(voxel_index(volume.voxel_count() - 1));
+    std::size_t wrong[4] = {0, 0, 0, 0};
+    for (const voxel_index i : probes) {
+        const voxel expected = reference(i);
+        wrong[0] += !(dense.at(i) == expected);
+        wrong[1] += !(list.at(i) == expected);
+        wrong[2] += !(bits.at(i) == expected);
+        wrong[3] += !(parts.at(i) == expected);
+    }
+    CHECK(wrong[0] == 0);
+    CHECK(wrong[1] == 0);
+    CHECK(wrong[2] == 0);
+    CHECK(wrong[3] == 0);
+    check_visits_the_list(parts, voxels);
+    CHECK(parts.bounds() == bounds_by_hand(volume, voxels));
+
+    // Memory follows the paper's costs.
+    {
+        const std::size_t n = voxels.size();
+        CHECK(dense.memory_bytes() == 2 * std::size_t(volume.voxel_count()));
+        CHECK(list.memory_bytes() == 6 * n);
+        CHECK(list.memory_bytes() >= hypertree::index_list_store::bytes_needed(volume, voxels));
+        CHECK(bits.memory_bytes() > list.memory_bytes());
+        CHECK(bits.memory_bytes() <= 6 * n + (voxels.back().index - voxels.front().index) / 8 + 8);
+        CHECK(parts.memory_bytes() < 6 * n + 6 * sizeof(hypertree::store_part) + 1);
+        // The paper: a compact hypertree takes under 5% of a dense array.
+        CHECK(list.memory_bytes() * 20 < dense.memory_bytes());
+        CHECK(parts.memory_bytes() * 20 < dense.memory_bytes());
+        CHECK(bits.memory_bytes() * 5 < dense.memory_bytes());
+    }
+
+    // Each part's sphere holds its voxels' cells, and the parts hold each voxel once.
+    {
+        std::map<int, std::vector<stored_voxel>> by_part;
+        for (const stored_voxel& v : voxels) by_part[v.part].push_back(v);
+        REQUIRE(parts.parts().size() == by_part.size());
+        std::size_t total = 0;
+        const vec3d half = volume.voxel_size() * 0.5;
+        for (const hypertree::store_part& part : parts.parts()) {
+            const auto& mine = by_part.at(part.part);
+            CHECK(part.count == mine.size());
+            CHECK(part.first_index == mine.front().index);
+            CHECK(part.last_index == mine.back().index);
+            CHECK(part.bounds == bounds_by_hand(volume, mine));
+            total += part.count;
+            const vec3d center(part.sphere.center);
+            double farthest = 0;
+            for (const stored_voxel& v : mine) {
+                const vec3d c = volume.voxel_center(v.index);
+                for (int corner = 0; corner < 8; ++corner) {
+                    const vec3d p{c.x + ((corner & 1) ? half.x : -half.x), c.y + ((corner & 2) ? half.y : -half.y),
+                                  c.z + ((corner & 4) ? half.z : -half.z)};
+                    farthest = std::max(farthest, krs::length(p - center));
+                }
+            }
+            CHECK(farthest <= double(part.sphere.radius));
+            // Not loose: the farthest voxel center plus half a diagonal exceeds the farthest corner
+            // by at most half a diagonal (a cell's farthest corner is no nearer than its center).
+            CHECK(double(part.sphere.radius) <= farthest + 0.5 * krs::length(volume.voxel_size()) + 1e-4);
+        }
+        CHECK(total == voxels.size());
+    }
+}
+
+TEST_CASE("stores: the memory budget is checked before anything is allocated")
+{
+    // 1000^3 voxels: a dense store needs 2 GB. The refusal must come from the budget check, since
+    // an allocation first would succeed (or fail with bad_alloc) instead of throwing this.
+    const hypervolume big({0, 0, 0}, {1, 1, 1}, hypertree::resolution::cube(1000));
+    CHECK(hypertree::dense_store::bytes_needed(big) == 2000000000u);
+    try {
+        (void)hypertree::dense_store::build(big, {}, hypertree::memory_budget{std::size_t(1) << 30});
+        FAIL("a 2 GB dense store fit a 1 GiB budget");
+    } catch (const krs::invalid_parameter& e) {
+        const std::string what = e.what();
+        CHECK(what.find("dense_store") != std::string::npos);
+        CHECK(what.find("2000000000") != std::string::npos);
+        CHECK(what.find("1073741824") != std::string::npos);
+    }
+    // The default budget (4 GiB) refuses 1600^3 (8 GB dense) too.
+    const hypervolume bigger({0, 0, 0}, {1, 1, 1}, hypertree::resolution::cube(1600));
+    CHECK_THROWS_AS((void)hypertree::dense_store::build(bigger, {}), krs::invalid_parameter);
+
+    std::mt19937_64 g(10);
+    const auto voxels = random_voxels(g, small_volume, 0.05);
+    const auto refuses = [&](auto build, std::size_t needed, const char* name) {
+        INFO(name);
+        CHECK_NOTHROW(build(hypertree::memory_budget{needed}));
+        try {
+            build(hypertree::memory_budget{needed - 1});
+            FAIL("one byte under the need was accepted");
+        } catch (const krs::invalid_parameter& e) {
+            CHECK(std::string(e.what()).find(name) != std::string::npos);
+            CHECK(std::string(e.what()).find(std::to_string(needed)) != std::string::npos);
+        }
+        CHECK_THROWS_AS(build(hypertree::memory_budget{100}), krs::invalid_parameter);
+    };
+    refuses([&](hypertree::memory_budget b) { return hypertree::index_list_store::build(small_volume, voxels, b); },
+            hypertree::index_list_store::bytes_needed(small_volume, voxels), "index_list_store");
+    refuses([&](hypertree::memory_budget b) { return hypertree::bit_array_store::build(small_volume, voxels, b); },
+            hypertree::bit_array_store::bytes_needed(small_volume, voxels), "bit_array_store");
+    refuses([&](hypertree::memory_budget b) { return hypertree::partitioned_store::build(small_volume, voxels, b); },
+            hypertree::partitioned_store::bytes_needed(small_volume, voxels), "partitioned_store");
+    refuses([&](hypertree::memory_budget b) { return hypertree::dense_store::build(small_volume, voxels, b); },
+            hypertree::dense_store::bytes_needed(small_volume), "dense_store");
+    CHECK(hypertree::index_list_store::bytes_needed(small_volume, voxels) == 6 * voxels.size());
+}
+
+TEST_CASE("stores: build refuses lists that are unsorted, repeated, outside the volume or empty-valued")
+{
+    const std::vector<std::vector<stored_voxel>> bad = {
+        {{5, {9, 0}, 0}, {3, {9, 0}, 0}},                       // unsorted
+        {{5, {9, 0}, 0}, {5, {7, 1}, 0}},                       // repeated
+        {{voxel_index(small_volume.voxel_count()), {9, 0}, 0}}, // outside
+        {{5, {0, 0}, 0}},                                       // empty voxel
+    };
+    for (const auto& voxels : bad) {
+        CHECK_THROWS_AS(hypertree::dense_store::build(small_volume, voxels), krs::invalid_parameter);
+        CHECK_THROWS_AS(hypertree::index_list_store::build(small_volume, voxels), krs::invalid_parameter);
+        CHECK_THROWS_AS(hypertree::bit_array_store::build(small_volume, voxels), krs::invalid_parameter);
+        CHECK_THROWS_AS(hypertree::partitioned_store::build(small_volume, voxels), krs::invalid_parameter);
+    }
+}
+
+// ---- operations ----------------------------------------------------------------------------------
+
+namespace {
+// The union rules written out per voxel.
+voxel max_rule(voxel a, voxel b)
+{
+    if (a.density == 0) return b;
+    if (b.density == 0) return a;
+    if (a.density != b.density) return a.density > b.density ? a : b;
+    return {a.density, std::min(a.level, b.level)};
+}
+voxel sum_rule(voxel a, voxel b)
+{
+    if (a.density == 0) return b;
+    if (b.density == 0) return a;
+    return {std::uint8_t(std::min(255, a.density + b.density)), std::min(a.level, b.level)};
+}
+} // namespace
+
+TEST_CASE("unite_max is the per-voxel maximum and is commutative and idempotent")
+{
+    std::mt19937_64 g(11);
+    const auto va = random_voxels(g, small_volume, 0.2);
+    const auto vb = random_voxels(g, small_volume, 0.2);
+    const auto a_list = hypertree::index_list_store::build(small_volume, va);
+    const auto a_dense = hypertree::dense_store::build(small_volume, va);
+    const auto b_parts = hypertree::partitioned_store::build(small_volume, vb);
+    const auto b_bits = hypertree::bit_array_store::build(small_volume, vb);
+    const auto ga = grid_of(small_volume, va), gb = grid_of(small_volume, vb);
+
+    std::vector<voxel> expected(ga.size());
+    for (std::size_t i = 0; i < ga.size(); ++i) expected[i] = max_rule(ga[i], gb[i]);
+    const auto ab = hypertree::unite_max(a_list, b_parts);
+    const auto ba = hypertree::unite_max(b_bits, a_dense);
+    CHECK(count_differences(grid_of(small_volume, ab), expected) == 0);
+    CHECK(count_differences(grid_of(small_volume, ba), expected) == 0);
+    CHECK(std::is_sorted(ab.begin(), ab.end(),
+                         [](const stored_voxel& x, const stored_voxel& y) { return x.index < y.index; }));
+
+    CHECK(count_differences(grid_of(small_volume, hypertree::unite_max(a_list, a_dense)), ga) == 0);
+    CHECK(count_differences(grid_of(small_volume, hypertree::unite_max(b_parts, b_parts)), gb) == 0);
+
+    const hypertree::partitioned_store united =
+        hypertree::unite_max_store(b_parts, hypertree::partitioned_store::build(small_volume, va));
+    CHECK(count_differences(grid_of_store(united), expected) == 0);
+    const hypertree::dense_store united_dense =
+        hypertree::unite_max_store(a_dense, hypertree::dense_store::build(small_volume, vb));
+    CHECK(count_differences(grid_of_store(united_dense), expected) == 0);
+}
+
+TEST_CASE("unite_sum saturates at 255 and keeps the shallower level")
+{
+    std::mt19937_64 g(12);
+    const auto va = random_voxels(g, small_volume, 0.3);
+    const auto vb = random_voxels(g, small_volume, 0.3);
+    const auto a = hypertree::bit_array_store::build(small_volume, va);
+    const auto b = hypertree::index_list_store::build(small_volume, vb);
+    const auto ga = grid_of(small_volume, va), gb = grid_of(small_volume, vb);
+    std::vector<voxel> expected(ga.size());
+    std::size_t saturated = 0;
+    for (std::size_t i = 0; i < ga.size(); ++i) {
+        expected[i] = sum_rule(ga[i], gb[i]);
+        saturated += ga[i].density + gb[i].density > 255;
+    }
+    REQUIRE(saturated > 100);
+    CHECK(count_differences(grid_of(small_volume, hypertree::unite_sum(a, b)), expected) == 0);
+    CHECK(count_differences(grid_of(small_volume, hypertree::unite_sum(b, a)), expected) == 0);
+    CHECK(count_differences(
+              grid_of_store(hypertree::unite_sum_store(a, hypertree::bit_array_store::build(small_volume, vb))),
+              expected) == 0);
+}
+
+TEST_CASE("clear and set change exactly the voxels whose centers are inside the region")
+{
+    std::mt19937_64 g(13);
+    const auto voxels = random_voxels(g, small_volume, 0.25);
+    const auto original = grid_of(small_volume, voxels);
+    const auto list = hypertree::index_list_store::build(small_volume, voxels);
+    const auto parts = hypertree::partitioned_store::build(small_volume, voxels);
+    const vec3d lo = small_volume.origin(), hi = small_volume.maximum();
+
+    const auto check_region = [&](const auto& region, const auto& inside, const char* name) {
+        INFO(name);
+        const auto cleared = grid_of(small_volume, hypertree::clear(list, region));
+        const voxel value{200, 3};
+        const auto set = grid_of(small_volume, hypertree::set(parts, region, value, 2));
+        std::size_t wrong_clear = 0, wrong_set = 0, inside_count = 0;
+        for (voxel_index i = 0; i < small_volume.voxel_count(); ++i) {
+            const bool in = inside(small_volume.voxel_center(i));
+            inside_count += in;
+            wrong_clear += !(cleared[i] == (in ? voxel{} : original[i]));
+            wrong_set += !(set[i] == (in ? value : original[i]));
+        }
+        CHECK(wrong_clear == 0);
+        CHECK(wrong_set == 0);
+        // Same through the store-kind variants, and set with density 0 clears.
+        CHECK(count_differences(grid_of_store(hypertree::clear_store(parts, region)), cleared) == 0);
+        CHECK(count_differences(grid_of_store(hypertree::set_store(list, region, value)), set) == 0);
+        CHECK(count_differences(grid_of(small_volume, hypertree::set(list, region, voxel{0, 4})), cleared) == 0);
+        return inside_count;
+    };
+
+    const vec3d box_lo{lo.x + 0.3, lo.y - 1.0, lo.z + 0.2}, box_hi{lo.x + 1.1, lo.y + 0.7, hi.z + 3.0};
+    CHECK(check_region(
+              hypertree::box_region(box_lo, box_hi),
+              [&](const vec3d& p) {
+                  return p.x >= box_lo.x && p.x <= box_hi.x && p.y >= box_lo.y && p.y <= box_hi.y && p.z >= box_lo.z &&
+                         p.z <= box_hi.z;
+              },
+              "box") > 1000);
+    const vec3d c{lo.x + 1.7, lo.y + 0.6, lo.z + 0.4};
+    CHECK(check_region(
+              hypertree::sphere_region(c, 0.55),
+              [&](const vec3d& p) {
+                  const double dx = p.x - c.x, dy = p.y - c.y, dz = p.z - c.z;
+                  return std::sqrt(dx * dx + dy * dy + dz * dz) <= 0.55;
+              },
+              "sphere") > 1000);
+    const vec3d q{lo.x + 1.0, lo.y + 0.5, lo.z + 0.5}, n{0.3, -1.0, 0.45};
+    const double n_length = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+    CHECK(
+        check_region(
+            hypertree::half_space_region(q, n),
+            [&](const vec3d& p) { return ((p.x - q.x) * n.x + (p.y - q.y) * n.y + (p.z - q.z) * n.z) / n_length >= 0; },
+            "oblique half-space") > 1000);
+    const vec3d up{0, 0, 1};
+    const vec3d top{0, 0, lo.z + 0.61};
+    CHECK(check_region(
+              hypertree::half_space_region(top, up), [&](const vec3d& p) { return p.z >= top.z; }, "trimming plane") >
+          1000);
+    CHECK(check_region(
+              hypertree::half_space_region(hi + vec3d{1, 1, 1}, vec3d{1, 1, 1}), [](const vec3d&) { return false; },
+              "half-space beyond the volume") == 0);
+    CHECK(check_region(
+              hypertree::sphere_region(lo - vec3d{5, 5, 5}, 1.0), [](const vec3d&) { return false; },
+              "sphere outside the volume") == 0);
+    CHECK(check_region(
+              hypertree::box_region(lo - vec3d{1, 1, 1}, hi + vec3d{1, 1, 1}), [](const vec3d&) { return true; },
+              "box around the volume") == small_volume.voxel_count());
+}
+
+TEST_CASE("operations refuse stores of different hypervolumes")
+{
+    std::mt19937_64 g(14);
+    const auto voxels = random_voxels(g, small_volume, 0.1);
+    const auto a = hypertree::index_list_store::build(small_volume, voxels);
+    const hypervolume finer(small_volume.origin(), small_volume.extent(), {40, 30, 21});
+    const hypervolume moved(small_volume.origin() + vec3d{0.5, 0, 0}, small_volume.extent(), small_volume.grid());
+    for (const hypervolume& other : {finer, moved}) {
+        const auto b = hypertree::index_list_store::build(other, {});
+        try {
+            (void)hypertree::unite_max(a, b);
+            FAIL("different hypervolumes united");
+        } catch (const krs::invalid_parameter& e) {
+            CHECK(std::string(e.what()).find("same hypervolume") != std::string::npos);
+        }
+        CHECK_THROWS_AS((void)hypertree::unite_sum(b, a), krs::invalid_parameter);
+        CHECK_THROWS_AS((void)hypertree::unite_max_store(a, b), krs::invalid_parameter);
+    }
+}
+
+TEST_CASE("regions refuse impossible parameters and set refuses a result over budget")
+{
+    const vec3d nan{std::nan(""), 0, 0};
+    CHECK_THROWS_AS(hypertree::box_region({1, 0, 0}, {0, 1, 1}), krs::invalid_parameter);
+    CHECK_THROWS_AS(hypertree::box_region(nan, {0, 1, 1}), krs::invalid_parameter);
+    CHECK_THROWS_AS(hypertree::sphere_region({0, 0, 0}, -1.0), krs::invalid_parameter);
+    CHECK_THROWS_AS(hypertree::sphere_region(nan, 1.0), krs::invalid_parameter);
+    CHECK_THROWS_AS(hypertree::half_space_region({0, 0, 0}, {0, 0, 0}), krs::invalid_parameter);
+    CHECK_THROWS_AS(hypertree::half_space_region({0, 0, 0}, nan), krs::invalid_parameter);
+
+    const auto store = hypertree::index_list_store::build(small_volume, {});
+    const hypertree::box_region everything(small_volume.origin(), small_volume.maximum());
+    CHECK_THROWS_AS((void)hypertree::set(store, everything, voxel{9, 0}, 0, hypertree::memory_budget{1000}),
+                    krs::invalid_parameter);
+    CHECK(hypertree::set(store, everything, voxel{9, 0}).size() == small_volume.voxel_count());
+}
