@@ -6,9 +6,18 @@
 // `compact` (validation: one entry per voxel) -> `density_classes` -> a store (dense, index
 // list, index list + bit array, partitioned) -> operations, level of detail, rendering.
 
+#include "hypertree/build.hpp"
+#include "hypertree/compact.hpp"
+#include "hypertree/density.hpp"
 #include "hypertree/generate.hpp"
 #include "hypertree/ifs.hpp"
+#include "hypertree/ops.hpp"
 #include "hypertree/random.hpp"
+#include "hypertree/store/bit_array_store.hpp"
+#include "hypertree/store/dense_store.hpp"
+#include "hypertree/store/index_list_store.hpp"
+#include "hypertree/store/partitioned_store.hpp"
+#include "hypertree/store/store.hpp"
 #include "hypertree/transform/condensation.hpp"
 #include "hypertree/transform/pipeline.hpp"
 #include "hypertree/volume.hpp"
