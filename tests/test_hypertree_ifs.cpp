@@ -444,3 +444,23 @@ TEST_CASE("hypertree all four stores agree on every voxel of a generated tree")
     CHECK(branch > 100);
     CHECK(branch_full == branch);
 }
+
+TEST_CASE("hypertree hard cases: resolution 1 and a dense store over the budget")
+{
+    auto t = presets::tree_a(1);
+    t.iterations = 5000;
+    const auto one = build_tree<index_list_store>(t, 1);
+    CHECK(one.nonempty_count() == 1);
+    CHECK(one.at(0).density == 255); // the trunk's level 0 is a branch level: full density
+    CHECK(one.at(0).level == 0);     // the shallowest level prevails
+    const auto dense_one = build_tree<dense_store>(t, 1);
+    CHECK(dense_one.at(0) == one.at(0));
+
+    // Refused before allocating: 1200^3 voxels at 2 bytes each is 3.5 GB against a 64 MiB budget.
+    auto big = presets::tree_a(1200);
+    big.iterations = 1000;
+    build_options small_budget;
+    small_budget.generation.budget.bytes = std::size_t(64) << 20;
+    CHECK_THROWS_WITH_AS(build_tree<dense_store>(big, 1, small_budget), doctest::Contains("dense_store"), krs::invalid_parameter);
+    CHECK_NOTHROW(build_tree<index_list_store>(big, 1, small_budget));
+}
