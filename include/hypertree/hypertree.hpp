@@ -11,6 +11,8 @@
 #include "hypertree/density.hpp"
 #include "hypertree/generate.hpp"
 #include "hypertree/ifs.hpp"
+#include "hypertree/io/definition_file.hpp"
+#include "hypertree/io/forest_file.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/random.hpp"
 #include "hypertree/store/bit_array_store.hpp"

@@ -1,0 +1,592 @@
+#pragma once
+// The hypertree definition file (paper section 10, figure 6): a text file that describes one
+// hypertree (its resolution, iteration count, depths, generator, coloring, perturbation,
+// hypervolume and IFS transformations) with the paper's reserved words. docs/hypertree_format.md
+// is the full reference; in brief:
+//
+//     NAME "my tree"
+//     RESOLUTION 300                 # or nx ny nz
+//     ITERATIONS 500000
+//     TREEDEPTH 10                   # generators of depths 0 .. 9
+//     BRANCHDEPTH 1                  # depths 0 .. 1 are wood
+//     DEPTHCOLOR 0 1 0.35 0.22 0.1 0.45 0.3 0.15
+//     HYPERVOLUME 1.5 1.2 1.5        # the box's extent
+//     DISPLACEMENT 0.75 0 0.75       # the tree's origin, from the box's minimum corner
+//     POINTINIT 0 0 0                # or LINEINIT x0 y0 z0 x1 y1 z1
+//     CONDENSATION
+//       CONE y 0 0.5 0.035 0.015
+//     TRANSFORM 1 0                  # probability, last level (0: no limit) [DUMMY d]
+//       SCALE (0.52, 0.5, 0.48)      # per level: 1, 2, 3 and deeper
+//       ROTATE 0 0 1 48~5            # degrees; random: mean~spread
+//       TRANSLATE 0 0.28 0
+//
+// `parse_definition` reads such text into the `ifs<runtime_pipeline>` of ifs.hpp plus what the
+// IFS does not hold (the depth colors and the density class count). It returns a complete tree or
+// throws a `definition_error` ("file:line:column: expected ..."): every value is checked where it
+// is read, and what the C++ model refuses afterwards (ifs::validate, the element constructors, the
+// contraction condition) is reported at the keyword that set it. Nothing half-built escapes.
+
+#include "hypertree/ifs.hpp"
+#include "hypertree/io/lexer.hpp"
+
+#include <array>
+#include <filesystem>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace hypertree {
+
+// Files give angles in degrees; the transforms take radians. Computed as the presets compute
+// theirs (pi / 180, then one multiplication per value), so a file and a C++ tree written with the
+// same numbers agree bit for bit.
+inline constexpr double radians_per_degree = std::numbers::pi / 180.0;
+
+// DEPTHCOLOR: voxels of depths first_depth .. last_depth get colors from first_color to
+// last_color, linearly in depth (section 8.3's transfer function by depth). RGB in [0, 1].
+struct depth_color {
+    int first_depth = 0, last_depth = 0;
+    vec3d first_color{}, last_color{};
+
+    bool covers(int depth) const { return first_depth <= depth && depth <= last_depth; }
+    vec3d at(int depth) const
+    {
+        if (last_depth == first_depth) return first_color;
+        const double t = double(depth - first_depth) / double(last_depth - first_depth);
+        return first_color + (last_color - first_color) * t;
+    }
+};
+
+// Everything a definition file describes.
+struct parsed_tree {
+    hypertree::ifs<runtime_pipeline> ifs;
+    std::vector<depth_color> depth_colors; // in file order; their depth ranges do not overlap
+    std::optional<int> density_class_count; // DENSITYCLASSES; empty: the caller's choice (build_options)
+
+    // The color the file gives voxels of `depth`, if a DEPTHCOLOR covers it.
+    std::optional<vec3d> color_of_depth(int depth) const
+    {
+        for (const auto& c : depth_colors)
+            if (c.covers(depth)) return c.at(depth);
+        return std::nullopt;
+    }
+};
+
+namespace detail {
+
+enum class definition_keyword {
+    resolution,
+    iterations,
+    tree_depth,
+    branch_depth,
+    name,
+    depth_color,
+    density_classes,
+    perturb,
+    hypervolume,
+    displacement,
+    point_init,
+    line_init,
+    transform,
+    condensation,
+    translate,
+    rotate,
+    scale,
+    shear,
+    cone,
+    count
+};
+
+struct keyword_entry {
+    std::string_view name;
+    definition_keyword id;
+    std::string_view usage;
+};
+
+inline constexpr keyword_entry definition_keywords[] = {
+    {"RESOLUTION", definition_keyword::resolution, "RESOLUTION n | RESOLUTION nx ny nz"},
+    {"ITERATIONS", definition_keyword::iterations, "ITERATIONS count"},
+    {"TREEDEPTH", definition_keyword::tree_depth, "TREEDEPTH depth"},
+    {"BRANCHDEPTH", definition_keyword::branch_depth, "BRANCHDEPTH depth"},
+    {"NAME", definition_keyword::name, "NAME word | NAME \"text\""},
+    {"DEPTHCOLOR", definition_keyword::depth_color, "DEPTHCOLOR first_depth last_depth r0 g0 b0 r1 g1 b1"},
+    {"DENSITYCLASSES", definition_keyword::density_classes, "DENSITYCLASSES count"},
+    {"PERTURB", definition_keyword::perturb, "PERTURB ax ay az [frequency]"},
+    {"HYPERVOLUME", definition_keyword::hypervolume, "HYPERVOLUME x y z"},
+    {"DISPLACEMENT", definition_keyword::displacement, "DISPLACEMENT x y z"},
+    {"POINTINIT", definition_keyword::point_init, "POINTINIT x y z"},
+    {"LINEINIT", definition_keyword::line_init, "LINEINIT x0 y0 z0 x1 y1 z1"},
+    {"TRANSFORM", definition_keyword::transform, "TRANSFORM probability last_level [DUMMY level]"},
+    {"CONDENSATION", definition_keyword::condensation, "CONDENSATION"},
+    {"TRANSLATE", definition_keyword::translate, "TRANSLATE x y z"},
+    {"ROTATE", definition_keyword::rotate, "ROTATE ax ay az degrees"},
+    {"SCALE", definition_keyword::scale, "SCALE s | SCALE sx sy sz"},
+    {"SHEAR", definition_keyword::shear, "SHEAR x|y|z dmax1 dmax2 exponent [height]"},
+    {"CONE", definition_keyword::cone, "CONE x|y|z bottom top bottom_radius top_radius"},
+};
+
+inline const keyword_entry* find_definition_keyword(const io::token& t)
+{
+    if (t.kind != io::token_kind::word) return nullptr;
+    for (const auto& k : definition_keywords)
+        if (io::same_word(t.text, k.name)) return &k;
+    return nullptr;
+}
+
+// "krs: shear.exponent: must be >= 1 (got 0.5)" -> "shear.exponent: must be >= 1 (got 0.5)".
+inline std::string without_library_prefix(const krs::invalid_parameter& e)
+{
+    std::string_view s = e.what();
+    if (s.starts_with("krs: ")) s.remove_prefix(5);
+    return std::string(s);
+}
+
+// The class counts DENSITYCLASSES accepts: density_classes' limits (density.hpp), repeated so that
+// reading a file does not pull in the store code.
+inline constexpr int density_class_minimum = 2;   // density_classes::min_class_count
+inline constexpr int density_class_maximum = 255; // density_classes::max_class_count
+
+class definition_parser {
+public:
+    definition_parser(std::string_view text, std::string_view file) : text_(text), file_(file)
+    {
+        // Keywords a file leaves out keep the C++ model's defaults.
+        const hypertree::ifs<runtime_pipeline> defaults;
+        grid_ = defaults.volume.grid();
+        extent_ = defaults.volume.extent();
+        displacement_ = -defaults.volume.origin();
+    }
+
+    parsed_tree run()
+    {
+        const std::vector<io::source_line> lines = io::tokenize(text_, file_);
+        for (const io::source_line& line : lines) {
+            const io::token& first = line.tokens.front();
+            const keyword_entry* keyword = find_definition_keyword(first);
+            if (keyword == nullptr) fail(first.at, "unknown keyword " + io::describe(&first) + "; " + keyword_list());
+            io::statement s(file_, line, keyword->usage);
+            if (!is_element(keyword->id)) close_block();
+            read(s, keyword->id);
+        }
+        close_block();
+        return assemble();
+    }
+
+private:
+    struct transform_block {
+        source_position at;
+        double probability = 1;
+        int last_level = never;
+        int dummy_from = never;
+        std::vector<transform_element> elements;
+        int shears = 0;
+    };
+    struct condensation_block {
+        source_position at;
+        std::optional<cone> stem;
+        source_position stem_at;
+        std::vector<transform_element> elements;
+        int shears = 0;
+    };
+    enum class block { none, transform, condensation };
+
+    static bool is_element(definition_keyword k)
+    {
+        return k == definition_keyword::translate || k == definition_keyword::rotate || k == definition_keyword::scale ||
+               k == definition_keyword::shear || k == definition_keyword::cone;
+    }
+    static std::string keyword_list()
+    {
+        std::string list = "the keywords are";
+        for (const auto& k : definition_keywords) list += std::string(&k == definition_keywords ? " " : ", ") + std::string(k.name);
+        return list;
+    }
+
+    [[noreturn]] void fail(source_position at, const std::string& message) const { throw definition_error(file_, at, message); }
+
+    // Runs `build` (a C++ constructor or validate()) and reports what the model refuses at `at`.
+    template <class Build>
+    auto checked(source_position at, std::string_view what, Build&& build) const
+    {
+        try {
+            return build();
+        } catch (const krs::invalid_parameter& e) {
+            fail(at, "invalid " + std::string(what) + ": " + without_library_prefix(e));
+        }
+    }
+
+    // Keywords that may appear once: a second occurrence names the first.
+    void once(const io::statement& s, definition_keyword k, std::string_view as = {})
+    {
+        std::optional<source_position>& seen = seen_[std::size_t(k)];
+        if (seen)
+            fail(s.where(), (as.empty() ? s.keyword() : std::string(as)) + " is given twice (first on line " + std::to_string(seen->line) + ")");
+        seen = s.where();
+    }
+    std::optional<source_position> seen(definition_keyword k) const { return seen_[std::size_t(k)]; }
+
+    void close_block()
+    {
+        if (current_ == block::transform && transforms_.back().elements.empty())
+            fail(transforms_.back().at, "expected at least one TRANSLATE, ROTATE, SCALE or SHEAR line after TRANSFORM");
+        if (current_ == block::condensation && !condensations_.back().stem)
+            fail(condensations_.back().at, "expected a CONE line after CONDENSATION (CONE x|y|z bottom top bottom_radius top_radius)");
+        current_ = block::none;
+    }
+
+    vec3d vector3(io::statement& s, io::number_rule rule = io::number_rule::any)
+    {
+        const double x = s.number(rule), y = s.number(rule), z = s.number(rule);
+        return {x, y, z};
+    }
+
+    void read(io::statement& s, definition_keyword k)
+    {
+        using io::number_rule;
+        switch (k) {
+        case definition_keyword::resolution:
+            once(s, k);
+            grid_ = io::read_resolution(s);
+            break;
+        case definition_keyword::iterations:
+            once(s, k);
+            tree_.iterations = s.count(1);
+            s.finish();
+            break;
+        case definition_keyword::tree_depth:
+            once(s, k);
+            tree_.tree_depth = int(s.integer(1, max_tree_depth));
+            s.finish();
+            break;
+        case definition_keyword::branch_depth:
+            once(s, k);
+            tree_.branch_depth = int(s.integer(0, max_tree_depth - 1));
+            s.finish();
+            break;
+        case definition_keyword::name:
+            once(s, k);
+            tree_.name = std::string(s.text("a name (a word or \"quoted text\")"));
+            s.finish();
+            break;
+        case definition_keyword::depth_color: read_depth_color(s); break;
+        case definition_keyword::density_classes:
+            once(s, k);
+            density_class_count_ = int(s.integer(density_class_minimum, density_class_maximum));
+            s.finish();
+            break;
+        case definition_keyword::perturb:
+            once(s, k);
+            tree_.perturb.amplitude = vector3(s);
+            if (!s.at_end()) tree_.perturb.frequency = s.number(number_rule::non_negative);
+            s.finish();
+            break;
+        case definition_keyword::hypervolume:
+            once(s, k);
+            extent_ = vector3(s, number_rule::positive);
+            s.finish();
+            break;
+        case definition_keyword::displacement:
+            once(s, k);
+            displacement_ = vector3(s);
+            s.finish();
+            break;
+        case definition_keyword::point_init: {
+            once(s, definition_keyword::point_init, "the generator (POINTINIT or LINEINIT)");
+            const vec3d p = vector3(s);
+            s.finish();
+            tree_.generator = generator_shape::line(p, p);
+            break;
+        }
+        case definition_keyword::line_init: {
+            once(s, definition_keyword::point_init, "the generator (POINTINIT or LINEINIT)");
+            const vec3d a = vector3(s), b = vector3(s);
+            s.finish();
+            tree_.generator = generator_shape::line(a, b);
+            break;
+        }
+        case definition_keyword::transform: read_transform(s); break;
+        case definition_keyword::condensation:
+            if (condensations_.size() == 2)
+                fail(s.where(), "expected at most two CONDENSATIONs (one stem, or the two stems of a dichotomous fork)");
+            s.finish();
+            condensations_.push_back({s.where(), std::nullopt, {}, {}, 0});
+            current_ = block::condensation;
+            break;
+        case definition_keyword::cone: read_cone(s); break;
+        case definition_keyword::translate:
+        case definition_keyword::rotate:
+        case definition_keyword::scale:
+        case definition_keyword::shear: read_element(s, k); break;
+        case definition_keyword::count: break;
+        }
+    }
+
+    void read_depth_color(io::statement& s)
+    {
+        using io::number_rule;
+        depth_color c;
+        c.first_depth = int(s.integer(0, max_tree_depth - 1));
+        c.last_depth = int(s.integer(c.first_depth, max_tree_depth - 1));
+        c.first_color = vector3(s, number_rule::unit_interval);
+        c.last_color = vector3(s, number_rule::unit_interval);
+        s.finish();
+        for (std::size_t i = 0; i < depth_colors_.size(); ++i) {
+            const depth_color& other = depth_colors_[i];
+            if (c.first_depth <= other.last_depth && other.first_depth <= c.last_depth)
+                fail(s.where(), "expected DEPTHCOLOR depths that no other DEPTHCOLOR covers, got " + std::to_string(c.first_depth) + " to " +
+                                    std::to_string(c.last_depth) + ", which overlaps " + std::to_string(other.first_depth) + " to " +
+                                    std::to_string(other.last_depth) + " on line " + std::to_string(depth_color_at_[i].line));
+        }
+        depth_colors_.push_back(c);
+        depth_color_at_.push_back(s.where());
+    }
+
+    void read_transform(io::statement& s)
+    {
+        if (transforms_.size() == std::size_t(max_transforms))
+            fail(s.where(), "expected at most " + std::to_string(max_transforms) + " TRANSFORMs (a voxel names its subpart in one byte)");
+        transform_block t;
+        t.at = s.where();
+        t.probability = s.number(io::number_rule::non_negative);
+        // Levels are counted from 1, so 0 is free to mean "no limit".
+        const int last = int(s.integer(0, max_tree_depth));
+        t.last_level = last == 0 ? never : last;
+        if (!s.at_end()) {
+            if (!s.accept_word("DUMMY")) s.expected("DUMMY or the end of the line", "after TRANSFORM's last level");
+            t.dummy_from = int(s.integer(1, max_tree_depth, "after DUMMY"));
+        }
+        s.finish();
+        transforms_.push_back(std::move(t));
+        current_ = block::transform;
+    }
+
+    void read_cone(io::statement& s)
+    {
+        using io::number_rule;
+        if (current_ != block::condensation)
+            fail(s.where(), current_ == block::transform ? "a CONE belongs to a CONDENSATION, not to a TRANSFORM"
+                                                         : "expected a CONDENSATION line before CONE");
+        condensation_block& c = condensations_.back();
+        if (c.stem) fail(s.where(), "expected one CONE per CONDENSATION (its CONE is on line " + std::to_string(c.stem_at.line) + ")");
+        cone stem;
+        stem.axis = s.axis();
+        stem.bottom = s.number();
+        stem.top = s.number();
+        stem.bottom_radius = s.number(number_rule::non_negative);
+        stem.top_radius = s.number(number_rule::non_negative);
+        s.finish();
+        checked(s.where(), "CONE", [&] { stem.validate(); });
+        c.stem = stem;
+        c.stem_at = s.where();
+    }
+
+    // One value of a transformation: a number, or mean~spread, or a per-level pair or triplet of
+    // those. `unit` converts the file's unit to the model's (degrees to radians).
+    parameter read_parameter(io::statement& s, bool per_level_allowed, double unit = 1.0)
+    {
+        parameter p;
+        const io::token* t = s.peek();
+        if (t != nullptr && t->kind == io::token_kind::open_paren) {
+            if (!per_level_allowed)
+                s.fail(t->at, "unexpected '(' after " + s.keyword() +
+                                  ": a condensation's transformations run once per cycle, at no level, so per-level values do not apply");
+            s.take();
+            const std::string context = "in the per-level value of " + s.keyword();
+            int count = 0;
+            for (;;) {
+                read_random_number(s, p.mean[std::size_t(count)], p.spread[std::size_t(count)], context);
+                ++count;
+                const io::token* next = s.peek();
+                if (count >= 2 && next != nullptr && next->kind == io::token_kind::close_paren) {
+                    s.take();
+                    break;
+                }
+                if (count < distinct_levels && next != nullptr && next->kind == io::token_kind::comma) {
+                    s.take();
+                    continue;
+                }
+                // A per-level value is (level 1, deeper levels) or (level 1, level 2, level 3 and deeper).
+                s.expected(count < 2                 ? "',' (a per-level value has two or three entries)"
+                           : count < distinct_levels ? "',' or ')'"
+                                                     : "')' (a per-level value has at most three entries: levels 1, 2, and 3 and deeper)",
+                           context);
+            }
+            // A pair gives level 1 and all deeper levels (section 10).
+            if (count == 2) p.mean[2] = p.mean[1], p.spread[2] = p.spread[1];
+        } else {
+            double mean = 0, spread = 0;
+            read_random_number(s, mean, spread, {});
+            p.mean = {mean, mean, mean};
+            p.spread = {spread, spread, spread};
+        }
+        if (unit != 1.0)
+            for (int l = 0; l < distinct_levels; ++l) p.mean[std::size_t(l)] *= unit, p.spread[std::size_t(l)] *= unit;
+        return p;
+    }
+
+    // mean or mean~spread.
+    static void read_random_number(io::statement& s, double& mean, double& spread, const std::string& context)
+    {
+        mean = s.number_before_spread(io::number_rule::any, context);
+        spread = 0;
+        const io::token* t = s.peek();
+        if (t != nullptr && t->kind == io::token_kind::tilde) {
+            s.take();
+            spread = s.number(io::number_rule::non_negative, "after '~' in " + s.keyword());
+        }
+    }
+
+    void read_element(io::statement& s, definition_keyword k)
+    {
+        if (current_ == block::none) fail(s.where(), "expected a TRANSFORM or CONDENSATION line before " + s.keyword());
+        if (current_ == block::condensation && !condensations_.back().stem)
+            fail(s.where(), "expected the CONE line first after CONDENSATION, got " + s.keyword());
+        const bool per_level = current_ == block::transform;
+        std::vector<transform_element>& elements = per_level ? transforms_.back().elements : condensations_.back().elements;
+        int& shears = per_level ? transforms_.back().shears : condensations_.back().shears;
+        switch (k) {
+        case definition_keyword::translate: {
+            const parameter x = read_parameter(s, per_level), y = read_parameter(s, per_level), z = read_parameter(s, per_level);
+            s.finish();
+            elements.push_back(checked(s.where(), "TRANSLATE", [&] { return translate(x, y, z); }));
+            break;
+        }
+        case definition_keyword::rotate: {
+            const vec3d axis = vector3(s);
+            const parameter angle = read_parameter(s, per_level, radians_per_degree);
+            s.finish();
+            elements.push_back(checked(s.where(), "ROTATE", [&] { return rotate(axis, angle); }));
+            break;
+        }
+        case definition_keyword::scale: {
+            const parameter x = read_parameter(s, per_level);
+            if (s.at_end()) {
+                elements.push_back(checked(s.where(), "SCALE", [&] { return scale(x); }));
+                break;
+            }
+            const parameter y = read_parameter(s, per_level), z = read_parameter(s, per_level);
+            s.finish();
+            elements.push_back(checked(s.where(), "SCALE", [&] { return scale(x, y, z); }));
+            break;
+        }
+        case definition_keyword::shear: {
+            if (shears == max_runtime_shears)
+                fail(s.where(), "expected at most " + std::to_string(max_runtime_shears) + " SHEARs in one " +
+                                    (per_level ? "TRANSFORM" : "CONDENSATION"));
+            const int axis = s.axis();
+            const parameter first = read_parameter(s, per_level), second = read_parameter(s, per_level);
+            const parameter exponent = read_parameter(s, per_level);
+            const double height = s.at_end() ? 1.0 : s.number(io::number_rule::positive);
+            s.finish();
+            elements.push_back(checked(s.where(), "SHEAR", [&] { return shear(axis, first, second, exponent, height); }));
+            ++shears;
+            break;
+        }
+        default: break;
+        }
+    }
+
+    // The position a refusal of the C++ model belongs to, from the parameter it names.
+    source_position position_of(const std::string& parameter) const
+    {
+        const auto at = [&](definition_keyword k) { return seen(k).value_or(source_position{}); };
+        if (parameter.starts_with("ifs.transforms[")) {
+            const std::size_t j = std::size_t(std::stoul(parameter.substr(15)));
+            if (j < transforms_.size()) return transforms_[j].at;
+        }
+        if (parameter.starts_with("ifs.transforms")) return transforms_.empty() ? source_position{} : transforms_.front().at;
+        if (parameter.starts_with("ifs.condensations") || parameter.starts_with("cone"))
+            return condensations_.empty() ? source_position{} : condensations_.front().at;
+        if (parameter.starts_with("ifs.tree_depth")) return at(definition_keyword::tree_depth);
+        if (parameter.starts_with("ifs.branch_depth"))
+            return seen(definition_keyword::branch_depth).value_or(at(definition_keyword::tree_depth));
+        if (parameter.starts_with("ifs.iterations")) return at(definition_keyword::iterations);
+        if (parameter.starts_with("ifs.generator")) return at(definition_keyword::point_init);
+        if (parameter.starts_with("ifs.perturb")) return at(definition_keyword::perturb);
+        if (parameter.starts_with("hypervolume.resolution")) return at(definition_keyword::resolution);
+        if (parameter.starts_with("hypervolume.extent")) return at(definition_keyword::hypervolume);
+        return at(definition_keyword::displacement);
+    }
+
+    parsed_tree assemble()
+    {
+        if (transforms_.empty()) fail(io::end_of_input(text_), "expected at least one TRANSFORM (the IFS needs a transformation)");
+        double total_probability = 0;
+        for (const auto& t : transforms_) total_probability += t.probability;
+        if (!(total_probability > 0))
+            fail(transforms_.front().at, "expected a positive probability on at least one TRANSFORM, got probabilities that sum to 0");
+
+        if (tree_.branch_depth >= tree_.tree_depth)
+            fail(seen(definition_keyword::branch_depth).value_or(seen(definition_keyword::tree_depth).value_or(source_position{})),
+                 "expected BRANCHDEPTH below TREEDEPTH (wood is depths 0 .. BRANCHDEPTH of the tree's 0 .. TREEDEPTH - 1), got BRANCHDEPTH " +
+                     std::to_string(tree_.branch_depth) + (seen(definition_keyword::branch_depth) ? "" : " (the default)") +
+                     " with TREEDEPTH " + std::to_string(tree_.tree_depth));
+        for (std::size_t i = 0; i < depth_colors_.size(); ++i)
+            if (depth_colors_[i].last_depth >= tree_.tree_depth)
+                fail(depth_color_at_[i], "expected DEPTHCOLOR depths below TREEDEPTH " + std::to_string(tree_.tree_depth) + ", got " +
+                                             std::to_string(depth_colors_[i].first_depth) + " to " +
+                                             std::to_string(depth_colors_[i].last_depth));
+
+        hypertree::ifs<runtime_pipeline> tree = tree_;
+        tree.transforms.clear();
+        for (auto& t : transforms_) {
+            runtime_pipeline pipeline = checked(t.at, "TRANSFORM", [&] { return runtime_pipeline(std::move(t.elements)); });
+            // The generator refuses a transformation that is not a contraction (ifs.hpp); report it
+            // here, at its line, for the mean parameter values (a random draw may still exceed 1).
+            for (int level = 1; level <= distinct_levels; ++level) {
+                const double bound = pipeline.chain_at(level).lipschitz();
+                if (!(bound < 1.0))
+                    fail(t.at, "expected a contraction (Lipschitz bound < 1) at level " + std::to_string(level) +
+                                   (level == distinct_levels ? " and deeper" : "") + ", got a TRANSFORM whose bound at its mean values is " +
+                                   krs::detail::to_text(bound) + " (add or shrink a SCALE)");
+            }
+            tree.transforms.push_back({std::move(pipeline), t.probability, t.last_level, t.dummy_from});
+        }
+        if (!condensations_.empty()) {
+            tree.condensations.clear();
+            for (auto& c : condensations_)
+                tree.condensations.push_back(
+                    {*c.stem, checked(c.at, "CONDENSATION", [&] { return runtime_pipeline(std::move(c.elements)); })});
+        }
+        try {
+            tree.volume = hypervolume::from_displacement(extent_, displacement_, grid_);
+            tree.validate();
+        } catch (const krs::invalid_parameter& e) {
+            fail(position_of(e.parameter()), "invalid tree: " + without_library_prefix(e));
+        }
+        return {std::move(tree), std::move(depth_colors_), density_class_count_};
+    }
+
+    std::string_view text_, file_;
+    hypertree::ifs<runtime_pipeline> tree_; // the scalar settings as read
+    resolution grid_;
+    vec3d extent_, displacement_;
+    std::vector<transform_block> transforms_;
+    std::vector<condensation_block> condensations_;
+    block current_ = block::none;
+    std::vector<depth_color> depth_colors_;
+    std::vector<source_position> depth_color_at_;
+    std::optional<int> density_class_count_;
+    std::array<std::optional<source_position>, std::size_t(definition_keyword::count)> seen_{};
+};
+
+} // namespace detail
+
+// Parses a definition file's text; `file_name` only labels the messages.
+inline parsed_tree parse_definition(std::string_view text, std::string_view file_name)
+{
+    return detail::definition_parser(text, file_name).run();
+}
+
+// Reads and parses a definition file; messages name it as `path` is written.
+inline parsed_tree load_definition(const std::filesystem::path& path)
+{
+    const std::optional<std::string> text = io::read_text_file(path);
+    if (!text) throw definition_error(path.string(), {1, 1}, "cannot read the definition file");
+    return parse_definition(*text, path.string());
+}
+
+} // namespace hypertree
