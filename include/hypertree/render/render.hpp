@@ -1,0 +1,123 @@
+#pragma once
+// Rendering a hypertree image: camera rays through every pixel, supersampled with jittered
+// samples (paper section 8.4), marched by volume_marcher as scalar rays or SIMD packets, and
+// composited over a background.
+//
+// Supersampling: s x s samples per pixel, each at a jittered position inside its sub-cell (the
+// jitter is a hash of pixel and sample, so renders are deterministic and the scalar and packet
+// paths trace the same rays). The paper's estimate of the factor needed is
+// s = ceil(sqrt(area(pixel) / area(voxel projection))): `supersampling_for` computes it for a
+// voxel of the tree's smallest side at the distance of the tree's center.
+//
+// Rows are the unit of work: `parallel_for(rows, body)` may run them on any threads (the library
+// starts none); an empty function renders serially.
+
+#include "hypertree/render/marcher.hpp"
+#include "krs/trace/camera.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace hypertree {
+
+struct image {
+    int width = 0, height = 0;
+    std::vector<float> rgb; // row-major from the top-left, 3 floats per pixel, linear
+    std::uint64_t lookups = 0;
+};
+
+struct render_settings {
+    int supersampling = 1; // s: s * s samples per pixel
+    rgb background{0.78f, 0.86f, 0.95f};
+    bool ray_cache = false; // scalar marcher only
+    std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)> parallel_for;
+};
+
+// s = ceil(sqrt(area(pixel) / area(projection))) for the smallest voxel side at distance d.
+inline int supersampling_for(const krs::pinhole_camera& camera, const krs::vec3f& eye, const tree_shape& shape, const hypervolume& volume)
+{
+    const double distance = krs::length(krs::vec3d(shape.crown.center) - krs::vec3d(eye));
+    const double pixel_side = double(camera.pixel_footprint()) * distance; // world size of one pixel there
+    const double voxel_side = volume.smallest_voxel_side();
+    return std::max(1, int(std::ceil(pixel_side / voxel_side - 1e-9)));
+}
+
+namespace detail {
+// A jitter in [0, 1) from (pixel x, pixel y, sample, axis): one round of a 32-bit integer mixer.
+inline float jitter(std::uint32_t x, std::uint32_t y, std::uint32_t sample, std::uint32_t axis)
+{
+    std::uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ sample * 0xcb1ab31fu ^ axis * 0x165667b1u;
+    h ^= h >> 16, h *= 0x7feb352du, h ^= h >> 15, h *= 0x846ca68bu, h ^= h >> 16;
+    return float(h >> 8) * 0x1.0p-24f;
+}
+} // namespace detail
+
+template <class T = float, voxel_store S>
+image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera, const render_settings& settings = {})
+{
+    if (settings.supersampling < 1 || settings.supersampling > 16)
+        throw krs::invalid_parameter("render_settings.supersampling", "must be in [1, 16]", std::to_string(settings.supersampling));
+    constexpr std::size_t lanes = krs::lane_count<T>;
+    const int w = camera.width(), h = camera.height(), s = settings.supersampling;
+    image out;
+    out.width = w, out.height = h;
+    out.rgb.assign(std::size_t(w) * std::size_t(h) * 3, 0.0f);
+    std::vector<std::uint64_t> row_lookups(std::size_t(h), 0);
+    const auto render_row = [&](std::size_t row) {
+        const int y = int(row);
+        ray_cache cache;
+        // Every sample ray of the row, in order; packets take them `lanes` at a time.
+        const std::size_t count = std::size_t(w) * std::size_t(s * s);
+        std::vector<float> px(count), py(count);
+        for (int x = 0; x < w; ++x)
+            for (int j = 0; j < s * s; ++j) {
+                const std::size_t i = std::size_t(x) * std::size_t(s * s) + std::size_t(j);
+                const int sx = j % s, sy = j / s;
+                px[i] = float(x) + (float(sx) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 0)) / float(s);
+                py[i] = float(y) + (float(sy) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 1)) / float(s);
+                if (s == 1) px[i] = float(x) + 0.5f, py[i] = float(y) + 0.5f;
+            }
+        std::vector<float> cr(count), cg(count), cb(count);
+        for (std::size_t first = 0; first < count; first += lanes) {
+            std::array<float, lanes> lx{}, ly{};
+            for (std::size_t l = 0; l < lanes; ++l) {
+                const std::size_t i = std::min(first + l, count - 1); // the last packet repeats its last ray
+                lx[l] = px[i], ly[l] = py[i];
+            }
+            T tx, ty;
+            if constexpr (std::floating_point<T>)
+                tx = lx[0], ty = ly[0];
+            else
+                tx = T::load_unaligned(lx.data()), ty = T::load_unaligned(ly.data());
+            const krs::ray<T> r = camera.primary_ray(tx, ty);
+            const march_result<T> m = marcher.march(r, settings.ray_cache && std::floating_point<T> ? &cache : nullptr);
+            for (std::size_t l = 0; l < lanes && first + l < count; ++l) {
+                const float tr = krs::lane_at(m.transmittance, l);
+                cr[first + l] = krs::lane_at(m.r, l) + tr * settings.background.r;
+                cg[first + l] = krs::lane_at(m.g, l) + tr * settings.background.g;
+                cb[first + l] = krs::lane_at(m.b, l) + tr * settings.background.b;
+                row_lookups[row] += std::uint64_t(krs::lane_at(m.lookups, l));
+            }
+        }
+        for (int x = 0; x < w; ++x) {
+            float r = 0, g = 0, b = 0;
+            for (int j = 0; j < s * s; ++j) {
+                const std::size_t i = std::size_t(x) * std::size_t(s * s) + std::size_t(j);
+                r += cr[i], g += cg[i], b += cb[i];
+            }
+            float* o = &out.rgb[(std::size_t(y) * std::size_t(w) + std::size_t(x)) * 3];
+            const float inv = 1.0f / float(s * s);
+            o[0] = r * inv, o[1] = g * inv, o[2] = b * inv;
+        }
+    };
+    if (settings.parallel_for)
+        settings.parallel_for(std::size_t(h), render_row);
+    else
+        for (int y = 0; y < h; ++y) render_row(std::size_t(y));
+    for (auto n : row_lookups) out.lookups += n;
+    return out;
+}
+
+} // namespace hypertree

@@ -1,0 +1,136 @@
+// The hypertree raymarcher (paper section 8) against closed forms and against itself with its
+// accelerations off: packets equal scalar rays, bounding spheres and the ray cache change no pixel.
+
+#include "hypertree/hypertree.hpp"
+#include "hypertree/presets.hpp"
+#include "hypertree/render/render.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+
+using namespace hypertree;
+
+namespace {
+
+// A slab of `thickness` voxels of one density, across a 32^3 unit-cell volume.
+index_list_store slab(std::uint8_t density, int thickness)
+{
+    const hypervolume v({0, 0, 0}, {32, 32, 32}, resolution::cube(32));
+    std::vector<stored_voxel> voxels;
+    for (int z = 0; z < 32; ++z)
+        for (int y = 0; y < 32; ++y)
+            for (int x = 10; x < 10 + thickness; ++x) voxels.push_back({v.index(x, y, z), {density, 3}, 0});
+    std::sort(voxels.begin(), voxels.end(), [](const stored_voxel& a, const stored_voxel& b) { return a.index < b.index; });
+    return index_list_store::build(v, voxels);
+}
+
+double max_difference(const image& a, const image& b)
+{
+    double worst = 0;
+    for (std::size_t i = 0; i < a.rgb.size(); ++i) worst = std::max(worst, double(std::abs(a.rgb[i] - b.rgb[i])));
+    return worst;
+}
+
+struct small_scene {
+    index_list_store list;
+    partitioned_store parts;
+    explicit small_scene(const ifs<>& t) : list(build_tree<index_list_store>(t, 2)), parts(build_tree<partitioned_store>(t, 2)) {}
+};
+
+ifs<> small_tree()
+{
+    auto t = presets::tree_d(40);
+    t.iterations = 30000;
+    return t;
+}
+
+} // namespace
+
+TEST_CASE("hypertree render transmittance through a slab matches the closed form")
+{
+    for (int density : {40, 128, 230}) {
+        for (float step_factor : {1.0f, 0.5f}) {
+            const auto store = slab(std::uint8_t(density), 3);
+            march_options o;
+            o.step_factor = step_factor;
+            o.min_transmittance = 0;
+            o.shadows = false;
+            const volume_marcher<index_list_store> m(store, tree_shape::of(store), depth_colors{}, o);
+            // Along x through voxel centers: 3 voxels = 3 / step_factor samples of one density.
+            const krs::ray<float> r{{-1, 16.5f, 16.5f}, {1, 0, 0}};
+            const auto result = m.march(r);
+            const double mu = density / 255.0;
+            const double expect = std::pow(1 - mu, 3.0); // (1 - mu)^(k * length / side), k = 1
+            CAPTURE(density);
+            CAPTURE(step_factor);
+            CHECK(result.transmittance == doctest::Approx(expect).epsilon(1e-5));
+        }
+    }
+}
+
+TEST_CASE("hypertree render stops at full opacity and shadows behind an opaque wall")
+{
+    const auto store = slab(255, 2);
+    march_options o;
+    const volume_marcher<index_list_store> m(store, tree_shape::of(store), depth_colors{}, o);
+    const auto result = m.march(krs::ray<float>{{-1, 16.5f, 16.5f}, {1, 0, 0}});
+    CHECK(result.transmittance == 0.0f);
+    CHECK(result.lookups == doctest::Approx(1 + 1)); // the first sample (and its shadow ray's first)
+    float lookups = 0;
+    // From x = 5 the wall (x in [10, 12)) is toward +x; toward -x the way is open.
+    CHECK(m.shadow_transmittance({5, 16.5f, 16.5f}, {-1, 0, 0}, lookups) == 1.0f);
+    CHECK(m.shadow_transmittance({5, 16.5f, 16.5f}, {1, 0, 0}, lookups) == 0.0f);
+}
+
+TEST_CASE("hypertree render packets give the scalar pixels")
+{
+    const small_scene scene(small_tree());
+    const auto shape = tree_shape::of(scene.parts);
+    const volume_marcher<partitioned_store> m(scene.parts, shape, depth_colors::tree(3, 6));
+    const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 48, 40);
+    render_settings s;
+    s.supersampling = 2;
+    const image scalar = render<float>(m, camera, s);
+    const image packet = render<krs::packet_f>(m, camera, s);
+    CHECK(max_difference(scalar, packet) == 0.0);
+    CHECK(scalar.lookups == packet.lookups);
+    // Not a blank image: some pixels differ from the background by a lot.
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < scalar.rgb.size(); i += 3) covered += std::abs(scalar.rgb[i + 2] - s.background.b) > 0.2f;
+    CHECK(covered > 100);
+}
+
+TEST_CASE("hypertree render bounding spheres and the ray cache change no pixel")
+{
+    const small_scene scene(small_tree());
+    const auto shape = tree_shape::of(scene.parts);
+    REQUIRE(shape.spheres.size() > 3);
+    march_options with, without;
+    without.use_spheres = false;
+    const volume_marcher<index_list_store> a(scene.list, shape, depth_colors::tree(3, 6), with);
+    const volume_marcher<index_list_store> b(scene.list, shape, depth_colors::tree(3, 6), without);
+    const krs::pinhole_camera camera({0.0f, 0.7f, -2.2f}, {0, 0.6f, 0}, {0, 1, 0}, 45, 64, 56);
+    const image with_spheres = render<float>(a, camera), box_only = render<float>(b, camera);
+    CHECK(max_difference(with_spheres, box_only) <= 1.0 / 255.0);
+    CHECK(with_spheres.lookups < box_only.lookups);
+    render_settings cached;
+    cached.ray_cache = true;
+    CHECK(max_difference(render<float>(a, camera, cached), with_spheres) == 0.0);
+}
+
+TEST_CASE("hypertree render supersampling factor follows the projected voxel size")
+{
+    const auto t = small_tree();
+    const small_scene scene(t);
+    const auto shape = tree_shape::of(scene.parts);
+    const krs::vec3f target = shape.crown.center;
+    for (float distance : {1.0f, 4.0f, 16.0f}) {
+        const krs::vec3f eye = target - krs::vec3f{0, 0, distance};
+        const krs::pinhole_camera camera(eye, target, {0, 1, 0}, 40, 300, 300);
+        // s = ceil(pixel side / voxel side) at the tree's distance: ceil(sqrt(area ratio)).
+        const double pixel = 2 * std::tan(20.0 * 3.141592653589793 / 180) / 300 * distance;
+        const int expect = std::max(1, int(std::ceil(pixel / t.volume.smallest_voxel_side() - 1e-9)));
+        CHECK(supersampling_for(camera, eye, shape, t.volume) == expect);
+    }
+}
