@@ -68,6 +68,11 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
     const auto render_row = [&](std::size_t row) {
         const int y = int(row);
         ray_cache cache;
+        // One shadow memo per thread, kept across the rows it renders; it only holds pure
+        // functions of voxels, so which thread renders which row changes nothing.
+        thread_local shadow_memo memo;
+        thread_local const void* memo_owner = nullptr;
+        if (memo_owner != &marcher) memo = shadow_memo{}, memo_owner = &marcher;
         // Every sample ray of the row, in order; packets take them `lanes` at a time.
         const std::size_t count = std::size_t(w) * std::size_t(s * s);
         std::vector<float> px(count), py(count);
@@ -92,7 +97,7 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
             else
                 tx = T::load_unaligned(lx.data()), ty = T::load_unaligned(ly.data());
             const krs::ray<T> r = camera.primary_ray(tx, ty);
-            const march_result<T> m = marcher.march(r, settings.ray_cache && std::floating_point<T> ? &cache : nullptr);
+            const march_result<T> m = marcher.march(r, march_context{settings.ray_cache ? &cache : nullptr, &memo});
             for (std::size_t l = 0; l < lanes && first + l < count; ++l) {
                 const float tr = krs::lane_at(m.transmittance, l);
                 cr[first + l] = krs::lane_at(m.r, l) + tr * settings.background.r;
