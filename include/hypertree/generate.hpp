@@ -23,7 +23,9 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 namespace hypertree {
@@ -136,87 +138,151 @@ struct segment {
     vec3d a, b;
 };
 
-template <transform_pipeline P, class Observer>
-void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
-                    std::vector<hit>& out, generation_stats& stats, Observer& observer)
+// Where a chunk's hits go. Points write into a buffer sized for one hit per generator, each
+// generator storing its hit unconditionally and advancing the end only when it counts: whether a
+// generator is recorded (dummy rule) and inside the box are data-dependent coin flips the branch
+// predictor cannot learn. Lines append to a vector (their hit count per generator varies).
+struct chunk_output {
+    std::unique_ptr<hit[]> points;
+    std::size_t point_count = 0;
+    std::vector<hit> lines;
+    std::size_t size() const { return points ? point_count : lines.size(); }
+    const hit* data() const { return points ? points.get() : lines.data(); }
+};
+
+// The chunk loop, specialized at compile time for the generator's shape (Line), noise
+// perturbation (Perturb) and the map type of the drawn IFS (a bare affine map when no chain has a
+// shear, else the whole chain), so the per-generator work carries no runtime flags.
+template <bool Line, bool Perturb, class Map, transform_pipeline P, class Observer>
+void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t seed, std::uint64_t chunk,
+                       std::uint64_t cycles, chunk_output& out, generation_stats& stats, Observer& observer)
 {
+    constexpr bool observed = !std::is_same_v<Observer, no_observer>;
     const ifs<P>& def = tree.definition();
     const hypervolume& volume = def.volume;
     const int depth = def.tree_depth;
-    const bool is_line = !def.generator.is_point();
     const vec3d half = (def.generator.end - def.generator.start) * 0.5;
     const double half_length = krs::length(half);
+    const int* const last_level = tree.last_levels().data();
+    const int* const dummy_from = tree.dummies_from().data();
+    const vec3d origin = volume.origin(), per = volume.cells_per_unit();
+    const resolution grid = volume.grid();
+    const double nx = grid.x, ny = grid.y, nz = grid.z;
     random_stream random = random_stream::derive(seed, chunk + 1);
     std::uint8_t selected[max_tree_depth];
     // Counted in locals, not through `stats`: the compiler cannot keep a referenced counter in a
     // register across the hit list's stores.
     std::uint64_t generators = 0, recorded_count = 0, escaped = 0, per_depth[max_tree_depth] = {};
+    hit* point_end = Line ? nullptr : out.points.get() + out.point_count;
 
-    const auto inside = [&](const vec3d& p) {
-        const vec3d lo = volume.origin(), hi = volume.maximum();
-        return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y && p.z <= hi.z;
+    // One cell-coordinate test decides both "inside" (for the escape count) and the voxel, which
+    // voxel_at would otherwise recompute; written so that NaN counts as outside.
+    const auto cell_of = [&](const vec3d& p, voxel_index& index) {
+        const double fx = (p.x - origin.x) * per.x, fy = (p.y - origin.y) * per.y, fz = (p.z - origin.z) * per.z;
+        const bool in = fx >= 0 && fy >= 0 && fz >= 0 && fx <= nx && fy <= ny && fz <= nz;
+        // Clamped before converting, so an outside (or NaN) point still makes a valid integer.
+        const int x = int(std::clamp(fx, 0.0, nx - 1)), y = int(std::clamp(fy, 0.0, ny - 1)), z = int(std::clamp(fz, 0.0, nz - 1));
+        index = volume.index(x, y, z);
+        return in;
     };
-    const auto record = [&](segment g, int s, std::uint8_t part) {
-        if (def.perturb.enabled()) {
-            // The whole generator moves with its midpoint, so a line keeps its length.
-            const vec3d mid = (g.a + g.b) * 0.5, shift = perturbed(def.perturb, mid) - mid;
-            g.a += shift, g.b += shift;
+    // Records a generator (its ends after perturbation go to `a`, `b`), or only stores its would-be
+    // hit past the end when `counts` is false; returns the recorded ends for the observer.
+    const auto record = [&](vec3d& a, vec3d& b, int s, std::uint8_t part, bool counts) {
+        if constexpr (Perturb) {
+            // The whole generator moves with its midpoint, so a line keeps its length. Only
+            // recorded generators move: the noise costs more than a mispredicted branch.
+            if (counts) {
+                const vec3d mid = Line ? (a + b) * 0.5 : a, shift = perturbed(def.perturb, mid) - mid;
+                a += shift;
+                if constexpr (Line) b += shift;
+            }
         }
-        ++recorded_count;
-        ++per_depth[s];
-        escaped += !inside(g.a) || !inside(g.b);
+        recorded_count += counts;
+        per_depth[s] += counts;
         const std::uint8_t level = std::uint8_t(s);
-        if (!is_line) {
-            if (const auto i = volume.voxel_at(g.a)) out.push_back({*i, level, part});
+        if constexpr (!Line) {
+            voxel_index i;
+            const bool in = cell_of(a, i);
+            escaped += counts & !in;
+            *point_end = hit{i, level, part};
+            point_end += counts & in;
         } else {
-            for_each_voxel_on_segment(volume, g.a, g.b, [&](voxel_index i) { out.push_back({i, level, part}); });
+            if (counts) {
+                voxel_index ia, ib;
+                escaped += !(cell_of(a, ia) & cell_of(b, ib));
+                for_each_voxel_on_segment(volume, a, b, [&](voxel_index i) { out.lines.push_back({i, level, part}); });
+            }
         }
-        return g;
-    };
-    const auto apply = [&](const auto& chain, const segment& g) {
-        if (is_line) return segment{chain(g.a), chain(g.b)};
-        const vec3d p = chain(g.a);
-        return segment{p, p};
     };
     // A transformed line is rescaled about its midpoint to the generator's length (section 4).
-    const auto keep_length = [&](segment g) {
-        if (!is_line) return g;
-        const vec3d mid = (g.a + g.b) * 0.5, dir = g.b - g.a;
+    const auto keep_length = [&](vec3d& a, vec3d& b) {
+        const vec3d mid = (a + b) * 0.5, dir = b - a;
         const double len = krs::length(dir);
         const vec3d h = len > 0 ? dir * (half_length / len) : half;
-        return segment{mid - h, mid + h};
+        a = mid - h, b = mid + h;
     };
 
     for (std::uint64_t c = 0; c < cycles; ++c) {
         const vec3d stem = tree.sample_stem(random);
-        const segment x{stem - half, stem + half};
+        const vec3d xa = stem - half, xb = stem + half;
         ++generators;
-        const segment trunk = record(x, 0, 0);
-        if constexpr (!std::is_same_v<Observer, no_observer>) observer(generator_event{0, {}, trunk.a, trunk.b, true});
+        {
+            vec3d a = xa, b = xb;
+            record(a, b, 0, 0, true);
+            if constexpr (observed) observer(generator_event{0, {}, a, Line ? b : a, true});
+        }
 
-        // `inner` holds w_{s-2}^3 ... w_1^s (X): the part of row s that row s + 1 reuses.
-        segment inner = x;
+        // (inner_a, inner_b) hold w_{s-2}^3 ... w_1^s (X): the part of row s that row s + 1 reuses.
+        vec3d inner_a = xa, inner_b = xb;
         int cycle_end = depth - 1; // the deepest row this cycle may make (last-level rule)
         for (int s = 1; s < depth; ++s) {
             const std::size_t w = tree.select(random.uniform());
             selected[s - 1] = std::uint8_t(w);
-            const auto& rule = def.transforms[w];
             // w_j executes at level s - j + 1 in row s: its last level is passed once s > m + j - 1.
-            cycle_end = std::min(cycle_end, rule.last_level + s - 1);
+            cycle_end = std::min(cycle_end, last_level[w] + s - 1);
             if (s > cycle_end) break;
-            if (s >= 3) inner = apply(tree.chain_of(selected[s - 3], 3), inner);
-            segment y = inner;
-            if (s >= 2) y = apply(tree.chain_of(selected[s - 2], 2), y);
-            y = keep_length(apply(tree.chain_of(w, 1), y));
+            if (s >= 3) {
+                const Map& m = maps[selected[s - 3] * distinct_levels + 2];
+                inner_a = m(inner_a);
+                if constexpr (Line) inner_b = m(inner_b);
+            }
+            vec3d a = inner_a, b = inner_b;
+            if (s >= 2) {
+                const Map& m = maps[selected[s - 2] * distinct_levels + 1];
+                a = m(a);
+                if constexpr (Line) b = m(b);
+            }
+            const Map& m = maps[w * distinct_levels];
+            a = m(a);
+            if constexpr (Line) {
+                b = m(b);
+                keep_length(a, b);
+            }
             ++generators;
-            const bool recorded = s < rule.dummy_from;
-            if (recorded) y = record(y, s, std::uint8_t(w + 1));
-            if constexpr (!std::is_same_v<Observer, no_observer>)
-                observer(generator_event{s, std::span<const std::uint8_t>(selected, std::size_t(s)), y.a, y.b, recorded});
+            const bool recorded = s < dummy_from[w];
+            record(a, b, s, std::uint8_t(w + 1), recorded);
+            if constexpr (observed)
+                observer(generator_event{s, std::span<const std::uint8_t>(selected, std::size_t(s)), a, Line ? b : a, recorded});
         }
     }
+    if constexpr (!Line) out.point_count = std::size_t(point_end - out.points.get());
     stats.cycles += cycles, stats.generators += generators, stats.recorded += recorded_count, stats.escaped += escaped;
     for (int d = 0; d < depth; ++d) stats.recorded_per_depth[std::size_t(d)] += per_depth[d];
+}
+
+template <transform_pipeline P, class Observer>
+void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
+                    chunk_output& out, generation_stats& stats, Observer& observer)
+{
+    const bool line = !tree.definition().generator.is_point(), perturb = tree.definition().perturb.enabled();
+    const auto with_maps = [&](const auto* maps) {
+        if (line && perturb) generate_chunk_as<true, true>(tree, maps, seed, chunk, cycles, out, stats, observer);
+        else if (line) generate_chunk_as<true, false>(tree, maps, seed, chunk, cycles, out, stats, observer);
+        else if (perturb) generate_chunk_as<false, true>(tree, maps, seed, chunk, cycles, out, stats, observer);
+        else generate_chunk_as<false, false>(tree, maps, seed, chunk, cycles, out, stats, observer);
+    };
+    if (!tree.affine_table().empty()) with_maps(tree.affine_table().data());
+    else with_maps(tree.chain_table().data());
 }
 
 } // namespace detail
@@ -243,13 +309,15 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
     if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
 
     const std::uint64_t chunks = (cycles + options.chunk_cycles - 1) / options.chunk_cycles;
-    std::vector<std::vector<hit>> chunk_hits(chunks);
+    std::vector<detail::chunk_output> chunk_hits(chunks);
     std::vector<generation_stats> chunk_stats(chunks);
     const auto run = [&](std::size_t c) {
         const std::uint64_t first = c * options.chunk_cycles;
         const std::uint64_t count = std::min(options.chunk_cycles, cycles - first);
         chunk_stats[c].recorded_per_depth.assign(depth, 0);
-        chunk_hits[c].reserve(std::size_t(double(count) * double(depth) * (definition.generator.is_point() ? 1.0 : voxels_per_generator / 3.0)));
+        // Default-initialized: only the hits written are read, so zeroing would only cost.
+        if (definition.generator.is_point()) chunk_hits[c].points.reset(new hit[std::size_t(count * depth)]);
+        else chunk_hits[c].lines.reserve(std::size_t(double(count) * double(depth) * voxels_per_generator / 3.0));
         detail::generate_chunk(tree, seed, c, count, chunk_hits[c], chunk_stats[c], observer);
     };
     if (options.parallel_for && chunks > 1)
@@ -263,8 +331,8 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
     result.hits.reserve(total);
     result.stats.recorded_per_depth.assign(depth, 0);
     for (std::size_t c = 0; c < chunks; ++c) {
-        result.hits.insert(result.hits.end(), chunk_hits[c].begin(), chunk_hits[c].end());
-        std::vector<hit>().swap(chunk_hits[c]);
+        result.hits.insert(result.hits.end(), chunk_hits[c].data(), chunk_hits[c].data() + chunk_hits[c].size());
+        chunk_hits[c] = {};
         const auto& s = chunk_stats[c];
         result.stats.cycles += s.cycles, result.stats.generators += s.generators;
         result.stats.recorded += s.recorded, result.stats.escaped += s.escaped;

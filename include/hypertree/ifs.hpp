@@ -28,8 +28,10 @@
 #include "hypertree/transform/pipeline.hpp"
 #include "hypertree/volume.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -128,10 +130,9 @@ public:
         random_stream random = random_stream::derive(seed, 0);
         for (std::size_t j = 0; j < definition.transforms.size(); ++j) {
             const P drawn = definition.transforms[j].transform.draw(random);
-            std::array<chain, distinct_levels> per_level{};
             for (int l = 0; l < distinct_levels; ++l) {
-                per_level[l] = drawn.chain_at(l + 1);
-                const double bound = per_level[l].lipschitz();
+                const chain& at_level = chains_.emplace_back(drawn.chain_at(l + 1));
+                const double bound = at_level.lipschitz();
                 if (definition.require_contraction && !(bound < 1.0))
                     throw krs::invalid_parameter(
                         "ifs.transforms[" + std::to_string(j) + "]",
@@ -140,8 +141,15 @@ public:
                         krs::detail::to_text(bound));
                 lipschitz_ = std::max(lipschitz_, bound);
             }
-            chains_.push_back(per_level);
+            last_level_.push_back(definition.transforms[j].last_level);
+            dummy_from_.push_back(definition.transforms[j].dummy_from);
         }
+        // Trees without shears (A, B and C of the presets) reduce every chain to its one affine
+        // map: a table of those is 96 bytes per entry instead of a whole chain, so the
+        // generator's working set stays in a few cache lines and each application is branch-free.
+        const bool affine = std::all_of(chains_.begin(), chains_.end(), [](const chain& c) { return c.shears == 0; });
+        if (affine)
+            for (const chain& c : chains_) affine_chains_.push_back(c.affine[0]);
         build_alias_table();
         for (const auto& c : definition.condensations) {
             const condensation drawn = c.draw(random);
@@ -153,8 +161,16 @@ public:
     }
 
     const ifs<P>& definition() const { return definition_; }
-    std::size_t transform_count() const { return chains_.size(); }
-    const chain& chain_of(std::size_t transform, int level) const { return chains_[transform][level_slot(level)]; }
+    std::size_t transform_count() const { return last_level_.size(); }
+    const chain& chain_of(std::size_t transform, int level) const { return chains_[transform * distinct_levels + std::size_t(level_slot(level))]; }
+    // Every chain, transformation-major: chain_of(j, level) is entry j * distinct_levels + level_slot(level).
+    std::span<const chain> chain_table() const { return chains_; }
+    // The same table holding each chain's single affine map, when no chain has a shear; else empty.
+    std::span<const affine_map> affine_table() const { return affine_chains_; }
+    // The level rules per transformation, copied out of the definition so the generator's inner
+    // loop reads two small arrays rather than whole ifs_transform records.
+    std::span<const int> last_levels() const { return last_level_; }
+    std::span<const int> dummies_from() const { return dummy_from_; }
     // The largest Lipschitz bound of any transformation at any level.
     double lipschitz() const { return lipschitz_; }
 
@@ -218,7 +234,9 @@ private:
     }
 
     ifs<P> definition_;
-    std::vector<std::array<chain, distinct_levels>> chains_;
+    std::vector<chain> chains_; // transformation-major, distinct_levels per transformation
+    std::vector<affine_map> affine_chains_;
+    std::vector<int> last_level_, dummy_from_;
     std::vector<double> keep_;        // per column: the share of the column that is its own
     std::vector<std::size_t> alias_; // per column: who takes the rest
     double lipschitz_ = 0;

@@ -91,7 +91,8 @@ struct shear_map {
     vec3<L> operator()(const vec3<L>& p) const
     {
         using std::abs, std::min, std::pow;
-        const L h = min(abs(component(p, axis)) * L(inverse_height), L(1));
+        const L height = axis == 0 ? p.x : axis == 1 ? p.y : p.z;
+        const L h = min(abs(height) * L(inverse_height), L(1));
         // Whole exponents (the usual 2 or 3) by repeated squaring: pow() would cost more than the
         // rest of the chain.
         L f;
@@ -103,10 +104,11 @@ struct shear_map {
         } else {
             f = pow(h, L(exponent));
         }
-        vec3<L> r = p;
-        component(r, first) = component(r, first) + L(dmax_first) * f;
-        component(r, second) = component(r, second) + L(dmax_second) * f;
-        return r;
+        // Every component gets its displacement (0 for the height axis): adding 0 * f leaves it
+        // as it was, and the axis choice becomes three constants rather than a write through a
+        // computed reference, which compiles to a store and reload on the generator's hot path.
+        const auto along = [&](int i) { return (first == i ? dmax_first : 0.0) + (second == i ? dmax_second : 0.0); };
+        return {p.x + L(along(0)) * f, p.y + L(along(1)) * f, p.z + L(along(2)) * f};
     }
     // The Jacobian is I + u v^T with |v| = e / height (the derivative of h^e) and u the unit
     // displacement scaled by |dmax|: its norm is at most 1 + |u||v|.
