@@ -212,8 +212,8 @@ TRANSFORM 0.5 0
     REQUIRE(f.condensations.size() == 1);
     CHECK(f.condensations[0].stem.top == cone{}.top);
     // Depth colors interpolate within their range and leave other depths uncolored.
-    CHECK(t.color_of_depth(1)->y == doctest::Approx(0.25));
-    CHECK(t.color_of_depth(5)->x == 0.5);
+    CHECK(t.color_of_depth(1)->g == doctest::Approx(0.25));
+    CHECK(t.color_of_depth(5)->r == 0.5f);
     CHECK(!t.color_of_depth(3).has_value());
 
     // A file that gives only a transformation keeps the model's defaults for the rest.

@@ -27,6 +27,7 @@
 // contraction condition) is reported at the keyword that set it. Nothing half-built escapes.
 
 #include "hypertree/ifs.hpp"
+#include "hypertree/render/transfer.hpp"
 #include "hypertree/io/lexer.hpp"
 
 #include <array>
@@ -45,33 +46,26 @@ namespace hypertree {
 // same numbers agree bit for bit.
 inline constexpr double radians_per_degree = std::numbers::pi / 180.0;
 
-// DEPTHCOLOR: voxels of depths first_depth .. last_depth get colors from first_color to
-// last_color, linearly in depth (section 8.3's transfer function by depth). RGB in [0, 1].
-struct depth_color {
-    int first_depth = 0, last_depth = 0;
-    vec3d first_color{}, last_color{};
-
-    bool covers(int depth) const { return first_depth <= depth && depth <= last_depth; }
-    vec3d at(int depth) const
-    {
-        if (last_depth == first_depth) return first_color;
-        const double t = double(depth - first_depth) / double(last_depth - first_depth);
-        return first_color + (last_color - first_color) * t;
-    }
-};
-
-// Everything a definition file describes.
+// Everything a definition file describes. DEPTHCOLOR lines become depth_color_span values of the
+// renderer's transfer function (render/transfer.hpp): depths from..to get colors first..last,
+// linearly in depth (section 8.3), RGB in [0, 1].
 struct parsed_tree {
     hypertree::ifs<runtime_pipeline> ifs;
-    std::vector<depth_color> depth_colors; // in file order; their depth ranges do not overlap
+    std::vector<depth_color_span> depth_colors; // in file order; their depth ranges do not overlap
     std::optional<int> density_class_count; // DENSITYCLASSES; empty: the caller's choice (build_options)
 
     // The color the file gives voxels of `depth`, if a DEPTHCOLOR covers it.
-    std::optional<vec3d> color_of_depth(int depth) const
+    std::optional<rgb> color_of_depth(int depth) const
     {
         for (const auto& c : depth_colors)
-            if (c.covers(depth)) return c.at(depth);
+            if (c.from <= depth && depth <= c.to) return hypertree::depth_colors({c}).at(depth);
         return std::nullopt;
+    }
+    // The renderer's transfer function: the file's DEPTHCOLOR spans, or when it gives none the
+    // default bark-and-leaves colors of its branch and tree depths.
+    hypertree::depth_colors colors() const
+    {
+        return depth_colors.empty() ? hypertree::depth_colors::tree(ifs.branch_depth, ifs.tree_depth) : hypertree::depth_colors(depth_colors);
     }
 };
 
@@ -327,18 +321,19 @@ private:
     void read_depth_color(io::statement& s)
     {
         using io::number_rule;
-        depth_color c;
-        c.first_depth = int(s.integer(0, max_tree_depth - 1));
-        c.last_depth = int(s.integer(c.first_depth, max_tree_depth - 1));
-        c.first_color = vector3(s, number_rule::unit_interval);
-        c.last_color = vector3(s, number_rule::unit_interval);
+        depth_color_span c;
+        c.from = int(s.integer(0, max_tree_depth - 1));
+        c.to = int(s.integer(c.from, max_tree_depth - 1));
+        const vec3d first = vector3(s, number_rule::unit_interval), last = vector3(s, number_rule::unit_interval);
+        c.first = {float(first.x), float(first.y), float(first.z)};
+        c.last = {float(last.x), float(last.y), float(last.z)};
         s.finish();
         for (std::size_t i = 0; i < depth_colors_.size(); ++i) {
-            const depth_color& other = depth_colors_[i];
-            if (c.first_depth <= other.last_depth && other.first_depth <= c.last_depth)
-                fail(s.where(), "expected DEPTHCOLOR depths that no other DEPTHCOLOR covers, got " + std::to_string(c.first_depth) + " to " +
-                                    std::to_string(c.last_depth) + ", which overlaps " + std::to_string(other.first_depth) + " to " +
-                                    std::to_string(other.last_depth) + " on line " + std::to_string(depth_color_at_[i].line));
+            const depth_color_span& other = depth_colors_[i];
+            if (c.from <= other.to && other.from <= c.to)
+                fail(s.where(), "expected DEPTHCOLOR depths that no other DEPTHCOLOR covers, got " + std::to_string(c.from) + " to " +
+                                    std::to_string(c.to) + ", which overlaps " + std::to_string(other.from) + " to " +
+                                    std::to_string(other.to) + " on line " + std::to_string(depth_color_at_[i].line));
         }
         depth_colors_.push_back(c);
         depth_color_at_.push_back(s.where());
@@ -525,10 +520,10 @@ private:
                      std::to_string(tree_.branch_depth) + (seen(definition_keyword::branch_depth) ? "" : " (the default)") +
                      " with TREEDEPTH " + std::to_string(tree_.tree_depth));
         for (std::size_t i = 0; i < depth_colors_.size(); ++i)
-            if (depth_colors_[i].last_depth >= tree_.tree_depth)
+            if (depth_colors_[i].to >= tree_.tree_depth)
                 fail(depth_color_at_[i], "expected DEPTHCOLOR depths below TREEDEPTH " + std::to_string(tree_.tree_depth) + ", got " +
-                                             std::to_string(depth_colors_[i].first_depth) + " to " +
-                                             std::to_string(depth_colors_[i].last_depth));
+                                             std::to_string(depth_colors_[i].from) + " to " +
+                                             std::to_string(depth_colors_[i].to));
 
         hypertree::ifs<runtime_pipeline> tree = tree_;
         tree.transforms.clear();
@@ -567,7 +562,7 @@ private:
     std::vector<transform_block> transforms_;
     std::vector<condensation_block> condensations_;
     block current_ = block::none;
-    std::vector<depth_color> depth_colors_;
+    std::vector<depth_color_span> depth_colors_;
     std::vector<source_position> depth_color_at_;
     std::optional<int> density_class_count_;
     std::array<std::optional<source_position>, std::size_t(definition_keyword::count)> seen_{};
