@@ -28,4 +28,14 @@ if [ -x "$build_dir/examples/krs_fractals" ]; then
     "$build_dir/examples/krs_fractals" --output-dir "$out_dir"
     ran=$((ran + 1))
 fi
+if [ -x "$build_dir/examples/hypertree_render" ]; then
+    echo "examples.sh: hypertree_render -> out/hypertree_{a,b,c,d,forest}.png"
+    for t in a b c d; do
+        "$build_dir/examples/hypertree_render" --tree "$repo_root/examples/hypertrees/tree_$t.tree" \
+            --output "$out_dir/hypertree_$t.png"
+    done
+    "$build_dir/examples/hypertree_render" --forest "$repo_root/examples/hypertrees/forest.forest" \
+        --width 640 --height 360 --output "$out_dir/hypertree_forest.png"
+    ran=$((ran + 1))
+fi
 echo "examples.sh: $ran example(s) rendered into $out_dir"

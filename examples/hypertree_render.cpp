@@ -1,0 +1,189 @@
+// hypertree_render: reads a hypertree definition file (or a hyperforest file, or one of the
+// built-in presets), generates it, renders it with self-shadowing and writes a PNG; prints the
+// creation and render times (paper sections 6, 8 and 10).
+//
+//     hypertree_render [--tree FILE | --forest FILE | --preset A|B|C|D] [--resolution N]
+//                      [--store dense|index_list|bit_array|partitioned] [--width W] [--height H]
+//                      [--supersampling S|auto] [--density-scale K] [--threads N] [--seed N]
+//                      [--output FILE.png]
+
+#include "hypertree/forest.hpp"
+#include "hypertree/hypertree.hpp"
+#include "hypertree/presets.hpp"
+#include "hypertree/render/render.hpp"
+#include "support/example_io.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace {
+
+using namespace hypertree;
+using clock_type = std::chrono::steady_clock;
+
+double seconds_since(clock_type::time_point t0) { return std::chrono::duration<double>(clock_type::now() - t0).count(); }
+
+struct settings {
+    std::string tree_file, forest_file, preset = "A", output = "out/hypertree.png";
+    std::optional<int> resolution;
+    storage_type store = storage_type::bit_array;
+    int width = 480, height = 480, supersampling = 0, threads = 0; // supersampling 0 = auto
+    float density_scale = 4;                                       // k of section 8.1
+    std::uint64_t seed = 1;
+};
+
+// Runs body(0 .. count-1) on `threads` threads, drawing indices from a shared counter, and draws a
+// progress bar on stderr as they finish.
+auto parallel_with_progress(int threads, const char* what)
+{
+    return [threads, what](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::atomic<std::size_t> next{0}, done{0};
+        std::vector<std::thread> workers;
+        for (int w = 0; w < threads; ++w)
+            workers.emplace_back([&] {
+                for (std::size_t i; (i = next++) < count;) {
+                    body(i);
+                    const std::size_t d = ++done;
+                    if (w == 0 || d == count) {
+                        const int filled = int(40 * d / count);
+                        std::fprintf(stderr, "\r%s [%s%s] %3d%%", what, std::string(std::size_t(filled), '#').c_str(),
+                                     std::string(std::size_t(40 - filled), '.').c_str(), int(100 * d / count));
+                    }
+                }
+            });
+        for (auto& t : workers) t.join();
+        std::fprintf(stderr, "\n");
+    };
+}
+
+template <voxel_store S>
+int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>& voxels, const depth_colors& colors,
+                     const settings& o, double creation_seconds)
+{
+    const auto t0 = clock_type::now();
+    const S store = S::build(volume, voxels);
+    const double store_seconds = seconds_since(t0);
+    const tree_shape shape = tree_shape::of(volume, voxels);
+    march_options mo;
+    mo.density_scale = o.density_scale;
+    const volume_marcher<S> marcher(store, shape, colors, mo);
+
+    // Frame the tree: look at its crown's center from the front, slightly above.
+    const krs::vec3f center{float(shape.box.lo.x + shape.box.hi.x) * 0.5f, float(shape.box.lo.y + shape.box.hi.y) * 0.5f,
+                            float(shape.box.lo.z + shape.box.hi.z) * 0.5f};
+    const float half_size = float(std::max({shape.box.hi.y - shape.box.lo.y, (shape.box.hi.x - shape.box.lo.x) * o.height / o.width})) * 0.5f;
+    const float distance = half_size / std::tan(20.0f * 3.14159265f / 180.0f) * 1.15f + float(shape.box.hi.z - shape.box.lo.z) * 0.5f;
+    const krs::vec3f eye = center + krs::vec3f{0.45f, 0.2f, -1.0f} * (distance / std::sqrt(1.0f + 0.45f * 0.45f + 0.2f * 0.2f));
+    const krs::pinhole_camera camera(eye, center, {0, 1, 0}, 40, o.width, o.height);
+
+    render_settings rs;
+    rs.supersampling = o.supersampling > 0 ? o.supersampling : std::min(4, supersampling_for(camera, eye, shape, volume));
+    const int threads = example::thread_count(o.threads);
+    rs.parallel_for = parallel_with_progress(threads, "render");
+    const auto t1 = clock_type::now();
+    const image img = render<krs::packet_f>(marcher, camera, rs);
+    const double render_seconds = seconds_since(t1);
+    if (!example::write_png(o.output, img.width, img.height, img.rgb)) return 1;
+    std::printf("%zu voxels, %s store %.2f MB built in %.1f ms; created in %.1f ms\n", store.nonempty_count(),
+                std::string(name_of(o.store)).c_str(), double(store.memory_bytes()) / 1e6, store_seconds * 1e3, creation_seconds * 1e3);
+    std::printf("rendered %dx%d, supersampling %d, %d thread(s), in %.1f ms (%.2f M lookups) -> %s\n", img.width, img.height,
+                rs.supersampling, threads, render_seconds * 1e3, double(img.lookups) / 1e6, o.output.c_str());
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    settings o;
+    example::arguments args(argc, argv,
+                            "hypertree_render [--tree FILE | --forest FILE | --preset A|B|C|D] [--resolution N] "
+                            "[--store dense|index_list|bit_array|partitioned] [--width W] [--height H] "
+                            "[--supersampling S|auto] [--density-scale K] [--threads N] [--seed N] [--output FILE.png]");
+    bool store_given = false;
+    for (std::string a; args.next(a);) {
+        if (a == "--tree") o.tree_file = args.text("--tree");
+        else if (a == "--forest") o.forest_file = args.text("--forest");
+        else if (a == "--preset") {
+            o.preset = args.text("--preset");
+            if (o.preset != "A" && o.preset != "B" && o.preset != "C" && o.preset != "D") args.fail("--preset must be A, B, C or D");
+        } else if (a == "--resolution") o.resolution = args.integer("--resolution", 1, 1600);
+        else if (a == "--store") {
+            const std::string s = args.text("--store");
+            const auto known = std::find(storage_type_names.begin(), storage_type_names.end(), s);
+            if (known == storage_type_names.end()) args.fail("--store must be dense, index_list, bit_array or partitioned (got '" + s + "')");
+            o.store = storage_type(known - storage_type_names.begin());
+            store_given = true;
+        } else if (a == "--width") o.width = args.integer("--width", 1, 8192);
+        else if (a == "--height") o.height = args.integer("--height", 1, 8192);
+        else if (a == "--supersampling") {
+            const std::string s = args.text("--supersampling");
+            if (s == "auto") o.supersampling = 0;
+            else o.supersampling = std::atoi(s.c_str());
+            if (s != "auto" && (o.supersampling < 1 || o.supersampling > 16)) args.fail("--supersampling must be auto or in [1, 16]");
+        } else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
+        else if (a == "--seed") o.seed = std::uint64_t(args.integer("--seed", 0, 1 << 30));
+        else if (a == "--output") o.output = args.text("--output");
+        else if (a == "--density-scale") {
+            o.density_scale = float(std::atof(args.text("--density-scale").c_str()));
+            if (!(o.density_scale > 0 && o.density_scale <= 100)) args.fail("--density-scale must be in (0, 100]");
+        }
+        else args.unknown(a);
+    }
+
+    try {
+        build_options options;
+        options.generation.parallel_for = [threads = example::thread_count(o.threads)](std::size_t count,
+                                                                                       const std::function<void(std::size_t)>& body) {
+            std::atomic<std::size_t> next{0};
+            std::vector<std::thread> workers;
+            for (int w = 0; w < threads; ++w)
+                workers.emplace_back([&] {
+                    for (std::size_t i; (i = next++) < count;) body(i);
+                });
+            for (auto& t : workers) t.join();
+        };
+        hypervolume volume;
+        std::vector<stored_voxel> voxels;
+        depth_colors colors;
+        const auto t0 = clock_type::now();
+        if (!o.forest_file.empty()) {
+            loaded_forest forest = load_forest(o.forest_file);
+            if (o.resolution) forest.listing.grid = resolution::cube(*o.resolution);
+            if (!store_given) o.store = forest.listing.storage;
+            generated_forest built = build_forest(forest, o.seed, options);
+            volume = built.volume, voxels = std::move(built.voxels);
+            colors = forest.trees.front().colors();
+        } else {
+            parsed_tree tree;
+            if (!o.tree_file.empty()) {
+                tree = load_definition(o.tree_file);
+            } else {
+                const int r = o.resolution.value_or(300);
+                tree.ifs = o.preset == "A" ? presets::tree_a(r) : o.preset == "B" ? presets::tree_b(r) : o.preset == "C" ? presets::tree_c(r) : presets::tree_d(r);
+            }
+            if (o.resolution) tree.ifs.volume = hypervolume(tree.ifs.volume.origin(), tree.ifs.volume.extent(), resolution::cube(*o.resolution));
+            const generated_hits hits = generate(tree.ifs, o.seed, options.generation);
+            const std::vector<voxel_entry> entries = compact(hits.hits);
+            const density_classes classes(entries, tree.density_class_count.value_or(options.density_class_count));
+            voxels = classify(entries, classes, tree.ifs.branch_depth);
+            volume = tree.ifs.volume;
+            colors = tree.colors();
+        }
+        const double creation = seconds_since(t0);
+        switch (o.store) {
+        case storage_type::dense: return render_and_write<dense_store>(volume, voxels, colors, o, creation);
+        case storage_type::index_list: return render_and_write<index_list_store>(volume, voxels, colors, o, creation);
+        case storage_type::bit_array: return render_and_write<bit_array_store>(volume, voxels, colors, o, creation);
+        case storage_type::partitioned: return render_and_write<partitioned_store>(volume, voxels, colors, o, creation);
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: %s\n", args.program().c_str(), e.what());
+        return 1;
+    }
+    return 1;
+}

@@ -1,0 +1,50 @@
+#pragma once
+// A hyperforest (paper section 10): trees generated into one shared volume, the result of a
+// forest file.
+//
+// Each tree keeps its own IFS and hypervolume shape; its offset moves it in the forest. Rather
+// than conjugating every transformation by the offset, the tree is generated against the forest's
+// grid moved by minus the offset: a generator at p then lands in the forest voxel of p + offset,
+// and every tree's voxels share one index space. Trees are united by the paper's max rule
+// (ops.hpp, over partitioned stores: the kind that keeps parts), and a voxel's part becomes its
+// tree's number, so the renderer fits one bounding sphere per tree.
+
+#include "hypertree/build.hpp"
+#include "hypertree/io/forest_file.hpp"
+#include "hypertree/ops.hpp"
+#include "hypertree/store/partitioned_store.hpp"
+
+#include <algorithm>
+#include <vector>
+
+namespace hypertree {
+
+struct generated_forest {
+    hypervolume volume;
+    std::vector<stored_voxel> voxels; // sorted, unique: ready for any store's build
+};
+
+// Tree i draws from seed + i. A tree without DENSITYCLASSES uses options.density_class_count.
+inline generated_forest build_forest(const loaded_forest& forest, std::uint64_t seed, const build_options& options = {})
+{
+    generated_forest out{forest.volume(), {}};
+    for (std::size_t i = 0; i < forest.trees.size(); ++i) {
+        ifs<> tree = forest.trees[i].ifs;
+        tree.volume = hypervolume(out.volume.origin() - forest.listing.trees[i].offset, out.volume.extent(), out.volume.grid());
+        const generated_hits hits = generate(tree, seed + i, options.generation);
+        const std::vector<voxel_entry> entries = compact(hits.hits);
+        const density_classes classes(entries, forest.trees[i].density_class_count.value_or(options.density_class_count));
+        std::vector<stored_voxel> voxels = classify(entries, classes, tree.branch_depth);
+        for (stored_voxel& v : voxels) v.part = std::uint8_t(std::min<std::size_t>(i, 255));
+        if (out.voxels.empty()) {
+            out.voxels = std::move(voxels);
+            continue;
+        }
+        const partitioned_store so_far = partitioned_store::build(out.volume, out.voxels, options.generation.budget);
+        const partitioned_store this_tree = partitioned_store::build(out.volume, voxels, options.generation.budget);
+        out.voxels = unite_max(so_far, this_tree);
+    }
+    return out;
+}
+
+} // namespace hypertree
