@@ -5,6 +5,7 @@
 
 #include "hypertree/generate.hpp"
 #include "hypertree/io/definition_file.hpp"
+#include "hypertree/forest.hpp"
 #include "hypertree/io/forest_file.hpp"
 #include "hypertree/presets.hpp"
 
@@ -433,4 +434,28 @@ TEST_CASE("hypertree io forest errors")
     CHECK(thrown_by([&] { load_forest(dir / "broken.forest"); })
               .starts_with((dir / "broken.tree").string() + ":3:9: expected a number after SCALE, got 'big'"));
     std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("hypertree io forest trees land at their offsets in one volume")
+{
+    loaded_forest forest = load_forest(std::filesystem::path(KRS_SOURCE_DIR) / "examples/hypertrees/forest.forest");
+    forest.listing.grid = resolution{120, 60, 120};
+    for (auto& t : forest.trees) t.ifs.iterations = 8000;
+    const generated_forest built = build_forest(forest, 3);
+    REQUIRE(forest.trees.size() == 4);
+    std::array<std::size_t, 4> per_tree{};
+    std::size_t misplaced = 0;
+    for (const stored_voxel& v : built.voxels) {
+        REQUIRE(v.part < 4);
+        ++per_tree[v.part];
+        // Moved back by its tree's offset, the voxel's center lies in that tree's own box.
+        const vec3d p = built.volume.voxel_center(v.index) - forest.listing.trees[v.part].offset;
+        const hypervolume& own = forest.trees[v.part].ifs.volume;
+        const vec3d h = built.volume.voxel_size() * 0.5;
+        misplaced += p.x < own.origin().x - h.x || p.y < own.origin().y - h.y || p.z < own.origin().z - h.z ||
+                     p.x > own.maximum().x + h.x || p.y > own.maximum().y + h.y || p.z > own.maximum().z + h.z;
+    }
+    CHECK(misplaced == 0);
+    for (std::size_t n : per_tree) CHECK(n > 200);
+    CHECK(std::is_sorted(built.voxels.begin(), built.voxels.end(), [](const stored_voxel& a, const stored_voxel& b) { return a.index < b.index; }));
 }
