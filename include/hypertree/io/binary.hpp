@@ -133,18 +133,18 @@ inline std::uint64_t get_le(const unsigned char* in, int bytes)
 // Writes in blocks and keeps the running checksum of everything written.
 class binary_writer {
 public:
-    explicit binary_writer(std::ostream& out) : out_(out) {}
+    explicit binary_writer(std::ostream& out) : out_(out), buffer_(block) {}
     void write(const unsigned char* bytes, std::size_t n)
     {
         checksum_.add(bytes, n);
-        buffer_.insert(buffer_.end(), bytes, bytes + n);
-        if (buffer_.size() >= block) flush();
+        put(bytes, n);
     }
+    // Appends the checksum of everything written so far (not covering itself).
     void finish()
     {
         unsigned char sum[binary_format::checksum_bytes];
         put_le(sum, checksum_.value(), 8);
-        buffer_.insert(buffer_.end(), sum, sum + sizeof sum);
+        put(sum, sizeof sum);
         flush();
         out_.flush();
         if (!out_) throw save_error("hypertree save: the output stream failed while writing");
@@ -152,13 +152,21 @@ public:
 
 private:
     static constexpr std::size_t block = std::size_t(1) << 16;
+    void put(const unsigned char* bytes, std::size_t n)
+    {
+        for (std::size_t i = 0; i < n; ++i) {
+            buffer_[used_++] = bytes[i];
+            if (used_ == buffer_.size()) flush();
+        }
+    }
     void flush()
     {
-        out_.write(reinterpret_cast<const char*>(buffer_.data()), std::streamsize(buffer_.size()));
-        buffer_.clear();
+        out_.write(reinterpret_cast<const char*>(buffer_.data()), std::streamsize(used_));
+        used_ = 0;
     }
     std::ostream& out_;
     std::vector<unsigned char> buffer_;
+    std::size_t used_ = 0;
     fnv1a64 checksum_;
 };
 
@@ -192,13 +200,29 @@ inline loaded_voxels read_voxels(std::istream& in, std::string_view file)
                                                                      {f::extent_offset, "the hypervolume extent"},
                                                                      {f::resolution_offset, "the resolution"},
                                                                      {f::count_offset, "the voxel count"}}};
+    const auto not_a_hypertree = [&] {
+        return load_error(file, 0, "not a saved hypertree: the file does not start with the magic bytes \"KRSHTREE\"");
+    };
+    const auto magic_matches = [&](std::size_t n) {
+        for (std::size_t i = 0; i < n; ++i)
+            if (header[i] != static_cast<unsigned char>(f::magic[i])) return false;
+        return true;
+    };
     for (std::size_t k = 0; k < fields.size(); ++k) {
         const std::size_t begin = fields[k].first;
         const std::size_t end = k + 1 < fields.size() ? fields[k + 1].first : f::header_bytes;
+        if (k == 0) {
+            // A short file of something else is "not a hypertree" rather than "truncated".
+            in.read(reinterpret_cast<char*>(header.data()), std::streamsize(end));
+            const std::size_t got = std::size_t(in.gcount());
+            if (!magic_matches(got)) throw not_a_hypertree();
+            if (got < end)
+                throw load_error(file, got,
+                                 "truncated: the file ends inside the magic bytes (" + std::to_string(end - got) +
+                                     " more bytes expected)");
+            continue;
+        }
         read_exactly(in, header.data() + begin, end - begin, begin, file, fields[k].second);
-        if (k == 0 && !std::equal(f::magic.begin(), f::magic.end(), header.begin(),
-                                  [](char c, unsigned char b) { return static_cast<unsigned char>(c) == b; }))
-            throw load_error(file, 0, "not a saved hypertree: the file does not start with the magic bytes \"KRSHTREE\"");
         if (k == 1) {
             const std::uint64_t version = get_le(header.data() + f::version_offset, 4);
             if (version != f::version)
@@ -236,7 +260,11 @@ inline loaded_voxels read_voxels(std::istream& in, std::string_view file)
                          "the resolution " + std::to_string(cells[0]) + " x " + std::to_string(cells[1]) + " x " +
                              std::to_string(cells[2]) + " names more than 2^32 - 1 voxels");
     loaded_voxels result;
-    result.volume = hypervolume(origin, extent, resolution{cells[0], cells[1], cells[2]});
+    try {
+        result.volume = hypervolume(origin, extent, resolution{cells[0], cells[1], cells[2]});
+    } catch (const invalid_parameter& e) { // checked above; kept so no other refusal escapes unnamed
+        throw load_error(file, f::origin_offset, std::string("invalid hypervolume: ") + e.what());
+    }
 
     // The count is checked against the volume and, where the stream can tell, against the bytes
     // left, before a single voxel is read or allocated.
@@ -340,7 +368,8 @@ void save(const S& store, std::ostream& out)
     detail::put_le(header.data() + f::version_offset, f::version, 4);
     const double reals[6] = {volume.origin().x, volume.origin().y, volume.origin().z,
                              volume.extent().x, volume.extent().y, volume.extent().z};
-    for (int k = 0; k < 6; ++k) detail::put_le(header.data() + f::origin_offset + 8 * k, std::bit_cast<std::uint64_t>(reals[k]), 8);
+    for (int k = 0; k < 6; ++k)
+        detail::put_le(header.data() + f::origin_offset + 8 * k, std::bit_cast<std::uint64_t>(reals[k]), 8);
     const resolution n = volume.grid();
     const int cells[3] = {n.x, n.y, n.z};
     for (int a = 0; a < 3; ++a)
