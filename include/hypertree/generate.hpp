@@ -209,7 +209,8 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
         } else {
             if (counts) {
                 voxel_index ia, ib;
-                escaped += !(cell_of(a, ia) & cell_of(b, ib));
+                const bool a_in = cell_of(a, ia), b_in = cell_of(b, ib);
+                escaped += !(a_in && b_in);
                 for_each_voxel_on_segment(volume, a, b, [&](voxel_index i) { out.lines.push_back({i, level, part}); });
             }
         }

@@ -4,17 +4,22 @@
 //
 // Flow: an `ifs` (C++ pipelines or a definition file) -> `generate` (seeded, deterministic) ->
 // `compact` (validation: one entry per voxel) -> `density_classes` -> a store (dense, index
-// list, index list + bit array, partitioned) -> operations, level of detail, rendering.
+// list, index list + bit array, partitioned) -> operations, level of detail, rendering (CPU
+// scalar or packets, or the emitted GLSL), binary save and load.
 
 #include "hypertree/build.hpp"
 #include "hypertree/compact.hpp"
 #include "hypertree/density.hpp"
 #include "hypertree/generate.hpp"
 #include "hypertree/ifs.hpp"
+#include "hypertree/forest.hpp"
+#include "hypertree/io/binary.hpp"
 #include "hypertree/io/definition_file.hpp"
 #include "hypertree/io/forest_file.hpp"
+#include "hypertree/lod.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/random.hpp"
+#include "hypertree/render/glsl.hpp"
 #include "hypertree/render/marcher.hpp"
 #include "hypertree/render/render.hpp"
 #include "hypertree/render/transfer.hpp"
