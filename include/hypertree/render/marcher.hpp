@@ -82,8 +82,8 @@ struct ray_cache {
 // index). A shadow is a pure function of its voxel, so what the table holds never changes a
 // result, only how often a shadow ray is marched.
 struct shadow_memo {
-    static constexpr std::size_t slots = std::size_t(1) << 14;
-    std::vector<voxel_index> index = std::vector<voxel_index>(slots, ~voxel_index(0));
+    std::size_t slots = 0; // a power of two, sized by the marcher on first use
+    std::vector<voxel_index> index;
     std::vector<float> value; // slots x lights
     std::size_t hits = 0, misses = 0;
 };
@@ -117,6 +117,9 @@ public:
         // voxel. A sample in an empty brick needs no store lookup (a bisection in list stores).
         for (int a = 0; a < 3; ++a) bricks_[a] = std::size_t((grid_[a] + brick_side - 1) / brick_side);
         brick_bits_.assign((bricks_[0] * bricks_[1] * bricks_[2] + 63) / 64, 0);
+        // Room for twice the non-empty voxels (up to 2^20 slots, 4 MB per light and thread), so
+        // few voxels evict each other from a thread's shadow memo.
+        while (memo_slots_ < 2 * store.nonempty_count() && memo_slots_ < (std::size_t(1) << 20)) memo_slots_ *= 2;
         store.for_each([&](voxel_index i, const voxel&) {
             const auto c = v.coordinates(i);
             const std::size_t b = std::size_t(c[0] / brick_side) + bricks_[0] * (std::size_t(c[1] / brick_side) + bricks_[1] * std::size_t(c[2] / brick_side));
@@ -300,8 +303,12 @@ private:
         const krs::vec3f center{float(c.x), float(c.y), float(c.z)};
         if (!memo) return shadow_transmittance(center, light_dirs_[l], lookups);
         const std::size_t lights = light_dirs_.size();
-        if (memo->value.size() != shadow_memo::slots * lights) memo->value.assign(shadow_memo::slots * lights, 0.0f);
-        const std::size_t slot = (std::size_t(index) * 0x9e3779b1u >> 7) & (shadow_memo::slots - 1);
+        if (memo->slots != memo_slots_) {
+            memo->slots = memo_slots_;
+            memo->index.assign(memo_slots_, ~voxel_index(0));
+            memo->value.assign(memo_slots_ * lights, 0.0f);
+        }
+        const std::size_t slot = (std::size_t(index) * 0x9e3779b1u >> 7) & (memo->slots - 1);
         if (memo->index[slot] != index) {
             ++memo->misses;
             memo->index[slot] = index;
@@ -349,6 +356,7 @@ private:
     krs::vec3f origin_{}, cells_per_unit_{}, box_lo_{}, box_hi_{};
     std::array<int, 3> grid_{};
     float side_ = 1, step_ = 1;
+    std::size_t memo_slots_ = 1024;
     static constexpr int brick_side = 4;
     std::array<std::size_t, 3> bricks_{};
     std::vector<std::uint64_t> brick_bits_;
