@@ -162,8 +162,8 @@ march_options varied_options()
     march_options o;
     o.step_factor = 0.7f;
     o.density_scale = 1.5f;
-    o.use_spheres = false;
-    o.shadow_per_voxel = false;
+    o.use_spheres = true;
+    o.shade_per_voxel = false;
     o.specular = 0.35f;
     o.shininess = 16.0f;
     o.lights = {directional_light{{0.4f, 0.8f, 0.45f}, {1.0f, 0.97f, 0.9f}},

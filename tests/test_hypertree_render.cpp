@@ -118,6 +118,7 @@ TEST_CASE("hypertree render bounding spheres and the ray cache change no pixel")
     const auto shape = tree_shape::of(scene.parts);
     REQUIRE(shape.spheres.size() > 3);
     march_options with, without;
+    with.use_spheres = true;
     without.use_spheres = false;
     const volume_marcher<index_list_store> a(scene.list, shape, depth_colors::tree(3, 6), with);
     const volume_marcher<index_list_store> b(scene.list, shape, depth_colors::tree(3, 6), without);

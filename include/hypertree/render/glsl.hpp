@@ -184,8 +184,8 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
         s += detail::glsl_vec3_array(n + "_level_color", level_colors);
     }
     // Voxel centers per axis: origin + (c + 1/2) side in double, then float, as the marcher's
-    // per-voxel shadow rays start.
-    if (options.shadows && options.shadow_per_voxel && !options.lights.empty()) {
+    // per-voxel shading point.
+    if (options.shade_per_voxel) {
         const char* axes[3] = {"x", "y", "z"};
         const int counts[3] = {v.grid().x, v.grid().y, v.grid().z};
         const double origins[3] = {v.origin().x, v.origin().y, v.origin().z};
@@ -339,10 +339,7 @@ vec3 $_shade(vec3 p, ivec3 cell, int level, vec3 view) {
                            n);
     // (No lights: ambient only, and no loop over arrays GLSL could not declare with size 0.)
     if (!options.lights.empty()) {
-        if (options.shadows && options.shadow_per_voxel)
-            s += detail::with_name("    vec3 shadow_origin = vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n", n);
-        else if (options.shadows)
-            s += "    vec3 shadow_origin = p;\n";
+        if (options.shadows) s += "    vec3 shadow_origin = p;\n";
         s += "    for (int i = 0; i < " + n + "_light_count; ++i) {\n";
         s += detail::with_name("        vec3 l = $_light_direction[i];\n", n);
         s += options.shadows ? detail::with_name("        float shadow = $_shadow_transmittance(shadow_origin, l);\n", n)
@@ -369,7 +366,13 @@ vec3 $_shade(vec3 p, ivec3 cell, int level, vec3 view) {
     s += detail::with_name(R"(    return base * light + specular;
 }
 
-// march: samples at t0 + (k + 1/2) ds, front to back, until the ray leaves the box or the
+)", n);
+    // The shading point: the voxel's center with shade_per_voxel (the marcher's per-voxel shading),
+    // else the sample itself.
+    s += detail::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
+                                                   : "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return p;\n}\n\n",
+                           n);
+    s += detail::with_name(R"(// march: samples at t0 + (k + 1/2) ds, front to back, until the ray leaves the box or the
 // transmittance falls below the minimum. Returns (premultiplied rgb, transmittance).
 vec4 march_$(vec3 origin, vec3 direction) {
     float t0, t1;
@@ -385,7 +388,7 @@ vec4 march_$(vec3 origin, vec3 direction) {
             uvec2 v = $_voxel(cell);
             if (v.x != 0u) {
                 float a = $_alpha[int(v.x)];
-                vec3 c = $_shade(p, cell, int(v.y), -direction);
+                vec3 c = $_shade($_shading_point(p, cell), cell, int(v.y), -direction);
                 color = color + transmittance * a * c;
                 transmittance = transmittance * (1.0 - a);
             }

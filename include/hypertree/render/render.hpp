@@ -68,11 +68,11 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
     const auto render_row = [&](std::size_t row) {
         const int y = int(row);
         ray_cache cache;
-        // One shadow memo per thread, kept across the rows it renders; it only holds pure
+        // One shading memo per thread, kept across the rows it renders; it only holds pure
         // functions of voxels, so which thread renders which row changes nothing.
-        thread_local shadow_memo memo;
+        thread_local shade_memo memo;
         thread_local const void* memo_owner = nullptr;
-        if (memo_owner != &marcher) memo = shadow_memo{}, memo_owner = &marcher;
+        if (memo_owner != &marcher) memo = shade_memo{}, memo_owner = &marcher;
         // Every sample ray of the row, in order; packets take them `lanes` at a time.
         const std::size_t count = std::size_t(w) * std::size_t(s * s);
         std::vector<float> px(count), py(count);
