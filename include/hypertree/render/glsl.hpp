@@ -301,8 +301,12 @@ float $_shadow_transmittance(vec3 p, vec3 l) {
     float t0, t1;
     $_enter_box(p, l, t0, t1);
     float transmittance = 1.0;
-    for (float t = max(t0, 0.0) + $_step; t < t1 && transmittance >= $_min_transmittance; t += $_step)
+    float base = max(t0, 0.0);
+    for (int j = 1;; ++j) {
+        float t = base + float(j) * $_step;
+        if (!(t < t1 && transmittance >= $_min_transmittance)) break;
         transmittance *= 1.0 - $_alpha[$_density_at(p + l * t)];
+    }
     return transmittance;
 }
 
@@ -372,16 +376,17 @@ vec3 $_shade(vec3 p, ivec3 cell, int level, vec3 view) {
     s += detail::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
                                                    : "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return p;\n}\n\n",
                            n);
-    s += detail::with_name(R"(// march: samples at t0 + (k + 1/2) ds, front to back, until the ray leaves the box or the
+    s += detail::with_name(R"(// march: samples at t0 + (k + 1/2) ds (computed from k, as the marcher does), front to back, until the ray leaves the box or the
 // transmittance falls below the minimum. Returns (premultiplied rgb, transmittance).
 vec4 march_$(vec3 origin, vec3 direction) {
     float t0, t1;
     $_enter_box(origin, direction, t0, t1);
     float ds = $_step;
-    float t = t0 + ds * 0.5;
     vec3 color = vec3(0.0);
     float transmittance = 1.0;
-    while (t < t1) {
+    for (int k = 0;; ++k) {
+        float t = t0 + (float(k) + 0.5) * ds;
+        if (!(t < t1)) break;
         vec3 p = origin + direction * t;
         ivec3 cell;
         if ($_cell(p, cell)) {
@@ -393,7 +398,6 @@ vec4 march_$(vec3 origin, vec3 direction) {
                 transmittance = transmittance * (1.0 - a);
             }
         }
-        t = t + ds;
         if (!(transmittance >= $_min_transmittance)) break;
     }
     return vec4(color, transmittance);

@@ -154,37 +154,45 @@ public:
     {
         ray_cache* cache = std::floating_point<T> ? context.rays : nullptr;
         using krs::any;
+        (void)cache;
         march_result<T> out;
         T t0, t1;
         enter_box(ray, t0, t1);
-        const T ds(step_);
-        T t = t0 + ds * T(0.5f);
-        auto active = t < t1;
-        std::size_t k = 0;
+        const T ds(step_), half(0.5f);
+        // Sample k sits at t0 + (k + 1/2) ds, computed from k (not accumulated), so skipping the
+        // empty samples of an empty brick lands exactly where stepping would.
+        T k(0.0f);
+        auto active = t0 + half * ds < t1;
         bool cache_valid = cache != nullptr;
         if constexpr (std::floating_point<T>) {
             if (cache && cache->index.size() < max_samples()) cache->index.resize(max_samples(), ~voxel_index(0)), cache->value.resize(max_samples());
         }
         while (any(active)) {
+            const T t = t0 + (k + half) * ds;
             const krs::vec3<T> p = ray.origin + ray.direction * t;
-            // Per lane: the voxel, its opacity for one step, and its shaded color if it is not empty.
-            std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{};
+            // Per lane: the voxel, its opacity for one step, and its shaded color if it is not
+            // empty; or, in an empty brick, how many samples to skip.
+            std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{}, advance{};
             for (std::size_t i = 0; i < lanes<T>; ++i) {
+                advance[i] = 1.0f;
                 if (!krs::mask_lane<T>(active, i)) continue;
                 const krs::vec3f pi{krs::lane_at(p.x, i), krs::lane_at(p.y, i), krs::lane_at(p.z, i)};
+                const krs::vec3f di{krs::lane_at(ray.direction.x, i), krs::lane_at(ray.direction.y, i), krs::lane_at(ray.direction.z, i)};
                 const std::optional<voxel_index> index = index_at(pi);
-                if (!index) continue;
+                if (!index) {
+                    advance[i] = float(empty_run(pi, di));
+                    continue;
+                }
                 voxel v;
                 if constexpr (std::floating_point<T>) {
-                    v = cache ? fetch_cached(*index, k, *cache, cache_valid, lookups[i]) : (++lookups[i], store_->at(*index));
+                    v = cache ? fetch_cached(*index, std::size_t(krs::lane_at(k, i)), *cache, cache_valid, lookups[i])
+                              : (++lookups[i], store_->at(*index));
                 } else {
                     v = (++lookups[i], store_->at(*index));
                 }
-                (void)cache_valid;
                 if (v.density == 0) continue;
                 alpha[i] = alpha_[v.density];
-                const krs::vec3f view{-krs::lane_at(ray.direction.x, i), -krs::lane_at(ray.direction.y, i), -krs::lane_at(ray.direction.z, i)};
-                const rgb c = shade(pi, *index, v.level, view, context.shading, lookups[i]);
+                const rgb c = shade(pi, *index, v.level, -di, context.shading, lookups[i]);
                 r[i] = c.r, g[i] = c.g, b[i] = c.b;
             }
             const T a = load<T>(alpha);
@@ -193,9 +201,8 @@ public:
             out.b = out.b + out.transmittance * a * load<T>(b);
             out.transmittance = out.transmittance * (T(1.0f) - a);
             out.lookups = out.lookups + load<T>(lookups);
-            t = t + ds;
-            ++k;
-            active = active & (t < t1) & (out.transmittance >= T(options_.min_transmittance));
+            k = k + load<T>(advance);
+            active = active & (t0 + (k + half) * ds < t1) & (out.transmittance >= T(options_.min_transmittance));
         }
         return out;
     }
@@ -206,21 +213,45 @@ public:
         float t0, t1;
         enter_box(krs::ray<float>{p, l}, t0, t1);
         float transmittance = 1.0f;
-        // Start one step out so the sample does not shadow itself.
-        for (float t = std::max(t0, 0.0f) + step_; t < t1 && transmittance >= options_.min_transmittance; t += step_) {
-            const voxel v = fetch(p + l * t, lookups);
-            transmittance *= 1.0f - alpha_[v.density];
+        // Sample j at base + j ds from j = 1: one step out, so the sample does not shadow itself.
+        const float base = std::max(t0, 0.0f);
+        for (int j = 1;; ) {
+            const float t = base + float(j) * step_;
+            if (!(t < t1 && transmittance >= options_.min_transmittance)) break;
+            const krs::vec3f q = p + l * t;
+            const std::optional<voxel_index> index = index_at(q);
+            if (!index) {
+                j += empty_run(q, l);
+                continue;
+            }
+            ++lookups;
+            transmittance *= 1.0f - alpha_[store_->at(*index).density];
+            ++j;
         }
         return transmittance;
     }
 
-    // The voxel at p: empty outside the grid and (with use_spheres) outside every sphere.
-    voxel fetch(const krs::vec3f& p, float& lookups) const
+    // The number of samples, from p on along direction d, that certainly lie in p's brick when
+    // that brick is empty (at least 1): the step count to the brick's exit, rounded so that a
+    // sample on the exit face is never skipped. 1 outside the grid or in a brick with voxels.
+    int empty_run(const krs::vec3f& p, const krs::vec3f& d) const
     {
-        const auto index = index_at(p);
-        if (!index) return {};
-        ++lookups;
-        return store_->at(*index);
+        const float f[3] = {(p.x - origin_.x) * cells_per_unit_.x, (p.y - origin_.y) * cells_per_unit_.y, (p.z - origin_.z) * cells_per_unit_.z};
+        if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < float(grid_[0]) && f[1] < float(grid_[1]) && f[2] < float(grid_[2]))) return 1;
+        int c[3];
+        for (int a = 0; a < 3; ++a) c[a] = std::min(int(f[a]), grid_[a] - 1);
+        const std::size_t brick = std::size_t(c[0] / brick_side) + bricks_[0] * (std::size_t(c[1] / brick_side) + bricks_[1] * std::size_t(c[2] / brick_side));
+        if ((brick_bits_[brick >> 6] >> (brick & 63)) & 1) return 1;
+        const float dir[3] = {d.x * cells_per_unit_.x, d.y * cells_per_unit_.y, d.z * cells_per_unit_.z}; // cells per unit t
+        float exit = 3.0e38f;
+        for (int a = 0; a < 3; ++a) {
+            const float lo = float((c[a] / brick_side) * brick_side), hi = lo + float(brick_side);
+            if (dir[a] > 0) exit = std::min(exit, (hi - f[a]) / dir[a]);
+            else if (dir[a] < 0) exit = std::min(exit, (lo - f[a]) / dir[a]);
+        }
+        // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 16).
+        const float steps = std::ceil(exit / step_ - 1e-3f);
+        return steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1;
     }
 
     std::optional<voxel_index> index_at(const krs::vec3f& p) const
