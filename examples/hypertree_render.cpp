@@ -5,7 +5,7 @@
 //     hypertree_render [--tree FILE | --forest FILE | --preset A|B|C|D] [--resolution N]
 //                      [--store dense|index_list|bit_array|partitioned] [--width W] [--height H]
 //                      [--supersampling S|auto] [--density-scale K] [--threads N] [--seed N]
-//                      [--output FILE.png]
+//                      [--output FILE.png] [--save-volume FILE]
 
 #include "hypertree/forest.hpp"
 #include "hypertree/hypertree.hpp"
@@ -28,7 +28,7 @@ using clock_type = std::chrono::steady_clock;
 double seconds_since(clock_type::time_point t0) { return std::chrono::duration<double>(clock_type::now() - t0).count(); }
 
 struct settings {
-    std::string tree_file, forest_file, preset = "A", output = "out/hypertree.png";
+    std::string tree_file, forest_file, preset = "A", output = "out/hypertree.png", save_volume;
     std::optional<int> resolution;
     storage_type store = storage_type::bit_array;
     int width = 480, height = 480, supersampling = 0, threads = 0; // supersampling 0 = auto
@@ -67,6 +67,10 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     const auto t0 = clock_type::now();
     const S store = S::build(volume, voxels);
     const double store_seconds = seconds_since(t0);
+    if (!o.save_volume.empty()) {
+        save(store, o.save_volume); // binary, with a checksum: io/binary.hpp
+        std::printf("saved the volume to %s\n", o.save_volume.c_str());
+    }
     const tree_shape shape = tree_shape::of(volume, voxels);
     march_options mo;
     mo.density_scale = o.density_scale;
@@ -103,7 +107,8 @@ int main(int argc, char** argv)
     example::arguments args(argc, argv,
                             "hypertree_render [--tree FILE | --forest FILE | --preset A|B|C|D] [--resolution N] "
                             "[--store dense|index_list|bit_array|partitioned] [--width W] [--height H] "
-                            "[--supersampling S|auto] [--density-scale K] [--threads N] [--seed N] [--output FILE.png]");
+                            "[--supersampling S|auto] [--density-scale K] [--threads N] [--seed N] [--output FILE.png] "
+                            "[--save-volume FILE]");
     bool store_given = false;
     for (std::string a; args.next(a);) {
         if (a == "--tree") o.tree_file = args.text("--tree");
@@ -128,6 +133,7 @@ int main(int argc, char** argv)
         } else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
         else if (a == "--seed") o.seed = std::uint64_t(args.integer("--seed", 0, 1 << 30));
         else if (a == "--output") o.output = args.text("--output");
+        else if (a == "--save-volume") o.save_volume = args.text("--save-volume");
         else if (a == "--density-scale") {
             o.density_scale = float(std::atof(args.text("--density-scale").c_str()));
             if (!(o.density_scale > 0 && o.density_scale <= 100)) args.fail("--density-scale must be in (0, 100]");
