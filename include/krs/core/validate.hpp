@@ -55,6 +55,36 @@ std::string to_text(const vec3<S>& v)
 }
 } // namespace detail
 
+// ---- magnitude policy ------------------------------------------------------------------------
+//
+// Every coordinate, offset, length and radius a kernel, mirror, fold step or builder accepts has
+// magnitude <= max_magnitude (points: Euclidean length |v| <= max_magnitude), and every field built
+// from such parameters returns a finite float distance at every query point with |p| <=
+// max_magnitude. Why 1e9: float overflows at 3.4e38, so a squared length overflows once a vector
+// is longer than 1.8e19, and a query point and a parameter of 1e9 stay far below that after
+// everything the library does to them: 64 KRS folds move a point by at most 2 * 64 * 1e9
+// (|p| <= 1.3e11, squared 1.7e22); a torus capsule squares its curvature times the point
+// (curvature <= 2 / min_length = 2e6: (2.6e17)^2 = 6.8e34); a KIFS magnifies points by up to
+// scale()^iterations, which its constructor bounds so they stay within what its kernel handles
+// (1e19, less for a torus capsule: see kifs.hpp). Beyond 1e9 float cannot place geometry anyway:
+// its spacing there is 64 units.
+inline constexpr float max_magnitude = 1e9f; // exact in float (1953125 * 2^9)
+// Lengths that a kernel divides by (a capsule's axis, a torus capsule's chord) are at least this
+// when non-zero, so 1 / length^2 and curvature * |p| stay far from overflow at every point above.
+// (At 1e-6 a chord is still ~16 float ulps long at distance 1 from the origin.)
+inline constexpr float min_length = 1e-6f;
+
+namespace detail {
+// max_magnitude as messages print it (tests check the two agree).
+inline constexpr std::string_view max_magnitude_text = "1e9";
+inline std::string magnitude_range(bool include_zero, bool negative)
+{
+    const std::string limit(max_magnitude_text);
+    if (negative) return "[-" + limit + ", " + limit + "]";
+    return (include_zero ? "[0, " : "(0, ") + limit + "]";
+}
+} // namespace detail
+
 template <std::floating_point S>
 inline S require_finite(std::string_view name, S v)
 {
@@ -82,6 +112,42 @@ inline S require_positive(std::string_view name, S v)
     if (!(v > S(0))) throw invalid_parameter(name, "must be > 0", detail::to_text(v));
     return v;
 }
+// A coordinate or offset: finite and in [-max_magnitude, max_magnitude].
+template <std::floating_point S>
+inline S require_magnitude(std::string_view name, S v)
+{
+    if (!std::isfinite(v) || !(std::abs(double(v)) <= double(max_magnitude)))
+        throw invalid_parameter(name, "must be finite and in " + detail::magnitude_range(true, true), detail::to_text(v));
+    return v;
+}
+// A point or offset vector: finite components and |v| <= max_magnitude (Euclidean, so a plane
+// through it has |offset| <= max_magnitude as well).
+template <std::floating_point S>
+inline vec3<S> require_magnitude(std::string_view name, const vec3<S>& v)
+{
+    require_finite(name, v);
+    if (!(length(vec3d(v)) <= double(max_magnitude)))
+        throw invalid_parameter(name, "must be finite and lie within " + std::string(detail::max_magnitude_text) + " of the origin",
+                                detail::to_text(v));
+    return v;
+}
+// A length or radius that may be 0: in [0, max_magnitude].
+template <std::floating_point S>
+inline S require_length(std::string_view name, S v)
+{
+    if (!std::isfinite(v) || !(v >= S(0) && double(v) <= double(max_magnitude)))
+        throw invalid_parameter(name, "must be finite and in " + detail::magnitude_range(true, false), detail::to_text(v));
+    return v;
+}
+// A length that must not be 0: in (0, max_magnitude].
+template <std::floating_point S>
+inline S require_positive_length(std::string_view name, S v)
+{
+    if (!std::isfinite(v) || !(v > S(0) && double(v) <= double(max_magnitude)))
+        throw invalid_parameter(name, "must be finite and in " + detail::magnitude_range(false, false), detail::to_text(v));
+    return v;
+}
+
 // A direction: finite and not (near) zero. Returns it normalized, computed in double so that a
 // float normal is as close to unit length as float allows.
 inline vec3f require_direction(std::string_view name, const vec3f& v)
