@@ -1,15 +1,17 @@
 // libFuzzer target: scene parameters decoded from bytes and fed to the model builders (issue 10,
 // "fuzzing"). Each input either makes a builder throw krs::invalid_parameter (fine) or builds a
-// scene whose instance_count() is a non-negative number and whose distance at 8 points derived
-// from the bytes is not NaN. Anything else (a NaN distance, another exception type, a sanitizer
-// report) aborts. Sizes are bounded so one execution stays fast; float fields also receive
-// out-of-range, NaN and infinite values so validation is exercised.
+// scene whose instance_count() is a non-negative number and whose distance is finite (float,
+// double and packet lanes) at probe points derived from the bytes, near the scene and out to the
+// magnitude policy's reach |p| <= 1e9. Anything else (a NaN or infinite distance, another
+// exception type, a sanitizer report) aborts. Sizes are bounded so one execution stays fast; float
+// fields also receive out-of-range, NaN, infinite and huge finite values so validation is exercised.
 //
-// Input layout: byte 0 picks the builder (mod 8); every float field is a mode byte followed by a
-// 16-bit little-endian value (mode < 200: in range; 200..239: just outside the range; 240..255: a
-// special value: NaN, +-inf, 0, -0, huge, tiny, or raw bits from the next 4 bytes); every int field
-// is one byte (< 224: in range; else an invalid value). A missing byte reads as 0.
-// Define KRS_FUZZ_VERBOSE to print each input's outcome. fuzz/replay_main.cpp runs the same function over fuzz/corpus/builders/ in ctest.
+// Input layout (fuzz_input.hpp decodes the fields): byte 0 picks the builder (mod 8), then the
+// builder's fields, then probe points. Define KRS_FUZZ_VERBOSE to print each input's outcome.
+// fuzz/replay_main.cpp runs the same function over fuzz/corpus/builders/ and fuzz/crashers/builders/
+// in ctest.
+
+#include "fuzz_input.hpp"
 
 #include "krs/model/coral.hpp"
 #include "krs/model/forest.hpp"
@@ -18,107 +20,25 @@
 #include "krs/model/terrain.hpp"
 #include "krs/model/tree.hpp"
 
-#include <climits>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #ifdef KRS_FUZZ_VERBOSE
 #include <cstdio>
 #endif
-#include <limits>
 
 namespace {
 
 using namespace krs;
 using namespace krs::model;
-
-struct reader {
-    const std::uint8_t* data;
-    std::size_t size;
-    std::size_t at = 0;
-
-    std::uint8_t byte() { return at < size ? data[at++] : std::uint8_t(0); }
-    std::uint16_t u16()
-    {
-        const std::uint16_t lo = byte();
-        return std::uint16_t(lo | (std::uint16_t(byte()) << 8));
-    }
-    std::uint32_t u32() { return std::uint32_t(u16()) | (std::uint32_t(u16()) << 16); }
-
-    // A float field whose valid range is [lo, hi].
-    float real(float lo, float hi)
-    {
-        const std::uint8_t mode = byte();
-        const double u = u16() / 65535.0;
-        const double w = double(hi) - double(lo);
-        if (mode < 200) return float(lo + w * u);
-        if (mode < 220) return float(lo - w * (0.001 + u));
-        if (mode < 240) return float(hi + w * (0.001 + u));
-        switch (mode & 15) {
-        case 0: return std::numeric_limits<float>::quiet_NaN();
-        case 1: return std::numeric_limits<float>::infinity();
-        case 2: return -std::numeric_limits<float>::infinity();
-        case 3: return 0.0f;
-        case 4: return -0.0f;
-        case 5: return std::numeric_limits<float>::max();
-        case 6: return -std::numeric_limits<float>::max();
-        case 7: return std::numeric_limits<float>::denorm_min();
-        case 8: return std::numeric_limits<float>::min();
-        case 9: return 1e-30f;
-        case 10: return 1e30f;
-        case 11: return -1e-30f;
-        default: {
-            const std::uint32_t bits = u32();
-            float f;
-            std::memcpy(&f, &bits, sizeof f);
-            return f;
-        }
-        }
-    }
-    // A vector field, each component with the valid range [lo, hi].
-    vec3f point(float lo, float hi)
-    {
-        const float x = real(lo, hi), y = real(lo, hi);
-        return {x, y, real(lo, hi)};
-    }
-    // An int field: in range [lo, hi] (kept small by the caller), or one of the invalid values.
-    int integer(int lo, int hi, int bad_lo, int bad_hi)
-    {
-        const std::uint8_t mode = byte();
-        if (mode < 224) return lo + int(mode % unsigned(hi - lo + 1));
-        switch (mode & 3) {
-        case 0: return bad_lo;
-        case 1: return bad_hi;
-        case 2: return INT_MIN;
-        default: return INT_MAX;
-        }
-    }
-    // A finite probe point, within +-`reach` of the origin.
-    template <class T>
-    vec3<T> probe(double reach)
-    {
-        auto c = [&] { return T(reach * (double(std::int16_t(u16())) / 32768.0)); };
-        const T x = c(), y = c();
-        return {x, y, c()};
-    }
-};
-
-[[noreturn]] void fail() { __builtin_trap(); }
+using krs_fuzz::fail;
+using krs_fuzz::probe;
+using krs_fuzz::reader;
 
 void check_count(double count)
 {
     if (std::isnan(count) || count < 0) fail();
-}
-
-// The field's distance (float and double) at 8 points from the bytes must not be NaN.
-template <class Field>
-void probe(const Field& field, reader& in, double reach)
-{
-    for (int i = 0; i < 8; ++i) {
-        if (std::isnan(field.distance(in.template probe<float>(reach)))) fail();
-        if (std::isnan(field.distance(in.template probe<double>(reach)))) fail();
-    }
 }
 
 template <class Sequence>

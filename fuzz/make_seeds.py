@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
-"""Writes the seed corpus of fuzz_builders.cpp to fuzz/corpus/builders/ (see that file for the
-byte layout). Re-run after changing the layout; crashers found by scripts/fuzz.sh are added to the
-same directory by hand."""
+"""Writes the seed corpora of fuzz_builders.cpp and fuzz_fractals.cpp to fuzz/corpus/builders/ and
+fuzz/corpus/fractals/ (fuzz_input.hpp has the byte layout). Re-run after changing the layout;
+crashers found by scripts/fuzz.sh go to fuzz/crashers/<target>/ by hand."""
 import os
 import struct
 
-OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corpus", "builders")
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 NAN, INF, NINF, ZERO, NZERO, FMAX = 0, 1, 2, 3, 4, 5
+LIMIT, ABOVE_LIMIT, NEG_LIMIT = 12, 13, 14
 
 
 def f(frac):
@@ -42,9 +43,14 @@ def u32(v):
 
 
 def points(seed):
+    """16 probe points: mostly near the scene (modes 0-3), then one far (4), one at the magnitude
+    limit (5), one tiny (6) and the origin (7)."""
     out = b""
-    for k in range(16 * 3):
-        out += struct.pack("<h", ((seed * 7919 + k * 104729) % 65536) - 32768)
+    for k in range(16):
+        mode = [0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 4, 5, 6, 7, 2, 3][k]
+        out += bytes([mode])
+        for c in range(3):
+            out += struct.pack("<h", ((seed * 7919 + (3 * k + c) * 104729) % 65536) - 32768)
     return out
 
 
@@ -119,8 +125,63 @@ seeds = {
     "forest_spacing_nan": bytes([7]) + style(3) + i(3, 0) + special(NAN) + f(.22) + bytes([0]) + u32(1) + points(34),
 }
 
-os.makedirs(OUT, exist_ok=True)
-for name, data in seeds.items():
-    with open(os.path.join(OUT, name), "wb") as fh:
-        fh.write(data)
-print(f"wrote {len(seeds)} seeds to {OUT}")
+seeds["rock_at_the_limit"] = bytes([3]) + special(LIMIT) + special(ZERO) + special(ZERO) + f(.2) + i(3, 1) + i(14, 0) + f(.4) + u32(1) + points(35)
+seeds["rock_near_the_limit"] = bytes([3]) + special(ZERO) + special(NEG_LIMIT) + special(ZERO) + f(0) + i(3, 1) + i(4, 0) + f(.4) + u32(1) + points(36)
+seeds["tree_raw_at_the_limit"] = bytes([1, 2]) + special(LIMIT) + special(ZERO) + special(ZERO) + vec(.5, .5, .5) + bytes([0]) \
+    + vec(.5, .6, .5) + f(.3) + bytes([0, 0]) + points(37)
+seeds["terrain_above_the_limit"] = bytes([2]) + terrain(8, {5: special(ABOVE_LIMIT)}) + points(38)
+
+
+def kifs_general(kernel, kernel_fields, iterations, taps, over=None):
+    """fuzz_general_kifs: plane fold, rotation, scale, translation, then the kernel."""
+    fields = [vec(1, .5, .5), f(.5), vec(.5, 1, .5), f(.55), f(.33), vec(.75, .5, .5), vec(.5, .5, .5)]
+    for k, v in (over or {}).items():
+        fields[k] = v
+    return bytes([5]) + b"".join(fields) + bytes([kernel]) + kernel_fields + i(iterations, 0) + bytes([taps])
+
+
+def shell_options(seams, cutoff=f(.04), step=f(1)):
+    return bytes([seams]) + cutoff + step
+
+
+fractal_seeds = {
+    "square_default": bytes([0]) + i(6, 0) + f(.12) + points(101),
+    "square_too_deep": bytes([0]) + bad(1) + f(.12) + points(102),
+    "cube_default": bytes([1]) + i(5, 0) + points(103),
+    "cube_deepest": bytes([1]) + i(20, 0) + points(104),
+    "menger_default": bytes([2]) + i(4, 0) + points(105),
+    "menger_deepest": bytes([2]) + i(20, 0) + points(106),
+    "sierpinski_default": bytes([3]) + i(8, 0) + f(.33) + points(107),
+    "sierpinski_deep_wide": bytes([3]) + i(30, 0) + f(1) + points(108),
+    "sierpinski_scale_nan": bytes([3]) + i(8, 0) + special(NAN) + points(109),
+    "koch_default": bytes([4]) + i(5, 0) + f(.1) + points(110),
+    "koch_huge_tube": bytes([4]) + i(12, 0) + special(LIMIT) + points(111),
+    "kifs_sphere": kifs_general(0, vec(.7, .5, .5) + f(.5), 8, 0) + points(112),
+    "kifs_box_last": kifs_general(1, vec(.5, .5, .5) + vec(.5, .5, .5), 12, 1) + points(113),
+    "kifs_capsule": kifs_general(2, vec(.4, .5, .5) + vec(.6, .5, .5) + f(.2), 10, 0) + points(114),
+    "kifs_tetrahedron_deep": kifs_general(3, b"", 40, 1) + points(115),
+    "kifs_torus_capsule": kifs_general(4, vec(.4, .5, .5) + vec(.6, .5, .5) + vec(.5, .6, .5) + f(.1), 10, 1)
+    + points(116),
+    "kifs_scale_huge": kifs_general(0, vec(.5, .5, .5) + f(.5), 20, 1, {4: special(LIMIT)}) + points(117),
+    "log_polar_sphere": bytes([6]) + i(12, 1) + f(.2) + f(.3) + vec(.5, .5, .5) + bytes([1]) + f(.4) + points(118),
+    "log_polar_box": bytes([6]) + i(7, 1) + f(.1) + f(.2) + vec(.5, .5, .5) + bytes([0]) + vec(.5, .5, .5) + points(119),
+    "log_polar_no_cells": bytes([6]) + bad(0) + f(.2) + f(.3) + vec(.5, .5, .5) + bytes([1]) + f(.4) + points(120),
+    "log_spherical_sphere": bytes([7]) + i(6, 3) + bytes([1]) + f(.3) + vec(.5, .5, .5) + bytes([1]) + f(.4) + points(121),
+    "log_spherical_odd": bytes([7]) + i(6, 3) + bytes([0]) + f(.3) + vec(.5, .5, .5) + bytes([0]) + vec(.5, .5, .5)
+    + points(122),
+    "lotus_default": bytes([8]) + f(.044) + i(8, 1) + shell_options(1) + points(123),
+    "lotus_thinnest_shells": bytes([8]) + f(0) + i(16, 1) + shell_options(0) + points(124),
+    "lotus_hidden": bytes([8]) + f(.07) + i(6, 1) + shell_options(2) + points(125),
+    "cube_singularity_default": bytes([9]) + f(.044) + shell_options(1) + points(126),
+    "cube_singularity_density_below": bytes([9]) + below() + shell_options(1) + points(127),
+    "user_shell_sphere": bytes([10]) + f(.02) + vec(.7, .5, .5) + f(.2) + shell_options(1) + points(128),
+    "user_shell_off_prototype": bytes([10]) + f(.5) + vec(1, 1, 1) + f(1) + shell_options(0) + points(129),
+}
+
+for target, table in (("builders", seeds), ("fractals", fractal_seeds)):
+    out = os.path.join(HERE, "corpus", target)
+    os.makedirs(out, exist_ok=True)
+    for name, data in table.items():
+        with open(os.path.join(out, name), "wb") as fh:
+            fh.write(data)
+    print(f"wrote {len(table)} seeds to {out}")

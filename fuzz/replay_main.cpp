@@ -1,6 +1,7 @@
-// Runs LLVMFuzzerTestOneInput (fuzz_builders.cpp) once over every file given on the command line
-// or found in a directory given there, so the seed corpus and any saved crashers are regression
-// tests in the normal ctest run, with any compiler. Fails if no input was found.
+// Runs LLVMFuzzerTestOneInput (a fuzz_*.cpp target) once over every file given on the command line
+// or found in a directory given there, so the seed corpus and the saved crashers are regression
+// tests in the normal ctest run, with any compiler. Hidden files (".gitkeep", which keeps an empty
+// crashers directory in git) are skipped. Fails if no input was found.
 
 #include <algorithm>
 #include <cstddef>
@@ -32,7 +33,7 @@ int main(int argc, char** argv)
         if (std::filesystem::is_directory(arg)) {
             std::vector<std::filesystem::path> files;
             for (const auto& e : std::filesystem::directory_iterator(arg))
-                if (e.is_regular_file()) files.push_back(e.path());
+                if (e.is_regular_file() && e.path().filename().string().rfind('.', 0) != 0) files.push_back(e.path());
             std::sort(files.begin(), files.end());
             for (const auto& f : files) run(f), ++count;
         } else if (std::filesystem::is_regular_file(arg)) {

@@ -11,6 +11,7 @@
 
 #include "krs/core/validate.hpp"
 
+#include <algorithm>
 #include <concepts>
 #include <cstdint>
 #include <string>
@@ -26,15 +27,19 @@ struct mirror {
     // The plane normal . x = offset; the normal is normalized, and a zero or non-finite one is
     // rejected (it would make every reflection NaN).
     mirror(const vec3f& normal_, float offset_)
-        : normal(require_direction("mirror.normal", normal_)), offset(require_finite("mirror.offset", offset_))
+        : normal(require_direction("mirror.normal", normal_)), offset(require_magnitude("mirror.offset", offset_))
     {
     }
     // The plane through `point` with the given normal.
     static mirror through(const vec3f& point, const vec3f& normal_)
     {
-        require_finite("mirror.point", point);
+        // |offset| <= |point| <= max_magnitude (krs/core/validate.hpp's policy), up to the few ulps
+        // by which the float normal's length differs from 1: the clamp absorbs those (it moves
+        // the plane by about float's spacing at that distance, 64 units).
+        require_magnitude("mirror.point", point);
         const vec3f n = require_direction("mirror.normal", normal_);
-        return mirror(n, float(dot(vec3d(n), vec3d(point))));
+        const double offset = std::clamp(dot(vec3d(n), vec3d(point)), -double(max_magnitude), double(max_magnitude));
+        return mirror(n, float(offset));
     }
 
     template <class T>
@@ -100,7 +105,7 @@ struct axis_mirror {
     {
         if (axis_ < 0 || axis_ > 2)
             throw invalid_parameter("axis_mirror.axis", "must be 0, 1 or 2 (x, y, z)", std::to_string(axis_));
-        require_finite("axis_mirror.position", position);
+        require_magnitude("axis_mirror.position", position);
         axis = std::uint8_t(axis_);
         above = fold_above;
         const float sign = above ? 1.0f : -1.0f;

@@ -198,7 +198,8 @@ public:
             throw invalid_parameter("sequence.mirror", "at most " + std::to_string(max_levels) + " mirrors are allowed",
                                     std::to_string(mirrors_.size() + 1));
         require_direction("sequence.mirror.normal", m.normal);
-        require_finite("sequence.mirror.offset", m.offset);
+        // The fields are public, so a mirror may not have been through its constructor's checks.
+        require_magnitude("sequence.mirror.offset", m.offset);
         mirrors_.push_back(m);
         levels_.emplace_back();
         return *this;

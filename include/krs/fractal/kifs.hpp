@@ -36,6 +36,7 @@
 #include "krs/kernels/capsule.hpp"
 #include "krs/mirror.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <concepts>
@@ -96,7 +97,7 @@ struct plane_fold {
 
     plane_fold() = default;
     plane_fold(const vec3f& normal_, float offset_)
-        : normal(require_direction("plane_fold.normal", normal_)), offset(require_finite("plane_fold.offset", offset_))
+        : normal(require_direction("plane_fold.normal", normal_)), offset(require_magnitude("plane_fold.offset", offset_))
     {
     }
     // The fold of a KRS level: keeps m's negative side (the stored plane is m with both signs
@@ -157,7 +158,7 @@ struct rotate_step {
     rotate_step(const vec3f& axis, float angle)
     {
         const vec3d u(require_direction("rotate_step.axis", axis));
-        const double a = require_finite("rotate_step.angle", angle);
+        const double a = require_magnitude("rotate_step.angle", angle);
         const double c = std::cos(a), s = std::sin(a), t = 1.0 - c;
         const double m[3][3] = {{t * u.x * u.x + c, t * u.x * u.y - s * u.z, t * u.x * u.z + s * u.y},
                                 {t * u.x * u.y + s * u.z, t * u.y * u.y + c, t * u.y * u.z - s * u.x},
@@ -198,7 +199,8 @@ private:
 struct scale_about {
     scale_about() = default;
     scale_about(float factor, const vec3f& center)
-        : factor_(require_positive("scale_about.factor", factor)), center_(require_finite("scale_about.center", center))
+        : factor_(require_positive_length("scale_about.factor", factor)),
+          center_(require_magnitude("scale_about.center", center))
     {
         const vec3d shift = vec3d(center_) * (double(factor_) - 1.0);
         shift_ = vec3f{float(shift.x), float(shift.y), float(shift.z)};
@@ -233,7 +235,7 @@ private:
 struct translate_step {
     vec3f offset{};
     translate_step() = default;
-    explicit translate_step(const vec3f& offset_) : offset(require_finite("translate_step.offset", offset_)) {}
+    explicit translate_step(const vec3f& offset_) : offset(require_magnitude("translate_step.offset", offset_)) {}
     template <class T>
     vec3<T> apply(const vec3<T>& p) const
     {
@@ -285,6 +287,63 @@ enum class kifs_taps {
 template <class P>
 concept kifs_program = fold_step<P>;
 
+// How far a KIFS carries the query points. The magnitude policy (krs/core/validate.hpp) promises
+// finite float distances for |p| <= max_magnitude, but each iteration magnifies the point by up to
+// scale(), so a deep program could carry such points past 1.8e19, where the kernel's squared
+// length overflows, and on to inf and inf - inf = NaN in the next fold. A step that stretches no
+// distance by more than s maps |p| <= B into |step(p)| <= s B + |step(0)| (triangle inequality),
+// which bounds every intermediate point from the steps' own scale() and their image of the origin,
+// for any program. kifs accepts `iterations` only while that bound stays <= kifs_escape_limit =
+// 1e19: the library's kernels (sphere, box, capsule, plane, tetrahedron) square at most that
+// (1e38 < 3.4e38). A kernel that overflows sooner says so with `double input_reach() const` (a
+// torus capsule multiplies the point by its curvature), and the bound must stay within that too.
+inline constexpr double kifs_escape_limit = 1e19;
+
+namespace detail {
+template <class Step>
+double escape_step(const Step& step, double bound)
+{
+    return double(step.scale()) * bound + length(step.apply(vec3d{0, 0, 0}));
+}
+// The largest |p| the program meets over `iterations` iterations from |p| <= max_magnitude (the
+// loop stops once it passes the limit).
+template <kifs_program Program>
+double kifs_escape_bound(const Program& program, int iterations)
+{
+    double bound = double(max_magnitude), worst = bound;
+    for (int i = 0; i < iterations && worst <= kifs_escape_limit; ++i) {
+        if constexpr (requires { program.steps(); })
+            std::apply([&](const auto&... step) { ((bound = escape_step(step, bound), worst = std::max(worst, bound)), ...); },
+                       program.steps());
+        else
+            worst = std::max(worst, bound = escape_step(program, bound));
+    }
+    return worst;
+}
+// The largest |p| the kernel's float distance is certain to stay finite at.
+template <class Kernel>
+double kernel_input_reach(const Kernel& kernel)
+{
+    if constexpr (requires { { kernel.input_reach() } -> std::convertible_to<double>; })
+        return std::min(kifs_escape_limit, double(kernel.input_reach()));
+    else
+        return kifs_escape_limit;
+}
+template <kifs_program Program>
+void require_kifs_escape(std::string_view name, const Program& program, int iterations, double reach)
+{
+    if (!(kifs_escape_bound(program, iterations) <= reach)) {
+        int most = 0; // the most iterations whose escape bound stays within reach
+        while (most < iterations && kifs_escape_bound(program, most + 1) <= reach) ++most;
+        throw invalid_parameter(name,
+                                "must be in [0, " + std::to_string(most) +
+                                    "] for this program and kernel: more iterations magnify points within 1e9 of the "
+                                    "origin past " + detail::to_text(reach) + ", where the float distance overflows",
+                                std::to_string(iterations));
+    }
+}
+} // namespace detail
+
 template <kifs_program Program, field Kernel>
 class kifs {
 public:
@@ -302,6 +361,7 @@ public:
                                     "must be finite and >= 1 (each copy no larger than the whole: the IFS must contract "
                                     "or, for a KRS, keep its size)",
                                     detail::to_text(s));
+        detail::require_kifs_escape("kifs.iterations", program_, iterations, detail::kernel_input_reach(kernel_));
         iterations_ = iterations;
         for (int i = 0; i <= iterations; ++i) {
             const double inv = std::pow(s, -double(i));
@@ -405,7 +465,7 @@ using square_fractal = kifs<square_program, box>;
 inline square_fractal make_square_fractal(int iterations, float thickness = 0.25f)
 {
     detail::require_iterations("square_fractal.iterations", iterations, 20);
-    require_positive("square_fractal.thickness", thickness);
+    require_positive_length("square_fractal.thickness", thickness);
     return {square_program(plane_fold({1, -1, 0}, 0), plane_fold({1, 1, 0}, 0), scale_about(3, {2, 0, 0})),
             box({0, 0, 0}, {1, 1, thickness}), iterations, kifs_taps::every_iteration};
 }
@@ -445,9 +505,13 @@ inline sierpinski_tetrahedron make_sierpinski_tetrahedron(int iterations, float 
 {
     detail::require_iterations("sierpinski_tetrahedron.iterations", iterations, 30);
     detail::require_contracting("sierpinski_tetrahedron.scale", scale);
-    return {sierpinski_program(plane_fold({1, 1, 0}, 0), plane_fold({1, 0, 1}, 0), plane_fold({0, 1, 1}, 0),
-                               scale_about(scale, {1, 1, 1})),
-            tetrahedron{}, iterations, kifs_taps::last_iteration};
+    if (!(scale <= max_magnitude))
+        throw invalid_parameter("sierpinski_tetrahedron.scale", "must be in (1, 1e9]", detail::to_text(scale));
+    sierpinski_program program(plane_fold({1, 1, 0}, 0), plane_fold({1, 0, 1}, 0), plane_fold({0, 1, 1}, 0),
+                               scale_about(scale, {1, 1, 1}));
+    // Named here: the iteration limit depends on this preset's scale.
+    detail::require_kifs_escape("sierpinski_tetrahedron.iterations", program, iterations, kifs_escape_limit);
+    return {program, tetrahedron{}, iterations, kifs_taps::last_iteration};
 }
 
 // Koch curve from (-1, 0, 0) to (1, 0, 0) in the xy plane, as a tube of world radius
@@ -459,8 +523,14 @@ using koch_curve = kifs<koch_program, capsule>;
 inline koch_curve make_koch_curve(int iterations, float tube_radius = 0.01f)
 {
     detail::require_iterations("koch_curve.iterations", iterations, 12);
-    require_positive("koch_curve.tube_radius", tube_radius);
+    require_positive_length("koch_curve.tube_radius", tube_radius);
     const float c = std::numbers::sqrt3_v<float> * 0.5f; // normal (cos -30, sin -30) of the 60-degree line
+    // The capsule is the last generation blown up 3^iterations times: its radius must obey the
+    // magnitude policy too.
+    const double blown_up = double(tube_radius) * std::pow(3.0, iterations);
+    if (!(blown_up <= double(max_magnitude)))
+        throw invalid_parameter("koch_curve.tube_radius", "times 3^iterations must be <= 1e9",
+                                detail::to_text(tube_radius) + " * 3^" + std::to_string(iterations));
     const float radius = tube_radius * float(std::pow(3.0, iterations));
     return {koch_program(abs_fold<fold_x>{}, plane_fold({c, -0.5f, 0}, c / 3.0f), scale_about(3, {1, 0, 0})),
             capsule({-1, 0, 0}, {1, 0, 0}, radius), iterations, kifs_taps::last_iteration};

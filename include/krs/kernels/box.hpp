@@ -7,7 +7,7 @@
 // it exact, which is why the frame must be orthonormal (a skewed frame would stretch space and
 // overestimate). The frame is checked to 1e-4 and then re-orthonormalized in double, so the stored
 // axes are orthonormal to float precision. Zero half extents are allowed (a rectangle, a segment,
-// a point).
+// a point). Center and half extents obey the magnitude policy of krs/core/validate.hpp.
 
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
@@ -21,13 +21,13 @@ namespace krs {
 struct box {
     box() = default;
     box(const vec3f& center, const vec3f& half_extents)
-        : center_(require_finite("box.center", center)), half_extents_(checked_extents(half_extents))
+        : center_(require_magnitude("box.center", center)), half_extents_(checked_extents(half_extents))
     {
     }
     // Oriented box: local axis i of the box is world direction axis_i.
     box(const vec3f& center, const vec3f& half_extents, const vec3f& axis_x, const vec3f& axis_y,
         const vec3f& axis_z)
-        : center_(require_finite("box.center", center)), half_extents_(checked_extents(half_extents))
+        : center_(require_magnitude("box.center", center)), half_extents_(checked_extents(half_extents))
     {
         require_finite("box.axes", axis_x);
         require_finite("box.axes", axis_y);
@@ -128,7 +128,7 @@ vec3 krs_box_normal(vec3 p, vec4 c, vec4 h, vec4 ax, vec4 ay, vec4 az) {
 private:
     static vec3f checked_extents(const vec3f& h)
     {
-        require_finite("box.half_extents", h);
+        require_magnitude("box.half_extents", h);
         if (h.x < 0 || h.y < 0 || h.z < 0)
             throw invalid_parameter("box.half_extents", "must be >= 0 in every component", detail::to_text(h));
         return h;

@@ -4,6 +4,8 @@
 // Its signed distance |p - closest point of ab| - radius is exact (1-Lipschitz, zero on the
 // surface): the straight branch of a tree and the limit of a torus_capsule whose control point
 // lies on the chord. a == b is allowed and gives a sphere; radius 0 gives the bare segment.
+// Otherwise |b - a| >= min_length (krs/core/validate.hpp): the clamp below multiplies by
+// 1 / |b - a|^2, which must be a finite float.
 
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
@@ -18,12 +20,15 @@ struct capsule {
 
     capsule() = default;
     capsule(const vec3f& a_, const vec3f& b_, float radius_)
-        : a(require_finite("capsule.a", a_)), b(require_finite("capsule.b", b_)),
-          radius(require_non_negative("capsule.radius", radius_))
+        : a(require_magnitude("capsule.a", a_)), b(require_magnitude("capsule.b", b_)),
+          radius(require_length("capsule.radius", radius_))
     {
         const vec3d ad(a), bd(b);
         const vec3d ab = bd - ad;
         const double len2 = dot(ab, ab);
+        if (len2 > 0.0 && !(std::sqrt(len2) >= double(min_length)))
+            throw invalid_parameter("capsule.b", "must equal a or lie at least 1e-6 (min_length) from it",
+                                    detail::to_text(b) + " with a = " + detail::to_text(a));
         axis_ = vec3f(ab);
         // a == b makes every t equivalent; 0 keeps the clamp below free of a 0/0.
         inverse_length_squared_ = len2 > 0.0 ? static_cast<float>(1.0 / len2) : 0.0f;

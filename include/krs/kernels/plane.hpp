@@ -4,11 +4,13 @@
 // Its signed distance dot(n, p) - offset is exact (1-Lipschitz because |n| = 1, zero on the
 // plane): a ground for terrain and the clipping half of a KRS mirror. The normal is normalized at
 // construction (in double), so a user may pass any non-zero direction. A half-space has no finite
-// bound, so bound() reports an unbounded sphere and tracers must clip it themselves.
+// bound, so bound() reports an unbounded sphere and tracers must clip it themselves. The offset
+// (the plane's distance from the origin) obeys the magnitude policy of krs/core/validate.hpp.
 
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
 
+#include <algorithm>
 #include <string_view>
 
 namespace krs {
@@ -19,7 +21,7 @@ struct plane {
 
     plane() = default;
     plane(const vec3f& normal_, float offset_)
-        : normal_direction(require_direction("plane.normal", normal_)), offset(require_finite("plane.offset", offset_))
+        : normal_direction(require_direction("plane.normal", normal_)), offset(require_magnitude("plane.offset", offset_))
     {
     }
 
@@ -29,10 +31,12 @@ struct plane {
     static plane through(const vec3f& point, const vec3f& normal)
     {
         const vec3f n = require_direction("plane.normal", normal);
-        const vec3d p(require_finite("plane.point", point));
+        // |offset| <= |point| <= max_magnitude: the policy holds for the offset too.
+        const vec3d p(require_magnitude("plane.point", point));
         plane result;
         result.normal_direction = n;
-        result.offset = static_cast<float>(dot(vec3d(n), p));
+        // The clamp absorbs the few ulps by which |n| differs from 1 (as mirror::through does).
+        result.offset = static_cast<float>(std::clamp(dot(vec3d(n), p), -double(max_magnitude), double(max_magnitude)));
         return result;
     }
 

@@ -3,6 +3,7 @@
 //
 // Its signed distance |p - c| - r is exact (1-Lipschitz, zero on the surface), which makes it the
 // kernel of choice for coral, rock and leaves (paper section 7.1). Radius 0 is allowed: a point.
+// Center and radius obey the magnitude policy of krs/core/validate.hpp (|center|, radius <= 1e9).
 
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
@@ -17,7 +18,7 @@ struct sphere {
 
     sphere() = default;
     sphere(const vec3f& center_, float radius_)
-        : center(require_finite("sphere.center", center_)), radius(require_non_negative("sphere.radius", radius_))
+        : center(require_magnitude("sphere.center", center_)), radius(require_length("sphere.radius", radius_))
     {
     }
 

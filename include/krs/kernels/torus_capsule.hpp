@@ -27,6 +27,7 @@
 #include "krs/core/validate.hpp"
 #include "krs/kernels/capsule.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string_view>
@@ -54,16 +55,20 @@ class torus_capsule {
 public:
     torus_capsule() : torus_capsule(vec3f{0, 0, 0}, vec3f{0, 0, 1}, vec3f{0, 0, 0.5f}, 0.0f) {}
     torus_capsule(const vec3f& start, const vec3f& end, const vec3f& control, float radius)
-        : start_(require_finite("torus_capsule.start", start)), end_(require_finite("torus_capsule.end", end)),
-          control_(require_finite("torus_capsule.control", control)),
-          radius_(require_non_negative("torus_capsule.radius", radius))
+        : start_(require_magnitude("torus_capsule.start", start)), end_(require_magnitude("torus_capsule.end", end)),
+          control_(require_magnitude("torus_capsule.control", control)),
+          radius_(require_length("torus_capsule.radius", radius))
     {
         // Everything derived is computed in double from the float inputs and rounded once.
         const vec3d s(start_), e(end_), c(control_);
         const vec3d chord = e - s;
         const double chord_length = length(chord);
-        if (!(chord_length > 0))
-            throw invalid_parameter("torus_capsule.end", "must differ from start", detail::to_text(end_));
+        // The curvature is at most 2 / chord: a chord of min_length or more keeps it <= 2e6, so
+        // the distance's curvature * u and curvature * |u|^2 stay finite floats at every point the
+        // magnitude policy covers, even folded by 64 mirrors (krs/core/validate.hpp).
+        if (!(chord_length >= double(min_length)))
+            throw invalid_parameter("torus_capsule.end", "must lie at least 1e-6 (min_length) from start",
+                                    detail::to_text(end_) + " with start = " + detail::to_text(start_));
         const vec3d a = s - c, b = e - c;
         const double la = length(a), lb = length(b);
         if (!(la > 0) || !(lb > 0))
@@ -137,6 +142,12 @@ public:
     float radius() const { return radius_; }
     // kappa = 1 / (circle radius); 0 for a straight arc.
     float curvature() const { return curvature_; }
+    // The largest |p| at which the float distance is certain to be finite. evaluate() takes the
+    // length of curvature * u (u = p - chord middle), which overflows once that passes 1.8e19, and
+    // squares u: so |p| <= 1e19 / max(1, curvature), less the chord middle's |c| <= 1e9. Callers
+    // that magnify points before evaluating a kernel (a KIFS) check against it; the magnitude
+    // policy's own points (|p| <= 1.3e11 after 64 folds) are always within it.
+    double input_reach() const { return 1e19 / std::max(1.0, double(curvature_)) - double(max_magnitude); }
     // Unit normal of the arc's plane (arbitrary perpendicular to the chord when straight).
     const vec3f& plane_normal() const { return plane_normal_; }
     // Unit vector in the arc plane, perpendicular to the chord, toward the bulge.

@@ -23,6 +23,7 @@
 #include "krs/model/tree.hpp"
 #include "krs/sequence.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -47,12 +48,19 @@ inline coral_sequence build_coral(const coral_parameters& c)
 {
     if (c.levels < 1 || c.levels > 40)
         throw invalid_parameter("coral.levels", "must be in [1, 40]", std::to_string(c.levels));
-    require_positive("coral.base_radius", c.base_radius);
-    require_positive("coral.segment_length", c.segment_length);
+    require_positive_length("coral.base_radius", c.base_radius);
+    require_positive_length("coral.segment_length", c.segment_length);
     detail::require_range("coral.taper", c.taper, 0.5, 1.0);
     detail::require_range("coral.spread_degrees", c.spread_degrees, 5.0, 80.0);
     detail::require_range("coral.knot", c.knot, 1.0, 3.0);
     detail::require_range("coral.tip_blob", c.tip_blob, 1.0, 4.0);
+    // The magnitude policy (krs/core/validate.hpp) for what the parameters grow into: the route
+    // (levels segments, none longer than the first) and the spheres (at most 4 base radii).
+    if (!(double(c.levels) * double(c.segment_length) <= double(max_magnitude)))
+        throw invalid_parameter("coral.segment_length", "times levels must be <= 1e9", krs::detail::to_text(c.segment_length));
+    if (!(double(std::max(c.knot, c.tip_blob)) * double(c.base_radius) <= double(max_magnitude)))
+        throw invalid_parameter("coral.base_radius", "times max(knot, tip_blob) must be <= 1e9",
+                                krs::detail::to_text(c.base_radius));
 
     constexpr double degree = std::numbers::pi / 180.0;
     detail::signed_unit_random random(c.seed);
@@ -73,6 +81,12 @@ inline coral_sequence build_coral(const coral_parameters& c)
         }
         radii.push_back(radius);
         points.push_back(points.back() + direction * segment);
+        // A capsule's ends, as stored in float, must coincide or lie min_length apart (capsule.hpp).
+        const double stored = length(vec3d(detail::to_float(points.back())) - vec3d(detail::to_float(points[points.size() - 2])));
+        if (stored > 0.0 && !(stored >= double(min_length)))
+            throw invalid_parameter("coral.segment_length",
+                                    "times taper^" + std::to_string(j) + " is below 1e-6 (min_length) (raise it or taper)",
+                                    krs::detail::to_text(c.segment_length));
     }
     coral_sequence::builder b;
     const std::size_t last = std::size_t(c.levels) - 1;
@@ -104,8 +118,12 @@ struct sponge {
 
 inline sponge build_sponge(const sponge_parameters& s)
 {
-    require_finite("sponge.center", s.center);
-    require_positive("sponge.size", s.size);
+    require_magnitude("sponge.center", s.center);
+    require_positive_length("sponge.size", s.size);
+    // Every mirror and the kernel lie within |center| + size of the origin (the magnitude policy of
+    // krs/core/validate.hpp).
+    if (!(length(vec3d(s.center)) + double(s.size) <= double(max_magnitude)))
+        throw invalid_parameter("sponge.size", "|center| + size must be <= 1e9", krs::detail::to_text(s.size));
     if (s.levels < 1 || s.levels > 9)
         throw invalid_parameter("sponge.levels", "must be in [1, 9]", std::to_string(s.levels));
 

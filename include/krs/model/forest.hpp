@@ -82,7 +82,7 @@ inline forest build_forest(const forest_parameters& f)
 
     detail::signed_unit_random random(f.seed);
     const scattering s = detail::scatter_by_mirrors(center, footprint, f.doublings, double(f.spacing) * 2.0 * footprint,
-                                                    double(f.angle_jitter_degrees), random);
+                                                    double(f.angle_jitter_degrees), random, "forest.doublings");
     auto b = detail::replay(tree);
     for (const mirror& m : s.mirrors) b.mirror(m); // empty kernel sets: pure multiplication
     if (f.ground_height) b.kernel(plane({0, 1, 0}, *f.ground_height));

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <string>
 
 namespace krs::model {
 
@@ -41,16 +42,21 @@ inline grass_field build_grass(const grass_parameters& g)
 {
     if (g.blades_per_clump < 1 || g.blades_per_clump > 64)
         throw invalid_parameter("grass.blades_per_clump", "must be in [1, 64]", std::to_string(g.blades_per_clump));
-    require_positive("grass.blade_height", g.blade_height);
-    require_positive("grass.blade_width", g.blade_width);
+    require_positive_length("grass.blade_height", g.blade_height);
+    require_positive_length("grass.blade_width", g.blade_width);
     if (g.blade_width > 0.25f * g.blade_height)
         throw invalid_parameter("grass.blade_width", "must be <= blade_height / 4", krs::detail::to_text(g.blade_width));
     detail::require_range("grass.lean", g.lean, 0.0, 1.0);
-    require_positive("grass.clump_radius", g.clump_radius);
+    require_positive_length("grass.clump_radius", g.clump_radius);
     if (g.doublings < 0 || g.doublings > 20)
         throw invalid_parameter("grass.doublings", "must be in [0, 20]", std::to_string(g.doublings));
     detail::require_range("grass.spacing", g.spacing, 0.0, 4.0);
-    require_finite("grass.ground_height", g.ground_height);
+    require_magnitude("grass.ground_height", g.ground_height);
+    // The clump (roots within clump_radius, blades leaning at most blade_height out and rising as
+    // much) must obey the magnitude policy (krs/core/validate.hpp) before it is scattered.
+    if (!(std::abs(double(g.ground_height)) + double(g.clump_radius) + 3.0 * double(g.blade_height) <= double(max_magnitude)))
+        throw invalid_parameter("grass.clump_radius", "|ground_height| + clump_radius + 3 blade_height must be <= 1e9",
+                                krs::detail::to_text(g.clump_radius));
 
     detail::signed_unit_random random(g.seed);
     grass_sequence::builder b;
@@ -68,7 +74,18 @@ inline grass_field build_grass(const grass_parameters& g)
         const vec3d tip = root + out * lean + vec3d{0, h, 0};
         // Control point: up from the root, so the blade leaves the ground vertically and arcs over.
         const vec3d control = root + vec3d{0, 0.6 * h, 0} + out * (0.2 * lean);
-        const torus_capsule blade(detail::to_float(root), detail::to_float(tip), detail::to_float(control), g.blade_width);
+        // A blade far smaller than float's spacing at its position loses its shape when stored
+        // (its root, control and tip coincide, or its chord drops under min_length): name the
+        // grass parameter rather than the kernel's.
+        const torus_capsule blade = [&] {
+            try {
+                return torus_capsule(detail::to_float(root), detail::to_float(tip), detail::to_float(control), g.blade_width);
+            } catch (const invalid_parameter& e) {
+                throw invalid_parameter("grass.blade_height",
+                                        std::string("is too small to store as a blade at ground_height (") + e.what() + ")",
+                                        krs::detail::to_text(g.blade_height));
+            }
+        }();
         b.kernel(blade);
         // The footprint must hold the whole blade (its arc may bulge past the tip), or the
         // scattering mirrors would clip it.
@@ -77,7 +94,7 @@ inline grass_field build_grass(const grass_parameters& g)
     }
     const double radius = reach;
     const scattering s = detail::scatter_by_mirrors(vec3d{0, y0, 0}, radius, g.doublings,
-                                                    double(g.spacing) * 2.0 * radius, 12.0, random);
+                                                    double(g.spacing) * 2.0 * radius, 12.0, random, "grass.doublings");
     for (const mirror& m : s.mirrors) b.mirror(m);
     b.kernel(plane({0, 1, 0}, g.ground_height));
     grass_field out;

@@ -20,6 +20,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace krs::model {
@@ -32,9 +34,11 @@ struct scattering {
 
 namespace detail {
 
-// Copies of a vertical object with footprint circle (center, radius) in the xz plane.
+// Copies of a vertical object with footprint circle (center, radius) in the xz plane. Each doubling
+// roughly doubles the patch's width, so many doublings of a large object can carry the mirrors past
+// the magnitude policy's 1e9 (krs/core/validate.hpp): that is reported against `doublings_name`.
 inline scattering scatter_by_mirrors(const vec3d& center, double radius, int doublings, double gap,
-                                     double jitter_degrees, signed_unit_random& random)
+                                     double jitter_degrees, signed_unit_random& random, std::string_view doublings_name)
 {
     constexpr double degree = std::numbers::pi / 180.0;
     scattering s;
@@ -46,6 +50,11 @@ inline scattering scatter_by_mirrors(const vec3d& center, double radius, int dou
         double extent = -1e300;
         for (const vec3d& p : s.positions) extent = std::max(extent, dot(m, p));
         const double offset = extent + radius + 0.5 * gap;
+        if (!(std::abs(offset) + radius <= double(max_magnitude)))
+            throw invalid_parameter(doublings_name,
+                                    "spreads the copies past 1e9 from the origin at doubling " + std::to_string(k) +
+                                        " (fewer doublings, less spacing or a smaller object)",
+                                    std::to_string(doublings));
         s.mirrors.push_back(mirror(vec3f{float(m.x), 0.0f, float(m.z)}, float(offset)));
         // Reflect with the stored (float) mirror, so positions follow what Algorithm 1 will do.
         const mirror& stored = s.mirrors.back();

@@ -43,12 +43,16 @@ inline plane_sequence build_terrain(const terrain_parameters& t)
 {
     if (t.levels < 1 || t.levels > 60)
         throw invalid_parameter("terrain.levels", "must be in [1, 60]", std::to_string(t.levels));
-    require_positive("terrain.size", t.size);
+    require_positive_length("terrain.size", t.size);
     detail::require_range("terrain.detail_ratio", t.detail_ratio, 0.5, 0.99);
     detail::require_range("terrain.slope", t.slope, 0.0, 2.0);
     if (t.extra_planes < 0 || t.extra_planes > 16)
         throw invalid_parameter("terrain.extra_planes", "must be in [0, 16]", std::to_string(t.extra_planes));
-    require_finite("terrain.height", t.height);
+    require_magnitude("terrain.height", t.height);
+    // The kernel planes' offsets are (height + lift) n.y with lift in [-size / 10, 0]: the magnitude
+    // policy (krs/core/validate.hpp) holds for them when |height| + size / 10 does.
+    if (!(std::abs(double(t.height)) + 0.1 * double(t.size) <= double(max_magnitude)))
+        throw invalid_parameter("terrain.height", "|height| + size / 10 must be <= 1e9", krs::detail::to_text(t.height));
 
     detail::signed_unit_random random(t.seed);
     auto tilted = [&](double slope, double lift) {
@@ -101,8 +105,12 @@ struct rock {
 
 inline rock build_rock(const rock_parameters& r)
 {
-    require_finite("rock.center", r.center);
-    require_positive("rock.radius", r.radius);
+    require_magnitude("rock.center", r.center);
+    require_positive_length("rock.radius", r.radius);
+    // Facet and fold planes lie within |center| + radius of the origin: the magnitude policy
+    // (krs/core/validate.hpp) holds for their offsets when that does.
+    if (!(length(vec3d(r.center)) + double(r.radius) <= double(max_magnitude)))
+        throw invalid_parameter("rock.radius", "|center| + radius must be <= 1e9", krs::detail::to_text(r.radius));
     if (r.facets < 1 || r.facets > 16)
         throw invalid_parameter("rock.facets", "must be in [1, 16]", std::to_string(r.facets));
     if (r.folds < 0 || r.folds > 58)

@@ -73,13 +73,22 @@ inline tree_sequence build_tree(const tree_parameters& t)
     if (branches - 1 > tree_sequence::max_levels)
         throw invalid_parameter("tree.forks", "too many forks for one sequence", std::to_string(branches - 1));
 
-    // Kernels (the torus_capsule constructor validates its own points and radius).
-    std::vector<torus_capsule> kernels;
+    // Every point obeys the magnitude policy (krs/core/validate.hpp), checked here so the message
+    // names the tree's parameter rather than the kernel's.
+    for (std::size_t j = 0; j < points; ++j) require_magnitude(detail::indexed("tree.forks", j), t.forks[j]);
     for (std::size_t j = 0; j < branches; ++j) {
-        require_finite(detail::indexed("tree.forks", j), t.forks[j]);
-        require_non_negative(detail::indexed("tree.widths", j), t.widths[j]);
-        kernels.emplace_back(t.forks[j], t.forks[j + 1], t.controls[j], t.widths[j]);
+        require_magnitude(detail::indexed("tree.controls", j), t.controls[j]);
+        require_length(detail::indexed("tree.widths", j), t.widths[j]);
+        if (!(length(vec3d(t.forks[j + 1]) - vec3d(t.forks[j])) >= double(min_length)))
+            throw invalid_parameter(detail::indexed("tree.forks", j + 1),
+                                    "must lie at least 1e-6 (min_length) from the fork before it",
+                                    krs::detail::to_text(t.forks[j + 1]));
     }
+    if (t.ground_height) require_magnitude("tree.ground_height", *t.ground_height);
+
+    // Kernels (the torus_capsule constructor checks the rest: a control point off its arc).
+    std::vector<torus_capsule> kernels;
+    for (std::size_t j = 0; j < branches; ++j) kernels.emplace_back(t.forks[j], t.forks[j + 1], t.controls[j], t.widths[j]);
 
     // Mirrors at inner forks 1 .. branches-1, with the route's child on the negative side.
     std::vector<mirror> fork_mirrors;
@@ -115,7 +124,7 @@ inline tree_sequence build_tree(const tree_parameters& t)
         b.mirror(fork_mirrors[j]);
         b.kernel(kernels[j]);
     }
-    if (t.ground_height) b.kernel(plane({0, 1, 0}, require_finite("tree.ground_height", *t.ground_height)));
+    if (t.ground_height) b.kernel(plane({0, 1, 0}, *t.ground_height));
     return b.build();
 }
 
@@ -165,8 +174,8 @@ inline tree_parameters grow_tree(const tree_style& s)
     using detail::require_range;
     if (s.levels < 1 || s.levels > int(tree_sequence::max_levels) + 1)
         throw invalid_parameter("tree_style.levels", "must be in [1, 65]", std::to_string(s.levels));
-    require_positive("tree_style.trunk_length", s.trunk_length);
-    require_non_negative("tree_style.trunk_radius", s.trunk_radius);
+    require_positive_length("tree_style.trunk_length", s.trunk_length);
+    require_length("tree_style.trunk_radius", s.trunk_radius);
     require_range("tree_style.length_ratio", s.length_ratio, 1e-3, 1.5);
     require_range("tree_style.radius_ratio", s.radius_ratio, 1e-3, 1.0);
     require_range("tree_style.spread_degrees", s.spread_degrees, 1.0, 89.0);
@@ -174,7 +183,8 @@ inline tree_parameters grow_tree(const tree_style& s)
     require_range("tree_style.bend", s.bend, -0.5, 0.5);
     require_range("tree_style.upward", s.upward, 0.0, 1.0);
     require_range("tree_style.leaves_per_twig", s.leaves_per_twig, 0, 64);
-    require_non_negative("tree_style.leaf_radius", s.leaf_radius);
+    require_length("tree_style.leaf_radius", s.leaf_radius);
+    if (s.ground_height) require_magnitude("tree_style.ground_height", *s.ground_height);
     require_range("tree_style.jitter", s.jitter, 0.0, 0.5);
 
     constexpr double degree = std::numbers::pi / 180.0;
@@ -210,6 +220,19 @@ inline tree_parameters grow_tree(const tree_style& s)
         t.controls.push_back(detail::to_float(control));
         t.widths.push_back(float(radius));
         t.forks.push_back(detail::to_float(end));
+        // The grown route must obey the magnitude policy, and each branch must stay a kernel
+        // (as stored in float: a branch below float's spacing at its position vanishes).
+        if (!(length(vec3d(t.forks.back())) <= double(max_magnitude)))
+            throw invalid_parameter("tree_style.trunk_length",
+                                    "grows the tree past 1e9 from the origin at level " + std::to_string(j) +
+                                        " (lower trunk_length, length_ratio or levels)",
+                                    krs::detail::to_text(s.trunk_length));
+        if (!(length(vec3d(t.forks.back()) - vec3d(t.forks[t.forks.size() - 2])) >= double(min_length)))
+            throw invalid_parameter("tree_style.length_ratio",
+                                    "shrinks branch " + std::to_string(j) +
+                                        " below 1e-6 (min_length) or below float's spacing at its position "
+                                        "(raise length_ratio or trunk_length, or lower levels)",
+                                    krs::detail::to_text(s.length_ratio));
         point = end;
     }
     // Leaves along the twig's second half, around it, kept on the negative side of the last fork's
@@ -222,7 +245,11 @@ inline tree_parameters grow_tree(const tree_style& s)
         const double angle = (k - 0.5 * (s.leaves_per_twig - 1)) * (std::numbers::pi * 0.8 / std::max(1, s.leaves_per_twig));
         const vec3d out = side0 * std::cos(angle) + side1 * std::sin(angle);
         const vec3d c = twig_start + direction * (along * branch_length) + out * (radius + s.leaf_radius);
-        t.leaves.emplace_back(detail::to_float(c), s.leaf_radius);
+        const vec3f leaf_center = detail::to_float(c);
+        if (!(length(vec3d(leaf_center)) <= double(max_magnitude)))
+            throw invalid_parameter("tree_style.leaf_radius", "puts a leaf past 1e9 from the origin",
+                                    krs::detail::to_text(s.leaf_radius));
+        t.leaves.emplace_back(leaf_center, s.leaf_radius);
     }
     return t;
 }
