@@ -19,9 +19,11 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -513,11 +515,18 @@ TEST_CASE("stores: all four kinds match the reference on a sparse 300 cubed tree
     {
         const std::size_t n = voxels.size();
         CHECK(dense.memory_bytes() == 2 * std::size_t(volume.voxel_count()));
-        CHECK(list.memory_bytes() == 6 * n);
+        // The list and its directory: at most one 4-byte position per two voxels, and two more.
+        CHECK(list.memory_bytes() > 6 * n);
+        CHECK(list.memory_bytes() <= 8 * n + 8);
         CHECK(list.memory_bytes() >= hypertree::index_list_store::bytes_needed(volume, voxels));
-        CHECK(bits.memory_bytes() > list.memory_bytes());
-        CHECK(bits.memory_bytes() <= 6 * n + (voxels.back().index - voxels.front().index) / 8 + 8);
-        CHECK(parts.memory_bytes() < 6 * n + 6 * sizeof(hypertree::store_part) + 1);
+        // The list, one bit per index of the range (rounded up to 512-bit blocks) and 4 bytes per block.
+        const std::size_t range = voxels.back().index - voxels.front().index + 1;
+        CHECK(bits.memory_bytes() > 6 * n + range / 8);
+        CHECK(bits.memory_bytes() <= 6 * n + (range + 511) / 512 * (64 + 4));
+        CHECK(bits.memory_bytes() >= hypertree::bit_array_store::bytes_needed(volume, voxels));
+        CHECK(parts.memory_bytes() > 6 * n);
+        CHECK(parts.memory_bytes() <= 8 * n + 6 * (sizeof(hypertree::store_part) + 8));
+        CHECK(parts.memory_bytes() >= hypertree::partitioned_store::bytes_needed(volume, voxels));
         // The paper: a compact hypertree takes under 5% of a dense array.
         CHECK(list.memory_bytes() * 20 < dense.memory_bytes());
         CHECK(parts.memory_bytes() * 20 < dense.memory_bytes());
@@ -554,6 +563,130 @@ TEST_CASE("stores: all four kinds match the reference on a sparse 300 cubed tree
             CHECK(double(part.sphere.radius) <= farthest + 0.5 * krs::length(volume.voxel_size()) + 1e-4);
         }
         CHECK(total == voxels.size());
+    }
+}
+
+TEST_CASE("stores: the lookup directories agree with the lists at grid edges, in empty rows and in full rows")
+{
+    // Row length 37 (not a power of two, so buckets and rows do not line up) and 64 (they do).
+    for (const int nx : {37, 64}) {
+        const hypervolume volume({0, 0, 0}, {1, 1, 1}, {nx, 6, 5});
+        const auto n = volume.grid();
+        const voxel_index last = voxel_index(volume.voxel_count() - 1);
+        const auto value_of = [](voxel_index i) {
+            return voxel{std::uint8_t(1 + i % 255), std::uint8_t(i % 7)};
+        };
+        std::mt19937_64 g(11);
+        std::vector<std::pair<std::string, std::vector<voxel_index>>> cases;
+        cases.push_back({"first voxel only", {0}});
+        cases.push_back({"last voxel only", {last}});
+        cases.push_back({"first and last voxels: every row between empty", {0, last}});
+        {
+            std::vector<voxel_index> corners; // both ends of every row: the grid's x faces
+            for (int z = 0; z < n.z; ++z)
+                for (int y = 0; y < n.y; ++y) corners.push_back(volume.index(0, y, z)), corners.push_back(volume.index(n.x - 1, y, z));
+            cases.push_back({"both ends of every row", corners});
+        }
+        {
+            std::vector<voxel_index> row; // one full row, all else empty
+            for (int x = 0; x < n.x; ++x) row.push_back(volume.index(x, 3, 2));
+            cases.push_back({"a single full row", row});
+        }
+        {
+            std::vector<voxel_index> slab; // full rows in every other z slice: runs of empty rows between
+            for (int z = 0; z < n.z; z += 2)
+                for (int y = 0; y < n.y; ++y)
+                    for (int x = 0; x < n.x; ++x) slab.push_back(volume.index(x, y, z));
+            cases.push_back({"full slices with empty slices between", slab});
+        }
+        {
+            std::vector<voxel_index> mixed = {0, last}; // a full row among scattered voxels
+            for (int x = 0; x < n.x; ++x) mixed.push_back(volume.index(x, n.y - 1, n.z - 1));
+            for (int k = 0; k < 40; ++k) mixed.push_back(integer(g, 0, last));
+            std::sort(mixed.begin(), mixed.end());
+            mixed.erase(std::unique(mixed.begin(), mixed.end()), mixed.end());
+            cases.push_back({"a full row at the grid's far edge among scattered voxels", mixed});
+        }
+        cases.push_back({"every voxel", {}});
+        for (voxel_index i = 0; i <= last; ++i) cases.back().second.push_back(i);
+
+        for (const auto& [name, indices] : cases) {
+            for (const int parts_per_list : {1, 3}) {
+                INFO("row length " << nx << ", " << name << ", " << parts_per_list << " part(s)");
+                std::vector<stored_voxel> voxels;
+                // Parts by row, so that one bucket holds voxels of several parts.
+                for (const voxel_index i : indices)
+                    voxels.push_back({i, value_of(i), std::uint8_t(i / voxel_index(nx) % voxel_index(parts_per_list))});
+                const auto reference = grid_of(volume, voxels);
+                const auto list = hypertree::index_list_store::build(volume, voxels);
+                const auto bits = hypertree::bit_array_store::build(volume, voxels);
+                const auto parts = hypertree::partitioned_store::build(volume, voxels);
+                CHECK(count_differences(grid_of_store(list), reference) == 0);
+                CHECK(count_differences(grid_of_store(bits), reference) == 0);
+                CHECK(count_differences(grid_of_store(parts), reference) == 0);
+                // A part answers for its own voxels only.
+                std::size_t wrong = 0;
+                for (std::size_t slot = 0; slot < parts.parts().size(); ++slot) {
+                    const std::uint8_t part = parts.parts()[slot].part;
+                    for (const stored_voxel& v : voxels) {
+                        const voxel expected = v.part == part ? v.value : voxel{};
+                        wrong += !(parts.at_in_part(slot, v.index) == expected);
+                    }
+                }
+                CHECK(wrong == 0);
+                CHECK(list.memory_bytes() >= hypertree::index_list_store::bytes_needed(volume, voxels));
+                CHECK(list.memory_bytes() <= 8 * voxels.size() + 8);
+            }
+        }
+    }
+}
+
+TEST_CASE("stores: index directory positions are the counts of smaller indices, for lists up to the largest index")
+{
+    using hypertree::detail::index_directory;
+    std::mt19937_64 g(12);
+    constexpr voxel_index top = std::numeric_limits<voxel_index>::max();
+    // Random lists, lists hugging both ends of the index range, and one spanning all of it.
+    std::vector<std::vector<voxel_index>> lists;
+    for (int k = 0; k < 20; ++k) {
+        std::vector<voxel_index> list(integer(g, 1, 3000));
+        const std::uint64_t lo = integer(g, 0, top / 2), hi = lo + integer(g, 1, k % 2 ? 10000 : top / 2);
+        for (voxel_index& i : list) i = integer(g, lo, hi);
+        lists.push_back(list);
+    }
+    lists.push_back({0, 1, 2, top - 2, top - 1});
+    lists.push_back({top});
+    lists.push_back({top - 100, top - 50, top});
+    for (auto& list : lists) {
+        std::sort(list.begin(), list.end());
+        list.erase(std::unique(list.begin(), list.end()), list.end());
+        INFO("list of " << list.size() << " from " << list.front() << " to " << list.back());
+        const auto d = index_directory::shape(list.front(), list.back(), list.size());
+        REQUIRE(d.buckets >= 1);
+        CHECK(d.positions() <= list.size() / index_directory::voxels_per_bucket + 2);
+        // The buckets cover the list's range.
+        CHECK(std::uint64_t(list.back()) - list.front() < (d.buckets << d.shift));
+        std::vector<std::uint32_t> starts(d.positions());
+        d.fill(list.data(), list.size(), starts.data());
+        std::size_t wrong = 0;
+        for (std::uint64_t b = 0; b <= d.buckets; ++b) {
+            const std::uint64_t bucket_first = std::uint64_t(list.front()) + (b << d.shift);
+            const auto smaller = std::size_t(
+                std::count_if(list.begin(), list.end(), [&](voxel_index i) { return i < bucket_first; }));
+            wrong += starts[b] != (b == d.buckets ? list.size() : smaller);
+        }
+        CHECK(wrong == 0);
+        // Every listed index is found where it is; its neighbours and the range's ends are not.
+        for (std::size_t k = 0; k < list.size(); ++k) {
+            wrong += d.find(list.data(), starts.data(), list[k]) != k;
+            for (const voxel_index near : {voxel_index(list[k] - 1), voxel_index(list[k] + 1)})
+                if (!std::binary_search(list.begin(), list.end(), near))
+                    wrong += d.find(list.data(), starts.data(), near) != index_directory::npos;
+        }
+        for (const voxel_index end : {voxel_index(0), top, voxel_index(list.front() / 2)})
+            if (!std::binary_search(list.begin(), list.end(), end))
+                wrong += d.find(list.data(), starts.data(), end) != index_directory::npos;
+        CHECK(wrong == 0);
     }
 }
 
@@ -598,7 +731,8 @@ TEST_CASE("stores: the memory budget is checked before anything is allocated")
             hypertree::partitioned_store::bytes_needed(small_volume, voxels), "partitioned_store");
     refuses([&](hypertree::memory_budget b) { return hypertree::dense_store::build(small_volume, voxels, b); },
             hypertree::dense_store::bytes_needed(small_volume), "dense_store");
-    CHECK(hypertree::index_list_store::bytes_needed(small_volume, voxels) == 6 * voxels.size());
+    CHECK(hypertree::index_list_store::bytes_needed(small_volume, voxels) > 6 * voxels.size());
+    CHECK(hypertree::index_list_store::bytes_needed(small_volume, voxels) <= 8 * voxels.size() + 8);
 }
 
 TEST_CASE("stores: build refuses lists that are unsorted, repeated, outside the volume or empty-valued")

@@ -5,13 +5,18 @@
 // one copy of the whole tree under each first-level transformation j (part j + 1). Keeping a
 // separate sorted list per part gives each part a tight description the raymarcher can use to
 // skip empty space: its bounding sphere (spheres, not boxes, because the paper derives secondary
-// bounds by transforming the primary sphere) and its index range. A lookup bisects only the parts
-// whose index range holds the index. Each voxel belongs to exactly one part, the part of its
+// bounds by transforming the primary sphere) and its index range. Each voxel belongs to exactly one part, the part of its
 // shallowest hit as `compact` chose it, so the parts' lists are disjoint and together hold every
 // non-empty voxel once.
 //
+// A lookup does not bisect the parts' lists whole: one directory over all of them
+// (detail::index_directory) gives, for the bucket of consecutive indices that holds the index,
+// each part's entries in that bucket, side by side, so the parts with none are passed over
+// without touching their lists and the others are searched over a few entries.
+//
 // Storage is the index list's 6 bytes per non-empty voxel (the parts' lists lie back to back in
-// one index array and one value array) plus one small record per part.
+// one index array and one value array), the directory (at most 2 bytes per non-empty voxel) and
+// one small record per part.
 
 #include "hypertree/store/store.hpp"
 
@@ -48,10 +53,8 @@ public:
 
     static std::size_t bytes_needed(const hypervolume&, std::span<const stored_voxel> voxels)
     {
-        std::array<bool, 256> present{};
-        std::size_t parts = 0;
-        for (const stored_voxel& v : voxels) parts += !std::exchange(present[v.part], true);
-        return bytes_per_voxel * voxels.size() + sizeof(store_part) * parts;
+        const std::size_t parts = part_count(voxels);
+        return bytes_per_voxel * voxels.size() + sizeof(store_part) * parts + directory_of(voxels, parts).bytes();
     }
 
     static partitioned_store build(const hypervolume& volume, std::span<const stored_voxel> voxels,
@@ -61,7 +64,9 @@ public:
         detail::require_within_budget("partitioned_store", bytes_needed(volume, voxels), budget,
                                       std::to_string(bytes_per_voxel) + " bytes x " + std::to_string(voxels.size()) +
                                           " non-empty voxels + " + std::to_string(sizeof(store_part)) +
-                                          " bytes per part");
+                                          " bytes per part + " +
+                                          std::to_string(directory_of(voxels, part_count(voxels)).bytes()) +
+                                          " bytes of list directory");
         partitioned_store store;
         store.volume_ = volume;
         store.bounds_ = detail::bounds_of(volume, voxels);
@@ -70,9 +75,8 @@ public:
         for (const stored_voxel& v : voxels) ++population[v.part];
         std::array<std::size_t, 256> next{};
         std::size_t offset = 0;
-        std::size_t part_count = 0;
-        for (std::size_t p = 0; p < 256; ++p) part_count += population[p] != 0;
-        store.parts_.reserve(part_count);
+        const std::size_t parts = part_count(voxels);
+        store.parts_.reserve(parts);
         for (std::size_t p = 0; p < 256; ++p) {
             if (population[p] == 0) continue;
             store_part part;
@@ -92,23 +96,36 @@ public:
             store.values_[k] = v.value;
         }
         for (store_part& part : store.parts_) store.describe(part);
+
+        store.directory_ = directory_of(voxels, parts);
+        store.starts_.resize(store.directory_.positions());
+        for (std::size_t slot = 0; slot < parts; ++slot) {
+            const store_part& part = store.parts_[slot];
+            store.directory_.fill(store.indices_.data() + part.offset, part.count, store.starts_.data(), slot);
+        }
         return store;
     }
 
     const hypervolume& volume() const { return volume_; }
-    // Parts' index ranges overlap (a part spans many z slices, and so do its neighbours), so a
-    // part whose range holds the index is also tested against its index box before it is bisected:
-    // the two divisions that give the coordinates cost less than one needless bisection.
+    // Parts' index ranges overlap (a part spans many z slices, and so do its neighbours), so the
+    // directory row of the index's bucket, which says where each part has entries near it, passes
+    // over the parts with none; a part with some is also tested against its index box before it is
+    // searched, since the two divisions that give the coordinates cost less than a needless search.
     voxel at(voxel_index i) const
     {
+        const std::size_t bucket = directory_.bucket_of(i);
+        if (bucket == detail::index_directory::npos) return voxel{};
+        const std::uint32_t* begin = starts_.data() + bucket * parts_.size();
+        const std::uint32_t* end = begin + parts_.size();
         std::array<int, 3> c{};
         bool have_coordinates = false;
         for (std::size_t slot = 0; slot < parts_.size(); ++slot) {
-            const store_part& part = parts_[slot];
-            if (i < part.first_index || i > part.last_index) continue;
+            if (begin[slot] == end[slot]) continue;
             if (!have_coordinates) c = volume_.coordinates(i), have_coordinates = true;
-            if (!part.bounds.contains(c)) continue;
-            if (const voxel v = at_in_part(slot, i); v.density != 0) return v;
+            if (!parts_[slot].bounds.contains(c)) continue;
+            const std::size_t offset = parts_[slot].offset;
+            const std::size_t p = detail::index_directory::search(indices_.data() + offset, begin[slot], end[slot], i);
+            if (p != detail::index_directory::npos) return values_[offset + p];
         }
         return voxel{};
     }
@@ -116,15 +133,18 @@ public:
     // a raymarcher that already knows which part's sphere it is in.
     voxel at_in_part(std::size_t slot, voxel_index i) const
     {
-        const store_part& part = parts_[slot];
-        const voxel_index* list = indices_.data() + part.offset;
-        const std::size_t p = detail::lower_bound_position(list, part.count, i);
-        return p < part.count && list[p] == i ? values_[part.offset + p] : voxel{};
+        const std::size_t bucket = directory_.bucket_of(i);
+        if (bucket == detail::index_directory::npos) return voxel{};
+        const std::uint32_t* begin = starts_.data() + bucket * parts_.size() + slot;
+        const std::size_t offset = parts_[slot].offset;
+        const std::size_t p =
+            detail::index_directory::search(indices_.data() + offset, *begin, *(begin + parts_.size()), i);
+        return p != detail::index_directory::npos ? values_[offset + p] : voxel{};
     }
     std::size_t memory_bytes() const
     {
         return indices_.capacity() * sizeof(voxel_index) + values_.capacity() * sizeof(voxel) +
-               parts_.capacity() * sizeof(store_part);
+               parts_.capacity() * sizeof(store_part) + starts_.capacity() * sizeof(std::uint32_t);
     }
     std::size_t nonempty_count() const { return indices_.size(); }
     index_box bounds() const { return bounds_; }
@@ -170,6 +190,20 @@ public:
     }
 
 private:
+    static std::size_t part_count(std::span<const stored_voxel> voxels)
+    {
+        std::array<bool, 256> present{};
+        std::size_t parts = 0;
+        for (const stored_voxel& v : voxels) parts += !std::exchange(present[v.part], true);
+        return parts;
+    }
+    // One column of positions per part, over the index range of all the voxels.
+    static detail::index_directory directory_of(std::span<const stored_voxel> voxels, std::size_t parts)
+    {
+        if (voxels.empty()) return {};
+        return detail::index_directory::shape(voxels.front().index, voxels.back().index, voxels.size(), parts);
+    }
+
     // Index range, index box and bounding sphere of a part whose list is in place. The sphere is
     // centered on the box of the voxel centers and reaches the farthest center plus half a voxel
     // diagonal, so it holds every cell of the part whole.
@@ -201,6 +235,8 @@ private:
     std::vector<voxel_index> indices_;
     std::vector<voxel> values_;
     std::vector<store_part> parts_;
+    detail::index_directory directory_{};
+    std::vector<std::uint32_t> starts_; // directory_'s positions: a row per bucket, a column per part
     index_box bounds_{};
 };
 
