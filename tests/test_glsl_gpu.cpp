@@ -5,13 +5,10 @@
 // Built as its own executable (krs_glsl_tests) because it links EGL and OpenGL; CMake option
 // KRS_GLSL_TESTS=OFF leaves it out. A context that cannot be created FAILS the test.
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <EGL/egl.h>
-#include <EGL/eglext.h>
-#include <GL/glcorearb.h>
-
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/kernels/sphere.hpp"
+
+#include "support/gl_context.hpp"
 
 #include <doctest/doctest.h>
 
@@ -28,73 +25,14 @@
 
 namespace {
 
+using krs_test::buffer, krs_test::compile, krs_test::link, krs_test::require_context, krs_test::validate_with_glslang;
+
 namespace ex = krs::glsl::examples;
 using krs::vec3f;
 
-// One context per process, never terminated (eglTerminate under ASan reports the driver's
-// unloading as a leak).
-void require_context()
-{
-    static bool ready = false;
-    if (ready) return;
-    const EGLDisplay display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (display == EGL_NO_DISPLAY) throw std::runtime_error("eglGetPlatformDisplay(surfaceless) failed");
-    EGLint major = 0, minor = 0;
-    if (!eglInitialize(display, &major, &minor))
-        throw std::runtime_error("eglInitialize failed: 0x" + std::to_string(eglGetError()) +
-                                 " (is libgl1-mesa-dri installed? configure with -DKRS_GLSL_TESTS=OFF to skip)");
-    if (!eglBindAPI(EGL_OPENGL_API)) throw std::runtime_error("eglBindAPI(EGL_OPENGL_API) failed");
-    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 3,
-                                 EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-    const EGLContext context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
-    if (context == EGL_NO_CONTEXT) throw std::runtime_error("eglCreateContext(4.3 core) failed");
-    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))
-        throw std::runtime_error("eglMakeCurrent failed");
-    ready = true;
-}
 
-GLuint compile(GLenum stage, const std::string& text)
-{
-    const GLuint shader = glCreateShader(stage);
-    const char* source = text.c_str();
-    glShaderSource(shader, 1, &source, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw std::runtime_error(std::string("shader compilation failed: ") + log);
-    }
-    return shader;
-}
 
-GLuint link(std::initializer_list<GLuint> shaders)
-{
-    const GLuint program = glCreateProgram();
-    for (GLuint s : shaders) glAttachShader(program, s);
-    glLinkProgram(program);
-    for (GLuint s : shaders) glDeleteShader(s);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
-        glDeleteProgram(program);
-        throw std::runtime_error(std::string("program link failed: ") + log);
-    }
-    return program;
-}
 
-GLuint buffer(GLenum target, const void* data, std::size_t bytes, GLenum usage)
-{
-    GLuint b = 0;
-    glGenBuffers(1, &b);
-    glBindBuffer(target, b);
-    glBufferData(target, GLsizeiptr(bytes), data, usage);
-    return b;
-}
 
 // What one point gives on the GPU: distance, then locate's point, kernel, level and bits.
 struct gpu_result {
@@ -316,21 +254,6 @@ void check_frame(const ex::scene<S>& s)
     CHECK(geometry > total / 20); // the camera sees the scene
 }
 
-// glslangValidator on one file (stage from the extension); a message on failure.
-void validate(const std::string& path, const std::string& text)
-{
-    {
-        std::ofstream out(path, std::ios::binary);
-        out << text;
-        REQUIRE(out.good());
-    }
-    const std::string log = path + ".log";
-    const int status = std::system(("\"" KRS_GLSLANG_VALIDATOR "\" -l \"" + path + "\" > \"" + log + "\" 2>&1").c_str());
-    std::ifstream in(log);
-    const std::string message((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    INFO(path << ":\n" << message);
-    CHECK(status == 0);
-}
 
 std::string wrapper_main(const std::string& name)
 {
@@ -353,11 +276,11 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
             const std::string path = dir + "/" + s.name + std::string(kind.suffix);
             if (kind.target == krs::glsl::target::shadertoy) {
                 // As Shadertoy (WebGL 2) compiles it: ES 3.00 with its uniforms and a main.
-                validate(path + ".frag", "#version 300 es\nprecision highp float;\nprecision highp int;\n"
+                validate_with_glslang(path + ".frag", "#version 300 es\nprecision highp float;\nprecision highp int;\n"
                                          "uniform vec3 iResolution;\nuniform float iTime;\nout vec4 krs_out;\n" +
                                              text + "void main() { mainImage(krs_out, gl_FragCoord.xy); }\n");
                 // And as desktop GLSL, where the tests run it.
-                validate(path + ".330.frag", "#version 330 core\nuniform vec3 iResolution;\nout vec4 krs_out;\n" + text +
+                validate_with_glslang(path + ".330.frag", "#version 330 core\nuniform vec3 iResolution;\nout vec4 krs_out;\n" + text +
                                                  "void main() { mainImage(krs_out, gl_FragCoord.xy); }\n");
                 files += 2;
                 continue;
@@ -365,10 +288,10 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
             const std::string body = text + wrapper_main(s.name);
             if (kind.target == krs::glsl::target::glsl330 && kind.mode == krs::glsl::data_mode::constants) {
                 // The constants snippet serves 330 and 450 alike.
-                validate(path + ".450.frag", "#version 450 core\n" + body);
+                validate_with_glslang(path + ".450.frag", "#version 450 core\n" + body);
                 ++files;
             }
-            validate(path + ".frag", krs::glsl::version_line(kind.target) + body);
+            validate_with_glslang(path + ".frag", krs::glsl::version_line(kind.target) + body);
             ++files;
         }
         // 450 constants and es300 buffer are not shipped files; check them too.
@@ -376,7 +299,7 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
                                    std::pair{krs::glsl::target::es300, krs::glsl::data_mode::buffer}}) {
             krs::glsl::emitter e({t, m, s.name + "_data", 0});
             e.add(s.field, s.name);
-            validate(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + ".extra.frag",
+            validate_with_glslang(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + ".extra.frag",
                      e.source(true) + wrapper_main(s.name));
             ++files;
         }
@@ -529,7 +452,7 @@ int validate_fractal(const std::string& dir, const std::string& name, const F& f
         for (const auto m : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
             krs::glsl::emitter e({t, m, name + "_data", 0});
             e.add(field, name);
-            validate(dir + "/" + name + "." + std::string(krs::glsl::target_name(t)) +
+            validate_with_glslang(dir + "/" + name + "." + std::string(krs::glsl::target_name(t)) +
                          (m == krs::glsl::data_mode::buffer ? ".buffer" : ".constants") + ".frag",
                      e.source(true) + fractal_main(name));
             ++files;

@@ -9,14 +9,11 @@
 // center, as render does) and the shader reads them from a storage buffer, so both marchers start
 // from the same floats and the comparison is of the march alone.
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <EGL/egl.h>
-#include <EGL/eglext.h>
-#include <GL/glcorearb.h>
-
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/render/glsl.hpp"
+
+#include "support/gl_context.hpp"
 
 #include <doctest/doctest.h>
 
@@ -34,69 +31,11 @@ using namespace hypertree;
 
 namespace {
 
-// One context per process, never terminated (eglTerminate under ASan reports the driver's
-// unloading as a leak).
-void require_context()
-{
-    static bool ready = false;
-    if (ready) return;
-    const EGLDisplay display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (display == EGL_NO_DISPLAY) throw std::runtime_error("eglGetPlatformDisplay(surfaceless) failed");
-    EGLint major = 0, minor = 0;
-    if (!eglInitialize(display, &major, &minor))
-        throw std::runtime_error("eglInitialize failed: 0x" + std::to_string(eglGetError()) +
-                                 " (is libgl1-mesa-dri installed? configure with -DKRS_GLSL_TESTS=OFF to skip)");
-    if (!eglBindAPI(EGL_OPENGL_API)) throw std::runtime_error("eglBindAPI(EGL_OPENGL_API) failed");
-    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 3,
-                                 EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-    const EGLContext context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
-    if (context == EGL_NO_CONTEXT) throw std::runtime_error("eglCreateContext(4.3 core) failed");
-    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) throw std::runtime_error("eglMakeCurrent failed");
-    ready = true;
-}
+using krs_test::buffer, krs_test::compile, krs_test::link, krs_test::require_context, krs_test::validate_with_glslang;
 
-GLuint compile(GLenum stage, const std::string& text)
-{
-    const GLuint shader = glCreateShader(stage);
-    const char* source = text.c_str();
-    glShaderSource(shader, 1, &source, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw std::runtime_error(std::string("shader compilation failed: ") + log);
-    }
-    return shader;
-}
 
-GLuint link(std::initializer_list<GLuint> shaders)
-{
-    const GLuint program = glCreateProgram();
-    for (GLuint s : shaders) glAttachShader(program, s);
-    glLinkProgram(program);
-    for (GLuint s : shaders) glDeleteShader(s);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
-        glDeleteProgram(program);
-        throw std::runtime_error(std::string("program link failed: ") + log);
-    }
-    return program;
-}
 
-GLuint storage_buffer(const void* data, std::size_t bytes, GLenum usage)
-{
-    GLuint b = 0;
-    glGenBuffers(1, &b);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), data, usage);
-    return b;
-}
+
 
 // The upload glsl.hpp documents: RG8UI, unpack alignment 1, nearest filtering, on texture unit 0
 // (the sampler uniform's default).
@@ -114,21 +53,6 @@ GLuint upload(const packed_volume& v)
     return texture;
 }
 
-// glslangValidator on one file (stage from the extension); a message on failure.
-void validate(const std::string& path, const std::string& text)
-{
-    {
-        std::ofstream out(path, std::ios::binary);
-        out << text;
-        REQUIRE(out.good());
-    }
-    const std::string log = path + ".log";
-    const int status = std::system(("\"" KRS_GLSLANG_VALIDATOR "\" -l \"" + path + "\" > \"" + log + "\" 2>&1").c_str());
-    std::ifstream in(log);
-    const std::string message((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    INFO(path << ":\n" << message);
-    CHECK(status == 0);
-}
 
 // A small tree (preset D at resolution 40, 30000 iterations): the shape from a partitioned store
 // (one sphere and one flow per first-level part), the voxels copied into a dense store for the
@@ -202,7 +126,7 @@ std::vector<float> render_gpu(const std::string& snippet, const packed_volume& v
                                  "}\n";
     const GLuint program = link({compile(GL_VERTEX_SHADER, vertex), compile(GL_FRAGMENT_SHADER, fragment)});
     const GLuint texture = upload(volume);
-    const GLuint ray_buffer = storage_buffer(rays.data(), rays.size() * sizeof(float), GL_STATIC_DRAW);
+    const GLuint ray_buffer = buffer(GL_SHADER_STORAGE_BUFFER, rays.data(), rays.size() * sizeof(float), GL_STATIC_DRAW);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ray_buffer);
     GLuint framebuffer = 0, color = 0, vao = 0;
     glGenFramebuffers(1, &framebuffer);
@@ -353,8 +277,8 @@ TEST_CASE("hypertree GLSL reads back every voxel of the texture at its cell")
         points.insert(points.end(), {float(c.x), float(c.y), float(c.z)});
     }
     const std::size_t count = hv.voxel_count();
-    const GLuint in = storage_buffer(points.data(), points.size() * sizeof(float), GL_STATIC_DRAW);
-    const GLuint out = storage_buffer(nullptr, count * sizeof(std::uint32_t), GL_DYNAMIC_READ);
+    const GLuint in = buffer(GL_SHADER_STORAGE_BUFFER, points.data(), points.size() * sizeof(float), GL_STATIC_DRAW);
+    const GLuint out = buffer(GL_SHADER_STORAGE_BUFFER, nullptr, count * sizeof(std::uint32_t), GL_DYNAMIC_READ);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, out);
     glUseProgram(program);
@@ -401,7 +325,7 @@ TEST_CASE("glslangValidator accepts the emitted hypertree volume marcher")
     for (const auto& [label, options] : variants) {
         const std::string code = hypertree_glsl(t.dense, t.shape, t.colors, options, {"tree"});
         for (const char* version : {"330", "450"}) {
-            validate(dir + "/hypertree_" + label + "." + version + ".frag",
+            validate_with_glslang(dir + "/hypertree_" + label + "." + version + ".frag",
                      std::string("#version ") + version + " core\n" + code + main);
             ++files;
         }
@@ -410,7 +334,7 @@ TEST_CASE("glslangValidator accepts the emitted hypertree volume marcher")
     tree_shape bare = t.shape;
     bare.flows.clear();
     bare.spheres.clear();
-    validate(dir + "/hypertree_bare.330.frag", "#version 330 core\n" + hypertree_glsl(t.dense, bare, t.colors, {}, {"tree"}) + main);
+    validate_with_glslang(dir + "/hypertree_bare.330.frag", "#version 330 core\n" + hypertree_glsl(t.dense, bare, t.colors, {}, {"tree"}) + main);
     std::printf("glslangValidator: %d hypertree volume shaders checked\n", files + 1);
 }
 
