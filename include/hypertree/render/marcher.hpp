@@ -118,18 +118,20 @@ public:
         const double exponent = double(options_.density_scale) * double(options_.step_factor);
         for (int d = 0; d < 256; ++d) alpha_[d] = d == 255 ? 1.0f : float(1.0 - std::pow(1.0 - d / 255.0, exponent));
         for (int l = 0; l < 256; ++l) level_color_[l] = colors_.at(l);
-        // Empty-space skipping: one bit per brick of brick_side^3 voxels that holds a non-empty
-        // voxel. A sample in an empty brick needs no store lookup (a bisection in list stores).
-        for (int a = 0; a < 3; ++a) bricks_[a] = std::size_t((grid_[a] + brick_side - 1) / brick_side);
-        brick_bits_.assign((bricks_[0] * bricks_[1] * bricks_[2] + 63) / 64, 0);
+        // Empty-space skipping: one bit per brick of 4^3 voxels, and per brick of 16^3, that holds
+        // a non-empty voxel. A sample in an empty brick needs no store lookup, and a ray skips the
+        // rest of the largest empty brick it is in.
+        for (occupancy& level : occupancy_) {
+            for (int a = 0; a < 3; ++a) level.count[std::size_t(a)] = std::size_t((grid_[a] + level.side - 1) / level.side);
+            level.bits.assign((level.count[0] * level.count[1] * level.count[2] + 63) / 64, 0);
+        }
+        store.for_each([&](voxel_index i, const voxel&) {
+            const auto c = v.coordinates(i);
+            for (occupancy& level : occupancy_) level.mark(c[0], c[1], c[2]);
+        });
         // Room for twice the non-empty voxels (up to 2^20 slots), so few voxels evict each other
         // from a thread's shading memo.
         while (memo_slots_ < 2 * store.nonempty_count() && memo_slots_ < (std::size_t(1) << 20)) memo_slots_ *= 2;
-        store.for_each([&](voxel_index i, const voxel&) {
-            const auto c = v.coordinates(i);
-            const std::size_t b = std::size_t(c[0] / brick_side) + bricks_[0] * (std::size_t(c[1] / brick_side) + bricks_[1] * std::size_t(c[2] / brick_side));
-            brick_bits_[b >> 6] |= std::uint64_t(1) << (b & 63);
-        });
         box_lo_ = {float(shape_.box.lo.x), float(shape_.box.lo.y), float(shape_.box.lo.z)};
         box_hi_ = {float(shape_.box.hi.x), float(shape_.box.hi.y), float(shape_.box.hi.z)};
         if (options_.lights.size() > max_lights)
@@ -231,25 +233,28 @@ public:
         return transmittance;
     }
 
-    // The number of samples, from p on along direction d, that certainly lie in p's brick when
-    // that brick is empty (at least 1): the step count to the brick's exit, rounded so that a
-    // sample on the exit face is never skipped. 1 outside the grid or in a brick with voxels.
+    // The number of samples, from p on along direction d, that certainly lie in an empty brick
+    // around p (at least 1): the step count to the exit of the largest empty brick holding p,
+    // rounded so that a sample on the exit face is never skipped. 1 outside the grid or when even
+    // p's smallest brick has voxels.
     int empty_run(const krs::vec3f& p, const krs::vec3f& d) const
     {
         const float f[3] = {(p.x - origin_.x) * cells_per_unit_.x, (p.y - origin_.y) * cells_per_unit_.y, (p.z - origin_.z) * cells_per_unit_.z};
         if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < float(grid_[0]) && f[1] < float(grid_[1]) && f[2] < float(grid_[2]))) return 1;
         int c[3];
         for (int a = 0; a < 3; ++a) c[a] = std::min(int(f[a]), grid_[a] - 1);
-        const std::size_t brick = std::size_t(c[0] / brick_side) + bricks_[0] * (std::size_t(c[1] / brick_side) + bricks_[1] * std::size_t(c[2] / brick_side));
-        if ((brick_bits_[brick >> 6] >> (brick & 63)) & 1) return 1;
+        const occupancy* empty = nullptr;
+        for (auto level = occupancy_.rbegin(); level != occupancy_.rend() && !empty; ++level)
+            if (!level->occupied(c[0], c[1], c[2])) empty = &*level;
+        if (!empty) return 1;
         const float dir[3] = {d.x * cells_per_unit_.x, d.y * cells_per_unit_.y, d.z * cells_per_unit_.z}; // cells per unit t
         float exit = 3.0e38f;
         for (int a = 0; a < 3; ++a) {
-            const float lo = float((c[a] / brick_side) * brick_side), hi = lo + float(brick_side);
+            const float lo = float((c[a] / empty->side) * empty->side), hi = lo + float(empty->side);
             if (dir[a] > 0) exit = std::min(exit, (hi - f[a]) / dir[a]);
             else if (dir[a] < 0) exit = std::min(exit, (lo - f[a]) / dir[a]);
         }
-        // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 16).
+        // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
         const float steps = std::ceil(exit / step_ - 1e-3f);
         return steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1;
     }
@@ -271,8 +276,7 @@ public:
             if (!inside) return std::nullopt;
         }
         const int x = std::min(int(fx), grid_[0] - 1), y = std::min(int(fy), grid_[1] - 1), z = std::min(int(fz), grid_[2] - 1);
-        const std::size_t brick = std::size_t(x / brick_side) + bricks_[0] * (std::size_t(y / brick_side) + bricks_[1] * std::size_t(z / brick_side));
-        if (!((brick_bits_[brick >> 6] >> (brick & 63)) & 1)) return std::nullopt;
+        if (!occupancy_[0].occupied(x, y, z)) return std::nullopt;
         return voxel_index(x) + voxel_index(grid_[0]) * (voxel_index(y) + voxel_index(grid_[1]) * voxel_index(z));
     }
 
@@ -352,7 +356,8 @@ private:
         rgb lit;
         if (options_.shade_per_voxel && memo) {
             const std::size_t stride = 3 + lights;
-            if (memo->slots != memo_slots_) {
+            // (Re)sized for this marcher: its slot count and its number of lights.
+            if (memo->slots != memo_slots_ || memo->value.size() != memo_slots_ * stride) {
                 memo->slots = memo_slots_;
                 memo->index.assign(memo_slots_, ~voxel_index(0));
                 memo->value.assign(memo_slots_ * stride, 0.0f);
@@ -421,9 +426,27 @@ private:
     float side_ = 1, step_ = 1;
     static constexpr std::size_t max_lights = 8;
     std::size_t memo_slots_ = 1024;
-    static constexpr int brick_side = 4;
-    std::array<std::size_t, 3> bricks_{};
-    std::vector<std::uint64_t> brick_bits_;
+    // Occupancy bits of one brick size: whether a brick holds any non-empty voxel.
+    struct occupancy {
+        int side;
+        std::array<std::size_t, 3> count{};
+        std::vector<std::uint64_t> bits;
+        std::size_t brick(int x, int y, int z) const
+        {
+            return std::size_t(x / side) + count[0] * (std::size_t(y / side) + count[1] * std::size_t(z / side));
+        }
+        bool occupied(int x, int y, int z) const
+        {
+            const std::size_t b = brick(x, y, z);
+            return (bits[b >> 6] >> (b & 63)) & 1;
+        }
+        void mark(int x, int y, int z)
+        {
+            const std::size_t b = brick(x, y, z);
+            bits[b >> 6] |= std::uint64_t(1) << (b & 63);
+        }
+    };
+    std::array<occupancy, 2> occupancy_{occupancy{4, {}, {}}, occupancy{16, {}, {}}}; // finest first
     std::array<float, 256> alpha_{};
     std::array<rgb, 256> level_color_{};
     std::vector<krs::vec3f> light_dirs_;

@@ -15,6 +15,8 @@
 #include "hypertree/render/marcher.hpp"
 #include "krs/trace/camera.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -65,14 +67,21 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
     out.width = w, out.height = h;
     out.rgb.assign(std::size_t(w) * std::size_t(h) * 3, 0.0f);
     std::vector<std::uint64_t> row_lookups(std::size_t(h), 0);
+    static std::atomic<std::uint64_t> renders{0};
+    const std::uint64_t render_id = ++renders;
     const auto render_row = [&](std::size_t row) {
         const int y = int(row);
         ray_cache cache;
-        // One shading memo per thread, kept across the rows it renders; it only holds pure
-        // functions of voxels, so which thread renders which row changes nothing.
+        // One shading memo per thread, kept across the rows it renders in this call and emptied
+        // when a new call starts (so every render pays for its shading, and timings compare). It
+        // only holds pure functions of voxels: which thread renders which row changes nothing.
         thread_local shade_memo memo;
-        thread_local const void* memo_owner = nullptr;
-        if (memo_owner != &marcher) memo = shade_memo{}, memo_owner = &marcher;
+        thread_local std::uint64_t memo_render = 0;
+        if (memo_render != render_id) {
+            std::fill(memo.index.begin(), memo.index.end(), ~voxel_index(0));
+            memo.hits = memo.misses = 0;
+            memo_render = render_id;
+        }
         // Every sample ray of the row, in order; packets take them `lanes` at a time.
         const std::size_t count = std::size_t(w) * std::size_t(s * s);
         std::vector<float> px(count), py(count);
