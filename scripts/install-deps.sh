@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Install the Debian packages krs needs.  Usage: scripts/install-deps.sh [--tests|--examples|--all]
+# Install the Debian packages krs needs.  Usage: scripts/install-deps.sh [--tests|--examples|--all|--peers]
 #   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa (GLSL tests), OpenImageIO
 #               (a test checks an example's image)
 #   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO
 #   --all       all of the above plus Google Benchmark (the default)
+#   --peers     --all plus the peers the benchmarks compare with: Embree, OpenVDB
 # Only missing packages are installed; apt-get update runs only when something is missing, so a
 # repeated run costs a dpkg-query and nothing else.
 set -euo pipefail
@@ -14,17 +15,19 @@ base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
 tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools)
 examples=(libopenimageio-dev)
 benchmarks=(libbenchmark-dev)
+peers=(libembree-dev libopenvdb-dev)
 
 case "$mode" in
     --tests) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}") ;;
     --examples) wanted=("${base[@]}" "${examples[@]}") ;;
     --all) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}") ;;
+    --peers) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}" "${peers[@]}") ;;
     -h | --help)
-        sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'
+        sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'
         exit 0
         ;;
     *)
-        echo "install-deps.sh: unknown option '$mode' (use --tests, --examples or --all)" >&2
+        echo "install-deps.sh: unknown option '$mode' (use --tests, --examples, --all or --peers)" >&2
         exit 2
         ;;
 esac
