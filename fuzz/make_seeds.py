@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the seed corpora of fuzz_builders.cpp and fuzz_fractals.cpp to fuzz/corpus/builders/ and
-fuzz/corpus/fractals/ (fuzz_input.hpp has the byte layout). Re-run after changing the layout;
-crashers found by scripts/fuzz.sh go to fuzz/crashers/<target>/ by hand."""
+fuzz/corpus/fractals/ (fuzz_input.hpp has the byte layout), and those of fuzz_definition.cpp and
+fuzz_binary.cpp to fuzz/corpus/definition/ and fuzz/corpus/binary/ (layouts in those files).
+Re-run after changing a layout; crashers found by scripts/fuzz.sh go to fuzz/crashers/<target>/ by hand."""
 import os
 import struct
 
@@ -179,6 +180,118 @@ fractal_seeds = {
 }
 
 for target, table in (("builders", seeds), ("fractals", fractal_seeds)):
+    out = os.path.join(HERE, "corpus", target)
+    os.makedirs(out, exist_ok=True)
+    for name, data in table.items():
+        with open(os.path.join(out, name), "wb") as fh:
+            fh.write(data)
+    print(f"wrote {len(table)} seeds to {out}")
+
+
+# fuzz_definition.cpp: the input is a definition or forest file's text, unchanged. Seeds: the
+# example files, then small trees that each use one feature, and a few refusals.
+EXAMPLES = os.path.join(HERE, "..", "examples", "hypertrees")
+definition_seeds = {}
+for example in sorted(os.listdir(EXAMPLES)):
+    with open(os.path.join(EXAMPLES, example), "rb") as fh:
+        definition_seeds["example_" + example.replace(".", "_")] = fh.read()
+
+
+def small_tree(body, head="RESOLUTION 12\nITERATIONS 300\nTREEDEPTH 5\n"):
+    return (head + body).encode()
+
+
+ONE_STEM = "CONDENSATION\n  CONE y 0 0.5 0.03 0.015\n"
+BRANCH = "TRANSFORM 1 0\n  SCALE 0.6\n  ROTATE 0 0 1 35\n  TRANSLATE 0 0.4 0\n"
+definition_seeds.update({
+    "tree_minimal": small_tree(BRANCH),
+    "tree_per_level": small_tree(ONE_STEM + "TRANSFORM 1 0\n  SCALE (0.6, 0.5)\n  ROTATE 0 0 1 (40, 30, 20)\n"
+                                 "  TRANSLATE 0 (0.4, 0.3, 0.2) 0\n"),
+    "tree_random": small_tree(ONE_STEM + "TRANSFORM 1 0\n  SCALE 0.55~0.05\n  ROTATE 0 1 0 137~20\n"
+                              "  ROTATE 0 0 1 (40~5, 30~2)\n  TRANSLATE 0 0.4~0.05 0\n"),
+    "tree_dummy": small_tree(ONE_STEM + BRANCH + "TRANSFORM 0.5 3 DUMMY 1\n  SCALE 0.4\n  TRANSLATE 0.1 0.3 0\n"),
+    "tree_lineinit": small_tree("LINEINIT 0 0 0 0 0.05 0\n" + ONE_STEM + BRANCH),
+    "tree_perturb": small_tree("PERTURB 0.01 0.02 0.01 6\n" + ONE_STEM + BRANCH),
+    "tree_two_condensations": small_tree(
+        "CONDENSATION\n  CONE y 0 0.5 0.03 0.015\n  SHEAR y 0.12 0 2 0.5\n"
+        "CONDENSATION\n  CONE y 0 0.5 0.03 0.015\n  SHEAR y -0.12 0.03 2 0.5\n"
+        "  ROTATE 0 1 0 90\n" + "TRANSFORM 1 0\n  SHEAR x 0.05 0 2\n  SCALE (0.5, 0.46, 0.44)\n  TRANSLATE 0 0.3 0\n"),
+    "tree_everything": small_tree(
+        'NAME "all keywords"\nBRANCHDEPTH 2\nDENSITYCLASSES 8\nHYPERVOLUME 1 1.2 1\nDISPLACEMENT 0.5 0 0.5\n'
+        "POINTINIT 0 0.01 0\nDEPTHCOLOR 0 2 0.3 0.2 0.1 0.4 0.3 0.2\nDEPTHCOLOR 3 4 0.1 0.5 0.1 0.2 0.7 0.2\n"
+        + ONE_STEM + "  TRANSLATE 0 0.01 0\n" + BRANCH + "TRANSFORM 2 4\n  SCALE 0.5 0.45 0.5\n  ROTATE 1 0 1 -30\n"
+        "  SHEAR z 0.02 0.01 1.5 0.8\n  TRANSLATE 0 0.3 0\n", head="RESOLUTION 10 14 12\nITERATIONS 250\nTREEDEPTH 6\n"),
+    "tree_crlf_tabs_comments": small_tree(BRANCH).replace(b"\n", b"  # note\r\n").replace(b"  ", b"\t"),
+    "tree_deepest": small_tree(BRANCH, head="RESOLUTION 8\nITERATIONS 200\nTREEDEPTH 64\nBRANCHDEPTH 63\n"),
+    "tree_limits": small_tree("PERTURB 1e9 -1e9 0 1e9\n" + BRANCH.replace("0.4", "1e9"),
+                              head="RESOLUTION 1 2 2147483647\nITERATIONS 18446744073709551615\nTREEDEPTH 2\n"),
+    "refused_not_contraction": small_tree("TRANSFORM 1 0\n  SCALE 1.5\n"),
+    "refused_unknown_keyword": small_tree("GROW 1\n" + BRANCH),
+    "refused_unterminated_quote": small_tree('NAME "no end\n' + BRANCH),
+    "refused_too_many_voxels": small_tree(BRANCH, head="RESOLUTION 65536 65536 2\n"),
+    "forest_small": b"RESOLUTION 32 16 32\nSTORAGETYPE partitioned\nTREE a.tree\nTREE \"b c.tree\" 1 0 -1\n"
+                    b"TREE /abs/d.tree -1e9 0 1e9\n",
+    "forest_refused_storage": b"RESOLUTION 8\nSTORAGETYPE octree\nTREE a.tree\n",
+})
+
+
+# fuzz_binary.cpp: byte 0 selects the store kind (bits 0-1), recomputing the checksum (bit 2) and
+# a byte after the file (bit 3); the rest is a saved tree, written here by an independent writer
+# of the format of include/hypertree/io/binary.hpp (so the ctest replay also checks that the
+# loader reads files it did not write).
+def fnv1a64(data):
+    h = 0xcbf29ce484222325
+    for b in data:
+        h = ((h ^ b) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+def saved_tree(origin, extent, grid, voxels, count=None, version=1):
+    """voxels: (index, density, level, part), sorted by index."""
+    body = b"KRSHTREE" + struct.pack("<I", version) + struct.pack("<3d", *origin) + struct.pack("<3d", *extent)
+    body += struct.pack("<3i", *grid) + struct.pack("<Q", len(voxels) if count is None else count)
+    for index, density, level, part in voxels:
+        body += struct.pack("<IBBB", index, density, level, part)
+    return body + struct.pack("<Q", fnv1a64(body))
+
+
+def grown_tree(n):
+    """A trunk up the middle of an n^3 grid and two branches to the sides, levels and parts as the
+    generator gives them (trunk: level 0, part 0; branch j: part j + 1)."""
+    cells = {}
+    mid = n // 2
+    for y in range(n * 2 // 3):
+        cells[(mid, y, mid)] = (255, 0, 0)
+    for j, dx in enumerate((1, -1)):
+        for k in range(1, n // 3):
+            x, y = mid + dx * k, n // 3 + k
+            cells[(x, y, mid)] = (255 if k < 3 else 40 + 50 * (k % 4), 1 if k < 3 else 2, j + 1)
+    voxels = [(x + n * (y + n * z), d, l, p) for (x, y, z), (d, l, p) in cells.items()]
+    return sorted(voxels)
+
+
+unit = ((-0.75, -0.01, -0.75), (1.5, 1.21, 1.5))
+binary_seeds = {}
+for kind, name in enumerate(("dense", "index_list", "bit_array", "partitioned")):
+    binary_seeds[f"tree12_{name}"] = bytes([kind]) + saved_tree(*unit, (12, 12, 12), grown_tree(12))
+binary_seeds.update({
+    "tree16_index_list_trailing_byte": bytes([8 | 1]) + saved_tree(*unit, (16, 16, 16), grown_tree(16)),
+    "tree8_partitioned_fixed_checksum": bytes([4 | 3]) + saved_tree(*unit, (8, 8, 8), grown_tree(8)),
+    "empty_tree": bytes([1]) + saved_tree((0, 0, 0), (1, 1, 1), (4, 4, 4), []),
+    "one_voxel_last_index": bytes([2]) + saved_tree((0, 0, 0), (1, 1, 1), (4, 4, 4), [(63, 1, 7, 254)]),
+    "flat_grid": bytes([3]) + saved_tree((-5, 0, 2), (10, 0.1, 1e-3), (16, 1, 3),
+                                         [(i, 1 + i * 5, i % 3, i % 4) for i in range(0, 48, 3)]),
+    "huge_grid_few_voxels": bytes([1]) + saved_tree((0, 0, 0), (1e6, 1e6, 1e6), (65535, 65535, 1),
+                                                    [(0, 9, 0, 0), (4294836224, 9, 1, 1)]),
+    "huge_grid_dense_over_budget": bytes([0]) + saved_tree((0, 0, 0), (1, 1, 1), (4096, 4096, 16), [(5, 3, 0, 0)]),
+    "claims_many_voxels": bytes([1 | 4]) + saved_tree(*unit, (12, 12, 12), grown_tree(12)[:3], count=1728),
+    "bad_checksum": bytes([1]) + saved_tree(*unit, (12, 12, 12), grown_tree(12))[:-1] + b"\0",
+    "unsorted_voxels": bytes([1 | 4]) + saved_tree(*unit, (12, 12, 12), [(9, 4, 0, 0), (3, 4, 0, 0)]),
+    "version_2": bytes([1]) + saved_tree(*unit, (12, 12, 12), grown_tree(12)[:4], version=2),
+    "truncated_header": bytes([1]) + saved_tree(*unit, (12, 12, 12), [])[:50],
+})
+
+for target, table in (("definition", definition_seeds), ("binary", binary_seeds)):
     out = os.path.join(HERE, "corpus", target)
     os.makedirs(out, exist_ok=True)
     for name, data in table.items():
