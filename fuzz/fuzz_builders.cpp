@@ -196,8 +196,7 @@ void fuzz_forest(reader& in)
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
-    reader in{data, size};
-    try {
+    return krs_fuzz::run_one(data, size, [](reader& in) {
         switch (in.byte() % 8) {
         case 0: fuzz_style_tree(in); break;
         case 1: fuzz_raw_tree(in); break;
@@ -208,17 +207,5 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         case 6: fuzz_grass(in); break;
         default: fuzz_forest(in); break;
         }
-    } catch (const krs::invalid_parameter& e) {
-        // Rejected parameters: the expected outcome for bad input.
-#ifdef KRS_FUZZ_VERBOSE
-        std::fprintf(stderr, "  rejected: %s\n", e.what());
-#endif
-        return 0;
-    } catch (...) {
-        fail();
-    }
-#ifdef KRS_FUZZ_VERBOSE
-    std::fprintf(stderr, "  built\n");
-#endif
-    return 0;
+    });
 }

@@ -168,8 +168,7 @@ void fuzz_user_shell(reader& in)
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
-    reader in{data, size};
-    try {
+    return krs_fuzz::run_one(data, size, [](reader& in) {
         switch (in.byte() % 11) {
         case 0: fuzz_square(in); break;
         case 1: fuzz_cube(in); break;
@@ -183,17 +182,5 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         case 9: fuzz_cube_singularity(in); break;
         default: fuzz_user_shell(in); break;
         }
-    } catch (const krs::invalid_parameter& e) {
-        // Rejected parameters: the expected outcome for bad input.
-#ifdef KRS_FUZZ_VERBOSE
-        std::fprintf(stderr, "  rejected: %s\n", e.what());
-#endif
-        return 0;
-    } catch (...) {
-        fail();
-    }
-#ifdef KRS_FUZZ_VERBOSE
-    std::fprintf(stderr, "  built\n");
-#endif
-    return 0;
+    });
 }

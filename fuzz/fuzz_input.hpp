@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -149,6 +150,30 @@ void probe(const Field& field, reader& in, double reach, int count = 8)
         if (++filled == W) flush();
     }
     if (filled > 0) flush();
+}
+
+// One fuzz input: `build(in)` reads parameters and builds and checks a field. Refused parameters
+// (krs::invalid_parameter) are the expected outcome for bad input; any other exception is a bug.
+template <class Build>
+int run_one(const std::uint8_t* data, std::size_t size, Build&& build)
+{
+    reader in{data, size};
+    try {
+        build(in);
+    } catch (const krs::invalid_parameter& e) {
+#ifdef KRS_FUZZ_VERBOSE
+        std::fprintf(stderr, "  rejected: %s\n", e.what());
+#else
+        (void)e;
+#endif
+        return 0;
+    } catch (...) {
+        fail();
+    }
+#ifdef KRS_FUZZ_VERBOSE
+    std::fprintf(stderr, "  built\n");
+#endif
+    return 0;
 }
 
 } // namespace krs_fuzz
