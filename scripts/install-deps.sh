@@ -15,7 +15,7 @@ base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
 tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools)
 examples=(libopenimageio-dev)
 benchmarks=(libbenchmark-dev)
-peers=(libembree-dev libopenvdb-dev)
+peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost
 
 case "$mode" in
     --tests) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}") ;;
