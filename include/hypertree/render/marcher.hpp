@@ -122,7 +122,7 @@ public:
         // a non-empty voxel. A sample in an empty brick needs no store lookup, and a ray skips the
         // rest of the largest empty brick it is in.
         for (occupancy& level : occupancy_) {
-            for (int a = 0; a < 3; ++a) level.count[std::size_t(a)] = std::size_t((grid_[a] + level.side - 1) / level.side);
+            for (int a = 0; a < 3; ++a) level.count[std::size_t(a)] = std::size_t((grid_[a] + level.side() - 1) >> level.shift);
             level.bits.assign((level.count[0] * level.count[1] * level.count[2] + 63) / 64, 0);
         }
         store.for_each([&](voxel_index i, const voxel&) {
@@ -250,7 +250,7 @@ public:
         const float dir[3] = {d.x * cells_per_unit_.x, d.y * cells_per_unit_.y, d.z * cells_per_unit_.z}; // cells per unit t
         float exit = 3.0e38f;
         for (int a = 0; a < 3; ++a) {
-            const float lo = float((c[a] / empty->side) * empty->side), hi = lo + float(empty->side);
+            const float lo = float((c[a] >> empty->shift) << empty->shift), hi = lo + float(empty->side());
             if (dir[a] > 0) exit = std::min(exit, (hi - f[a]) / dir[a]);
             else if (dir[a] < 0) exit = std::min(exit, (lo - f[a]) / dir[a]);
         }
@@ -426,14 +426,16 @@ private:
     float side_ = 1, step_ = 1;
     static constexpr std::size_t max_lights = 8;
     std::size_t memo_slots_ = 1024;
-    // Occupancy bits of one brick size: whether a brick holds any non-empty voxel.
+    // Occupancy bits of one brick size (2^shift voxels a side): whether a brick holds any
+    // non-empty voxel. Shifts, not divisions: this runs for every sample.
     struct occupancy {
-        int side;
+        int shift;
         std::array<std::size_t, 3> count{};
         std::vector<std::uint64_t> bits;
+        int side() const { return 1 << shift; }
         std::size_t brick(int x, int y, int z) const
         {
-            return std::size_t(x / side) + count[0] * (std::size_t(y / side) + count[1] * std::size_t(z / side));
+            return std::size_t(x >> shift) + count[0] * (std::size_t(y >> shift) + count[1] * std::size_t(z >> shift));
         }
         bool occupied(int x, int y, int z) const
         {
@@ -446,7 +448,7 @@ private:
             bits[b >> 6] |= std::uint64_t(1) << (b & 63);
         }
     };
-    std::array<occupancy, 2> occupancy_{occupancy{4, {}, {}}, occupancy{16, {}, {}}}; // finest first
+    std::array<occupancy, 2> occupancy_{occupancy{2, {}, {}}, occupancy{4, {}, {}}}; // 4^3 and 16^3, finest first
     std::array<float, 256> alpha_{};
     std::array<rgb, 256> level_color_{};
     std::vector<krs::vec3f> light_dirs_;
