@@ -9,14 +9,18 @@
 // side so k = 1 makes a voxel of density mu, crossed along one side, exactly mu opaque). It is
 // shaded, multiplied by alpha and by the transmittance so far, and added; the march ends when the
 // transmittance falls below `min_transmittance` (full opacity) or the ray leaves the box.
-// Samples outside every secondary bounding sphere are not looked up (tree_shape.hpp: the spheres
-// hold every non-empty cell, so this changes no pixel, only the number of lookups).
+// Empty space is skipped by occupancy bricks (4^3 and 16^3 voxels): a sample in an empty brick is
+// not looked up, and the ray jumps by whole steps to the brick's exit, so it takes exactly the
+// samples it would have stepped through. Optionally, samples outside every secondary bounding
+// sphere are not looked up either (tree_shape.hpp: the spheres hold every non-empty cell).
+// Neither changes a pixel, only the work.
 //
 // Shading (8.3): ambient light attenuated toward the interior (Reeves' exponential falloff with
-// the depth below the crown's bounding sphere), Lambert diffuse and Phong specular with the
+// the depth below the crown's bounding sphere), Lambert diffuse and Blinn-Phong specular with the
 // procedural normals of the structure flow, each light's term attenuated by the opacity a shadow
 // ray accumulates toward it (same step, same early exit). The base color comes from the voxel's
-// depth (transfer.hpp).
+// depth (transfer.hpp). By default a sample is shaded at its voxel's center (shade_per_voxel), so
+// a voxel's shading is computed once per thread and render.
 //
 // One template: the loop over samples, the masks and the accumulation are written once over T.
 // What each lane looks up (store access, sphere test, shading of a sample) runs per lane in scalar
