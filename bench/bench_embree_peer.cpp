@@ -1,0 +1,777 @@
+// bench_embree_peer: the same KRS scene traced two ways, as issue 9 asks. The KRS side is the
+// packet tracer on the sequence itself (O(n) distance, memory independent of 2^n); the Embree side
+// is what a user without this library would do: tessellate each kernel, expand the sequence into
+// its 2^n instance transforms and trace triangles with Embree 3.
+//
+//     bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] [--tolerance T]
+//                       [--repeat R] [--csv FILE] [--scene grid|unaligned|both] [--krs-floor F]
+//
+// Scenes: a ring (two torus capsules closing a circle) around a sphere, copied 2^n times by n
+// vertical mirrors (krs::sequence, so krs::expand applies): `grid` with x- and z-normal mirrors,
+// `unaligned` with each normal turned by up to 10 degrees (ring_scene below); both seen whole
+// from above at an angle. n = 8, 10, ... max-n (default 32); Embree runs up to --embree-max-n
+// (default 22). Each image is N x N primary rays (default 512) in 8 x 8 tiles taken from a
+// shared counter by 2 threads (this machine's cores). Timings are the best of R runs (default 2).
+// The table is printed per scene; the CSV (default bench_embree_peer.csv next to the binary) has
+// one row per scene and n.
+//
+// Embree configurations (Debian's build: one instance level):
+//   flat       one instance of the level-0 kernel set's mesh per copy (2^n instances);
+//   two-level  a bottom mesh of 2^k expanded copies, instanced 2^(n-k) times; k in
+//              {n/2 - 2, n/2, n/2 + 2}, the fastest is reported.
+// Each is traced with rtcIntersect1 and rtcIntersect16 (4 x 4 pixel packets). Memory is what
+// Embree reports through its device memory monitor plus the application's expansion, or the RSS
+// growth when that is larger (the monitor does not see Embree's per-geometry objects: at n = 22
+// flat, about 0.6 GB reported against 2 GB resident). A configuration stops when its memory
+// passes the budget (default 8 GiB), and that is printed.
+//
+// Agreement: the share of pixels whose hit/miss matches the KRS render with a faithful threshold
+// (pixel_footprint = 0, a fixed floor well under the tessellation tolerance, max_steps 4096). The
+// pixel-footprint threshold (0.5 px) is timed separately, with its coverage error against the
+// faithful render.
+
+#include "krs/expansion.hpp"
+#include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus_capsule.hpp"
+#include "krs/trace/camera.hpp"
+#include "krs/trace/packet_trace.hpp"
+
+#include <embree3/rtcore.h>
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <array>
+#include <malloc.h>
+#include <string>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+namespace {
+
+using krs::vec3d;
+using krs::vec3f;
+using scene_sequence = krs::sequence<krs::torus_capsule, krs::sphere>;
+
+constexpr int thread_count = 2;
+constexpr int tile = 8;
+constexpr double mib = 1024.0 * 1024.0;
+
+// ---- settings ----------------------------------------------------------------------------------
+
+struct settings {
+    int size = 512;
+    int max_n = 32;
+    int embree_max_n = 22;
+    double budget_bytes = 8.0 * 1024 * mib;
+    double tolerance = 0.02; // tessellation: largest deviation, as a share of the tube radius
+    int repeats = 2;
+    std::string csv_path;
+    std::string scene = "both";
+    float krs_floor = 1e-3f; // the faithful KRS threshold's floor, in scene units
+};
+
+// ---- scene -------------------------------------------------------------------------------------
+
+constexpr float ring_radius = 1.0f, tube_radius = 0.2f, core_radius = 0.35f, spacing = 3.0f;
+
+struct framing {
+    vec3f eye, target;
+    float far;
+    float extent;
+};
+
+// One ring (two half-circle torus capsules) standing in the xy plane around a sphere, copied 2^n
+// times by n vertical mirrors. Each copy fits a ball of radius 1.2 about its center, and each
+// mirror is placed 1.5 beyond the support of the copies so far in its normal's direction, so it
+// separates its kernels and both renderers draw the same geometry.
+//   grid:      normals x and z alternately; the mirror at (2^j - 1/2) spacing doubles the copies
+//              along its axis (a 2^ceil(n/2) x 2^floor(n/2) grid, 3 units apart).
+//   unaligned: each normal turned by a random angle within +-10 degrees about y (the paper's
+//              section 5 hides the symmetry this way); the copies' centers are tracked as a 2D
+//              convex hull to place the next mirror, and copies' bounding boxes overlap.
+scene_sequence ring_scene(int n, bool unaligned, framing& view)
+{
+    scene_sequence::builder b;
+    const float r = ring_radius;
+    b.kernel(krs::torus_capsule({-r, 0, 0}, {r, 0, 0}, {0, r, 0}, tube_radius));
+    b.kernel(krs::torus_capsule({-r, 0, 0}, {r, 0, 0}, {0, -r, 0}, tube_radius));
+    b.kernel(krs::sphere({0, 0, 0}, core_radius));
+    using point = std::array<double, 2>; // (x, z)
+    std::vector<point> hull{{0.0, 0.0}};
+    std::mt19937 random(11);
+    std::uniform_real_distribution<double> tilt(-10.0, 10.0);
+    for (int i = 0; i < n; ++i) {
+        const double angle = (i % 2 == 0 ? 0.0 : 90.0) + (unaligned ? tilt(random) : 0.0);
+        const double nx = std::cos(angle * std::numbers::pi / 180), nz = std::sin(angle * std::numbers::pi / 180);
+        double support = -1e300;
+        for (const point& p : hull) support = std::max(support, nx * p[0] + nz * p[1]);
+        const double offset = support + 0.5 * spacing;
+        b.mirror(krs::mirror(vec3f{float(nx), 0.0f, float(nz)}, float(offset)));
+        const std::size_t count = hull.size();
+        for (std::size_t j = 0; j < count; ++j) {
+            const double d = 2 * (nx * hull[j][0] + nz * hull[j][1] - offset);
+            hull.push_back({hull[j][0] - d * nx, hull[j][1] - d * nz});
+        }
+        // Andrew's monotone chain keeps the hull small (the grid's has 4 corners).
+        std::sort(hull.begin(), hull.end());
+        hull.erase(std::unique(hull.begin(), hull.end()), hull.end());
+        if (hull.size() > 2) {
+            auto cross = [](const point& o, const point& a, const point& c) {
+                return (a[0] - o[0]) * (c[1] - o[1]) - (a[1] - o[1]) * (c[0] - o[0]);
+            };
+            std::vector<point> h(2 * hull.size());
+            std::size_t k = 0;
+            for (std::size_t j = 0; j < hull.size(); ++j) {
+                while (k >= 2 && cross(h[k - 2], h[k - 1], hull[j]) <= 0) --k;
+                h[k++] = hull[j];
+            }
+            for (std::size_t j = hull.size() - 1, lower = k + 1; j-- > 0;) {
+                while (k >= lower && cross(h[k - 2], h[k - 1], hull[j]) <= 0) --k;
+                h[k++] = hull[j];
+            }
+            h.resize(k - 1);
+            hull = std::move(h);
+        }
+    }
+    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+    for (const point& p : hull)
+        for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+    const float extent = float(std::max(hi[0] - lo[0], hi[1] - lo[1])) + spacing;
+    const vec3f middle{float(0.5 * (lo[0] + hi[0])), 0.0f, float(0.5 * (lo[1] + hi[1]))};
+    view = {middle + vec3f{-0.55f * extent, 0.45f * extent, -0.85f * extent}, middle, 4 * extent, extent};
+    return b.build();
+}
+
+krs::pinhole_camera camera_for(const framing& v, int size)
+{
+    return krs::pinhole_camera(v.eye, v.target, {0, 1, 0}, 40.0f, size, size);
+}
+
+// Faithful: no footprint term, a floor far below the tessellation tolerance (raised with the
+// scene's extent only where float coordinates cannot resolve it any more).
+krs::trace_options faithful_options(const framing& v, float floor)
+{
+    krs::trace_options o;
+    o.pixel_footprint = 0.0f;
+    o.threshold_floor = std::max(floor, 4e-7f * v.extent);
+    o.max_distance = v.far;
+    o.max_steps = 4096;
+    return o.validate();
+}
+krs::trace_options footprint_options(const krs::pinhole_camera& camera, const framing& v)
+{
+    krs::trace_options o;
+    o.pixel_footprint = 0.5f * camera.pixel_footprint();
+    o.threshold_floor = 1e-5f;
+    o.max_distance = v.far;
+    o.max_steps = 512;
+    return o.validate();
+}
+
+// sizeof plus the heap the sequence's vectors hold (element counts times sizes: the mirrors, the
+// kernels, their levels, n + 2 level offsets and n level bounds; allocator overhead not counted).
+std::size_t sequence_bytes(const scene_sequence& s)
+{
+    const std::size_t n = s.mirror_count(), k = s.kernels().size();
+    return sizeof s + s.mirrors().capacity() * sizeof(krs::mirror) +
+           s.kernels().capacity() * sizeof(scene_sequence::kernel_variant) + k * sizeof(std::uint32_t) +
+           (n + 2) * sizeof(std::uint32_t) + n * sizeof(krs::bounding_sphere);
+}
+
+// ---- tessellation ------------------------------------------------------------------------------
+
+struct mesh {
+    std::vector<float> vertices;         // x y z
+    std::vector<std::uint32_t> indices;  // three per triangle
+    std::size_t triangles() const { return indices.size() / 3; }
+    std::uint32_t add(const vec3d& p)
+    {
+        vertices.insert(vertices.end(), {float(p.x), float(p.y), float(p.z)});
+        return std::uint32_t(vertices.size() / 3 - 1);
+    }
+    void quad(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d)
+    {
+        indices.insert(indices.end(), {a, b, c, a, c, d});
+    }
+};
+
+// Segments of a circle of radius r whose inscribed polygon stays within `tolerance` of it.
+int circle_segments(double r, double tolerance, double angle = 2 * std::numbers::pi)
+{
+    if (tolerance >= r) return std::max(3, int(std::ceil(angle / (2 * std::numbers::pi) * 3)));
+    const double step = 2 * std::acos(1 - tolerance / r);
+    return std::max(3, int(std::ceil(angle / step)));
+}
+
+// A ball patch: latitudes from the pole `axis` down to `last_latitude` (pi/2: a hemisphere, pi: the
+// whole ball); `around` meridians, the first along `x` (x, y, axis orthonormal).
+void add_ball(mesh& m, const vec3d& center, double radius, const vec3d& x, const vec3d& y, const vec3d& axis,
+              double last_latitude, int around, double tolerance)
+{
+    const int rings = std::max(2, circle_segments(radius, tolerance, last_latitude));
+    std::vector<std::uint32_t> previous, current;
+    for (int i = 0; i <= rings; ++i) {
+        const double theta = last_latitude * double(i) / double(rings);
+        current.clear();
+        for (int j = 0; j < around; ++j) {
+            const double phi = 2 * std::numbers::pi * double(j) / double(around);
+            const vec3d d = axis * std::cos(theta) + (x * std::cos(phi) + y * std::sin(phi)) * std::sin(theta);
+            current.push_back(m.add(center + d * radius));
+        }
+        if (i > 0)
+            for (int j = 0; j < around; ++j)
+                m.quad(previous[j], current[j], current[(j + 1) % around], previous[(j + 1) % around]);
+        std::swap(previous, current);
+    }
+}
+
+// The torus capsule: a circle of the tube radius swept along the arc, closed by hemispheres.
+// Vertices lie on the surface, so the mesh is inside it by at most `tolerance` (the sagitta of
+// the tube's polygon and of the outer edge's polygon along the arc).
+void add_torus_capsule(mesh& m, const krs::torus_capsule& k, double tolerance)
+{
+    const double r = k.radius(), kappa = k.curvature();
+    const vec3d chord(k.chord_direction()), toward(k.toward_control()), normal(k.plane_normal());
+    const int around = circle_segments(r, tolerance);
+    const double alpha = k.half_angle();
+    const int along = kappa > 0 ? circle_segments(1 / kappa + r, tolerance, 2 * alpha) : 1;
+    // Arc point, outward radial direction and tangent at u in [-1, 1] (start to end).
+    auto frame = [&](double u, vec3d& point, vec3d& radial, vec3d& tangent) {
+        if (kappa > 0) {
+            const double s = u * alpha;
+            radial = chord * std::sin(s) + toward * std::cos(s);
+            tangent = chord * std::cos(s) - toward * std::sin(s);
+            point = vec3d(k.circle_center()) + radial * (1 / kappa);
+        } else {
+            radial = toward, tangent = chord;
+            point = vec3d(k.chord_middle()) + chord * (u * double(k.half_chord()));
+        }
+    };
+    std::vector<std::uint32_t> previous, current;
+    vec3d point, radial, tangent;
+    for (int i = 0; i <= along; ++i) {
+        frame(-1 + 2 * double(i) / double(along), point, radial, tangent);
+        current.clear();
+        for (int j = 0; j < around; ++j) {
+            const double phi = 2 * std::numbers::pi * double(j) / double(around);
+            current.push_back(m.add(point + (radial * std::cos(phi) + normal * std::sin(phi)) * r));
+        }
+        if (i > 0)
+            for (int j = 0; j < around; ++j)
+                m.quad(previous[j], current[j], current[(j + 1) % around], previous[(j + 1) % around]);
+        std::swap(previous, current);
+    }
+    frame(-1, point, radial, tangent);
+    add_ball(m, point, r, radial, normal, tangent * -1.0, std::numbers::pi / 2, around, tolerance);
+    frame(1, point, radial, tangent);
+    add_ball(m, point, r, radial, normal, tangent, std::numbers::pi / 2, around, tolerance);
+}
+
+void add_sphere(mesh& m, const krs::sphere& k, double tolerance)
+{
+    add_ball(m, vec3d(k.center), k.radius, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, std::numbers::pi,
+             circle_segments(k.radius, tolerance), tolerance);
+}
+
+// The level-0 kernel set as one mesh (the scene has kernels on level 0 only).
+mesh tessellate_level0(const scene_sequence& s, double tolerance)
+{
+    mesh m;
+    for (std::uint32_t k = s.level_begin(0); k < s.level_begin(1); ++k)
+        std::visit(
+            [&](const auto& kernel) {
+                if constexpr (std::is_same_v<std::decay_t<decltype(kernel)>, krs::torus_capsule>)
+                    add_torus_capsule(m, kernel, tolerance);
+                else
+                    add_sphere(m, kernel, tolerance);
+            },
+            s.kernels()[k]);
+    return m;
+}
+
+// ---- memory ------------------------------------------------------------------------------------
+
+double resident_bytes()
+{
+    long pages = 0, resident = 0;
+    if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+        if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+        std::fclose(f);
+    }
+    return double(resident) * double(sysconf(_SC_PAGESIZE));
+}
+
+// Embree's allocations as its memory monitor reports them; refuses any that would pass the budget
+// (Embree then fails the build with RTC_ERROR_OUT_OF_MEMORY).
+struct embree_memory {
+    std::atomic<long long> current{0}, peak{0};
+    double budget = 0;
+    std::atomic<bool> refused{false};
+
+    static bool monitor(void* self_pointer, ssize_t bytes, bool /*post*/)
+    {
+        auto& self = *static_cast<embree_memory*>(self_pointer);
+        const long long now = self.current.fetch_add(bytes) + bytes;
+        if (bytes > 0 && double(now) > self.budget) {
+            self.current.fetch_sub(bytes);
+            self.refused = true;
+            return false;
+        }
+        long long p = self.peak.load();
+        while (now > p && !self.peak.compare_exchange_weak(p, now)) {}
+        return true;
+    }
+    void reset() { current = 0, peak = 0, refused = false; }
+};
+
+// ---- tracing -----------------------------------------------------------------------------------
+
+struct frame {
+    std::vector<std::uint8_t> hit;
+    double seconds = 0;
+    long long evaluations = 0; // field evaluations (KRS only)
+    double mrays() const { return double(hit.size()) / seconds * 1e-6; }
+};
+
+// Runs `work(take_tile, hit)` on two threads; take_tile(x0, y0, x1, y1) hands out the next 8 x 8
+// tile from a shared counter and returns false when none is left. Best of `repeats`.
+template <class Work>
+frame render_tiles(int size, int repeats, Work&& work)
+{
+    const int tiles_x = (size + tile - 1) / tile, tiles = tiles_x * tiles_x;
+    frame best;
+    for (int r = 0; r < repeats; ++r) {
+        frame out;
+        out.hit.assign(std::size_t(size) * std::size_t(size), 0);
+        std::atomic<int> next{0};
+        auto take_tile = [&](int& x0, int& y0, int& x1, int& y1) {
+            const int k = next.fetch_add(1);
+            if (k >= tiles) return false;
+            x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
+            x1 = std::min(x0 + tile, size), y1 = std::min(y0 + tile, size);
+            return true;
+        };
+        auto worker = [&] { work(take_tile, out.hit.data()); };
+        const auto start = std::chrono::steady_clock::now();
+        std::vector<std::thread> pool;
+        for (int i = 1; i < thread_count; ++i) pool.emplace_back(worker);
+        worker();
+        for (std::thread& t : pool) t.join();
+        out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        benchmark::DoNotOptimize(out.hit.data());
+        if (r == 0 || out.seconds < best.seconds) best = std::move(out);
+    }
+    return best;
+}
+
+// One stream per thread over all of its tiles, so lanes are refilled across tile borders.
+frame render_krs(const scene_sequence& s, const krs::pinhole_camera& camera, const krs::trace_options& o,
+                 int repeats)
+{
+    const int size = camera.width();
+    std::atomic<long long> evaluations{0};
+    frame out = render_tiles(size, repeats, [&](auto& take_tile, std::uint8_t* hit) {
+        int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+        bool have_tile = take_tile(x0, y0, x1, y1);
+        int x = x0, y = y0;
+        auto next = [&](krs::ray_job& job) {
+            while (have_tile && y >= y1) {
+                have_tile = take_tile(x0, y0, x1, y1);
+                x = x0, y = y0;
+            }
+            if (!have_tile) return false;
+            job.r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+            job.t_start = o.min_distance;
+            job.t_max = o.max_distance;
+            job.id = std::uint32_t(y * size + x);
+            if (++x >= x1) x = x0, ++y;
+            return true;
+        };
+        auto done = [&](std::uint32_t id, const krs::hit<float>& h) { hit[id] = h.found ? 1 : 0; };
+        evaluations += krs::trace_stream<krs::packet_f, 2>(s, next, done, o).evaluations;
+    });
+    out.evaluations = evaluations.load() / repeats;
+    return out;
+}
+
+// rtcIntersect1 per pixel, or rtcIntersect16 per 4 x 4 pixels, over one tile.
+void embree_tile(RTCScene scene, const krs::pinhole_camera& camera, float far, bool packets, int x0, int y0, int x1,
+                 int y1, std::uint8_t* hit)
+{
+    const int size = camera.width();
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    if (!packets) {
+        for (int py = y0; py < y1; ++py)
+            for (int px = x0; px < x1; ++px) {
+                const krs::ray<float> r = camera.primary_ray(float(px) + 0.5f, float(py) + 0.5f);
+                RTCRayHit rh{};
+                rh.ray.org_x = r.origin.x, rh.ray.org_y = r.origin.y, rh.ray.org_z = r.origin.z;
+                rh.ray.dir_x = r.direction.x, rh.ray.dir_y = r.direction.y, rh.ray.dir_z = r.direction.z;
+                rh.ray.tnear = 0.0f, rh.ray.tfar = far, rh.ray.mask = ~0u;
+                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                rtcIntersect1(scene, &context, &rh);
+                hit[py * size + px] = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            }
+        return;
+    }
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (int by = y0; by < y1; by += 4)
+        for (int bx = x0; bx < x1; bx += 4) {
+            alignas(64) RTCRayHit16 rh{};
+            alignas(64) int valid[16];
+            for (int i = 0; i < 16; ++i) {
+                const int px = bx + i % 4, py = by + i / 4;
+                valid[i] = px < x1 && py < y1 ? -1 : 0;
+                const krs::ray<float> r = camera.primary_ray(float(px) + 0.5f, float(py) + 0.5f);
+                rh.ray.org_x[i] = r.origin.x, rh.ray.org_y[i] = r.origin.y, rh.ray.org_z[i] = r.origin.z;
+                rh.ray.dir_x[i] = r.direction.x, rh.ray.dir_y[i] = r.direction.y, rh.ray.dir_z[i] = r.direction.z;
+                rh.ray.tnear[i] = 0.0f, rh.ray.tfar[i] = far, rh.ray.mask[i] = ~0u;
+                rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+            }
+            rtcIntersect16(valid, scene, &context, &rh);
+            for (int i = 0; i < 16; ++i)
+                if (valid[i]) hit[(by + i / 4) * size + bx + i % 4] = rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+        }
+}
+
+frame render_embree(RTCScene scene, const krs::pinhole_camera& camera, float far, bool packets, int repeats)
+{
+    return render_tiles(camera.width(), repeats, [&](auto& take_tile, std::uint8_t* hit) {
+        int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+        while (take_tile(x0, y0, x1, y1)) embree_tile(scene, camera, far, packets, x0, y0, x1, y1, hit);
+    });
+}
+
+double hit_share(const frame& a)
+{
+    std::size_t hits = 0;
+    for (const std::uint8_t h : a.hit) hits += h;
+    return double(hits) / double(a.hit.size());
+}
+
+double agreement(const frame& a, const frame& b)
+{
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < a.hit.size(); ++i) same += a.hit[i] == b.hit[i];
+    return double(same) / double(a.hit.size());
+}
+
+// ---- Embree scenes -----------------------------------------------------------------------------
+
+void embree_error(void*, RTCError code, const char* text)
+{
+    if (code != RTC_ERROR_OUT_OF_MEMORY) std::fprintf(stderr, "embree error %d: %s\n", int(code), text ? text : "");
+}
+
+// A triangle scene holding `copies` placements of the mesh (one or many).
+RTCScene mesh_scene(RTCDevice device, const mesh& m, const std::vector<krs::isometry>& copies)
+{
+    RTCScene scene = rtcNewScene(device);
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    const std::size_t nv = m.vertices.size() / 3, nt = m.triangles();
+    auto* v = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                nv * copies.size()));
+    auto* ix = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(std::uint32_t), nt * copies.size()));
+    if (!v || !ix) {
+        rtcReleaseGeometry(g);
+        rtcReleaseScene(scene);
+        return nullptr;
+    }
+    for (std::size_t c = 0; c < copies.size(); ++c) {
+        for (std::size_t i = 0; i < nv; ++i) {
+            const vec3d p = copies[c].apply({m.vertices[3 * i], m.vertices[3 * i + 1], m.vertices[3 * i + 2]});
+            float* out = v + 3 * (c * nv + i);
+            out[0] = float(p.x), out[1] = float(p.y), out[2] = float(p.z);
+        }
+        for (std::size_t i = 0; i < 3 * nt; ++i) ix[3 * c * nt + i] = std::uint32_t(c * nv) + m.indices[i];
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    return scene;
+}
+
+// The transforms of a sequence with the given mirrors and one placeholder kernel: all 2^m
+// compositions, by krs::expand.
+std::vector<krs::isometry> mirror_group(const std::vector<krs::mirror>& mirrors)
+{
+    krs::sequence<krs::sphere>::builder b;
+    b.kernel(krs::sphere({0, 0, 0}, 0.0f));
+    for (const krs::mirror& m : mirrors) b.mirror(m);
+    const krs::sequence<krs::sphere> s = b.build();
+    const auto e = krs::expand(s, std::size_t(1) << 40);
+    std::vector<krs::isometry> out;
+    out.reserve(e.instances.size());
+    for (const auto& in : e.instances) out.push_back(in.to_world);
+    return out;
+}
+
+struct embree_result {
+    bool built = false;
+    std::string stopped; // why the configuration stopped, when it did
+    int k = -1;          // two-level split
+    double build_seconds = 0, embree_bytes = 0, app_bytes = 0, rss_growth = 0;
+    double single_mrays = 0, packet_mrays = 0, agree = 0;
+};
+
+// Top scene of instances of `bottom` placed by `placements`; budget checked as they are made.
+RTCScene instance_scene(RTCDevice device, RTCScene bottom, const std::vector<krs::isometry>& placements,
+                        const embree_memory& memory, double rss0, double app_bytes, std::string& stopped)
+{
+    RTCScene top = rtcNewScene(device);
+    for (std::size_t i = 0; i < placements.size(); ++i) {
+        const krs::isometry& w = placements[i];
+        const float xfm[12] = {float(w.a[0]), float(w.a[1]), float(w.a[2]), float(w.t.x),
+                               float(w.a[3]), float(w.a[4]), float(w.a[5]), float(w.t.y),
+                               float(w.a[6]), float(w.a[7]), float(w.a[8]), float(w.t.z)};
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(g, bottom);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(top, g);
+        rtcReleaseGeometry(g);
+        if ((i & 0xffff) == 0xffff &&
+            std::max(double(memory.current.load()) + app_bytes, resident_bytes() - rss0) > memory.budget) {
+            stopped = "instances passed the budget while being created";
+            rtcReleaseScene(top);
+            return nullptr;
+        }
+    }
+    rtcCommitScene(top);
+    return top;
+}
+
+embree_result run_embree(RTCDevice device, embree_memory& memory, const scene_sequence& s, const mesh& kernel_mesh,
+                         int k, const krs::pinhole_camera& camera, const framing& v, const frame& reference,
+                         const settings& opt)
+{
+    embree_result r;
+    r.k = k;
+    const int n = int(s.mirror_count());
+    // The application's share: expansion (instances and krs::expand's transform list) and the
+    // bottom copies' vertices before Embree takes them, estimated before anything is allocated.
+    const double copies = std::ldexp(1.0, k), placements = std::ldexp(1.0, n - k);
+    r.app_bytes = 2 * (copies + placements) * sizeof(krs::isometry);
+    const double bottom_bytes = copies * double(kernel_mesh.vertices.size() * 4 + kernel_mesh.indices.size() * 4);
+    if (r.app_bytes + 2 * bottom_bytes > opt.budget_bytes) {
+        r.stopped = "expansion alone passes the budget";
+        return r;
+    }
+    memory.reset();
+    rtcGetDeviceError(device); // clears an error left by an earlier configuration
+    malloc_trim(0); // so that RSS growth counts this build, not memory freed by the previous one
+    const double rss0 = resident_bytes();
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<krs::mirror> all = s.mirrors();
+    const std::vector<krs::isometry> low = mirror_group({all.begin(), all.begin() + k});
+    const std::vector<krs::isometry> high = mirror_group({all.begin() + k, all.end()});
+    RTCScene bottom = mesh_scene(device, kernel_mesh, low);
+    if (!bottom || memory.refused) {
+        r.stopped = "bottom mesh passed the budget";
+        if (bottom) rtcReleaseScene(bottom);
+        return r;
+    }
+    RTCScene top = instance_scene(device, bottom, high, memory, rss0, r.app_bytes, r.stopped);
+    r.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    r.embree_bytes = double(memory.peak.load());
+    r.rss_growth = resident_bytes() - rss0;
+    const bool out_of_memory = rtcGetDeviceError(device) == RTC_ERROR_OUT_OF_MEMORY;
+    if (!top || memory.refused || out_of_memory) {
+        if (r.stopped.empty()) r.stopped = "Embree's memory passed the budget";
+        if (top) rtcReleaseScene(top);
+        rtcReleaseScene(bottom);
+        return r;
+    }
+    r.built = true;
+    const frame single = render_embree(top, camera, v.far, false, opt.repeats);
+    const frame packet = render_embree(top, camera, v.far, true, opt.repeats);
+    r.single_mrays = single.mrays();
+    r.packet_mrays = packet.mrays();
+    r.agree = std::min(agreement(single, reference), agreement(packet, reference));
+    rtcReleaseScene(top);
+    rtcReleaseScene(bottom);
+    return r;
+}
+
+// ---- output ------------------------------------------------------------------------------------
+
+std::string format(const char* f, ...) __attribute__((format(printf, 1, 2)));
+std::string format(const char* f, ...)
+{
+    char buffer[512];
+    va_list args;
+    va_start(args, f);
+    std::vsnprintf(buffer, sizeof buffer, f, args);
+    va_end(args);
+    return buffer;
+}
+
+std::string cell(const embree_result& r, double value, const char* f)
+{
+    if (!r.built) return r.k < 0 ? "-" : "stop";
+    return format(f, value);
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    settings opt;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto value = [&] { return i + 1 < argc ? argv[++i] : "0"; };
+        if (a == "--size") opt.size = std::max(16, std::atoi(value()));
+        else if (a == "--max-n") opt.max_n = std::clamp(std::atoi(value()), 8, 62);
+        else if (a == "--embree-max-n") opt.embree_max_n = std::atoi(value());
+        else if (a == "--budget-gib") opt.budget_bytes = std::atof(value()) * 1024 * mib;
+        else if (a == "--tolerance") opt.tolerance = std::max(1e-4, std::atof(value()));
+        else if (a == "--repeat") opt.repeats = std::max(1, std::atoi(value()));
+        else if (a == "--csv") opt.csv_path = value();
+        else if (a == "--scene") opt.scene = value();
+        else if (a == "--krs-floor") opt.krs_floor = float(std::max(1e-6, std::atof(value())));
+        else {
+            std::fprintf(stderr, "usage: bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] "
+                                 "[--tolerance T] [--repeat R] [--csv FILE] [--scene grid|unaligned|both] "
+                                 "[--krs-floor F]\n");
+            return 2;
+        }
+    }
+    if (opt.csv_path.empty()) {
+        const std::string self = argv[0];
+        const std::size_t slash = self.find_last_of('/');
+        opt.csv_path =
+            (slash == std::string::npos ? std::string(".") : self.substr(0, slash)) + "/bench_embree_peer.csv";
+    }
+    std::ofstream csv(opt.csv_path);
+    if (!csv) {
+        std::fprintf(stderr, "bench_embree_peer: cannot write %s\n", opt.csv_path.c_str());
+        return 1;
+    }
+
+    RTCDevice device = rtcNewDevice("threads=2");
+    if (!device) {
+        std::fprintf(stderr, "bench_embree_peer: rtcNewDevice failed (error %d)\n", int(rtcGetDeviceError(nullptr)));
+        return 1;
+    }
+    embree_memory memory;
+    memory.budget = opt.budget_bytes;
+    rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+    rtcSetDeviceMemoryMonitorFunction(device, embree_memory::monitor, &memory);
+
+    framing v0;
+    const mesh kernel_mesh = tessellate_level0(ring_scene(0, false, v0), opt.tolerance * tube_radius);
+    std::printf("bench_embree_peer: %dx%d primary rays, %d threads, %zu float lanes, budget %.1f GiB, CSV -> %s\n",
+                opt.size, opt.size, thread_count, krs::lane_count<krs::packet_f>, opt.budget_bytes / (1024 * mib),
+                opt.csv_path.c_str());
+    std::printf("kernels: a ring (2 torus capsules, R %.1f, r %.2f) around a sphere (r %.2f); 3 kernels per copy, 2^n "
+                "copies\n",
+                ring_radius, tube_radius, core_radius);
+    std::printf("tessellation: vertices on the surface, deviation <= %.4f (%.1f%% of the tube radius), %zu triangles "
+                "per copy\n",
+                opt.tolerance * tube_radius, 100 * opt.tolerance, kernel_mesh.triangles());
+    std::printf("KRS: packet tracer; faithful threshold = pixel_footprint 0, floor max(%g, 4e-7 extent), 4096 steps;\n"
+                "     evals = field evaluations per ray (faithful); px = 0.5 px footprint threshold,\n"
+                "     'px agree' its hit/miss agreement with faithful\n",
+                double(opt.krs_floor));
+    std::printf("Embree: Mr/s single (rtcIntersect1) / x16 (rtcIntersect16); mem = max(monitor + application "
+                "expansion, RSS growth);\n"
+                "        agree = hit/miss agreement with KRS faithful (worse of single and x16)\n");
+    csv << "scene,n,instances,hit_share,krs_mrays_s,krs_evals_per_ray,krs_px_mrays_s,krs_px_agree,krs_bytes,"
+           "triangles_per_copy,"
+           "flat_single_mrays_s,flat_packet_mrays_s,flat_embree_bytes,flat_app_bytes,flat_rss_growth,flat_build_s,"
+           "flat_agree,flat_stopped,two_level_k,two_level_single_mrays_s,two_level_packet_mrays_s,"
+           "two_level_embree_bytes,two_level_app_bytes,two_level_rss_growth,two_level_build_s,two_level_agree,"
+           "two_level_stopped\n";
+
+    for (const bool unaligned : {false, true}) {
+        if ((unaligned && opt.scene == "grid") || (!unaligned && opt.scene == "unaligned")) continue;
+        const char* scene_name = unaligned ? "unaligned" : "grid";
+        std::printf("\n== %s mirrors ==\n", unaligned ? "unaligned (+-10 degrees)" : "grid (axis-normal)");
+        std::printf("%3s %6s %9s %6s %9s %8s %8s | %-24s %9s %8s %7s | %-26s %9s %8s %7s\n", "n", "hits", "KRS Mr/s",
+                    "evals", "KRS px",
+                    "px agree", "KRS mem", "flat: single / x16 Mr/s", "mem MiB", "build s", "agree",
+                    "two-level: k, single / x16", "mem MiB", "build s", "agree");
+        bool flat_stopped = false, two_stopped = false;
+        for (int n = 8; n <= opt.max_n; n += 2) {
+            framing v;
+            const scene_sequence s = ring_scene(n, unaligned, v);
+            const krs::pinhole_camera camera = camera_for(v, opt.size);
+            const frame krs_faithful = render_krs(s, camera, faithful_options(v, opt.krs_floor), opt.repeats);
+            const frame krs_px = render_krs(s, camera, footprint_options(camera, v), opt.repeats);
+            const double px_agree = agreement(krs_px, krs_faithful);
+
+            embree_result flat, two;
+            const char* earlier = "stopped at a smaller n";
+            if (n <= opt.embree_max_n) {
+                if (!flat_stopped) {
+                    flat = run_embree(device, memory, s, kernel_mesh, 0, camera, v, krs_faithful, opt);
+                    flat_stopped = !flat.built;
+                } else {
+                    flat.k = 0, flat.stopped = earlier;
+                }
+                if (!two_stopped) {
+                    for (int k : {n / 2 - 2, n / 2, n / 2 + 2}) {
+                        embree_result r = run_embree(device, memory, s, kernel_mesh, k, camera, v, krs_faithful, opt);
+                        const auto best = [](const embree_result& e) {
+                            return std::max(e.single_mrays, e.packet_mrays);
+                        };
+                        if (r.built && (!two.built || best(r) > best(two))) two = r;
+                        else if (!two.built && two.stopped.empty()) two = r;
+                    }
+                    two_stopped = !two.built;
+                } else {
+                    two.k = 0, two.stopped = earlier;
+                }
+            }
+            const auto memory_of = [](const embree_result& e) {
+                return std::max(e.embree_bytes + e.app_bytes, e.rss_growth) / mib;
+            };
+            const std::string flat_speed = flat.built ? format("%.2f / %.2f", flat.single_mrays, flat.packet_mrays)
+                                                      : (flat.k < 0 ? "-" : "stopped: over budget");
+            const std::string two_speed = two.built
+                                              ? format("k=%d, %.2f / %.2f", two.k, two.single_mrays, two.packet_mrays)
+                                              : (two.k < 0 ? "-" : "stopped: over budget");
+            std::printf("%3d %5.1f%% %9.2f %6.1f %9.2f %7.2f%% %6zu B | %-24s %9s %8s %7s | %-26s %9s %8s %7s\n", n,
+                        100 * hit_share(krs_faithful), krs_faithful.mrays(),
+                        double(krs_faithful.evaluations) / double(krs_faithful.hit.size()), krs_px.mrays(),
+                        100 * px_agree, sequence_bytes(s), flat_speed.c_str(),
+                        cell(flat, memory_of(flat), "%.1f").c_str(), cell(flat, flat.build_seconds, "%.2f").c_str(),
+                        cell(flat, 100 * flat.agree, "%.2f%%").c_str(), two_speed.c_str(),
+                        cell(two, memory_of(two), "%.1f").c_str(), cell(two, two.build_seconds, "%.2f").c_str(),
+                        cell(two, 100 * two.agree, "%.2f%%").c_str());
+            if (!flat.built && flat.k >= 0 && flat.stopped != earlier)
+                std::printf("    flat stopped at n = %d: %s\n", n, flat.stopped.c_str());
+            if (!two.built && two.k >= 0 && two.stopped != earlier)
+                std::printf("    two-level stopped at n = %d: %s\n", n, two.stopped.c_str());
+            std::fflush(stdout);
+            csv << format("%s,%d,%.0f,%.6f,%.4f,%.2f,%.4f,%.6f,%zu,%zu,", scene_name, n, s.instance_count(),
+                          hit_share(krs_faithful), krs_faithful.mrays(),
+                          double(krs_faithful.evaluations) / double(krs_faithful.hit.size()),
+                          krs_px.mrays(), px_agree, sequence_bytes(s), kernel_mesh.triangles())
+                << format("%.4f,%.4f,%.0f,%.0f,%.0f,%.4f,%.6f,%s,", flat.single_mrays, flat.packet_mrays,
+                          flat.embree_bytes, flat.app_bytes, flat.rss_growth, flat.build_seconds, flat.agree,
+                          flat.built ? "" : (flat.k < 0 ? "not run" : flat.stopped.c_str()))
+                << format("%d,%.4f,%.4f,%.0f,%.0f,%.0f,%.4f,%.6f,%s\n", two.k, two.single_mrays, two.packet_mrays,
+                          two.embree_bytes, two.app_bytes, two.rss_growth, two.build_seconds, two.agree,
+                          two.built ? "" : (two.k < 0 ? "not run" : two.stopped.c_str()));
+        }
+    }
+    rtcReleaseDevice(device);
+    return 0;
+}
