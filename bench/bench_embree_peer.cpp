@@ -30,6 +30,7 @@
 // pixel-footprint threshold (0.5 px) is timed separately, with its coverage error against the
 // faithful render.
 
+#include "support/text.hpp"
 #include "krs/expansion.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
@@ -611,16 +612,7 @@ embree_result run_embree(RTCDevice device, embree_memory& memory, const scene_se
 
 // ---- output ------------------------------------------------------------------------------------
 
-std::string format(const char* f, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* f, ...)
-{
-    char buffer[512];
-    va_list args;
-    va_start(args, f);
-    std::vsnprintf(buffer, sizeof buffer, f, args);
-    va_end(args);
-    return buffer;
-}
+using bench::format;
 
 std::string cell(const embree_result& r, double value, const char* f)
 {

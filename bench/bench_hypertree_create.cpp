@@ -20,6 +20,7 @@
 #include "hypertree/store/dense_store.hpp"
 #include "hypertree/store/index_list_store.hpp"
 #include "hypertree/store/partitioned_store.hpp"
+#include "support/timing.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -49,17 +50,6 @@ const paper_figures paper[4][3] = {
     {{0.4, 0.8, 210 * K, 1.4 * M}, {0.4, 0.9, 332 * K, 4.6 * M}, {0.3, 2.0, 2.9 * M, 80 * M}},
     {{2.1, 1.4, 56 * K, 315 * K}, {2.2, 1.5, 178 * K, 3.5 * M}, {1.0, 2.5, 2.9 * M, 80 * M}},
 };
-
-double seconds_of(const std::function<void()>& f, int repeat)
-{
-    double best = 1e300;
-    for (int r = 0; r < repeat; ++r) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    }
-    return best;
-}
 
 std::string bytes_text(double b)
 {
@@ -109,14 +99,7 @@ int main(int argc, char** argv)
 
     generation_options generation;
     generation.budget.bytes = budget_mib << 20;
-    generation.parallel_for = [threads](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::vector<std::thread> workers;
-        for (unsigned w = 0; w < threads; ++w)
-            workers.emplace_back([&, w] {
-                for (std::size_t c = w; c < count; c += threads) body(c);
-            });
-        for (auto& t : workers) t.join();
-    };
+    generation.parallel_for = bench::parallel_for(threads);
 
     std::printf("hypertree creation (paper Table 1): %u thread(s), best of %d, budget %zu MiB\n\n", threads, repeat, budget_mib);
     std::printf("%-4s %5s %-12s %9s %9s %9s %9s %10s %9s %9s | %9s %9s %8s\n", "tree", "res", "store", "generate", "compact",
@@ -133,12 +116,12 @@ int main(int argc, char** argv)
             row base;
             base.tree = tree.name;
             base.resolution = resolution_;
-            base.generate_s = seconds_of([&] { hits = generate(tree, 1, generation); }, reps);
-            base.compact_s = seconds_of([&] { entries = compact(hits.hits); }, reps);
-            base.classify_s = seconds_of([&] {
+            base.generate_s = bench::best_seconds(reps, [&] { hits = generate(tree, 1, generation); });
+            base.compact_s = bench::best_seconds(reps, [&] { entries = compact(hits.hits); });
+            base.classify_s = bench::best_seconds(reps, [&] {
                 const density_classes classes(entries, 32);
                 voxels = classify(entries, classes, tree.branch_depth);
-            }, reps);
+            });
             base.voxels = voxels.size();
             base.hits = hits.hits.size();
 
@@ -148,7 +131,7 @@ int main(int argc, char** argv)
                 if (resolution_ <= 300 && figures) r.paper = figures;
                 try {
                     std::size_t bytes = 0;
-                    r.build_s = seconds_of([&] { bytes = build().memory_bytes(); }, reps);
+                    r.build_s = bench::best_seconds(reps, [&] { bytes = build().memory_bytes(); });
                     r.bytes = bytes;
                 } catch (const krs::invalid_parameter& e) {
                     r.bytes.reset();

@@ -16,6 +16,7 @@
 
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
+#include "support/timing.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -42,41 +43,6 @@ const double paper_seconds[4][3][2] = {
     {{1.0, 15.5}, {0.5, 7.5}, {0.5, 7.1}},
     {{0.5, 7.8}, {0.3, 4.1}, {0.3, 4.1}},
 };
-
-std::function<void(std::size_t, const std::function<void(std::size_t)>&)> workers(unsigned threads)
-{
-    return [threads](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::atomic<std::size_t> next{0};
-        std::vector<std::thread> pool;
-        for (unsigned w = 0; w < threads; ++w)
-            pool.emplace_back([&] {
-                for (std::size_t i; (i = next++) < count;) body(i);
-            });
-        for (auto& t : pool) t.join();
-    };
-}
-
-double seconds_of(const std::function<void()>& f, int repeat)
-{
-    double best = 1e300;
-    for (int r = 0; r < repeat; ++r) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    }
-    return best;
-}
-
-// The example's framing: the tree's box seen from the front, a little to the side and above.
-krs::pinhole_camera framing(const tree_shape& shape, int size)
-{
-    const krs::vec3f center{float(shape.box.lo.x + shape.box.hi.x) * 0.5f, float(shape.box.lo.y + shape.box.hi.y) * 0.5f,
-                            float(shape.box.lo.z + shape.box.hi.z) * 0.5f};
-    const float half = float(std::max(shape.box.hi.y - shape.box.lo.y, shape.box.hi.x - shape.box.lo.x)) * 0.5f;
-    const float distance = half / std::tan(20.0f * 3.14159265f / 180.0f) * 1.15f + float(shape.box.hi.z - shape.box.lo.z) * 0.5f;
-    const krs::vec3f eye = center + krs::vec3f{0.45f, 0.2f, -1.0f} * (distance / std::sqrt(1.0f + 0.45f * 0.45f + 0.2f * 0.2f));
-    return krs::pinhole_camera(eye, center, {0, 1, 0}, 40, size, size);
-}
 
 double rmse(const image& a, const image& b)
 {
@@ -132,15 +98,15 @@ int main(int argc, char** argv)
                 const ifs<> tree = makers[t](res);
                 const std::vector<stored_voxel> voxels = classified(tree, 1);
                 const tree_shape shape = tree_shape::of(tree.volume, voxels);
-                const krs::pinhole_camera camera = framing(shape, 300);
+                const krs::pinhole_camera camera = framing_camera(shape.box, 300, 300);
                 render_settings rs;
                 rs.supersampling = s;
-                rs.parallel_for = workers(threads);
+                rs.parallel_for = bench::parallel_for(threads);
                 const auto row = [&]<class S>(const char* name, const S& store, std::optional<double> paper) {
                     const volume_marcher<S> marcher(store, shape, depth_colors::tree(tree.branch_depth, tree.tree_depth));
                     image img;
-                    const double scalar = seconds_of([&] { img = render<float>(marcher, camera, rs); }, 2);
-                    const double packet = seconds_of([&] { img = render<krs::packet_f>(marcher, camera, rs); }, 2);
+                    const double scalar = bench::best_seconds(2, [&] { img = render<float>(marcher, camera, rs); });
+                    const double packet = bench::best_seconds(2, [&] { img = render<krs::packet_f>(marcher, camera, rs); });
                     const double best = std::min(scalar, packet);
                     std::string paper_text = "-", speedup = "-";
                     if (paper) {
@@ -173,27 +139,27 @@ int main(int argc, char** argv)
         const bit_array_store store = bit_array_store::build(tree.volume, voxels);
         const tree_shape shape = tree_shape::of(tree.volume, voxels);
         const depth_colors colors = depth_colors::tree(tree.branch_depth, tree.tree_depth);
-        const krs::pinhole_camera camera = framing(shape, size);
+        const krs::pinhole_camera camera = framing_camera(shape.box, size, size);
 
         march_options reference_options;
         reference_options.step_factor = 0.25f;
         reference_options.shade_per_voxel = false;
         render_settings reference_settings;
         reference_settings.supersampling = 4;
-        reference_settings.parallel_for = workers(threads);
+        reference_settings.parallel_for = bench::parallel_for(threads);
         const volume_marcher<bit_array_store> reference_marcher(store, shape, colors, reference_options);
         image reference;
-        const double reference_seconds = seconds_of([&] { reference = render<float>(reference_marcher, camera, reference_settings); }, 1);
+        const double reference_seconds = bench::best_seconds(1, [&] { reference = render<float>(reference_marcher, camera, reference_settings); });
         std::printf("speed against error: tree A, resolution 300, %dx%d, %u thread(s); reference (step 0.25, s = 4, shadow "
                     "rays per sample) took %.2f s\n\n",
                     size, size, threads, reference_seconds);
         std::printf("%-34s %10s %10s %10s\n", "setting", "time", "lookups", "RMSE");
 
         const auto measure = [&]<class S>(const std::string& name, const S& st, const tree_shape& sh, march_options mo, render_settings rs) {
-            rs.parallel_for = workers(threads);
+            rs.parallel_for = bench::parallel_for(threads);
             const volume_marcher<S> marcher(st, sh, colors, mo);
             image img;
-            const double secs = seconds_of([&] { img = render<float>(marcher, camera, rs); }, 2);
+            const double secs = bench::best_seconds(2, [&] { img = render<float>(marcher, camera, rs); });
             const double error = rmse(img, reference);
             std::printf("%-34s %8.1fms %9.2fM %10.5f\n", name.c_str(), secs * 1e3, double(img.lookups) / 1e6, error);
             csv << "error,A,300," << rs.supersampling << ",bit_array,scalar," << name << ',' << secs << ',' << img.lookups << ',' << error << ",\n";

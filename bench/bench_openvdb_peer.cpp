@@ -38,6 +38,7 @@
 // Timings are the best of 4 renders and include only the rendering (the marcher's occupancy bits
 // and the intersector's bool tree are built once, timed apart as "setup").
 
+#include "support/timing.hpp"
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
 
@@ -65,40 +66,6 @@ using namespace hypertree;
 
 using byte_tree = openvdb::tree::Tree4<std::uint8_t, 5, 4, 3>::Type;
 using byte_grid = openvdb::Grid<byte_tree>;
-
-// Runs body(0..count-1) on `threads` threads taking items in order from a shared counter.
-void parallel_rows(unsigned threads, std::size_t count, const std::function<void(std::size_t)>& body)
-{
-    std::atomic<std::size_t> next{0};
-    std::vector<std::thread> pool;
-    for (unsigned w = 0; w < threads; ++w)
-        pool.emplace_back([&] {
-            for (std::size_t i; (i = next++) < count;) body(i);
-        });
-    for (auto& t : pool) t.join();
-}
-
-template <class F>
-double best_seconds(int repeat, F&& f)
-{
-    double best = 1e300;
-    for (int r = 0; r < repeat; ++r) {
-        const auto start = std::chrono::steady_clock::now();
-        f();
-        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    }
-    return best;
-}
-
-// A view from in front, slightly right and above, framing the box of the non-empty voxels.
-krs::pinhole_camera view_of(const world_box& box, int size)
-{
-    const vec3d center = (box.lo + box.hi) * 0.5, extent = box.hi - box.lo;
-    const double reach = 0.5 * std::max(extent.x, extent.y) / std::tan(20.0 * 3.14159265358979 / 180.0) * 1.2 + 0.5 * extent.z;
-    const vec3d toward = krs::normalize(vec3d{0.4, 0.25, -1.0});
-    const vec3d eye = center + toward * reach;
-    return krs::pinhole_camera(krs::vec3f(eye), krs::vec3f(center), {0, 1, 0}, 40, size, size);
-}
 
 struct picture {
     int size = 0;
@@ -152,7 +119,7 @@ public:
         picture out;
         out.size = camera.width();
         out.rgb.assign(std::size_t(camera.width()) * std::size_t(camera.height()) * 3, 0.0f);
-        parallel_rows(threads, std::size_t(camera.height()), [&](std::size_t row) {
+        bench::run_parallel(threads, std::size_t(camera.height()), [&](std::size_t row) {
             // The shallow copy shares the bool tree and brings its own node cache; so does the
             // accessor: one of each per row keeps threads apart.
             openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid> intersector(intersector_);
@@ -297,7 +264,7 @@ int main(int argc, char** argv)
         const std::vector<stored_voxel> voxels = classify(entries, density_classes(entries, 32), tree.branch_depth);
         const hypervolume& volume = tree.volume;
         const tree_shape shape = tree_shape::of(volume, voxels);
-        const krs::pinhole_camera camera = view_of(shape.box, size);
+        const krs::pinhole_camera camera = framing_camera(shape.box, size, size);
         const rgb background{0.78f, 0.86f, 0.95f};
 
         // The same lookups for everyone: indices for the stores, coordinates for the grids.
@@ -313,7 +280,7 @@ int main(int argc, char** argv)
             any_coord[q] = openvdb::Coord(n[0], n[1], n[2]);
         }
         const auto ns_per = [&](auto&& lookups) {
-            return best_seconds(3, lookups) * 1e9 / double(queries);
+            return bench::best_seconds(3, lookups) * 1e9 / double(queries);
         };
 
         // The library: every store kind, the shading that matches the OpenVDB side.
@@ -329,7 +296,7 @@ int main(int argc, char** argv)
         render_settings settings;
         settings.background = background;
         settings.parallel_for = [threads](std::size_t count, const std::function<void(std::size_t)>& body) {
-            parallel_rows(threads, count, body);
+            bench::run_parallel(threads, count, body);
         };
         std::vector<float> reference; // the dense store's scalar image
         const std::size_t bricks4 = std::size_t((grid.x + 3) / 4) * std::size_t((grid.y + 3) / 4) * std::size_t((grid.z + 3) / 4);
@@ -351,10 +318,10 @@ int main(int argc, char** argv)
                 sink = sink + s;
             });
             std::optional<volume_marcher<S>> marcher;
-            r.setup_ms = best_seconds(1, [&] { marcher.emplace(store, shape, white, options); }) * 1e3;
+            r.setup_ms = bench::best_seconds(1, [&] { marcher.emplace(store, shape, white, options); }) * 1e3;
             image scalar, packet;
-            r.scalar_ms = best_seconds(4, [&] { scalar = render<float>(*marcher, camera, settings); }) * 1e3;
-            r.packet_ms = best_seconds(4, [&] { packet = render<krs::packet_f>(*marcher, camera, settings); }) * 1e3;
+            r.scalar_ms = bench::best_seconds(4, [&] { scalar = render<float>(*marcher, camera, settings); }) * 1e3;
+            r.packet_ms = bench::best_seconds(4, [&] { packet = render<krs::packet_f>(*marcher, camera, settings); }) * 1e3;
             if (reference.empty()) reference = scalar.rgb;
             r.image = compare(packet.rgb, reference);
             const difference scalar_difference = compare(scalar.rgb, reference);
@@ -396,10 +363,10 @@ int main(int argc, char** argv)
                 sink = sink + unsigned(s);
             });
             std::optional<openvdb_marcher> marcher;
-            r.setup_ms = best_seconds(1, [&] { marcher.emplace(*density, volume, step_factor, background); }) * 1e3;
+            r.setup_ms = bench::best_seconds(1, [&] { marcher.emplace(*density, volume, step_factor, background); }) * 1e3;
             r.accelerator = marcher->accelerator_bytes();
             picture img;
-            r.scalar_ms = best_seconds(4, [&] { img = marcher->render(camera, threads); }) * 1e3;
+            r.scalar_ms = bench::best_seconds(4, [&] { img = marcher->render(camera, threads); }) * 1e3;
             r.image = compare(img.rgb, reference);
             r.rendered = true;
             rows.push_back(r);

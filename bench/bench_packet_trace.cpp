@@ -10,6 +10,7 @@
 // trace_stream<packet_f, 2> (lane refill, two interleaved packets). Each timing is the best of R
 // runs (default 3). Targets of issue 4 are checked at the end of each table.
 
+#include "support/text.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
@@ -244,16 +245,7 @@ struct csv_writer {
     void row(const std::string& line) { file << line << '\n'; }
 };
 
-std::string format(const char* f, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* f, ...)
-{
-    char buffer[512];
-    va_list args;
-    va_start(args, f);
-    std::vsnprintf(buffer, sizeof buffer, f, args);
-    va_end(args);
-    return buffer;
-}
+using bench::format;
 
 const char* verdict(bool met) { return met ? "MET" : "NOT MET"; }
 

@@ -76,16 +76,10 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     mo.density_scale = o.density_scale;
     const volume_marcher<S> marcher(store, shape, colors, mo);
 
-    // Frame the tree: look at its crown's center from the front, slightly above.
-    const krs::vec3f center{float(shape.box.lo.x + shape.box.hi.x) * 0.5f, float(shape.box.lo.y + shape.box.hi.y) * 0.5f,
-                            float(shape.box.lo.z + shape.box.hi.z) * 0.5f};
-    const float half_size = float(std::max({shape.box.hi.y - shape.box.lo.y, (shape.box.hi.x - shape.box.lo.x) * o.height / o.width})) * 0.5f;
-    const float distance = half_size / std::tan(20.0f * 3.14159265f / 180.0f) * 1.15f + float(shape.box.hi.z - shape.box.lo.z) * 0.5f;
-    const krs::vec3f eye = center + krs::vec3f{0.45f, 0.2f, -1.0f} * (distance / std::sqrt(1.0f + 0.45f * 0.45f + 0.2f * 0.2f));
-    const krs::pinhole_camera camera(eye, center, {0, 1, 0}, 40, o.width, o.height);
+    const krs::pinhole_camera camera = framing_camera(shape.box, o.width, o.height);
 
     render_settings rs;
-    rs.supersampling = o.supersampling > 0 ? o.supersampling : std::min(4, supersampling_for(camera, eye, shape, volume));
+    rs.supersampling = o.supersampling > 0 ? o.supersampling : std::min(4, supersampling_for(camera, shape, volume));
     const int threads = example::thread_count(o.threads);
     rs.parallel_for = parallel_with_progress(threads, "render");
     const auto t1 = clock_type::now();

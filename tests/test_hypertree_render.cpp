@@ -143,6 +143,6 @@ TEST_CASE("hypertree render supersampling factor follows the projected voxel siz
         // s = ceil(pixel side / voxel side) at the tree's distance: ceil(sqrt(area ratio)).
         const double pixel = 2 * std::tan(20.0 * 3.141592653589793 / 180) / 300 * distance;
         const int expect = std::max(1, int(std::ceil(pixel / t.volume.smallest_voxel_side() - 1e-9)));
-        CHECK(supersampling_for(camera, eye, shape, t.volume) == expect);
+        CHECK(supersampling_for(camera, shape, t.volume) == expect);
     }
 }

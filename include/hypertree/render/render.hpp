@@ -38,12 +38,24 @@ struct render_settings {
 };
 
 // s = ceil(sqrt(area(pixel) / area(projection))) for the smallest voxel side at distance d.
-inline int supersampling_for(const krs::pinhole_camera& camera, const krs::vec3f& eye, const tree_shape& shape, const hypervolume& volume)
+inline int supersampling_for(const krs::pinhole_camera& camera, const tree_shape& shape, const hypervolume& volume)
 {
-    const double distance = krs::length(krs::vec3d(shape.crown.center) - krs::vec3d(eye));
+    const double distance = krs::length(krs::vec3d(shape.crown.center) - krs::vec3d(camera.eye()));
     const double pixel_side = double(camera.pixel_footprint()) * distance; // world size of one pixel there
     const double voxel_side = volume.smallest_voxel_side();
     return std::max(1, int(std::ceil(pixel_side / voxel_side - 1e-9)));
+}
+
+// A camera that frames a tree: it looks at the center of the box (the tree's non-empty cells,
+// tree_shape::box) from the front, a little to the right and above, far enough that the box's
+// front face fits the image with a margin. (The same view serves the example and the benchmarks.)
+inline krs::pinhole_camera framing_camera(const world_box& box, int width, int height, float vertical_fov_degrees = 40)
+{
+    const vec3d center = (box.lo + box.hi) * 0.5, extent = box.hi - box.lo;
+    const double half = 0.5 * std::max(extent.y, extent.x * double(height) / double(std::max(width, 1)));
+    const double reach = half / std::tan(0.5 * double(vertical_fov_degrees) * 3.14159265358979 / 180.0) * 1.15 + 0.5 * extent.z;
+    const vec3d eye = center + krs::normalize(vec3d{0.45, 0.2, -1.0}) * reach;
+    return krs::pinhole_camera(krs::vec3f(eye), krs::vec3f(center), {0, 1, 0}, vertical_fov_degrees, width, height);
 }
 
 namespace detail {
