@@ -260,7 +260,7 @@ void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
     }
 }
 
-// index_at: the cell of p, false outside the grid (and outside every part sphere).
+// The marcher's probe: the cell of p, false outside the grid (and outside every part sphere).
 bool $_cell(vec3 p, out ivec3 cell) {
     cell = ivec3(0);
     float fx = (p.x - $_origin.x) * $_cells_per_unit.x, fy = (p.y - $_origin.y) * $_cells_per_unit.y,

@@ -184,11 +184,12 @@ public:
                 if (!krs::mask_lane<T>(active, i)) continue;
                 const krs::vec3f pi{krs::lane_at(p.x, i), krs::lane_at(p.y, i), krs::lane_at(p.z, i)};
                 const krs::vec3f di{krs::lane_at(ray.direction.x, i), krs::lane_at(ray.direction.y, i), krs::lane_at(ray.direction.z, i)};
-                const std::optional<voxel_index> index = index_at(pi);
-                if (!index) {
-                    advance[i] = float(empty_run(pi, di));
+                const probe_result found = probe(pi, di);
+                if (!found.index) {
+                    advance[i] = float(found.skip);
                     continue;
                 }
+                const std::optional<voxel_index>& index = found.index;
                 voxel v;
                 if constexpr (std::floating_point<T>) {
                     v = cache ? fetch_cached(*index, std::size_t(krs::lane_at(k, i)), *cache, cache_valid, lookups[i])
@@ -225,32 +226,42 @@ public:
             const float t = base + float(j) * step_;
             if (!(t < t1 && transmittance >= options_.min_transmittance)) break;
             const krs::vec3f q = p + l * t;
-            const std::optional<voxel_index> index = index_at(q);
-            if (!index) {
-                j += empty_run(q, l);
+            const probe_result found = probe(q, l);
+            if (!found.index) {
+                j += found.skip;
                 continue;
             }
             ++lookups;
-            transmittance *= 1.0f - alpha_[store_->at(*index).density];
+            transmittance *= 1.0f - alpha_[store_->at(*found.index).density];
             ++j;
         }
         return transmittance;
     }
 
-    // The number of samples, from p on along direction d, that certainly lie in an empty brick
-    // around p (at least 1): the step count to the exit of the largest empty brick holding p,
-    // rounded so that a sample on the exit face is never skipped. 1 outside the grid or when even
-    // p's smallest brick has voxels.
-    int empty_run(const krs::vec3f& p, const krs::vec3f& d) const
+    // What a sample at p finds: its voxel index when its 4^3 brick holds voxels (and, with
+    // use_spheres, p lies in a part's sphere); otherwise the number of samples along direction d
+    // that certainly lie in empty space (at least 1): the step count to the exit of the largest
+    // empty brick holding p, rounded so that a sample on the exit face is never skipped.
+    struct probe_result {
+        std::optional<voxel_index> index;
+        int skip = 1;
+    };
+    probe_result probe(const krs::vec3f& p, const krs::vec3f& d) const
     {
         const float f[3] = {(p.x - origin_.x) * cells_per_unit_.x, (p.y - origin_.y) * cells_per_unit_.y, (p.z - origin_.z) * cells_per_unit_.z};
-        if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < float(grid_[0]) && f[1] < float(grid_[1]) && f[2] < float(grid_[2]))) return 1;
+        if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < float(grid_[0]) && f[1] < float(grid_[1]) && f[2] < float(grid_[2]))) return {};
         int c[3];
         for (int a = 0; a < 3; ++a) c[a] = std::min(int(f[a]), grid_[a] - 1);
-        const occupancy* empty = nullptr;
-        for (auto level = occupancy_.rbegin(); level != occupancy_.rend() && !empty; ++level)
-            if (!level->occupied(c[0], c[1], c[2])) empty = &*level;
-        if (!empty) return 1;
+        if (occupancy_[0].occupied(c[0], c[1], c[2])) {
+            if (options_.use_spheres && !inside_a_sphere(p)) return {};
+            return {voxel_index(c[0]) + voxel_index(grid_[0]) * (voxel_index(c[1]) + voxel_index(grid_[1]) * voxel_index(c[2])), 1};
+        }
+        const occupancy* empty = &occupancy_[0];
+        for (auto level = occupancy_.rbegin(); level != occupancy_.rend(); ++level)
+            if (!level->occupied(c[0], c[1], c[2])) {
+                empty = &*level;
+                break;
+            }
         const float dir[3] = {d.x * cells_per_unit_.x, d.y * cells_per_unit_.y, d.z * cells_per_unit_.z}; // cells per unit t
         float exit = 3.0e38f;
         for (int a = 0; a < 3; ++a) {
@@ -260,28 +271,17 @@ public:
         }
         // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
         const float steps = std::ceil(exit / step_ - 1e-3f);
-        return steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1;
+        return {std::nullopt, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
     }
 
-    std::optional<voxel_index> index_at(const krs::vec3f& p) const
+    bool inside_a_sphere(const krs::vec3f& p) const
     {
-        const float fx = (p.x - origin_.x) * cells_per_unit_.x, fy = (p.y - origin_.y) * cells_per_unit_.y,
-                    fz = (p.z - origin_.z) * cells_per_unit_.z;
-        if (!(fx >= 0 && fy >= 0 && fz >= 0 && fx < float(grid_[0]) && fy < float(grid_[1]) && fz < float(grid_[2]))) return std::nullopt;
-        if (options_.use_spheres && !shape_.spheres.empty()) {
-            bool inside = false;
-            for (const auto& s : shape_.spheres) {
-                const krs::vec3f d = p - s.center;
-                if (krs::dot(d, d) <= s.radius * s.radius) {
-                    inside = true;
-                    break;
-                }
-            }
-            if (!inside) return std::nullopt;
+        if (shape_.spheres.empty()) return true;
+        for (const auto& s : shape_.spheres) {
+            const krs::vec3f d = p - s.center;
+            if (krs::dot(d, d) <= s.radius * s.radius) return true;
         }
-        const int x = std::min(int(fx), grid_[0] - 1), y = std::min(int(fy), grid_[1] - 1), z = std::min(int(fz), grid_[2] - 1);
-        if (!occupancy_[0].occupied(x, y, z)) return std::nullopt;
-        return voxel_index(x) + voxel_index(grid_[0]) * (voxel_index(y) + voxel_index(grid_[1]) * voxel_index(z));
+        return false;
     }
 
     // The most samples a ray can take through the box (the paper's cache size q).
