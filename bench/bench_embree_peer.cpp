@@ -181,16 +181,6 @@ krs::trace_options footprint_options(const krs::pinhole_camera& camera, const fr
     return o.validate();
 }
 
-// sizeof plus the heap the sequence's vectors hold (element counts times sizes: the mirrors, the
-// kernels, their levels, n + 2 level offsets and n level bounds; allocator overhead not counted).
-std::size_t sequence_bytes(const scene_sequence& s)
-{
-    const std::size_t n = s.mirror_count(), k = s.kernels().size();
-    return sizeof s + s.mirrors().capacity() * sizeof(krs::mirror) +
-           s.kernels().capacity() * sizeof(scene_sequence::kernel_variant) + k * sizeof(std::uint32_t) +
-           (n + 2) * sizeof(std::uint32_t) + n * sizeof(krs::bounding_sphere);
-}
-
 // ---- tessellation ------------------------------------------------------------------------------
 
 struct mesh {
@@ -742,7 +732,7 @@ int main(int argc, char** argv)
             std::printf("%3d %5.1f%% %9.2f %6.1f %9.2f %7.2f%% %6zu B | %-24s %9s %8s %7s | %-26s %9s %8s %7s\n", n,
                         100 * hit_share(krs_faithful), krs_faithful.mrays(),
                         double(krs_faithful.evaluations) / double(krs_faithful.hit.size()), krs_px.mrays(),
-                        100 * px_agree, sequence_bytes(s), flat_speed.c_str(),
+                        100 * px_agree, s.memory_bytes(), flat_speed.c_str(),
                         cell(flat, memory_of(flat), "%.1f").c_str(), cell(flat, flat.build_seconds, "%.2f").c_str(),
                         cell(flat, 100 * flat.agree, "%.2f%%").c_str(), two_speed.c_str(),
                         cell(two, memory_of(two), "%.1f").c_str(), cell(two, two.build_seconds, "%.2f").c_str(),
@@ -755,7 +745,7 @@ int main(int argc, char** argv)
             csv << format("%s,%d,%.0f,%.6f,%.4f,%.2f,%.4f,%.6f,%zu,%zu,", scene_name, n, s.instance_count(),
                           hit_share(krs_faithful), krs_faithful.mrays(),
                           double(krs_faithful.evaluations) / double(krs_faithful.hit.size()),
-                          krs_px.mrays(), px_agree, sequence_bytes(s), kernel_mesh.triangles())
+                          krs_px.mrays(), px_agree, s.memory_bytes(), kernel_mesh.triangles())
                 << format("%.4f,%.4f,%.0f,%.0f,%.0f,%.4f,%.6f,%s,", flat.single_mrays, flat.packet_mrays,
                           flat.embree_bytes, flat.app_bytes, flat.rss_growth, flat.build_seconds, flat.agree,
                           flat.built ? "" : (flat.k < 0 ? "not run" : flat.stopped.c_str()))

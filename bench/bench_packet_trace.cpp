@@ -303,16 +303,19 @@ void throughput_table(int size, csv_writer& csv)
 void levels_table(int size, csv_writer& csv)
 {
     std::printf("\n== paper section 8: time per ray vs expansion level n (1 thread, %dx%d) ==\n", size, size);
-    std::printf("%4s %18s %18s %18s %18s\n", "n", "tree scalar us", "tree packet us", "terrain scalar us",
-                "terrain packet us");
-    csv.row("table,n,tree_scalar_us,tree_packet_us,terrain_scalar_us,terrain_packet_us,tree_evals_per_ray,terrain_evals_per_ray");
+    std::printf("%4s %18s %18s %18s %18s %12s %12s\n", "n", "tree scalar us", "tree packet us", "terrain scalar us",
+                "terrain packet us", "tree bytes", "terrain bytes");
+    csv.row("table,n,tree_scalar_us,tree_packet_us,terrain_scalar_us,terrain_packet_us,tree_evals_per_ray,terrain_evals_per_ray,"
+            "tree_memory_bytes,terrain_memory_bytes");
     std::vector<double> ns, cols[4];
     for (int n = 6; n <= 32; n += 2) {
         double us[4];
         double evals[2];
+        std::size_t bytes[2];
         for (int scene = 0; scene < 2; ++scene) {
             framing v;
             auto run = [&](const auto& f) {
+                bytes[scene] = f.memory_bytes();
                 const krs::pinhole_camera camera = camera_for(v, size);
                 render_settings s;
                 s.options = options_for(camera, v);
@@ -328,8 +331,9 @@ void levels_table(int size, csv_writer& csv)
         }
         ns.push_back(n);
         for (int c = 0; c < 4; ++c) cols[c].push_back(us[c]);
-        std::printf("%4d %18.3f %18.3f %18.3f %18.3f\n", n, us[0], us[1], us[2], us[3]);
-        csv.row(format("levels,%d,%.5f,%.5f,%.5f,%.5f,%.2f,%.2f", n, us[0], us[1], us[2], us[3], evals[0], evals[1]));
+        std::printf("%4d %18.3f %18.3f %18.3f %18.3f %12zu %12zu\n", n, us[0], us[1], us[2], us[3], bytes[0], bytes[1]);
+        csv.row(format("levels,%d,%.5f,%.5f,%.5f,%.5f,%.2f,%.2f,%zu,%zu", n, us[0], us[1], us[2], us[3], evals[0], evals[1],
+                       bytes[0], bytes[1]));
     }
     // Least-squares slope of time per ray against n.
     auto slope = [&](const std::vector<double>& y) {

@@ -232,7 +232,7 @@ def packet_trace_section(path, images, md):
     md.append("## KRS packet tracer (`bench_packet_trace`)\n")
     if not path:
         md.append("_bench_packet_trace.csv not found: run `bench/bench_packet_trace` in the build directory._\n")
-        return {}
+        return {}, {}
     s = read_sections(path)
     rows = s.get("throughput", [])
     if rows:
@@ -274,12 +274,20 @@ def packet_trace_section(path, images, md):
             us = num(r.get(col))
             if n is not None and us:
                 krs.setdefault(name, []).append((n, 1.0 / us))
-    return krs
+    # The sequences' own memory per n (bytes, as MiB like the Embree side), when the CSV has it.
+    krs_memory = {}
+    for r in levels:
+        n = num(r.get("n"))
+        for col, name in (("tree_memory_bytes", "KRS tree"), ("terrain_memory_bytes", "KRS terrain")):
+            b = num(r.get(col))
+            if n is not None and b:
+                krs_memory.setdefault(name, []).append((n, b / 2.0 ** 20))
+    return krs, krs_memory
 
 
-def embree_section(path, krs_series, images, md):
+def embree_section(path, krs_series, krs_memory, images, md):
     md.append("## KRS against Embree (`bench_embree_peer`)\n")
-    series_rays, series_memory = dict(krs_series), {}
+    series_rays, series_memory = dict(krs_series), dict(krs_memory)
     if not path:
         md.append("_bench_embree_peer.csv not found (build with the Embree option and run `bench/bench_embree_peer`); "
                   "only the KRS side is plotted._\n")
@@ -449,8 +457,8 @@ def main():
                                                            "bench_hypertree_render.csv", "bench_openvdb_peer.csv",
                                                            "bench_embree_peer.csv")}
     md.append("\nCSVs read: " + ", ".join("`%s`" % n if p else "~~%s~~ (absent)" % n for n, p in found.items()) + ".\n")
-    krs = packet_trace_section(found["bench_packet_trace.csv"], images, md)
-    embree_section(found["bench_embree_peer.csv"], krs, images, md)
+    krs, krs_memory = packet_trace_section(found["bench_packet_trace.csv"], images, md)
+    embree_section(found["bench_embree_peer.csv"], krs, krs_memory, images, md)
     create_section(found["bench_hypertree_create.csv"], md)
     render_section(found["bench_hypertree_render.csv"], images, md)
     openvdb_section(found["bench_openvdb_peer.csv"], images, md)

@@ -255,3 +255,28 @@ TEST_CASE("sequence validation names the parameter")
     CHECK(deep.instance_count() == std::ldexp(1.0, 64));
     CHECK_THROWS_WITH_AS(krs::expand(deep), doctest::Contains("max_instances"), krs::invalid_parameter);
 }
+
+TEST_CASE("sequence memory grows with n and the kernels: not with the 2^n instances")
+{
+    using seq = krs::sequence<krs::sphere, krs::torus_capsule>;
+    const auto build = [](int n) {
+        seq::builder b;
+        b.kernel(krs::sphere({0.3f, 1.0f, 0}, 0.2f));
+        b.kernel(krs::torus_capsule({0, 0, 0}, {0.3f, 1.0f, 0}, {0.05f, 0.5f, 0}, 0.05f));
+        for (int i = 0; i < n; ++i) b.mirror(krs::mirror({std::cos(0.7f * float(i)), 0, std::sin(0.7f * float(i))}, 2.0f + 2.5f * float(i)));
+        return b.build();
+    };
+    for (int n : {8, 16, 32, 64}) {
+        const seq s = build(n);
+        // The contents, counted element by element: a lower bound; vectors hold at most twice
+        // their size (a generous bound on their growth), plus one allocation's rounding.
+        const std::size_t contents = sizeof(seq) + std::size_t(n) * sizeof(krs::mirror) + 2 * sizeof(seq::kernel_variant) +
+                                     2 * sizeof(std::uint32_t) + std::size_t(n + 2) * sizeof(std::uint32_t) +
+                                     std::size_t(n) * sizeof(krs::bounding_sphere);
+        CAPTURE(n);
+        CHECK(s.memory_bytes() >= contents);
+        CHECK(s.memory_bytes() <= 2 * contents);
+        if (n <= 32) CHECK(s.memory_bytes() < 64 * 1024); // issue 9: "KRS memory stays under 64 KiB"
+        CHECK(s.instance_count() == doctest::Approx(std::ldexp(2.0, n)));
+    }
+}

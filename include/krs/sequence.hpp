@@ -80,6 +80,14 @@ public:
     }
     // A sphere holding every instance (infinite if any kernel is unbounded).
     const bounding_sphere& bound() const { return bound_; }
+    // The sequence's memory: the object plus what its vectors hold (allocator overhead aside). It
+    // grows with n and the kernel count, never with the 2^n instances it stands for.
+    std::size_t memory_bytes() const
+    {
+        return sizeof(*this) + mirrors_.capacity() * sizeof(Mirror) + kernels_.capacity() * sizeof(kernel_variant) +
+               (kernel_levels_.capacity() + level_begin_.capacity()) * sizeof(std::uint32_t) +
+               level_bounds_.capacity() * sizeof(bounding_sphere);
+    }
 
     // Algorithm 1.
     template <class T>
