@@ -45,9 +45,9 @@
 // The code is one text for GLSL 3.30 and 4.x (no #version line; a 4.3 context runs it in the tests).
 
 #include "hypertree/render/marcher.hpp"
+#include "krs/glsl/literal.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -92,34 +92,18 @@ struct hypertree_glsl_options {
 
 namespace detail {
 
-// Shortest decimal that reads back as the same float, with a point or exponent so GLSL takes it
-// as a float.
-inline std::string glsl_float(float v)
-{
-    char buffer[32];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
-    std::string s(buffer, result.ptr);
-    if (s.find_first_of(".e") == std::string::npos) s += ".0";
-    return s;
-}
-inline std::string glsl_vec3(float x, float y, float z)
-{
-    return "vec3(" + glsl_float(x) + ", " + glsl_float(y) + ", " + glsl_float(z) + ")";
-}
-inline std::string glsl_vec3(const krs::vec3f& v)
-{
-    return glsl_vec3(v.x, v.y, v.z);
-}
+using krs::glsl::float_literal, krs::glsl::vec3_literal;
+
 inline std::string glsl_float_array(const std::string& name, const std::vector<float>& values)
 {
     std::string s = "const float " + name + "[" + std::to_string(values.size()) + "] = float[" + std::to_string(values.size()) + "](";
-    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? (i % 8 ? ", " : ",\n    ") : "") + glsl_float(values[i]);
+    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? (i % 8 ? ", " : ",\n    ") : "") + float_literal(values[i]);
     return s + ");\n";
 }
 inline std::string glsl_vec3_array(const std::string& name, const std::vector<krs::vec3f>& values)
 {
     std::string s = "const vec3 " + name + "[" + std::to_string(values.size()) + "] = vec3[" + std::to_string(values.size()) + "](";
-    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ",\n    " : "") + glsl_vec3(values[i]);
+    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ",\n    " : "") + vec3_literal(values[i]);
     return s + ");\n";
 }
 // Every `$` of a template becomes the name prefix.
@@ -145,12 +129,12 @@ template <voxel_store S>
 std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_colors& colors, const march_options& options,
                            const hypertree_glsl_options& glsl = {})
 {
+    using krs::glsl::float_literal, krs::glsl::vec3_literal;
     // The marcher validates the options and normalizes the lights; building one here makes the
     // same checks with the same messages.
     const volume_marcher<S> marcher(store, shape, colors, options);
     const std::string& n = glsl.name;
     const hypervolume& v = store.volume();
-    using detail::glsl_float, detail::glsl_vec3;
     int level_count = 1;
     store.for_each([&](voxel_index, voxel value) { level_count = std::max(level_count, int(value.level) + 1); });
 
@@ -158,15 +142,15 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
     s += "// " + n + "_volume: RG8UI 3D texture of pack_volume(store), r = density, g = level.\n";
     s += "uniform usampler3D " + n + "_volume;\n";
     // The grid, as the marcher's floats.
-    s += "const vec3 " + n + "_box_lo = " + glsl_vec3(float(shape.box.lo.x), float(shape.box.lo.y), float(shape.box.lo.z)) + ";\n";
-    s += "const vec3 " + n + "_box_hi = " + glsl_vec3(float(shape.box.hi.x), float(shape.box.hi.y), float(shape.box.hi.z)) + ";\n";
-    s += "const vec3 " + n + "_origin = " + glsl_vec3(float(v.origin().x), float(v.origin().y), float(v.origin().z)) + ";\n";
+    s += "const vec3 " + n + "_box_lo = " + vec3_literal(krs::vec3f(shape.box.lo)) + ";\n";
+    s += "const vec3 " + n + "_box_hi = " + vec3_literal(krs::vec3f(shape.box.hi)) + ";\n";
+    s += "const vec3 " + n + "_origin = " + vec3_literal(krs::vec3f(v.origin())) + ";\n";
     s += "const vec3 " + n + "_cells_per_unit = " +
-         glsl_vec3(float(v.cells_per_unit().x), float(v.cells_per_unit().y), float(v.cells_per_unit().z)) + ";\n";
+         vec3_literal(krs::vec3f(v.cells_per_unit())) + ";\n";
     s += "const ivec3 " + n + "_grid = ivec3(" + std::to_string(v.grid().x) + ", " + std::to_string(v.grid().y) + ", " +
          std::to_string(v.grid().z) + ");\n";
-    s += "const float " + n + "_step = " + glsl_float(marcher.step()) + ";\n";
-    s += "const float " + n + "_min_transmittance = " + glsl_float(options.min_transmittance) + ";\n";
+    s += "const float " + n + "_step = " + float_literal(marcher.step()) + ";\n";
+    s += "const float " + n + "_min_transmittance = " + float_literal(options.min_transmittance) + ";\n";
     // Opacity of one step per density byte: alpha = 1 - (1 - mu)^(k ds / side), the marcher's table.
     {
         const double exponent = double(options.density_scale) * double(options.step_factor);
@@ -203,8 +187,8 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
         s += "const vec4 " + n + "_spheres[" + std::to_string(count) + "] = vec4[" + std::to_string(count) + "](";
         for (std::size_t i = 0; i < count; ++i) {
             const krs::bounding_sphere& b = shape.spheres[i];
-            s += (i ? ",\n    vec4(" : "vec4(") + glsl_float(b.center.x) + ", " + glsl_float(b.center.y) + ", " +
-                 glsl_float(b.center.z) + ", " + glsl_float(b.radius * b.radius) + ")";
+            s += (i ? ",\n    vec4(" : "vec4(") + float_literal(b.center.x) + ", " + float_literal(b.center.y) + ", " +
+                 float_literal(b.center.z) + ", " + float_literal(b.radius * b.radius) + ")";
         }
         s += ");\n";
     }
@@ -220,8 +204,8 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
         s += detail::glsl_vec3_array(n + "_flow_axis", axes);
         s += detail::glsl_float_array(n + "_flow_soft", soft);
     }
-    s += "const vec3 " + n + "_crown_center = " + glsl_vec3(shape.crown.center) + ";\n";
-    s += "const float " + n + "_crown_radius = " + glsl_float(shape.crown.radius) + ";\n";
+    s += "const vec3 " + n + "_crown_center = " + vec3_literal(shape.crown.center) + ";\n";
+    s += "const float " + n + "_crown_radius = " + float_literal(shape.crown.radius) + ";\n";
     {
         std::vector<krs::vec3f> directions, light_colors;
         for (const directional_light& l : options.lights) {
@@ -236,11 +220,11 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
             s += detail::glsl_vec3_array(n + "_light_color", light_colors);
         }
     }
-    s += "const float " + n + "_ambient = " + glsl_float(options.ambient) + ";\n";
-    s += "const float " + n + "_ambient_falloff = " + glsl_float(options.ambient_falloff) + ";\n";
-    s += "const float " + n + "_diffuse = " + glsl_float(options.diffuse) + ";\n";
-    s += "const float " + n + "_specular = " + glsl_float(options.specular) + ";\n";
-    s += "const float " + n + "_shininess = " + glsl_float(options.shininess) + ";\n";
+    s += "const float " + n + "_ambient = " + float_literal(options.ambient) + ";\n";
+    s += "const float " + n + "_ambient_falloff = " + float_literal(options.ambient_falloff) + ";\n";
+    s += "const float " + n + "_diffuse = " + float_literal(options.diffuse) + ";\n";
+    s += "const float " + n + "_specular = " + float_literal(options.specular) + ";\n";
+    s += "const float " + n + "_shininess = " + float_literal(options.shininess) + ";\n";
 
     // Functions. Each mirrors the marcher member of the same name; sums are spelled out where
     // GLSL's dot or length might associate differently from krs::dot (x, then y, then z).

@@ -37,6 +37,7 @@
 #include "krs/core/validate.hpp"
 #include "krs/fractal/kifs.hpp"
 #include "krs/fractal/log_spherical.hpp"
+#include "krs/glsl/literal.hpp"
 #include "krs/sequence.hpp"
 
 #include <charconv>
@@ -142,17 +143,6 @@ template <class F>
 struct is_similar_shell : std::false_type {};
 template <class S>
 struct is_similar_shell<similar_shell<S>> : std::true_type {};
-
-// Shortest decimal that reads back as the same float, always with a '.' or an exponent (a GLSL
-// float literal). Parameters are validated finite, so no inf/NaN reaches here.
-inline std::string float_literal(float v)
-{
-    char buffer[32];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
-    std::string s(buffer, result.ptr);
-    if (s.find_first_of(".e") == std::string::npos) s += ".0";
-    return s;
-}
 
 class emitter {
 public:

@@ -52,10 +52,6 @@ struct view {
 };
 
 namespace detail {
-inline std::string vec3_literal(const vec3f& v)
-{
-    return "vec3(" + float_literal(v.x) + ", " + float_literal(v.y) + ", " + float_literal(v.z) + ")";
-}
 // Shading palette by kernel type (linear RGB).
 template <class K>
 constexpr vec3f albedo_of()
@@ -86,13 +82,13 @@ std::string shadertoy(const basic_sequence<M, Kinds...>& s, const view& v, const
     const vec3f palette[] = {detail::albedo_of<Kinds>()...};
     out += "vec3 krs_albedo(uint kind) {\n";
     for (std::size_t i = 0; i < sizeof...(Kinds); ++i)
-        out += "    if (kind == " + std::to_string(i) + "u) return " + detail::vec3_literal(palette[i]) + ";\n";
+        out += "    if (kind == " + std::to_string(i) + "u) return " + vec3_literal(palette[i]) + ";\n";
     out += "    return vec3(0.5);\n}\n";
-    out += "const vec3 KRS_EYE = " + detail::vec3_literal(v.eye) + ";\n";
-    out += "const vec3 KRS_FORWARD = " + detail::vec3_literal(v.forward) + ";\n";
-    out += "const vec3 KRS_RIGHT = " + detail::vec3_literal(v.right) + ";\n";
-    out += "const vec3 KRS_UP = " + detail::vec3_literal(v.up) + ";\n";
-    out += "const vec3 KRS_TO_LIGHT = " + detail::vec3_literal(v.to_light) + ";\n";
+    out += "const vec3 KRS_EYE = " + vec3_literal(v.eye) + ";\n";
+    out += "const vec3 KRS_FORWARD = " + vec3_literal(v.forward) + ";\n";
+    out += "const vec3 KRS_RIGHT = " + vec3_literal(v.right) + ";\n";
+    out += "const vec3 KRS_UP = " + vec3_literal(v.up) + ";\n";
+    out += "const vec3 KRS_TO_LIGHT = " + vec3_literal(v.to_light) + ";\n";
     out += "const float KRS_TAN_HALF_FOV = " + float_literal(v.tan_half_fov) + ";\n";
     out += "const float KRS_MAX_DISTANCE = " + float_literal(v.max_distance) + ";\n";
     out += "const int KRS_MAX_STEPS = " + std::to_string(v.max_steps) + ";\n";
