@@ -196,36 +196,13 @@ void check_scene(const ex::scene<S>& s)
 std::vector<float> render_gpu(const std::string& shadertoy, int width, int height)
 {
     require_context();
-    const std::string vertex = "#version 430 core\n"
-                               "void main() {\n"
-                               "    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));\n"
-                               "    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);\n"
-                               "}\n";
     const std::string fragment = "#version 430 core\nuniform vec3 iResolution;\nuniform float iTime;\n"
                                  "out vec4 krs_frag_color;\n" +
                                  shadertoy + "void main() { mainImage(krs_frag_color, gl_FragCoord.xy); }\n";
-    const GLuint program = link({compile(GL_VERTEX_SHADER, vertex), compile(GL_FRAGMENT_SHADER, fragment)});
-    GLuint framebuffer = 0, color = 0, vao = 0;
-    glGenFramebuffers(1, &framebuffer);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    glGenRenderbuffers(1, &color);
-    glBindRenderbuffer(GL_RENDERBUFFER, color);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, width, height);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
-    REQUIRE(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE);
-    glViewport(0, 0, width, height);
-    glGenVertexArrays(1, &vao);
-    glBindVertexArray(vao);
-    glUseProgram(program);
-    glUniform3f(glGetUniformLocation(program, "iResolution"), float(width), float(height), 1.0f);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    std::vector<float> pixels(std::size_t(width) * std::size_t(height) * 4);
-    glReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, pixels.data());
-    REQUIRE(glGetError() == GL_NO_ERROR);
-    glDeleteVertexArrays(1, &vao);
-    glDeleteRenderbuffers(1, &color);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glDeleteFramebuffers(1, &framebuffer);
+    const GLuint program = link({compile(GL_VERTEX_SHADER, krs_test::fullscreen_vertex_shader), compile(GL_FRAGMENT_SHADER, fragment)});
+    const std::vector<float> pixels = krs_test::draw_fullscreen(program, width, height, [&] {
+        glUniform3f(glGetUniformLocation(program, "iResolution"), float(width), float(height), 1.0f);
+    });
     glDeleteProgram(program);
     return pixels;
 }

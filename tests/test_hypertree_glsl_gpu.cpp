@@ -108,11 +108,6 @@ std::vector<float> render_gpu(const std::string& snippet, const packed_volume& v
                               int width, int height, const rgb& background)
 {
     require_context();
-    const std::string vertex = "#version 430 core\n"
-                               "void main() {\n"
-                               "    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));\n"
-                               "    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);\n"
-                               "}\n";
     const std::string fragment = "#version 430 core\n" + snippet +
                                  "layout(std430, binding = 0) readonly buffer rays_block { float rays[]; };\n"
                                  "uniform int width;\nuniform int height;\nuniform vec3 background;\n"
@@ -124,33 +119,15 @@ std::vector<float> render_gpu(const std::string& snippet, const packed_volume& v
                                  "                             vec3(rays[i + 3], rays[i + 4], rays[i + 5]));\n"
                                  "    frag_color = vec4(m.rgb + m.a * background, 1.0);\n"
                                  "}\n";
-    const GLuint program = link({compile(GL_VERTEX_SHADER, vertex), compile(GL_FRAGMENT_SHADER, fragment)});
+    const GLuint program = link({compile(GL_VERTEX_SHADER, krs_test::fullscreen_vertex_shader), compile(GL_FRAGMENT_SHADER, fragment)});
     const GLuint texture = upload(volume);
     const GLuint ray_buffer = buffer(GL_SHADER_STORAGE_BUFFER, rays.data(), rays.size() * sizeof(float), GL_STATIC_DRAW);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ray_buffer);
-    GLuint framebuffer = 0, color = 0, vao = 0;
-    glGenFramebuffers(1, &framebuffer);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    glGenRenderbuffers(1, &color);
-    glBindRenderbuffer(GL_RENDERBUFFER, color);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, width, height);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
-    REQUIRE(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE);
-    glViewport(0, 0, width, height);
-    glGenVertexArrays(1, &vao);
-    glBindVertexArray(vao);
-    glUseProgram(program);
-    glUniform1i(glGetUniformLocation(program, "width"), width);
-    glUniform1i(glGetUniformLocation(program, "height"), height);
-    glUniform3f(glGetUniformLocation(program, "background"), background.r, background.g, background.b);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    std::vector<float> pixels(std::size_t(width) * std::size_t(height) * 4);
-    glReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, pixels.data());
-    REQUIRE(glGetError() == GL_NO_ERROR);
-    glDeleteVertexArrays(1, &vao);
-    glDeleteRenderbuffers(1, &color);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glDeleteFramebuffers(1, &framebuffer);
+    const std::vector<float> pixels = krs_test::draw_fullscreen(program, width, height, [&] {
+        glUniform1i(glGetUniformLocation(program, "width"), width);
+        glUniform1i(glGetUniformLocation(program, "height"), height);
+        glUniform3f(glGetUniformLocation(program, "background"), background.r, background.g, background.b);
+    });
     glDeleteBuffers(1, &ray_buffer);
     glDeleteTextures(1, &texture);
     glDeleteProgram(program);
