@@ -19,6 +19,7 @@
 // Define KRS_FUZZ_VERBOSE to print each input's outcome. fuzz/replay_main.cpp runs the same
 // function over fuzz/corpus/binary/ and fuzz/crashers/binary/ in ctest.
 
+#include "fuzz_input.hpp"
 #include "hypertree/io/binary.hpp"
 #include "hypertree/store/bit_array_store.hpp"
 #include "hypertree/store/dense_store.hpp"
@@ -29,21 +30,13 @@
 #include <cstdint>
 #include <sstream>
 #include <string>
-#ifdef KRS_FUZZ_VERBOSE
-#include <cstdio>
-#endif
 
 namespace {
 
 using namespace hypertree;
 
-[[noreturn]] void fail() { __builtin_trap(); }
-
-#ifdef KRS_FUZZ_VERBOSE
-void note(const char* what, const char* detail) { std::fprintf(stderr, "  %s: %s\n", what, detail); }
-#else
-void note(const char*, const char*) {}
-#endif
+using krs_fuzz::fail;
+using krs_fuzz::note;
 
 constexpr memory_budget budget{std::size_t(64) << 20};
 

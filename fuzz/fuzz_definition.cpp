@@ -18,6 +18,7 @@
 // Define KRS_FUZZ_VERBOSE to print each input's outcome. fuzz/replay_main.cpp runs the same
 // function over fuzz/corpus/definition/ and fuzz/crashers/definition/ in ctest.
 
+#include "fuzz_input.hpp"
 #include "hypertree/build.hpp"
 #include "hypertree/io/definition_file.hpp"
 #include "hypertree/io/forest_file.hpp"
@@ -27,19 +28,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
-#ifdef KRS_FUZZ_VERBOSE
-#include <cstdio>
-#endif
 
 namespace {
 
-[[noreturn]] void fail() { __builtin_trap(); }
-
-#ifdef KRS_FUZZ_VERBOSE
-void note(const char* what, const char* detail) { std::fprintf(stderr, "  %s: %s\n", what, detail); }
-#else
-void note(const char*, const char*) {}
-#endif
+using krs_fuzz::fail;
+using krs_fuzz::note;
 
 // Bounds that keep one execution to a fraction of a millisecond: the generator's work grows with
 // the iterations, the store's with the voxels of the grid.

@@ -32,6 +32,13 @@ using krs::vec3f;
 
 [[noreturn]] inline void fail() { __builtin_trap(); }
 
+// A line on stderr about the input (what was refused and why) in verbose builds; nothing otherwise.
+#ifdef KRS_FUZZ_VERBOSE
+inline void note(const char* what, const char* detail) { std::fprintf(stderr, "  %s: %s\n", what, detail); }
+#else
+inline void note(const char*, const char*) {}
+#endif
+
 struct reader {
     const std::uint8_t* data;
     std::size_t size;
