@@ -353,7 +353,8 @@ private:
     // specular term is a pure function of the voxel and is memoized per thread.
     rgb shade(const krs::vec3f& p, voxel_index index, int level, const krs::vec3f& view, shade_memo* memo, float& lookups) const
     {
-        const krs::vec3f q = options_.shade_per_voxel ? center_of(index) : p;
+        // The shading point, computed only where needed: a memo hit needs none (unless specular).
+        const auto point = [&] { return options_.shade_per_voxel ? center_of(index) : p; };
         const std::size_t lights = light_dirs_.size();
         std::array<float, max_lights> local{};
         const float* shadows = local.data();
@@ -371,7 +372,7 @@ private:
             if (memo->index[slot] != index) {
                 ++memo->misses;
                 memo->index[slot] = index;
-                lit = light_at(q, level, entry + 3, lookups);
+                lit = light_at(point(), level, entry + 3, lookups);
                 entry[0] = lit.r, entry[1] = lit.g, entry[2] = lit.b;
             } else {
                 ++memo->hits;
@@ -379,10 +380,10 @@ private:
             }
             shadows = entry + 3;
         } else {
-            lit = light_at(q, level, local.data(), lookups);
+            lit = light_at(point(), level, local.data(), lookups);
         }
         if (!(options_.specular > 0)) return lit;
-        const krs::vec3d nd = shape_.normal_at(krs::vec3d(q));
+        const krs::vec3d nd = shape_.normal_at(krs::vec3d(point()));
         if (nd.x == 0 && nd.y == 0 && nd.z == 0) return lit;
         const krs::vec3f n{float(nd.x), float(nd.y), float(nd.z)};
         for (std::size_t i = 0; i < lights; ++i) {
