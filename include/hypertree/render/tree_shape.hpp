@@ -61,20 +61,14 @@ struct tree_shape {
             m.second[3] += c.y * c.y, m.second[4] += c.y * c.z, m.second[5] += c.z * c.z;
         }
         shape.box = world_bounds(volume, box);
-        const vec3d half_cell = volume.voxel_size() * 0.5;
-        const double cell_radius = krs::length(half_cell);
-        std::vector<double> radius(max_parts, 0.0);
-        std::vector<vec3d> centroid(max_parts);
-        for (int p = 0; p < max_parts; ++p)
-            if (parts[p].n) centroid[p] = parts[p].sum / double(parts[p].n);
-        for (const stored_voxel& v : voxels)
-            radius[v.part] = std::max(radius[v.part], krs::length(volume.voxel_center(v.index) - centroid[v.part]));
+        std::vector<std::vector<voxel_index>> part_indices(max_parts);
+        for (const stored_voxel& v : voxels) part_indices[v.part].push_back(v.index);
         for (int p = 0; p < max_parts; ++p) {
             const moments& m = parts[p];
             if (!m.n) continue;
-            shape.spheres.push_back(krs::bound_around(centroid[p], radius[p] + cell_radius));
+            shape.spheres.push_back(detail::cell_bounding_sphere(volume, part_indices[std::size_t(p)]));
             const double n = double(m.n);
-            const vec3d c = centroid[p];
+            const vec3d c = m.sum / double(m.n);
             const std::array<double, 6> cov{m.second[0] / n - c.x * c.x, m.second[1] / n - c.x * c.y, m.second[2] / n - c.x * c.z,
                                             m.second[3] / n - c.y * c.y, m.second[4] / n - c.y * c.z, m.second[5] / n - c.z * c.z};
             part_flow f;

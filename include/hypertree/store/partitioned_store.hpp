@@ -204,9 +204,8 @@ private:
         return detail::index_directory::shape(voxels.front().index, voxels.back().index, voxels.size(), parts);
     }
 
-    // Index range, index box and bounding sphere of a part whose list is in place. The sphere is
-    // centered on the box of the voxel centers and reaches the farthest center plus half a voxel
-    // diagonal, so it holds every cell of the part whole.
+    // Index range, index box and bounding sphere (detail::cell_bounding_sphere: every cell whole)
+    // of a part whose list is in place.
     void describe(store_part& part) const
     {
         const std::span<const voxel_index> list(indices_.data() + part.offset, part.count);
@@ -216,19 +215,7 @@ private:
         detail::coordinate_walker coordinates(volume_);
         for (const voxel_index i : list) part.bounds.include(coordinates(i));
 
-        const vec3d& size = volume_.voxel_size();
-        const vec3d& origin = volume_.origin();
-        const auto center_of = [&](const std::array<int, 3>& c) {
-            return vec3d{origin.x + (c[0] + 0.5) * size.x, origin.y + (c[1] + 0.5) * size.y,
-                         origin.z + (c[2] + 0.5) * size.z};
-        };
-        const vec3d center = (center_of(part.bounds.lo) + center_of(part.bounds.hi)) * 0.5;
-        double farthest_squared = 0;
-        detail::coordinate_walker again(volume_);
-        for (const voxel_index i : list)
-            farthest_squared = std::max(farthest_squared, krs::length_squared(center_of(again(i)) - center));
-        const double half_diagonal = 0.5 * krs::length(size);
-        part.sphere = krs::bound_around(center, std::sqrt(farthest_squared) + half_diagonal);
+        part.sphere = detail::cell_bounding_sphere(volume_, list);
     }
 
     hypervolume volume_{};

@@ -27,9 +27,11 @@
 // advance, so a caller can pick the fastest kind that fits.
 
 #include "hypertree/voxel.hpp"
+#include "krs/core/bounds.hpp"
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -104,6 +106,28 @@ private:
     std::uint64_t row_end_ = 0; // empty row: the first call divides
     int y_ = 0, z_ = 0;
 };
+
+// The sphere around the cells of voxels given by index (in roughly increasing order, for the
+// walker): centered on the box of their centers, reaching the farthest center plus half a voxel
+// diagonal, so it holds every cell whole. Parts' secondary bounding spheres (section 8.2).
+template <class Indices>
+krs::bounding_sphere cell_bounding_sphere(const hypervolume& volume, const Indices& indices)
+{
+    const vec3d& size = volume.voxel_size();
+    const vec3d& origin = volume.origin();
+    const auto center_of = [&](const std::array<int, 3>& c) {
+        return vec3d{origin.x + (c[0] + 0.5) * size.x, origin.y + (c[1] + 0.5) * size.y, origin.z + (c[2] + 0.5) * size.z};
+    };
+    index_box box = index_box::nothing();
+    coordinate_walker coordinates(volume);
+    for (const voxel_index i : indices) box.include(coordinates(i));
+    if (box.empty()) return {};
+    const vec3d center = (center_of(box.lo) + center_of(box.hi)) * 0.5;
+    double farthest_squared = 0;
+    coordinate_walker again(volume);
+    for (const voxel_index i : indices) farthest_squared = std::max(farthest_squared, krs::length_squared(center_of(again(i)) - center));
+    return krs::bound_around(center, std::sqrt(farthest_squared) + 0.5 * krs::length(size));
+}
 
 // Position of the first element of sorted[0, n) that is >= key (n when none), by a bisection
 // without data-dependent branches: it always takes ceil(log2 n) + 1 steps, and the compiler turns
