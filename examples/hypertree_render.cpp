@@ -44,7 +44,7 @@ auto parallel_with_progress(int threads, const char* what)
         std::atomic<std::size_t> next{0}, done{0};
         std::vector<std::thread> workers;
         for (int w = 0; w < threads; ++w)
-            workers.emplace_back([&] {
+            workers.emplace_back([&, w] { // w by value: the loop moves on while the thread runs
                 for (std::size_t i; (i = next++) < count;) {
                     body(i);
                     const std::size_t d = ++done;
@@ -137,16 +137,7 @@ int main(int argc, char** argv)
 
     try {
         build_options options;
-        options.generation.parallel_for = [threads = example::thread_count(o.threads)](std::size_t count,
-                                                                                       const std::function<void(std::size_t)>& body) {
-            std::atomic<std::size_t> next{0};
-            std::vector<std::thread> workers;
-            for (int w = 0; w < threads; ++w)
-                workers.emplace_back([&] {
-                    for (std::size_t i; (i = next++) < count;) body(i);
-                });
-            for (auto& t : workers) t.join();
-        };
+        options.generation.parallel_for = parallel_with_progress(example::thread_count(o.threads), "generate");
         hypervolume volume;
         std::vector<stored_voxel> voxels;
         depth_colors colors;
