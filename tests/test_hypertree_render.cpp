@@ -146,3 +146,25 @@ TEST_CASE("hypertree render supersampling factor follows the projected voxel siz
         CHECK(supersampling_for(camera, shape, t.volume) == expect);
     }
 }
+
+TEST_CASE("hypertree render framing_camera sees the whole box and refuses an empty tree")
+{
+    const world_box box{{-0.5, 0.0, -0.4}, {0.7, 1.3, 0.6}};
+    const krs::pinhole_camera camera = framing_camera(box, 120, 80);
+    // Every corner of the box projects inside the image: its direction from the eye lies within
+    // the half-angles of the view (the camera's own ray through the image edge bounds them).
+    const krs::vec3d eye(camera.eye());
+    const krs::vec3d forward = krs::normalize(krs::vec3d(camera.primary_ray(60.0f, 40.0f).direction));
+    const double tan_half_v = std::tan(20.0 * 3.141592653589793 / 180.0), tan_half_h = tan_half_v * 120.0 / 80.0;
+    const krs::vec3d up_hint{0, 1, 0};
+    const krs::vec3d right = krs::normalize(krs::cross(forward, up_hint)), up = krs::cross(right, forward);
+    for (int c = 0; c < 8; ++c) {
+        const krs::vec3d corner{(c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y, (c & 4) ? box.hi.z : box.lo.z};
+        const krs::vec3d d = corner - eye;
+        const double depth = krs::dot(d, forward);
+        CHECK(depth > 0);
+        CHECK(std::abs(krs::dot(d, right)) / depth < tan_half_h);
+        CHECK(std::abs(krs::dot(d, up)) / depth < tan_half_v);
+    }
+    CHECK_THROWS_WITH_AS(framing_camera(world_box{}, 64, 64), doctest::Contains("framing_camera.box"), krs::invalid_parameter);
+}
