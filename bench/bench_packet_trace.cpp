@@ -17,7 +17,7 @@
 #include "krs/model/tree.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/packet_trace.hpp"
-#include "krs/trace/tile_prepass.hpp"
+#include "krs/trace/tile_rays.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -73,15 +73,14 @@ frame render_once(const F& f, const krs::pinhole_camera& camera, const render_se
 
     auto worker = [&] {
         long long my_evaluations = 0, my_prepass = 0;
-        // The tile a thread works on, its prepass and its next pixel.
-        int x0 = 0, y0 = 0, x1 = 0, y1 = 0, x = 0, y = 0;
+        // The tile a thread works on and its prepass.
+        int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
         krs::tile_prepass pre;
         auto take_tile = [&]() {
             const int k = next_tile.fetch_add(1);
             if (k >= tiles) return false;
             x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
             x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
-            x = x0, y = y0;
             pre = krs::tile_prepass{};
             pre.start = o.min_distance;
             if (s.prepass) {
@@ -100,15 +99,12 @@ frame render_once(const F& f, const krs::pinhole_camera& camera, const render_se
                         out.depth[std::size_t(py) * width + px] = h.found ? h.t : INFINITY;
                     }
         } else {
-            bool have_tile = take_tile();
+            krs::tile_rays<> rays;
             auto next = [&](krs::ray_job& job) {
-                while (have_tile && y >= y1) have_tile = take_tile();
-                if (!have_tile) return false;
-                job.r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
-                job.t_start = pre.start_for(job.r);
-                job.t_max = o.max_distance;
-                job.id = std::uint32_t(y * width + x);
-                if (++x >= x1) x = x0, ++y;
+                while (!rays.pop(job)) {
+                    if (!take_tile()) return false;
+                    rays.fill(camera, x0, y0, x1, y1, pre, o.max_distance);
+                }
                 return true;
             };
             auto done = [&](std::uint32_t id, const krs::hit<float>& h) { out.depth[id] = h.found ? h.t : INFINITY; };

@@ -15,7 +15,7 @@
 #include "krs/trace/camera.hpp"
 #include "krs/trace/packet_shade.hpp"
 #include "krs/trace/packet_trace.hpp"
-#include "krs/trace/tile_prepass.hpp"
+#include "krs/trace/tile_rays.hpp"
 
 #include "support/example_io.hpp"
 
@@ -120,27 +120,23 @@ int main(int argc, char** argv)
     auto worker = [&] {
         // Phase 0: one ray stream per thread over the tiles it takes; a tile's rays start at its
         // prepass depth.
-        int x0 = 0, y0 = 0, x1 = 0, y1 = 0, x = 0, y = 0, k = -1;
+        int x0 = 0, y0 = 0, x1 = 0, y1 = 0, k = -1;
         krs::tile_prepass pre;
         auto take_tile = [&] {
             k = next_trace.fetch_add(1);
             if (k >= tiles) return false;
             x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
             x1 = std::min(x0 + tile, opt.width), y1 = std::min(y0 + tile, opt.height);
-            x = x0, y = y0;
             pre = krs::prepass_tile(tree, camera, x0, y0, x1, y1, trace);
             done.fetch_add(1);
             return true;
         };
-        bool have_tile = take_tile();
+        krs::tile_rays<P> rays;
         auto next = [&](krs::ray_job& job) {
-            while (have_tile && y >= y1) have_tile = take_tile();
-            if (!have_tile) return false;
-            job.r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
-            job.t_start = pre.start_for(job.r);
-            job.t_max = trace.max_distance;
-            job.id = std::uint32_t(y * opt.width + x);
-            if (++x >= x1) x = x0, ++y;
+            while (!rays.pop(job)) {
+                if (!take_tile()) return false;
+                rays.fill(camera, x0, y0, x1, y1, pre, trace.max_distance);
+            }
             return true;
         };
         long long my_hits = 0;

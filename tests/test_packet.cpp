@@ -9,6 +9,7 @@
 #include "krs/trace/packet_shade.hpp"
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
+#include "krs/trace/tile_rays.hpp"
 
 #include <doctest/doctest.h>
 
@@ -370,4 +371,69 @@ TEST_CASE("packet shadow query and Lambert shade equal the scalar ones")
     }
     CHECK(shadowed > 50);
     CHECK(lit > 50);
+}
+
+TEST_CASE_TEMPLATE("mask bits: a mask as a word of lane bits and back", T, float, double, krs::packet_f, krs::packet_d)
+{
+    constexpr std::size_t W = krs::lane_count<T>;
+    std::mt19937_64 g(5);
+    for (int trial = 0; trial < 200; ++trial) {
+        // A mask made by a comparison, read lane by lane: its word has bit i exactly for lane i.
+        alignas(64) krs::scalar_t<T> values[W];
+        std::uint64_t expected = 0;
+        for (std::size_t i = 0; i < W; ++i) {
+            values[i] = krs::scalar_t<T>(int(g() % 7) - 3);
+            if (values[i] > 0) expected |= std::uint64_t(1) << i;
+        }
+        T x;
+        if constexpr (std::floating_point<T>)
+            x = values[0];
+        else
+            x = T::load_aligned(values);
+        const krs::mask_t<T> m = x > T(0);
+        REQUIRE(krs::mask_bits<T>(m) == expected);
+        // A word turned into a mask sets exactly its lanes.
+        const std::uint64_t word = g() & (W == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1);
+        const krs::mask_t<T> back = krs::mask_from_bits<T>(word);
+        for (std::size_t i = 0; i < W; ++i) REQUIRE(krs::mask_lane<T>(back, i) == (((word >> i) & 1u) != 0));
+    }
+}
+
+TEST_CASE("tile rays: every pixel of a clipped tile once, with the scalar camera ray and prepass start")
+{
+    const scene s = grove();
+    const int width = 37, height = 29;
+    const krs::pinhole_camera camera = view(2, width, height);
+    const krs::trace_options o = primary_options(camera);
+    krs::tile_rays<P> rays;
+    std::vector<int> seen(std::size_t(width) * height, 0);
+    long long checked = 0;
+    // Tiles of 12 x 10 overrun the right and bottom edges; one lies wholly outside.
+    for (int y0 = 0; y0 < height + 10; y0 += 10)
+        for (int x0 = 0; x0 < width + 12; x0 += 12) {
+            const krs::tile_prepass pre = krs::prepass_tile(s, camera, std::min(x0, width - 1),
+                                                            std::min(y0, height - 1), std::min(x0 + 12, width),
+                                                            std::min(y0 + 10, height), o);
+            rays.fill(camera, x0, y0, x0 + 12, y0 + 10, pre, o.max_distance);
+            const int expected = std::max(0, std::min(x0 + 12, width) - x0) * std::max(0, std::min(y0 + 10, height) - y0);
+            REQUIRE(rays.remaining() == std::size_t(expected));
+            krs::ray_job job;
+            while (rays.pop(job)) {
+                REQUIRE(job.id < seen.size());
+                ++seen[job.id];
+                const int x = int(job.id) % width, y = int(job.id) / width;
+                REQUIRE((x >= x0 && x < x0 + 12 && y >= y0 && y < y0 + 10));
+                const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+                REQUIRE((job.r.origin.x == r.origin.x && job.r.origin.y == r.origin.y && job.r.origin.z == r.origin.z));
+                REQUIRE(job.r.direction.x == doctest::Approx(r.direction.x).epsilon(1e-6));
+                REQUIRE(job.r.direction.y == doctest::Approx(r.direction.y).epsilon(1e-6));
+                REQUIRE(job.r.direction.z == doctest::Approx(r.direction.z).epsilon(1e-6));
+                REQUIRE(job.t_start == doctest::Approx(pre.start_for(r)).epsilon(1e-5));
+                REQUIRE(job.t_max == o.max_distance);
+                ++checked;
+            }
+            REQUIRE(rays.remaining() == 0);
+        }
+    for (int n : seen) REQUIRE(n == 1);
+    CHECK(checked == width * height);
 }

@@ -35,8 +35,10 @@ struct isometry {
         return {a[0] * q.x + a[3] * q.y + a[6] * q.z, a[1] * q.x + a[4] * q.y + a[7] * q.z,
                 a[2] * q.x + a[5] * q.y + a[8] * q.z};
     }
-    // The reflection R x = x - 2 (m . x - c) m = (I - 2 m m^T) x + 2 c m.
-    static isometry reflection(const mirror& m)
+    // The reflection R x = x - 2 (m . x - c) m = (I - 2 m m^T) x + 2 c m (any mirror kind: an
+    // axis_mirror states its plane by the same normal and offset).
+    template <mirror_kind M>
+    static isometry reflection(const M& m)
     {
         const vec3d n(m.normal);
         const double c = m.offset;
@@ -60,14 +62,14 @@ struct isometry {
     }
 };
 
-template <kernel... Kinds>
+template <mirror_kind Mirror, kernel... Kinds>
 struct expansion {
     struct instance {
         std::uint32_t kernel = 0; // index into sequence::kernels()
         isometry to_world;        // kernel space -> world
     };
 
-    const sequence<Kinds...>* source = nullptr;
+    const basic_sequence<Mirror, Kinds...>* source = nullptr;
     std::vector<instance> instances;
 
     // min over all instances of k(W^-1 x): the distance to the union, computed the slow way.
@@ -86,14 +88,15 @@ struct expansion {
 
 // Expands every kernel instance of `s`. Throws invalid_parameter("max_instances") when the
 // expansion would exceed the budget, before allocating anything.
-template <kernel... Kinds>
-expansion<Kinds...> expand(const sequence<Kinds...>& s, std::size_t max_instances = std::size_t(1) << 22)
+template <mirror_kind Mirror, kernel... Kinds>
+expansion<Mirror, Kinds...> expand(const basic_sequence<Mirror, Kinds...>& s,
+                                   std::size_t max_instances = std::size_t(1) << 22)
 {
     const double count = s.instance_count();
     if (count > double(max_instances))
         throw invalid_parameter("max_instances", "the expansion has more kernel instances than allowed",
                                 detail::to_text(count) + " > " + std::to_string(max_instances));
-    expansion<Kinds...> e;
+    expansion<Mirror, Kinds...> e;
     e.source = &s;
     e.instances.reserve(std::size_t(count));
 

@@ -103,9 +103,13 @@ public:
             // to that sphere, so when the sphere is no nearer than d for every lane the rest of
             // the walk cannot lower d. The result equals the full walk's; far from the finer
             // levels (most sphere-tracing steps) the walk stops after a few levels.
-            const bounding_sphere& b = level_bounds_[i];
-            const T reach = d + T(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
-            if (all(length_squared(p - vec3<T>(b.center)) > reach * reach && reach > T(0))) break;
+            // Above the highest level that holds kernels d is still infinite and the test cannot
+            // pass: a sequence with all its kernels at level 0 (a grid of copies) skips it.
+            if (i < top_kernel_level_) {
+                const bounding_sphere& b = level_bounds_[i];
+                const T reach = d + T(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
+                if (all(length_squared(p - vec3<T>(b.center)) > reach * reach && reach > T(0))) break;
+            }
             d = nearest_kernel(p, i, d);
         }
         return d;
@@ -184,6 +188,7 @@ private:
     std::vector<std::uint32_t> level_begin_{0, 0}; // n + 2 offsets into kernels_
     bounding_sphere bound_{};
     std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
+    std::size_t top_kernel_level_ = 0;          // the highest level that holds a kernel
 };
 
 // Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
@@ -227,6 +232,8 @@ public:
             s.level_begin_.push_back(std::uint32_t(s.kernels_.size()));
         }
         if (s.kernels_.empty()) throw invalid_parameter("sequence.kernels", "a sequence needs at least one kernel");
+        for (std::size_t i = 0; i < levels_.size(); ++i)
+            if (!levels_[i].empty()) s.top_kernel_level_ = i;
         s.bound_ = expansion_bound(s, &s.level_bounds_);
         return s;
     }

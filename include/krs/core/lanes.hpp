@@ -16,6 +16,7 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <cstdint>
 #include <type_traits>
 
 namespace krs {
@@ -144,6 +145,46 @@ inline bool mask_lane(const mask_t<T>& m, std::size_t i) noexcept
         alignas(64) bool buffer[lane_count<T>];
         m.store_aligned(buffer);
         return buffer[i];
+    }
+}
+
+// A mask as a word of bits (bit i = lane i) and back, for code that keeps per-lane flags between
+// packet operations (a refilling tracer's finished lanes). With AVX-512 the mask register is
+// that word already; other targets go through memory.
+template <lane T>
+inline std::uint64_t mask_bits(const mask_t<T>& m) noexcept
+{
+    static_assert(lane_count<T> <= 64, "a mask of more than 64 lanes does not fit one word");
+    if constexpr (std::floating_point<T>) {
+        return m ? 1u : 0u;
+    } else {
+        if constexpr (std::is_base_of_v<xsimd::avx512f, typename T::arch_type>) {
+            using word = typename mask_t<T>::register_type;
+            return std::uint64_t(static_cast<word>(m));
+        } else {
+            alignas(64) bool lanes[lane_count<T>];
+            m.store_aligned(lanes);
+            std::uint64_t bits = 0;
+            for (std::size_t i = 0; i < lane_count<T>; ++i) bits |= std::uint64_t(lanes[i]) << i;
+            return bits;
+        }
+    }
+}
+template <lane T>
+inline mask_t<T> mask_from_bits(std::uint64_t bits) noexcept
+{
+    static_assert(lane_count<T> <= 64, "a mask of more than 64 lanes does not fit one word");
+    if constexpr (std::floating_point<T>) {
+        return (bits & 1u) != 0;
+    } else {
+        if constexpr (std::is_base_of_v<xsimd::avx512f, typename T::arch_type>) {
+            using word = typename mask_t<T>::register_type;
+            return mask_t<T>(static_cast<word>(bits));
+        } else {
+            alignas(64) bool lanes[lane_count<T>];
+            for (std::size_t i = 0; i < lane_count<T>; ++i) lanes[i] = ((bits >> i) & 1u) != 0;
+            return mask_t<T>::load_aligned(lanes);
+        }
     }
 }
 

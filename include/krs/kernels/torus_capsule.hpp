@@ -184,7 +184,8 @@ public:
         const arc_point<T> e = evaluate(p);
         const T one(1);
         const vec3<T> offset = e.radial_direction * e.radial + vec3<T>(plane_normal_) * e.height;
-        const vec3<T> torus_dir = select(e.torus > T(0), offset / select(e.torus > T(0), e.torus, one),
+        const T torus = sqrt(e.torus_squared);
+        const vec3<T> torus_dir = select(torus > T(0), offset / select(torus > T(0), torus, one),
                                          e.radial_direction);
         const T ls = length(e.from_start), le = length(e.from_end);
         const vec3<T> start_dir =
@@ -276,7 +277,7 @@ private:
     template <class T>
     struct arc_point {
         vec3<T> from_middle, from_start, from_end, radial_direction;
-        T height, radial, torus, to_arc;
+        T height, radial, torus_squared, to_arc;
         mask_t<T> in_arc;
     };
 
@@ -293,7 +294,7 @@ private:
         const T wl = length(w);
         r.radial = (k * dot(up, up) + T(2) * c * dot(up, m) - T(chord_offset_)) / (wl + T(1));
         r.radial_direction = select(wl > T(0), w / select(wl > T(0), wl, T(1)), m);
-        r.torus = sqrt(r.radial * r.radial + r.height * r.height);
+        r.torus_squared = r.radial * r.radial + r.height * r.height;
         r.from_start = p - vec3<T>(start_);
         r.from_end = p - vec3<T>(end_);
         const auto in_start = dot(r.from_start, vec3<T>(start_tangent_)) >= T(0);
@@ -301,8 +302,10 @@ private:
         // The wedge of a minor arc is the intersection of the half-spaces bounded by the radial
         // planes at its ends; a major arc's is their union.
         r.in_arc = major_ ? (in_start || in_end) : (in_start && in_end);
-        const T ends = sqrt(min(dot(r.from_start, r.from_start), dot(r.from_end, r.from_end)));
-        r.to_arc = select(r.in_arc, r.torus, ends);
+        // One square root of whichever squared distance applies (the same value as choosing
+        // between two roots, at half the cost).
+        const T ends_squared = min(dot(r.from_start, r.from_start), dot(r.from_end, r.from_end));
+        r.to_arc = sqrt(select(r.in_arc, r.torus_squared, ends_squared));
         return r;
     }
 

@@ -15,6 +15,7 @@
 #include "krs/trace/sphere_trace.hpp"
 
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <limits>
 
@@ -49,14 +50,16 @@ struct stream_stats {
 
 namespace detail {
 
-// SoA staging of one packet's rays, so single lanes can be replaced between steps.
+// SoA staging of one packet's rays, so single lanes can be replaced between steps. Per-lane
+// flags are words of bits (bit i = lane i), so finding the finished lanes is a few word
+// operations rather than a loop over the packet.
 template <class P>
 struct packet_lanes {
     static constexpr std::size_t W = lane_count<P>;
     alignas(64) float ox[W], oy[W], oz[W], dx[W], dy[W], dz[W], t0[W], t1[W];
-    alignas(64) bool fresh[W];
     std::uint32_t id[W];
-    bool live[W];
+    std::uint64_t live = 0;  // lanes holding a ray that has not been reported yet
+    std::uint64_t fresh = 0; // lanes pulled since the packet's state was last started
 
     // Fills lane i from the queue; a lane left empty gets a ray the tracer rejects at once.
     template <class Next>
@@ -64,12 +67,13 @@ struct packet_lanes {
     {
         ray_job job;
         if (queue_open) queue_open = next(job);
-        live[i] = queue_open;
-        if (!live[i]) job = ray_job{{{0, 0, 0}, {0, 0, 1}}, std::numeric_limits<float>::infinity(), 0.0f, 0};
+        const std::uint64_t bit = std::uint64_t(1) << i;
+        live = queue_open ? (live | bit) : (live & ~bit);
+        if (!queue_open) job = ray_job{{{0, 0, 0}, {0, 0, 1}}, std::numeric_limits<float>::infinity(), 0.0f, 0};
         ox[i] = job.r.origin.x, oy[i] = job.r.origin.y, oz[i] = job.r.origin.z;
         dx[i] = job.r.direction.x, dy[i] = job.r.direction.y, dz[i] = job.r.direction.z;
         t0[i] = job.t_start, t1[i] = job.t_max, id[i] = job.id;
-        fresh[i] = true;
+        fresh |= bit;
     }
     march_state<P> start(const trace_options& options) const
     {
@@ -123,37 +127,27 @@ stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_opti
     auto harvest = [&](int k, bool force) {
         detail::packet_lanes<P>& L = lanes[k];
         march_state<P>& m = state[k];
-        alignas(64) bool running[W];
-        m.active.store_aligned(running);
-        int finished = 0;
-        for (std::size_t i = 0; i < W; ++i) finished += (L.live[i] && !running[i]) ? 1 : 0;
-        if (finished == 0 || (finished < refill_at && !force)) return;
+        const std::uint64_t finished = L.live & ~mask_bits<P>(m.active);
+        const int count = std::popcount(finished);
+        if (count == 0 || (count < refill_at && !force)) return;
         alignas(64) float t[W], steps[W], evaluations[W];
-        alignas(64) bool found[W], invalid[W];
         m.result.t.store_aligned(t);
         m.result.steps.store_aligned(steps);
         m.result.evaluations.store_aligned(evaluations);
-        m.result.found.store_aligned(found);
-        m.result.invalid.store_aligned(invalid);
-        bool any_fresh = false;
-        for (std::size_t i = 0; i < W; ++i) {
-            L.fresh[i] = false;
-            if (!L.live[i] || running[i]) continue;
+        const std::uint64_t found = mask_bits<P>(m.result.found), invalid = mask_bits<P>(m.result.invalid);
+        L.fresh = 0;
+        for (std::uint64_t rest = finished; rest != 0; rest &= rest - 1) {
+            const std::size_t i = std::size_t(std::countr_zero(rest));
             hit<float> h;
-            h.t = t[i], h.found = found[i], h.invalid = invalid[i];
+            h.t = t[i], h.found = (found >> i) & 1u, h.invalid = (invalid >> i) & 1u;
             h.steps = int(steps[i]), h.evaluations = int(evaluations[i]);
             ++stats.rays;
             stats.evaluations += h.evaluations;
             stats.busy_lanes += h.steps;
             done(L.id[i], h);
-            L.live[i] = false;
             L.pull(i, next, queue_open);
-            any_fresh = true;
         }
-        if (any_fresh) {
-            const mask_t<P> fresh = mask_t<P>::load_aligned(L.fresh);
-            detail::blend(fresh, m, L.start(options));
-        }
+        detail::blend(mask_from_bits<P>(L.fresh), m, L.start(options));
     };
     for (;;) {
         for (int k = 0; k < Interleave; ++k) harvest(k, !any(state[k].active));
@@ -167,8 +161,7 @@ stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_opti
         if (running) continue;
         // Nothing runs: done unless a lane still holds an unreported (rejected) ray.
         bool pending = false;
-        for (int k = 0; k < Interleave; ++k)
-            for (std::size_t i = 0; i < W; ++i) pending = pending || lanes[k].live[i];
+        for (int k = 0; k < Interleave; ++k) pending = pending || lanes[k].live != 0;
         if (!pending) break;
     }
     return stats;
