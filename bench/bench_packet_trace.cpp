@@ -3,7 +3,7 @@
 //
 //     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error]
 //
-// Prints three tables and writes them to one CSV (default: bench_packet_trace.csv next to the
+// Prints three tables and writes them to one CSV (default: <executable>.csv next to the
 // binary), with a `table` column. Rays are camera rays over N x N pixels (default 256), rendered
 // in 8 x 8 tiles taken from a shared counter by 1 or 2 threads. The scalar path traces each pixel
 // with sphere_trace<float>; the packet path streams every ray of a thread's tiles through
@@ -290,8 +290,13 @@ void throughput_table(int size, csv_writer& csv)
     throughput_row("terrain (general)", terrain, tv, size, csv, worst);
     const auto terrain_axis = terrain_scene<krs::axis_mirror>(20, tv);
     throughput_row("terrain (axis mirrors)", terrain_axis, tv, size, csv, worst);
-    std::printf("target packet/scalar >= 8x on 1 thread with 16 lanes: worst %.2fx -> %s%s\n", worst,
-                verdict(worst >= 8.0), packet_width == 16 ? "" : " (this build has fewer than 16 lanes)");
+    // Issue 4: >= 8x with 16 lanes, >= 5x with 8 lanes.
+    const double target = packet_width >= 16 ? 8.0 : packet_width >= 8 ? 5.0 : 0.0;
+    if (target > 0)
+        std::printf("target packet/scalar >= %.0fx on 1 thread with %zu lanes: worst %.2fx -> %s\n", target,
+                    packet_width, worst, verdict(worst >= target));
+    else
+        std::printf("packet/scalar worst %.2fx (no target for %zu lanes)\n", worst, packet_width);
 }
 
 // ---- table 2: time per ray against expansion level ---------------------------------------------
@@ -455,7 +460,8 @@ int main(int argc, char** argv)
     if (csv_path.empty()) {
         const std::string self = argv[0];
         const std::size_t slash = self.find_last_of('/');
-        csv_path = (slash == std::string::npos ? std::string(".") : self.substr(0, slash)) + "/bench_packet_trace.csv";
+        // Named after the executable, so the 8-lane build (bench_packet_trace_avx2) keeps its own.
+        csv_path = (slash == std::string::npos ? std::string(".") + "/" + self : self) + ".csv";
     }
     csv_writer csv;
     csv.file.open(csv_path);

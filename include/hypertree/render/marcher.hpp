@@ -173,18 +173,24 @@ public:
         if constexpr (std::floating_point<T>) {
             if (cache && cache->index.size() < max_samples()) cache->index.resize(max_samples(), ~voxel_index(0)), cache->value.resize(max_samples());
         }
+        const std::array<float, lanes<T>> dx = store(ray.direction.x), dy = store(ray.direction.y), dz = store(ray.direction.z);
+        std::array<cell_slopes, lanes<T>> inverse;
+        for (std::size_t i = 0; i < lanes<T>; ++i) inverse[i] = slopes({dx[i], dy[i], dz[i]});
         while (any(active)) {
             const T t = t0 + (k + half) * ds;
             const krs::vec3<T> p = ray.origin + ray.direction * t;
             // Per lane: the voxel, its opacity for one step, and its shaded color if it is not
             // empty; or, in an empty brick, how many samples to skip.
             std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{}, advance{};
+            // The lanes' inputs, spilled once per sample rather than once per lane.
+            const std::array<float, lanes<T>> px = store(p.x), py = store(p.y), pz = store(p.z), ks = store(k);
+            const std::uint64_t running = krs::mask_bits<T>(active);
             for (std::size_t i = 0; i < lanes<T>; ++i) {
                 advance[i] = 1.0f;
-                if (!krs::mask_lane<T>(active, i)) continue;
-                const krs::vec3f pi{krs::lane_at(p.x, i), krs::lane_at(p.y, i), krs::lane_at(p.z, i)};
-                const krs::vec3f di{krs::lane_at(ray.direction.x, i), krs::lane_at(ray.direction.y, i), krs::lane_at(ray.direction.z, i)};
-                const probe_result found = probe(pi, di);
+                if (!((running >> i) & 1u)) continue;
+                const krs::vec3f pi{px[i], py[i], pz[i]};
+                const krs::vec3f di{dx[i], dy[i], dz[i]};
+                const probe_result found = probe(pi, inverse[i]);
                 if (!found.index) {
                     advance[i] = float(found.skip);
                     continue;
@@ -192,7 +198,7 @@ public:
                 const std::optional<voxel_index>& index = found.index;
                 voxel v;
                 if constexpr (std::floating_point<T>) {
-                    v = cache ? fetch_cached(*index, std::size_t(krs::lane_at(k, i)), *cache, cache_valid, lookups[i])
+                    v = cache ? fetch_cached(*index, std::size_t(ks[i]), *cache, cache_valid, lookups[i])
                               : (++lookups[i], store_->at(*index));
                 } else {
                     v = (++lookups[i], store_->at(*index));
@@ -222,11 +228,12 @@ public:
         float transmittance = 1.0f;
         // Sample j at base + j ds from j = 1: one step out, so the sample does not shadow itself.
         const float base = std::max(t0, 0.0f);
+        const cell_slopes inverse = slopes(l);
         for (int j = 1;; ) {
             const float t = base + float(j) * step_;
             if (!(t < t1 && transmittance >= options_.min_transmittance)) break;
             const krs::vec3f q = p + l * t;
-            const probe_result found = probe(q, l);
+            const probe_result found = probe(q, inverse);
             if (!found.index) {
                 j += found.skip;
                 continue;
@@ -238,15 +245,30 @@ public:
         return transmittance;
     }
 
+    // A ray direction d as the t it takes to cross one cell along each axis, 1 / (d * cells per
+    // unit), with 0 for an axis the ray does not move along: computed once per ray, so probing
+    // an empty brick multiplies instead of dividing.
+    struct cell_slopes {
+        float inverse[3];
+    };
+    cell_slopes slopes(const krs::vec3f& d) const
+    {
+        const float dir[3] = {d.x * cells_per_unit_.x, d.y * cells_per_unit_.y, d.z * cells_per_unit_.z};
+        cell_slopes s;
+        for (int a = 0; a < 3; ++a) s.inverse[a] = dir[a] != 0 ? 1.0f / dir[a] : 0.0f;
+        return s;
+    }
+
     // What a sample at p finds: its voxel index when its 4^3 brick holds voxels (and, with
-    // use_spheres, p lies in a part's sphere); otherwise the number of samples along direction d
-    // that certainly lie in empty space (at least 1): the step count to the exit of the largest
-    // empty brick holding p, rounded so that a sample on the exit face is never skipped.
+    // use_spheres, p lies in a part's sphere); otherwise the number of samples along the ray
+    // (direction given by its slopes) that certainly lie in empty space (at least 1): the step
+    // count to the exit of the largest empty brick holding p, rounded so that a sample on the
+    // exit face is never skipped.
     struct probe_result {
         std::optional<voxel_index> index;
         int skip = 1;
     };
-    probe_result probe(const krs::vec3f& p, const krs::vec3f& d) const
+    probe_result probe(const krs::vec3f& p, const cell_slopes& slope) const
     {
         const float f[3] = {(p.x - origin_.x) * cells_per_unit_.x, (p.y - origin_.y) * cells_per_unit_.y, (p.z - origin_.z) * cells_per_unit_.z};
         if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < float(grid_[0]) && f[1] < float(grid_[1]) && f[2] < float(grid_[2]))) return {};
@@ -262,12 +284,12 @@ public:
                 empty = &*level;
                 break;
             }
-        const float dir[3] = {d.x * cells_per_unit_.x, d.y * cells_per_unit_.y, d.z * cells_per_unit_.z}; // cells per unit t
         float exit = 3.0e38f;
         for (int a = 0; a < 3; ++a) {
             const float lo = float((c[a] >> empty->shift) << empty->shift), hi = lo + float(empty->side());
-            if (dir[a] > 0) exit = std::min(exit, (hi - f[a]) / dir[a]);
-            else if (dir[a] < 0) exit = std::min(exit, (lo - f[a]) / dir[a]);
+            const float inv = slope.inverse[a];
+            if (inv > 0) exit = std::min(exit, (hi - f[a]) * inv);
+            else if (inv < 0) exit = std::min(exit, (lo - f[a]) * inv);
         }
         // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
         const float steps = std::ceil(exit / step_ - 1e-3f);
@@ -295,6 +317,16 @@ private:
     template <class T>
     static constexpr std::size_t lanes = krs::lane_count<T>;
 
+    template <class T>
+    static std::array<float, lanes<T>> store(const T& x)
+    {
+        std::array<float, lanes<T>> a;
+        if constexpr (std::floating_point<T>)
+            a[0] = x;
+        else
+            x.store_unaligned(a.data());
+        return a;
+    }
     template <class T>
     static T load(const std::array<float, lanes<T>>& a)
     {
