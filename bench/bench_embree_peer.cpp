@@ -389,7 +389,9 @@ std::optional<grid_sequence> axis_copy(const scene_sequence& s)
     return b.build();
 }
 
-// One stream per thread over all of its tiles, so lanes are refilled across tile borders. With
+// One stream per thread over all of its tiles, so lanes are refilled across tile borders; four
+// packets step together (the sequence walks their points in lockstep: on this scene 4 beat 2 by
+// about 5% with axis mirrors and 30% with general ones). With
 // `prepass`, each tile's rays start where its beam's prepass (krs/trace/tile_prepass.hpp) left off;
 // its evaluations are counted with the rays'.
 template <class Field>
@@ -416,7 +418,7 @@ frame render_krs(const Field& s, const krs::pinhole_camera& camera, const krs::t
             return true;
         };
         auto done = [&](std::uint32_t id, const krs::hit<float>& h) { hit[id] = h.found ? 1 : 0; };
-        evaluations += krs::trace_stream<krs::packet_f, 2>(s, next, done, o).evaluations + prepass_evaluations;
+        evaluations += krs::trace_stream<krs::packet_f, 4>(s, next, done, o).evaluations + prepass_evaluations;
     });
     out.evaluations = evaluations.load() / repeats;
     return out;

@@ -27,10 +27,12 @@
 #include "krs/field.hpp"
 #include "krs/mirror.hpp"
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -86,31 +88,69 @@ public:
     {
         return sizeof(*this) + mirrors_.capacity() * sizeof(Mirror) + kernels_.capacity() * sizeof(kernel_variant) +
                (kernel_levels_.capacity() + level_begin_.capacity()) * sizeof(std::uint32_t) +
-               level_bounds_.capacity() * sizeof(bounding_sphere);
+               levels_with_kernels_.capacity() * sizeof(std::uint32_t) + level_bounds_.capacity() * sizeof(bounding_sphere);
     }
 
     // Algorithm 1.
     template <class T>
     T distance(const vec3<T>& x) const
     {
+        return distances<T, 1>({x})[0];
+    }
+
+    // Algorithm 1 for K points (or packets) at once, walking the levels in lockstep: the folds of
+    // one level are independent across the K points, so the processor overlaps their chains of
+    // dependent operations (a packet tracer steps K packets this way). Each point leaves the walk
+    // at its own early out; the results equal K calls of distance().
+    //
+    // The walk goes from one level that holds kernels to the next (levels_with_kernels_): the mirrors
+    // between them are folded in a loop that does nothing else, which is all a grid of copies
+    // (every kernel at level 0) does until its last level.
+    template <class T, std::size_t K>
+    std::array<T, K> distances(const std::array<vec3<T>, K>& x) const
+    {
         const std::size_t n = mirrors_.size();
-        vec3<T> p = x;
-        T d = nearest_kernel(p, n, T(std::numeric_limits<scalar_t<T>>::infinity()));
-        for (std::size_t i = n; i-- > 0;) {
-            p = mirrors_[i].fold(p);
-            // Early out: every kernel instance still to come lies in L_i's bounding sphere (in
-            // this folded space), and each kernel is at least as far as its instance's distance
-            // to that sphere, so when the sphere is no nearer than d for every lane the rest of
-            // the walk cannot lower d. The result equals the full walk's; far from the finer
-            // levels (most sphere-tracing steps) the walk stops after a few levels.
-            // Above the highest level that holds kernels d is still infinite and the test cannot
-            // pass: a sequence with all its kernels at level 0 (a grid of copies) skips it.
-            if (i < top_kernel_level_) {
-                const bounding_sphere& b = level_bounds_[i];
-                const T reach = d + T(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
-                if (all(length_squared(p - vec3<T>(b.center)) > reach * reach && reach > T(0))) break;
+        std::array<vec3<T>, K> p = x;
+        std::array<T, K> d;
+        std::array<bool, K> walking;
+        // The K points are stepped by a fold expression over compile-time indices, so each
+        // point's coordinates stay in registers.
+        const auto each = [&]<std::size_t... k>(std::index_sequence<k...>, auto&& step) {
+            (step(std::integral_constant<std::size_t, k>{}), ...);
+        };
+        constexpr auto all_k = std::make_index_sequence<K>{};
+        each(all_k, [&](auto k) {
+            d[k] = nearest_kernel(p[k], n, T(std::numeric_limits<scalar_t<T>>::infinity()));
+            walking[k] = true;
+        });
+        std::size_t i = n; // p is folded down to level i
+        for (const std::uint32_t level : levels_with_kernels_) {
+            if (level >= n) continue; // level n's kernels are evaluated above
+            for (; i > level; --i) {
+                const Mirror& mirror = mirrors_[i - 1];
+                each(all_k, [&](auto k) { p[k] = mirror.fold(p[k]); });
             }
-            d = nearest_kernel(p, i, d);
+            bool any_walking = false;
+            each(all_k, [&](auto k) {
+                if (!walking[k]) return;
+                // Early out: every kernel instance still to come lies in L_level's bounding sphere
+                // (in this folded space), and each kernel is at least as far as its instance's
+                // distance to that sphere, so when the sphere is no nearer than d for every lane
+                // the rest of the walk cannot lower d. The result equals the full walk's; far from
+                // the finer levels (most sphere-tracing steps) the walk stops after a few levels.
+                // At the highest level that holds kernels d is still infinite: no test.
+                if (level < top_kernel_level_) {
+                    const bounding_sphere& b = level_bounds_[level];
+                    const T reach = d[k] + T(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
+                    if (all(length_squared(p[k] - vec3<T>(b.center)) > reach * reach && reach > T(0))) {
+                        walking[k] = false;
+                        return;
+                    }
+                }
+                d[k] = nearest_kernel(p[k], level, d[k]);
+                any_walking = true;
+            });
+            if (!any_walking) break;
         }
         return d;
     }
@@ -189,6 +229,7 @@ private:
     bounding_sphere bound_{};
     std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
     std::size_t top_kernel_level_ = 0;          // the highest level that holds a kernel
+    std::vector<std::uint32_t> levels_with_kernels_; // highest first
 };
 
 // Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
@@ -232,8 +273,9 @@ public:
             s.level_begin_.push_back(std::uint32_t(s.kernels_.size()));
         }
         if (s.kernels_.empty()) throw invalid_parameter("sequence.kernels", "a sequence needs at least one kernel");
-        for (std::size_t i = 0; i < levels_.size(); ++i)
-            if (!levels_[i].empty()) s.top_kernel_level_ = i;
+        for (std::size_t i = levels_.size(); i-- > 0;)
+            if (!levels_[i].empty()) s.levels_with_kernels_.push_back(std::uint32_t(i));
+        s.top_kernel_level_ = s.levels_with_kernels_.front();
         s.bound_ = expansion_bound(s, &s.level_bounds_);
         return s;
     }

@@ -3,10 +3,12 @@
 //
 // A plain packet (`sphere_trace(f, ray<packet_f>, ...)`) runs until its slowest lane is done, so
 // most lanes idle while one grazing ray creeps along a branch. Here a packet pulls a new ray from
-// the caller's queue into every lane that finished, and several packets are stepped in turn
-// (`Interleave`), so that one packet's distance evaluation hides another's latency. The step
-// itself is `march_step`, the template the scalar tracer runs: scheduling is the only thing this
-// header adds (DESIGN.md rule 1).
+// the caller's queue into every lane that finished, and several packets (`Interleave`) are
+// stepped together: their sample points go to the field in one call, and a field that walks
+// several points in lockstep (a sequence's `distances`) overlaps one packet's chain of dependent
+// operations with another's (about 1.5x on general mirrors, bench_embree_peer). The step itself
+// is `march_advance`, the template the scalar tracer's `march_step` runs: scheduling is the only
+// thing this header adds (DESIGN.md rule 1).
 //
 // Rays come from `next(ray_job&) -> bool` (false: the queue is empty) and leave through
 // `done(std::uint32_t id, const hit<float>&)`, in completion order, on the calling thread. The
@@ -83,6 +85,20 @@ struct packet_lanes {
     }
 };
 
+// The field at K points: in one call when the field walks several points in lockstep (a
+// sequence's `distances`), else one call per point.
+template <field F, class T, std::size_t K>
+std::array<T, K> distances_of(const F& f, const std::array<vec3<T>, K>& points)
+{
+    if constexpr (requires { f.template distances<T, K>(points); }) {
+        return f.template distances<T, K>(points);
+    } else {
+        std::array<T, K> d;
+        for (std::size_t k = 0; k < K; ++k) d[k] = f.distance(points[k]);
+        return d;
+    }
+}
+
 template <class T>
 void blend(const mask_t<T>& m, march_state<T>& into, const march_state<T>& from)
 {
@@ -151,14 +167,23 @@ stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_opti
     };
     for (;;) {
         for (int k = 0; k < Interleave; ++k) harvest(k, !any(state[k].active));
+        // All packets' points in one evaluation (a packet with no active lane left, near the
+        // end of the stream, rides along and is not advanced).
         bool running = false;
+        std::array<vec3<P>, Interleave> points;
         for (int k = 0; k < Interleave; ++k) {
-            if (!any(state[k].active)) continue;
-            running = true;
-            march_step(f, state[k], options);
-            ++stats.packet_steps;
+            running = running || any(state[k].active);
+            points[std::size_t(k)] = point_at(state[k].r, state[k].t);
         }
-        if (running) continue;
+        if (running) {
+            const std::array<P, Interleave> d = detail::distances_of(f, points);
+            for (int k = 0; k < Interleave; ++k) {
+                if (!any(state[k].active)) continue;
+                march_advance(state[k], d[std::size_t(k)], options);
+                ++stats.packet_steps;
+            }
+            continue;
+        }
         // Nothing runs: done unless a lane still holds an unreported (rejected) ray.
         bool pending = false;
         for (int k = 0; k < Interleave; ++k) pending = pending || lanes[k].live != 0;

@@ -124,11 +124,14 @@ march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, co
 // sphere tracing could stop at. If they do not overlap, the sample is discarded, the lane steps
 // back to t_a + d_a (the plain step from the kept sphere) and marches with omega = 1 from there.
 // Lanes that are not active are left untouched (their state freezes through `select`).
-template <field F, class T>
-void march_step(const F& f, march_state<T>& m, const trace_options& options)
+//
+// march_step evaluates the field at the lane's sample point and calls march_advance, which does
+// the rest; a tracer that evaluates several packets' points at once (krs/trace/packet_trace.hpp)
+// calls the two halves itself.
+template <class T>
+void march_advance(march_state<T>& m, const T& d, const trace_options& options)
 {
     const mask_t<T> was_active = m.active;
-    const T d = f.distance(point_at(m.r, m.t));
     m.result.steps += detail::count_if<T>(was_active);
     m.result.evaluations += detail::count_if<T>(was_active);
     const T threshold = options.threshold(m.t) + m.threshold_bias;
@@ -155,6 +158,12 @@ void march_step(const F& f, march_state<T>& m, const trace_options& options)
         m.active = m.active && m.result.steps < options.max_steps;
     else
         m.active = m.active && (m.result.steps < T(scalar_t<T>(options.max_steps)));
+}
+
+template <field F, class T>
+void march_step(const F& f, march_state<T>& m, const trace_options& options)
+{
+    march_advance(m, f.distance(point_at(m.r, m.t)), options);
 }
 
 template <field F, class T>
