@@ -88,7 +88,7 @@ public:
     {
         return sizeof(*this) + mirrors_.capacity() * sizeof(Mirror) + kernels_.capacity() * sizeof(kernel_variant) +
                (kernel_levels_.capacity() + level_begin_.capacity()) * sizeof(std::uint32_t) +
-               levels_with_kernels_.capacity() * sizeof(std::uint32_t) + level_bounds_.capacity() * sizeof(bounding_sphere);
+               has_kernels_.capacity() + level_bounds_.capacity() * sizeof(bounding_sphere);
     }
 
     // Algorithm 1.
@@ -103,9 +103,8 @@ public:
     // dependent operations (a packet tracer steps K packets this way). Each point leaves the walk
     // at its own early out; the results equal K calls of distance().
     //
-    // The walk goes from one level that holds kernels to the next (levels_with_kernels_): the mirrors
-    // between them are folded in a loop that does nothing else, which is all a grid of copies
-    // (every kernel at level 0) does until its last level.
+    // A level without kernels is a fold and nothing else (has_kernels_), which is all a grid of
+    // copies (every kernel at level 0) does until its last level.
     template <class T, std::size_t K>
     std::array<T, K> distances(const std::array<vec3<T>, K>& x) const
     {
@@ -123,31 +122,29 @@ public:
             d[k] = nearest_kernel(p[k], n, T(std::numeric_limits<scalar_t<T>>::infinity()));
             walking[k] = true;
         });
-        std::size_t i = n; // p is folded down to level i
-        for (const std::uint32_t level : levels_with_kernels_) {
-            if (level >= n) continue; // level n's kernels are evaluated above
-            for (; i > level; --i) {
-                const Mirror& mirror = mirrors_[i - 1];
-                each(all_k, [&](auto k) { p[k] = mirror.fold(p[k]); });
-            }
+        for (std::size_t i = n; i-- > 0;) {
+            const Mirror& mirror = mirrors_[i];
+            // (A point that has left the walk is folded on regardless: cheaper than testing.)
+            each(all_k, [&](auto k) { p[k] = mirror.fold(p[k]); });
+            if (!has_kernels_[i]) continue;
             bool any_walking = false;
             each(all_k, [&](auto k) {
                 if (!walking[k]) return;
-                // Early out: every kernel instance still to come lies in L_level's bounding sphere
-                // (in this folded space), and each kernel is at least as far as its instance's
+                // Early out: every kernel instance still to come lies in L_i's bounding sphere (in
+                // this folded space), and each kernel is at least as far as its instance's
                 // distance to that sphere, so when the sphere is no nearer than d for every lane
                 // the rest of the walk cannot lower d. The result equals the full walk's; far from
                 // the finer levels (most sphere-tracing steps) the walk stops after a few levels.
                 // At the highest level that holds kernels d is still infinite: no test.
-                if (level < top_kernel_level_) {
-                    const bounding_sphere& b = level_bounds_[level];
+                if (i < top_kernel_level_) {
+                    const bounding_sphere& b = level_bounds_[i];
                     const T reach = d[k] + T(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
                     if (all(length_squared(p[k] - vec3<T>(b.center)) > reach * reach && reach > T(0))) {
                         walking[k] = false;
                         return;
                     }
                 }
-                d[k] = nearest_kernel(p[k], level, d[k]);
+                d[k] = nearest_kernel(p[k], i, d[k]);
                 any_walking = true;
             });
             if (!any_walking) break;
@@ -229,7 +226,7 @@ private:
     bounding_sphere bound_{};
     std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
     std::size_t top_kernel_level_ = 0;          // the highest level that holds a kernel
-    std::vector<std::uint32_t> levels_with_kernels_; // highest first
+    std::vector<std::uint8_t> has_kernels_;     // per level: whether it holds kernels
 };
 
 // Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
@@ -273,9 +270,10 @@ public:
             s.level_begin_.push_back(std::uint32_t(s.kernels_.size()));
         }
         if (s.kernels_.empty()) throw invalid_parameter("sequence.kernels", "a sequence needs at least one kernel");
-        for (std::size_t i = levels_.size(); i-- > 0;)
-            if (!levels_[i].empty()) s.levels_with_kernels_.push_back(std::uint32_t(i));
-        s.top_kernel_level_ = s.levels_with_kernels_.front();
+        for (std::size_t i = 0; i < levels_.size(); ++i) {
+            s.has_kernels_.push_back(levels_[i].empty() ? 0 : 1);
+            if (!levels_[i].empty()) s.top_kernel_level_ = i;
+        }
         s.bound_ = expansion_bound(s, &s.level_bounds_);
         return s;
     }
