@@ -7,6 +7,7 @@ Looks in BUILD_DIR and BUILD_DIR/bench for the CSVs the benchmarks write:
 
     bench_packet_trace.csv      KRS packet tracer (sections keyed by the first column, each
                                 introduced by a header row whose first field is "table")
+    bench_packet_trace_avx2.csv the same with 8-lane packets (its throughput table)
     bench_hypertree_create.csv  hypertree creation and memory (paper Table 1)
     bench_hypertree_render.csv  hypertree rendering (paper Table 1) and speed against error
     bench_openvdb_peer.csv      the hypertree stores against OpenVDB grids
@@ -228,6 +229,19 @@ def machine():
 # ---- sections ------------------------------------------------------------------------------------
 
 
+def packet_width_section(path, md):
+    """The 8-lane build's scalar-against-packet table (bench_packet_trace_avx2), when it was run."""
+    if not path:
+        return
+    rows = read_sections(path).get("throughput", [])
+    if not rows:
+        return
+    md.append("\nThe same with 8-lane packets (`bench_packet_trace_avx2`, AVX2; scalar code built the same way):\n")
+    md.append(table(["scene", "threads", "scalar Mrays/s", "packet Mrays/s", "packet/scalar", "lanes busy"],
+                    [[r.get("scene"), r.get("threads"), fmt(num(r.get("scalar_mrays_s"))), fmt(num(r.get("packet_mrays_s"))),
+                      fmt(num(r.get("ratio"))) + "x", "%.1f%%" % (100 * num(r.get("lane_utilization"), 0))] for r in rows]))
+
+
 def packet_trace_section(path, images, md):
     md.append("## KRS packet tracer (`bench_packet_trace`)\n")
     if not path:
@@ -445,7 +459,8 @@ def main():
           "How to reproduce:\n" % (os.path.basename(os.path.normpath(args.build)) or args.build, datetime.date.today().isoformat()),
           "```sh\ncmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DKRS_BUILD_BENCHMARKS=ON -DKRS_BENCH_OPENVDB=ON\n"
           "cmake --build build --target krs_benchmarks\n"
-          "cd build && ./bench/bench_packet_trace && ./bench/bench_hypertree_create && ./bench/bench_hypertree_render && "
+          "cd build && ./bench/bench_packet_trace && ./bench/bench_packet_trace_avx2 && ./bench/bench_hypertree_create && "
+          "./bench/bench_hypertree_render && "
           "./bench/bench_openvdb_peer\n"
           "python3 ../scripts/benchmark_report.py .\n```\n",
           "## Machine\n",
@@ -453,11 +468,13 @@ def main():
                 [[m["cpu"], m["cores"], m["isa"], m["os"], m["compiler"], m["load"]]]),
           "\nThe cores may be shared with other work: a load average above the core count means the timings below were taken "
           "on a busy machine and carry that noise.\n"]
-    found = {name: find_csv(args.build, name) for name in ("bench_packet_trace.csv", "bench_hypertree_create.csv",
+    found = {name: find_csv(args.build, name) for name in ("bench_packet_trace.csv", "bench_packet_trace_avx2.csv",
+                                                           "bench_hypertree_create.csv",
                                                            "bench_hypertree_render.csv", "bench_openvdb_peer.csv",
                                                            "bench_embree_peer.csv")}
     md.append("\nCSVs read: " + ", ".join("`%s`" % n if p else "~~%s~~ (absent)" % n for n, p in found.items()) + ".\n")
     krs, krs_memory = packet_trace_section(found["bench_packet_trace.csv"], images, md)
+    packet_width_section(found["bench_packet_trace_avx2.csv"], md)
     embree_section(found["bench_embree_peer.csv"], krs, krs_memory, images, md)
     create_section(found["bench_hypertree_create.csv"], md)
     render_section(found["bench_hypertree_render.csv"], images, md)
