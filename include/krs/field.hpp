@@ -8,11 +8,17 @@
 // A *kernel* is a field that is also a primitive a KRS can hold: besides its distance it reports a
 // bounding sphere (for expansion, tiling and tests) and the outward unit normal at a point (for
 // shading in kernel space, paper section 6.1). Kernel parameters are validated at construction.
+//
+// A *lockstep field* also evaluates K points of lane type T in one call, `distances<T, K>`, equal
+// to K calls of `distance` but interleaved so that their dependent operations overlap (a KRS walks
+// its levels once for all of them). Packet tracers use it where a field offers it.
 
 #include "krs/core/bounds.hpp"
 #include "krs/core/vec3.hpp"
 
+#include <array>
 #include <concepts>
+#include <cstddef>
 
 namespace krs {
 
@@ -20,6 +26,11 @@ template <class F>
 concept field = requires(const F& f, const vec3f& pf, const vec3d& pd) {
     { f.distance(pf) } -> std::same_as<float>;
     { f.distance(pd) } -> std::same_as<double>;
+};
+
+template <class F, class T, std::size_t K>
+concept lockstep_field = field<F> && requires(const F& f, const std::array<vec3<T>, K>& points) {
+    { f.template distances<T, K>(points) } -> std::same_as<std::array<T, K>>;
 };
 
 template <class K>

@@ -34,3 +34,4 @@
 #include "krs/trace/ray.hpp"
 #include "krs/trace/sphere_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
+#include "krs/trace/tile_rays.hpp"

@@ -102,9 +102,6 @@ public:
     // one level are independent across the K points, so the processor overlaps their chains of
     // dependent operations (a packet tracer steps K packets this way). Each point leaves the walk
     // at its own early out; the results equal K calls of distance().
-    //
-    // A level without kernels is a fold and nothing else (has_kernels_), which is all a grid of
-    // copies (every kernel at level 0) does until its last level.
     template <class T, std::size_t K>
     std::array<T, K> distances(const std::array<vec3<T>, K>& x) const
     {
@@ -126,28 +123,30 @@ public:
             const Mirror& mirror = mirrors_[i];
             // (A point that has left the walk is folded on regardless: cheaper than testing.)
             each(all_k, [&](auto k) { p[k] = mirror.fold(p[k]); });
+            // Early out: every kernel instance still to come lies in L_i's bounding sphere (in
+            // this folded space), and each kernel is at least as far as its instance's distance
+            // to that sphere, so when the sphere is no nearer than d for every lane the rest of
+            // the walk cannot lower d. The result equals the full walk's; far from the finer
+            // levels (most sphere-tracing steps) the walk stops after a few levels. Down to the
+            // highest level that holds kernels d is still infinite: no test there, which leaves
+            // a grid of copies (every kernel at level 0) with folds alone until its last level.
+            if (i < top_kernel_level_) {
+                const bounding_sphere& b = level_bounds_[i];
+                const T radius(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
+                const vec3<T> center(b.center);
+                bool any_walking = false;
+                each(all_k, [&](auto k) {
+                    if (!walking[k]) return;
+                    const T reach = d[k] + radius;
+                    walking[k] = !all(length_squared(p[k] - center) > reach * reach && reach > T(0));
+                    any_walking = any_walking || walking[k];
+                });
+                if (!any_walking) break;
+            }
             if (!has_kernels_[i]) continue;
-            bool any_walking = false;
             each(all_k, [&](auto k) {
-                if (!walking[k]) return;
-                // Early out: every kernel instance still to come lies in L_i's bounding sphere (in
-                // this folded space), and each kernel is at least as far as its instance's
-                // distance to that sphere, so when the sphere is no nearer than d for every lane
-                // the rest of the walk cannot lower d. The result equals the full walk's; far from
-                // the finer levels (most sphere-tracing steps) the walk stops after a few levels.
-                // At the highest level that holds kernels d is still infinite: no test.
-                if (i < top_kernel_level_) {
-                    const bounding_sphere& b = level_bounds_[i];
-                    const T reach = d[k] + T(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
-                    if (all(length_squared(p[k] - vec3<T>(b.center)) > reach * reach && reach > T(0))) {
-                        walking[k] = false;
-                        return;
-                    }
-                }
-                d[k] = nearest_kernel(p[k], i, d[k]);
-                any_walking = true;
+                if (walking[k]) d[k] = nearest_kernel(p[k], i, d[k]);
             });
-            if (!any_walking) break;
         }
         return d;
     }

@@ -58,12 +58,13 @@ namespace detail {
 template <class P>
 struct packet_lanes {
     static constexpr std::size_t W = lane_count<P>;
-    alignas(64) float ox[W], oy[W], oz[W], dx[W], dy[W], dz[W], t0[W], t1[W];
+    alignas(64) float ox[W]{}, oy[W]{}, oz[W]{}, dx[W], dy[W], dz[W], t0[W], t1[W];
     std::uint32_t id[W];
-    std::uint64_t live = 0;  // lanes holding a ray that has not been reported yet
-    std::uint64_t fresh = 0; // lanes pulled since the packet's state was last started
+    std::uint64_t live = 0; // lanes holding a ray that has not been reported yet
 
-    // Fills lane i from the queue; a lane left empty gets a ray the tracer rejects at once.
+    // Fills lane i from the queue. A lane left empty gets a ray the tracer rejects at once; it
+    // keeps the origin of the lane's last ray, so the point the field is evaluated at for the
+    // idle lane (its origin, see trace_stream) is a finite one the caller chose.
     template <class Next>
     void pull(std::size_t i, Next& next, bool& queue_open)
     {
@@ -71,11 +72,11 @@ struct packet_lanes {
         if (queue_open) queue_open = next(job);
         const std::uint64_t bit = std::uint64_t(1) << i;
         live = queue_open ? (live | bit) : (live & ~bit);
-        if (!queue_open) job = ray_job{{{0, 0, 0}, {0, 0, 1}}, std::numeric_limits<float>::infinity(), 0.0f, 0};
+        if (!queue_open)
+            job = ray_job{{{ox[i], oy[i], oz[i]}, {0, 0, 1}}, std::numeric_limits<float>::infinity(), 0.0f, 0};
         ox[i] = job.r.origin.x, oy[i] = job.r.origin.y, oz[i] = job.r.origin.z;
         dx[i] = job.r.direction.x, dy[i] = job.r.direction.y, dz[i] = job.r.direction.z;
         t0[i] = job.t_start, t1[i] = job.t_max, id[i] = job.id;
-        fresh |= bit;
     }
     march_state<P> start(const trace_options& options) const
     {
@@ -90,7 +91,7 @@ struct packet_lanes {
 template <field F, class T, std::size_t K>
 std::array<T, K> distances_of(const F& f, const std::array<vec3<T>, K>& points)
 {
-    if constexpr (requires { f.template distances<T, K>(points); }) {
+    if constexpr (lockstep_field<F, T, K>) {
         return f.template distances<T, K>(points);
     } else {
         std::array<T, K> d;
@@ -151,7 +152,6 @@ stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_opti
         m.result.steps.store_aligned(steps);
         m.result.evaluations.store_aligned(evaluations);
         const std::uint64_t found = mask_bits<P>(m.result.found), invalid = mask_bits<P>(m.result.invalid);
-        L.fresh = 0;
         for (std::uint64_t rest = finished; rest != 0; rest &= rest - 1) {
             const std::size_t i = std::size_t(std::countr_zero(rest));
             hit<float> h;
@@ -163,19 +163,25 @@ stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_opti
             done(L.id[i], h);
             L.pull(i, next, queue_open);
         }
-        detail::blend(mask_from_bits<P>(L.fresh), m, L.start(options));
+        // Every finished lane was pulled again: those lanes start afresh.
+        detail::blend(mask_from_bits<P>(finished), m, L.start(options));
     };
     for (;;) {
         for (int k = 0; k < Interleave; ++k) harvest(k, !any(state[k].active));
-        // All packets' points in one evaluation (a packet with no active lane left, near the
-        // end of the stream, rides along and is not advanced).
-        bool running = false;
+        // All packets' points in one evaluation. An idle lane is evaluated at its ray's origin
+        // (its sample point may be at infinity), and a packet with no active lane left, near the
+        // end of the stream, takes the points of an active one: it rides along at no extra depth
+        // of the walk and is not advanced.
         std::array<vec3<P>, Interleave> points;
+        int first_running = -1;
         for (int k = 0; k < Interleave; ++k) {
-            running = running || any(state[k].active);
-            points[std::size_t(k)] = point_at(state[k].r, state[k].t);
+            if (!any(state[k].active)) continue;
+            if (first_running < 0) first_running = k;
+            points[std::size_t(k)] = point_at(state[k].r, select(state[k].active, state[k].t, P(0.0f)));
         }
-        if (running) {
+        for (int k = 0; k < Interleave; ++k)
+            if (first_running >= 0 && !any(state[k].active)) points[std::size_t(k)] = points[std::size_t(first_running)];
+        if (first_running >= 0) {
             const std::array<P, Interleave> d = detail::distances_of(f, points);
             for (int k = 0; k < Interleave; ++k) {
                 if (!any(state[k].active)) continue;

@@ -115,9 +115,8 @@ march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, co
     return m;
 }
 
-// One march step: the single body every tracer (scalar, packet, refilling packet) runs.
-//
-// Evaluate d at t. With over-relaxation the previous kept sphere (t_a, d_a) and this one must
+// One march step, given the field's value d at the lane's sample point t: the single body every
+// tracer (scalar, packet, refilling packet) runs. With over-relaxation the previous kept sphere (t_a, d_a) and this one must
 // overlap along the ray, with room for the hit threshold: d_a + |d| - (t - t_a) >= 2 threshold(t).
 // Then, because the field is 1-Lipschitz, every point between t_a and t is at least
 // (d_a + |d| - (t - t_a)) / 2 >= threshold from the surface: the long step skipped nothing plain
@@ -125,9 +124,8 @@ march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, co
 // back to t_a + d_a (the plain step from the kept sphere) and marches with omega = 1 from there.
 // Lanes that are not active are left untouched (their state freezes through `select`).
 //
-// march_step evaluates the field at the lane's sample point and calls march_advance, which does
-// the rest; a tracer that evaluates several packets' points at once (krs/trace/packet_trace.hpp)
-// calls the two halves itself.
+// march_step evaluates the field at the sample point and advances; a tracer that evaluates
+// several packets' points in one call (krs/trace/packet_trace.hpp) calls march_advance itself.
 template <class T>
 void march_advance(march_state<T>& m, const T& d, const trace_options& options)
 {

@@ -23,6 +23,8 @@
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
 
+#include <algorithm>
+#include <cstdint>
 #include <vector>
 
 namespace krs {
@@ -47,12 +49,14 @@ public:
         const std::size_t count = std::size_t(columns) * std::size_t(y1 - y0);
         jobs_.resize(count);
         alignas(64) float px[W], py[W], ox[W], oy[W], oz[W], dx[W], dy[W], dz[W], start[W];
+        std::uint32_t id[W];
         for (std::size_t first = 0; first < count; first += W) {
             // Lanes past the tile's last pixel repeat it; their results are not kept.
             for (std::size_t i = 0; i < W; ++i) {
                 const std::size_t k = std::min(first + i, count - 1);
-                px[i] = float(x0 + int(k % std::size_t(columns))) + 0.5f;
-                py[i] = float(y0 + int(k / std::size_t(columns))) + 0.5f;
+                const int x = x0 + int(k % std::size_t(columns)), y = y0 + int(k / std::size_t(columns));
+                px[i] = float(x) + 0.5f, py[i] = float(y) + 0.5f;
+                id[i] = std::uint32_t(std::size_t(y) * std::size_t(camera.width()) + std::size_t(x));
             }
             const ray<P> r = camera.primary_ray(P::load_aligned(px), P::load_aligned(py));
             r.origin.x.store_aligned(ox), r.origin.y.store_aligned(oy), r.origin.z.store_aligned(oz);
@@ -63,7 +67,7 @@ public:
                 job.r = {{ox[i], oy[i], oz[i]}, {dx[i], dy[i], dz[i]}};
                 job.t_start = start[i];
                 job.t_max = t_max;
-                job.id = std::uint32_t(int(py[i]) * camera.width() + int(px[i]));
+                job.id = id[i];
             }
         }
     }
