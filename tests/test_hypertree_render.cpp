@@ -7,6 +7,7 @@
 
 #include <doctest/doctest.h>
 
+#include <atomic>
 #include <cmath>
 #include <thread>
 
@@ -95,7 +96,8 @@ TEST_CASE("hypertree render packets give the scalar pixels")
     const image scalar = render<float>(m, camera, s);
     const image packet = render<krs::packet_f>(m, camera, s);
     CHECK(max_difference(scalar, packet) == 0.0);
-    // Threads keep their own shadow memos: which thread renders a row changes no pixel.
+    // Threads share a shading memo behind their own: which thread renders a row changes no
+    // pixel, and a voxel's shadow rays are marched about once whatever the thread count.
     render_settings threaded = s;
     threaded.parallel_for = [](std::size_t count, const std::function<void(std::size_t)>& body) {
         std::vector<std::thread> workers;
@@ -105,7 +107,12 @@ TEST_CASE("hypertree render packets give the scalar pixels")
             });
         for (auto& t : workers) t.join();
     };
-    CHECK(max_difference(render<krs::packet_f>(m, camera, threaded), scalar) == 0.0);
+    const image threaded_image = render<krs::packet_f>(m, camera, threaded);
+    CHECK(max_difference(threaded_image, scalar) == 0.0);
+    // (Measured: 0.2% more lookups than serial shared, 6.5% more with a memo per thread alone;
+    // shadow rays are short in this small tree.)
+    INFO("threaded " << threaded_image.lookups << " serial " << packet.lookups);
+    CHECK(double(threaded_image.lookups) <= 1.03 * double(packet.lookups));
     // Not a blank image: some pixels differ from the background by a lot.
     std::size_t covered = 0;
     for (std::size_t i = 0; i < scalar.rgb.size(); i += 3) covered += std::abs(scalar.rgb[i + 2] - s.background.b) > 0.2f;
@@ -167,4 +174,36 @@ TEST_CASE("hypertree render framing_camera sees the whole box and refuses an emp
         CHECK(std::abs(krs::dot(d, up)) / depth < tan_half_v);
     }
     CHECK_THROWS_WITH_AS(framing_camera(world_box{}, 64, 64), doctest::Contains("framing_camera.box"), krs::invalid_parameter);
+}
+
+TEST_CASE("hypertree shade memo: concurrent readers only ever see whole entries")
+{
+    // Two threads store and look up voxels that collide in a small table; an entry's values are
+    // a function of its voxel, so a torn copy (values of two voxels) would show.
+    shade_memo memo(64, 5);
+    const auto value = [](voxel_index v, std::size_t i) { return float(v) * 8.0f + float(i); };
+    std::atomic<long long> found{0}, wrong{0};
+    const auto work = [&](std::uint32_t seed) {
+        std::uint32_t state = seed;
+        float out[5], in[5];
+        for (int n = 0; n < 200000; ++n) {
+            state = state * 1664525u + 1013904223u;
+            const voxel_index v = (state >> 8) % 1000;
+            if (memo.find(v, out)) {
+                ++found;
+                for (std::size_t i = 0; i < 5; ++i) wrong += out[i] != value(v, i) ? 1 : 0;
+            } else {
+                for (std::size_t i = 0; i < 5; ++i) in[i] = value(v, i);
+                memo.store(v, in);
+            }
+        }
+    };
+    std::thread other(work, 7u);
+    work(11u);
+    other.join();
+    CHECK(wrong == 0);
+    CHECK(found > 1000); // the table is used, not just written
+    // An index it never stored is not found.
+    float out[5];
+    CHECK_FALSE(memo.find(5000, out));
 }

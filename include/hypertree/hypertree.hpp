@@ -22,6 +22,7 @@
 #include "hypertree/render/glsl.hpp"
 #include "hypertree/render/marcher.hpp"
 #include "hypertree/render/render.hpp"
+#include "hypertree/render/shade_memo.hpp"
 #include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/store/bit_array_store.hpp"

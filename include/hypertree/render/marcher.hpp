@@ -20,7 +20,7 @@
 // procedural normals of the structure flow, each light's term attenuated by the opacity a shadow
 // ray accumulates toward it (same step, same early exit). The base color comes from the voxel's
 // depth (transfer.hpp). By default a sample is shaded at its voxel's center (shade_per_voxel), so
-// a voxel's shading is computed once per thread and render.
+// a voxel's shading is computed about once per render, whatever the thread count.
 //
 // One template: the loop over samples, the masks and the accumulation are written once over T.
 // What each lane looks up (store access, sphere test, shading of a sample) runs per lane in scalar
@@ -31,6 +31,7 @@
 // voxel of sample k of the previous ray; a ray reads it until its first mismatch and then
 // overwrites the rest. (The paper found it gave little; bench_hypertree_render measures it.)
 
+#include "hypertree/render/shade_memo.hpp"
 #include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "krs/core/lanes.hpp"
@@ -61,7 +62,7 @@ struct march_options {
     bool shadows = true;
     // Shade at the voxel's center instead of the sample (the voxel is a homogeneous region, as in
     // section 9), so one voxel's ambient, normal and shadow rays serve every sample in it
-    // (memoized per thread: see march_context). Off: everything per sample, shadow rays included:
+    // (memoized for all threads of a render: see shade_memo.hpp). Off: everything per sample, shadow rays included:
     // the reference the benchmark measures the difference against.
     bool shade_per_voxel = true;
     float ambient = 0.3f;
@@ -88,19 +89,22 @@ struct ray_cache {
 };
 
 // Per-voxel shading remembered by one thread: a direct-mapped table (slot = hash of the voxel
-// index). With shade_per_voxel a voxel's lit color and shadows are pure functions of the voxel,
-// so what the table holds never changes a result, only how often shadow rays are marched.
-struct shade_memo {
-    std::size_t slots = 0; // a power of two, sized by the marcher on first use
+// index) in plain memory, sized by the marcher on first use. It sits in front of the render's
+// shared memo (shade_memo.hpp): a thread meets the same voxels again and again along its rows,
+// and its own table answers those without touching memory another core writes.
+struct thread_shade_memo {
+    std::size_t slots = 0;
     std::vector<voxel_index> index;
     std::vector<float> value; // per slot: lit rgb, then one shadow per light
-    std::size_t hits = 0, misses = 0;
 };
 
-// What a thread brings to a march: its caches, each optional.
+// What a thread brings to a march: its caches, each optional. `shared_shading` may be shared by
+// all threads of a render (make it with volume_marcher::new_shade_memo()); it is consulted where
+// the thread's own `shading` misses.
 struct march_context {
     ray_cache* rays = nullptr; // scalar marcher only
-    shade_memo* shading = nullptr;
+    thread_shade_memo* shading = nullptr;
+    shade_memo* shared_shading = nullptr;
 };
 
 template <voxel_store S>
@@ -134,7 +138,7 @@ public:
             for (occupancy& level : occupancy_) level.mark(c[0], c[1], c[2]);
         });
         // Room for twice the non-empty voxels (up to 2^20 slots), so few voxels evict each other
-        // from a thread's shading memo.
+        // from the shading memo.
         while (memo_slots_ < 2 * store.nonempty_count() && memo_slots_ < (std::size_t(1) << 20)) memo_slots_ *= 2;
         box_lo_ = {float(shape_.box.lo.x), float(shape_.box.lo.y), float(shape_.box.lo.z)};
         box_hi_ = {float(shape_.box.hi.x), float(shape_.box.hi.y), float(shape_.box.hi.z)};
@@ -151,6 +155,9 @@ public:
     }
 
     const march_options& options() const { return options_; }
+    // An empty shading memo sized for this marcher (its voxel count and lights), for one render:
+    // all its threads may share it.
+    shade_memo new_shade_memo() const { return shade_memo(memo_slots_, 3 + light_dirs_.size()); }
     const tree_shape& shape() const { return shape_; }
     float step() const { return step_; }
 
@@ -205,7 +212,7 @@ public:
                 }
                 if (v.density == 0) continue;
                 alpha[i] = alpha_[v.density];
-                const rgb c = shade(pi, *index, v.level, -di, context.shading, lookups[i]);
+                const rgb c = shade(pi, *index, v.level, -di, context.shading, context.shared_shading, lookups[i]);
                 r[i] = c.r, g[i] = c.g, b[i] = c.b;
             }
             const T a = load<T>(alpha);
@@ -382,37 +389,43 @@ private:
 
     // The lit color of a sample: base color x (ambient + diffuse), plus specular. With
     // shade_per_voxel the shading point is the voxel's center, so all but the view-dependent
-    // specular term is a pure function of the voxel and is memoized per thread.
-    rgb shade(const krs::vec3f& p, voxel_index index, int level, const krs::vec3f& view, shade_memo* memo, float& lookups) const
+    // specular term is a pure function of the voxel and is memoized: in the thread's own table,
+    // and behind it in the render's shared one.
+    rgb shade(const krs::vec3f& p, voxel_index index, int level, const krs::vec3f& view, thread_shade_memo* memo,
+              shade_memo* shared, float& lookups) const
     {
         // The shading point, computed only where needed: a memo hit needs none (unless specular).
         const auto point = [&] { return options_.shade_per_voxel ? center_of(index) : p; };
         const std::size_t lights = light_dirs_.size();
-        std::array<float, max_lights> local{};
-        const float* shadows = local.data();
+        std::array<float, 3 + max_lights> local{}; // an entry: lit rgb, then one shadow per light
+        const float* shadows = local.data() + 3;
         rgb lit;
         if (options_.shade_per_voxel && memo) {
             const std::size_t stride = 3 + lights;
-            // (Re)sized for this marcher: its slot count and its number of lights.
-            if (memo->slots != memo_slots_ || memo->value.size() != memo_slots_ * stride) {
-                memo->slots = memo_slots_;
-                memo->index.assign(memo_slots_, ~voxel_index(0));
-                memo->value.assign(memo_slots_ * stride, 0.0f);
+            // (Re)sized for this marcher: its slot count and its number of lights. With a shared
+            // memo behind it, the thread's own is a small one (recent voxels, in the core's cache).
+            const std::size_t slots = shared ? std::min(memo_slots_, thread_memo_slots) : memo_slots_;
+            if (memo->slots != slots || memo->value.size() != slots * stride) {
+                memo->slots = slots;
+                memo->index.assign(slots, ~voxel_index(0));
+                memo->value.assign(slots * stride, 0.0f);
             }
             const std::size_t slot = (std::size_t(index) * 0x9e3779b1u >> 7) & (memo->slots - 1);
             float* entry = &memo->value[slot * stride];
             if (memo->index[slot] != index) {
-                ++memo->misses;
+                // Behind this thread's table, the render's (a memo of another size is not used).
+                const bool usable = shared && shared->stride() == stride && shared->slots() == memo_slots_;
+                if (!(usable && shared->find(index, entry))) {
+                    lit = light_at(point(), level, entry + 3, lookups);
+                    entry[0] = lit.r, entry[1] = lit.g, entry[2] = lit.b;
+                    if (usable) shared->store(index, entry);
+                }
                 memo->index[slot] = index;
-                lit = light_at(point(), level, entry + 3, lookups);
-                entry[0] = lit.r, entry[1] = lit.g, entry[2] = lit.b;
-            } else {
-                ++memo->hits;
-                lit = {entry[0], entry[1], entry[2]};
             }
+            lit = {entry[0], entry[1], entry[2]};
             shadows = entry + 3;
         } else {
-            lit = light_at(point(), level, local.data(), lookups);
+            lit = light_at(point(), level, local.data() + 3, lookups);
         }
         if (!(options_.specular > 0)) return lit;
         const krs::vec3d nd = shape_.normal_at(krs::vec3d(point()));
@@ -463,6 +476,7 @@ private:
     float side_ = 1, step_ = 1;
     static constexpr std::size_t max_lights = 8;
     std::size_t memo_slots_ = 1024;
+    static constexpr std::size_t thread_memo_slots = 4096;
     // Occupancy bits of one brick size (2^shift voxels a side): whether a brick holds any
     // non-empty voxel. Shifts, not divisions: this runs for every sample.
     struct occupancy {

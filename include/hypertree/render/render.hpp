@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace hypertree {
@@ -97,19 +98,25 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
     out.width = w, out.height = h;
     out.rgb.assign(std::size_t(w) * std::size_t(h) * 3, 0.0f);
     std::vector<std::uint64_t> row_lookups(std::size_t(h), 0);
+    // Shading memos (marcher.hpp): one per thread, kept across the rows it renders in this call,
+    // and behind them one shared by the call's threads, so that a voxel's shadow rays are
+    // marched about once whatever the thread count. Both are emptied for each call (every render
+    // pays for its shading, and timings compare); the shared one is made only where it can pay:
+    // several threads and shadow rays to share. They only hold pure functions of voxels: which
+    // thread renders which row changes nothing.
     static std::atomic<std::uint64_t> renders{0};
     const std::uint64_t render_id = ++renders;
+    const march_options& options = marcher.options();
+    std::optional<shade_memo> shared;
+    if (settings.parallel_for && options.shade_per_voxel && options.shadows && !options.lights.empty())
+        shared.emplace(marcher.new_shade_memo());
     const auto render_row = [&](std::size_t row) {
         const int y = int(row);
         ray_cache cache;
-        // One shading memo per thread, kept across the rows it renders in this call and emptied
-        // when a new call starts (so every render pays for its shading, and timings compare). It
-        // only holds pure functions of voxels: which thread renders which row changes nothing.
-        thread_local shade_memo memo;
+        thread_local thread_shade_memo memo;
         thread_local std::uint64_t memo_render = 0;
         if (memo_render != render_id) {
             std::fill(memo.index.begin(), memo.index.end(), ~voxel_index(0));
-            memo.hits = memo.misses = 0;
             memo_render = render_id;
         }
         // Every sample ray of the row, in order; packets take them `lanes` at a time.
@@ -136,13 +143,23 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
             else
                 tx = T::load_unaligned(lx.data()), ty = T::load_unaligned(ly.data());
             const krs::ray<T> r = camera.primary_ray(tx, ty);
-            const march_result<T> m = marcher.march(r, march_context{settings.ray_cache ? &cache : nullptr, &memo});
+            const march_result<T> m =
+                marcher.march(r, march_context{settings.ray_cache ? &cache : nullptr, &memo, shared ? &*shared : nullptr});
+            // Each lane's result, spilled once per packet.
+            const auto spill = [](const T& x) {
+                std::array<float, krs::lane_count<T>> a{};
+                if constexpr (std::floating_point<T>)
+                    a[0] = x;
+                else
+                    x.store_unaligned(a.data());
+                return a;
+            };
+            const auto tr = spill(m.transmittance), mr = spill(m.r), mg = spill(m.g), mb = spill(m.b), ml = spill(m.lookups);
             for (std::size_t l = 0; l < lanes && first + l < count; ++l) {
-                const float tr = krs::lane_at(m.transmittance, l);
-                cr[first + l] = krs::lane_at(m.r, l) + tr * settings.background.r;
-                cg[first + l] = krs::lane_at(m.g, l) + tr * settings.background.g;
-                cb[first + l] = krs::lane_at(m.b, l) + tr * settings.background.b;
-                row_lookups[row] += std::uint64_t(krs::lane_at(m.lookups, l));
+                cr[first + l] = mr[l] + tr[l] * settings.background.r;
+                cg[first + l] = mg[l] + tr[l] * settings.background.g;
+                cb[first + l] = mb[l] + tr[l] * settings.background.b;
+                row_lookups[row] += std::uint64_t(ml[l]);
             }
         }
         for (int x = 0; x < w; ++x) {
