@@ -108,17 +108,15 @@ public:
         const std::size_t n = mirrors_.size();
         std::array<vec3<T>, K> p = x;
         std::array<T, K> d;
-        std::array<bool, K> walking;
+        static_assert(K >= 1 && K <= 32, "distances takes 1 to 32 points");
+        std::uint32_t walking = (std::uint32_t(1) << (K - 1) << 1) - 1; // bit k: point k still walks
         // The K points are stepped by a fold expression over compile-time indices, so each
         // point's coordinates stay in registers.
         const auto each = [&]<std::size_t... k>(std::index_sequence<k...>, auto&& step) {
             (step(std::integral_constant<std::size_t, k>{}), ...);
         };
         constexpr auto all_k = std::make_index_sequence<K>{};
-        each(all_k, [&](auto k) {
-            d[k] = nearest_kernel(p[k], n, T(std::numeric_limits<scalar_t<T>>::infinity()));
-            walking[k] = true;
-        });
+        each(all_k, [&](auto k) { d[k] = nearest_kernel(p[k], n, T(std::numeric_limits<scalar_t<T>>::infinity())); });
         for (std::size_t i = n; i-- > 0;) {
             const Mirror& mirror = mirrors_[i];
             // (A point that has left the walk is folded on regardless: cheaper than testing.)
@@ -134,18 +132,16 @@ public:
                 const bounding_sphere& b = level_bounds_[i];
                 const T radius(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
                 const vec3<T> center(b.center);
-                bool any_walking = false;
                 each(all_k, [&](auto k) {
-                    if (!walking[k]) return;
                     const T reach = d[k] + radius;
-                    walking[k] = !all(length_squared(p[k] - center) > reach * reach && reach > T(0));
-                    any_walking = any_walking || walking[k];
+                    if (((walking >> k) & 1u) && all(length_squared(p[k] - center) > reach * reach && reach > T(0)))
+                        walking &= ~(std::uint32_t(1) << k);
                 });
-                if (!any_walking) break;
+                if (walking == 0) break;
             }
             if (!has_kernels_[i]) continue;
             each(all_k, [&](auto k) {
-                if (walking[k]) d[k] = nearest_kernel(p[k], i, d[k]);
+                if ((walking >> k) & 1u) d[k] = nearest_kernel(p[k], i, d[k]);
             });
         }
         return d;
