@@ -8,6 +8,17 @@ import struct
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
+
+def write_corpora(*targets):
+    """Writes each (target, {name: bytes}) table as the files of corpus/<target>/."""
+    for target, table in targets:
+        out = os.path.join(HERE, "corpus", target)
+        os.makedirs(out, exist_ok=True)
+        for name, data in table.items():
+            with open(os.path.join(out, name), "wb") as fh:
+                fh.write(data)
+        print(f"wrote {len(table)} seeds to {out}")
+
 NAN, INF, NINF, ZERO, NZERO, FMAX = 0, 1, 2, 3, 4, 5
 LIMIT, ABOVE_LIMIT, NEG_LIMIT = 12, 13, 14
 
@@ -179,13 +190,7 @@ fractal_seeds = {
     "user_shell_off_prototype": bytes([10]) + f(.5) + vec(1, 1, 1) + f(1) + shell_options(0) + points(129),
 }
 
-for target, table in (("builders", seeds), ("fractals", fractal_seeds)):
-    out = os.path.join(HERE, "corpus", target)
-    os.makedirs(out, exist_ok=True)
-    for name, data in table.items():
-        with open(os.path.join(out, name), "wb") as fh:
-            fh.write(data)
-    print(f"wrote {len(table)} seeds to {out}")
+write_corpora(("builders", seeds), ("fractals", fractal_seeds))
 
 
 # fuzz_definition.cpp: the input is a definition or forest file's text, unchanged. Seeds: the
@@ -291,10 +296,4 @@ binary_seeds.update({
     "truncated_header": bytes([1]) + saved_tree(*unit, (12, 12, 12), [])[:50],
 })
 
-for target, table in (("definition", definition_seeds), ("binary", binary_seeds)):
-    out = os.path.join(HERE, "corpus", target)
-    os.makedirs(out, exist_ok=True)
-    for name, data in table.items():
-        with open(os.path.join(out, name), "wb") as fh:
-            fh.write(data)
-    print(f"wrote {len(table)} seeds to {out}")
+write_corpora(("definition", definition_seeds), ("binary", binary_seeds))

@@ -280,23 +280,25 @@ def packet_trace_section(path, images, md):
                                [[r.get("threshold_px"), r.get("omega"), r.get("prepass"), r.get("max_steps"), r.get("ns_per_ray"),
                                  r.get("evals_per_ray"), r.get("mean_relative_depth_error"),
                                  "%.3f%%" % (100 * num(r.get("hit_miss_differ_share"), 0))] for r in error]))
-    # Mrays/s against n from the levels table (1 thread): 1 / (us per ray).
-    krs = {}
-    for r in levels:
-        n = num(r.get("n"))
-        for col, name in (("tree_packet_us", "KRS tree packet (1 thread)"), ("terrain_packet_us", "KRS terrain packet (1 thread)")):
-            us = num(r.get(col))
-            if n is not None and us:
-                krs.setdefault(name, []).append((n, 1.0 / us))
-    # The sequences' own memory per n (bytes, as MiB like the Embree side), when the CSV has it.
-    krs_memory = {}
-    for r in levels:
-        n = num(r.get("n"))
-        for col, name in (("tree_memory_bytes", "KRS tree"), ("terrain_memory_bytes", "KRS terrain")):
-            b = num(r.get(col))
-            if n is not None and b:
-                krs_memory.setdefault(name, []).append((n, b / 2.0 ** 20))
+    # Mrays/s against n from the levels table (1 thread): 1 / (us per ray); and the sequences' own
+    # memory per n (bytes, as MiB like the Embree side), when the CSV has it.
+    krs = series_against_n(levels, (("tree_packet_us", "KRS tree packet (1 thread)"),
+                                    ("terrain_packet_us", "KRS terrain packet (1 thread)")), lambda us: 1.0 / us)
+    krs_memory = series_against_n(levels, (("tree_memory_bytes", "KRS tree"), ("terrain_memory_bytes", "KRS terrain")),
+                                  lambda b: b / 2.0 ** 20)
     return krs, krs_memory
+
+
+def series_against_n(rows, columns, convert):
+    """{name: [(n, convert(value))]} for each (column, name), skipping missing or zero values."""
+    series = {}
+    for r in rows:
+        n = num(r.get("n"))
+        for col, name in columns:
+            v = num(r.get(col))
+            if n is not None and v:
+                series.setdefault(name, []).append((n, convert(v)))
+    return series
 
 
 def embree_section(path, krs_series, krs_memory, images, md):

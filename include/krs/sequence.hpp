@@ -88,7 +88,7 @@ public:
     {
         return sizeof(*this) + mirrors_.capacity() * sizeof(Mirror) + kernels_.capacity() * sizeof(kernel_variant) +
                (kernel_levels_.capacity() + level_begin_.capacity()) * sizeof(std::uint32_t) +
-               has_kernels_.capacity() + level_bounds_.capacity() * sizeof(bounding_sphere);
+               level_bounds_.capacity() * sizeof(bounding_sphere);
     }
 
     // Algorithm 1.
@@ -139,7 +139,7 @@ public:
                 });
                 if (walking == 0) break;
             }
-            if (!has_kernels_[i]) continue;
+            if (level_begin_[i] == level_begin_[i + 1]) continue; // no kernels at this level
             each(all_k, [&](auto k) {
                 if ((walking >> k) & 1u) d[k] = nearest_kernel(p[k], i, d[k]);
             });
@@ -221,7 +221,6 @@ private:
     bounding_sphere bound_{};
     std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
     std::size_t top_kernel_level_ = 0;          // the highest level that holds a kernel
-    std::vector<std::uint8_t> has_kernels_;     // per level: whether it holds kernels
 };
 
 // Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
@@ -265,10 +264,8 @@ public:
             s.level_begin_.push_back(std::uint32_t(s.kernels_.size()));
         }
         if (s.kernels_.empty()) throw invalid_parameter("sequence.kernels", "a sequence needs at least one kernel");
-        for (std::size_t i = 0; i < levels_.size(); ++i) {
-            s.has_kernels_.push_back(levels_[i].empty() ? 0 : 1);
+        for (std::size_t i = 0; i < levels_.size(); ++i)
             if (!levels_[i].empty()) s.top_kernel_level_ = i;
-        }
         s.bound_ = expansion_bound(s, &s.level_bounds_);
         return s;
     }

@@ -180,7 +180,7 @@ public:
         if constexpr (std::floating_point<T>) {
             if (cache && cache->index.size() < max_samples()) cache->index.resize(max_samples(), ~voxel_index(0)), cache->value.resize(max_samples());
         }
-        const std::array<float, lanes<T>> dx = store(ray.direction.x), dy = store(ray.direction.y), dz = store(ray.direction.z);
+        const auto dx = krs::lanes_of(ray.direction.x), dy = krs::lanes_of(ray.direction.y), dz = krs::lanes_of(ray.direction.z);
         std::array<cell_slopes, lanes<T>> inverse;
         for (std::size_t i = 0; i < lanes<T>; ++i) inverse[i] = slopes({dx[i], dy[i], dz[i]});
         while (any(active)) {
@@ -190,7 +190,7 @@ public:
             // empty; or, in an empty brick, how many samples to skip.
             std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{}, advance{};
             // The lanes' inputs, spilled once per sample rather than once per lane.
-            const std::array<float, lanes<T>> px = store(p.x), py = store(p.y), pz = store(p.z), ks = store(k);
+            const auto px = krs::lanes_of(p.x), py = krs::lanes_of(p.y), pz = krs::lanes_of(p.z), ks = krs::lanes_of(k);
             const std::uint64_t running = krs::mask_bits<T>(active);
             for (std::size_t i = 0; i < lanes<T>; ++i) {
                 advance[i] = 1.0f;
@@ -324,16 +324,6 @@ private:
     template <class T>
     static constexpr std::size_t lanes = krs::lane_count<T>;
 
-    template <class T>
-    static std::array<float, lanes<T>> store(const T& x)
-    {
-        std::array<float, lanes<T>> a;
-        if constexpr (std::floating_point<T>)
-            a[0] = x;
-        else
-            x.store_unaligned(a.data());
-        return a;
-    }
     template <class T>
     static T load(const std::array<float, lanes<T>>& a)
     {

@@ -146,15 +146,8 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
             const march_result<T> m =
                 marcher.march(r, march_context{settings.ray_cache ? &cache : nullptr, &memo, shared ? &*shared : nullptr});
             // Each lane's result, spilled once per packet.
-            const auto spill = [](const T& x) {
-                std::array<float, krs::lane_count<T>> a{};
-                if constexpr (std::floating_point<T>)
-                    a[0] = x;
-                else
-                    x.store_unaligned(a.data());
-                return a;
-            };
-            const auto tr = spill(m.transmittance), mr = spill(m.r), mg = spill(m.g), mb = spill(m.b), ml = spill(m.lookups);
+            const auto tr = krs::lanes_of(m.transmittance), mr = krs::lanes_of(m.r), mg = krs::lanes_of(m.g),
+                       mb = krs::lanes_of(m.b), ml = krs::lanes_of(m.lookups);
             for (std::size_t l = 0; l < lanes && first + l < count; ++l) {
                 cr[first + l] = mr[l] + tr[l] * settings.background.r;
                 cg[first + l] = mg[l] + tr[l] * settings.background.g;

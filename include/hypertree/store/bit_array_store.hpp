@@ -49,12 +49,7 @@ public:
                                           "a 4-byte count per " + std::to_string(words_per_block) + " words");
         bit_array_store store;
         store.volume_ = volume;
-        store.indices_.resize(voxels.size());
-        store.values_.resize(voxels.size());
-        for (std::size_t k = 0; k < voxels.size(); ++k) {
-            store.indices_[k] = voxels[k].index;
-            store.values_[k] = voxels[k].value;
-        }
+        detail::split_voxels(voxels, store.indices_, store.values_);
         store.bounds_ = detail::bounds_of(volume, voxels);
         if (!voxels.empty()) {
             store.first_ = voxels.front().index;

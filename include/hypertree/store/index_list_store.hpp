@@ -42,12 +42,7 @@ public:
                                           " bytes of list directory");
         index_list_store store;
         store.volume_ = volume;
-        store.indices_.resize(voxels.size());
-        store.values_.resize(voxels.size());
-        for (std::size_t k = 0; k < voxels.size(); ++k) {
-            store.indices_[k] = voxels[k].index;
-            store.values_[k] = voxels[k].value;
-        }
+        detail::split_voxels(voxels, store.indices_, store.values_);
         store.directory_ = directory_of(voxels);
         store.starts_.resize(store.directory_.positions());
         store.directory_.fill(store.indices_.data(), store.indices_.size(), store.starts_.data());

@@ -262,6 +262,17 @@ inline void require_within_budget(std::string_view store, std::size_t needed, me
                                 std::to_string(budget.bytes) + " bytes");
 }
 
+// The voxels as the two parallel arrays the list stores keep: indices and values.
+inline void split_voxels(std::span<const stored_voxel> voxels, std::vector<voxel_index>& indices, std::vector<voxel>& values)
+{
+    indices.resize(voxels.size());
+    values.resize(voxels.size());
+    for (std::size_t k = 0; k < voxels.size(); ++k) {
+        indices[k] = voxels[k].index;
+        values[k] = voxels[k].value;
+    }
+}
+
 inline index_box bounds_of(const hypervolume& volume, std::span<const stored_voxel> voxels)
 {
     if (voxels.empty()) return {};

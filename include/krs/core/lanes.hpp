@@ -13,6 +13,7 @@
 #include <xsimd/xsimd.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -132,6 +133,18 @@ inline scalar_t<T> lane_at(const T& x, std::size_t i) noexcept
         x.store_aligned(buffer);
         return buffer[i];
     }
+}
+// All lanes of a lane value as an array, in one store: for code that reads several lanes (lane_at
+// spills the whole value for each one).
+template <lane T>
+inline std::array<scalar_t<T>, lane_count<T>> lanes_of(const T& x) noexcept
+{
+    std::array<scalar_t<T>, lane_count<T>> a;
+    if constexpr (std::floating_point<T>)
+        a[0] = x;
+    else
+        x.store_unaligned(a.data());
+    return a;
 }
 // Lane i of a mask; T names the lane type because a mask alone cannot say it (bool is every
 // scalar's mask).
