@@ -12,7 +12,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <variant>
 #include <vector>
 
 namespace {
@@ -163,6 +165,54 @@ TEST_CASE("axis-aligned grid: Algorithm 1 equals the minimum over all 2^n instan
         }
         INFO("n = " << n);
         CHECK(worst <= 1e-5 * std::max(reach[0], reach[1]));
+    }
+}
+
+TEST_CASE_TEMPLATE("axis mirrors: the fold prefix applied axis by axis equals folding level by level", T, float,
+                   krs::packet_f)
+{
+    // Mirrors on all three axes, folding either side, kernels at level 0 and (in odd trials) at
+    // one middle level: the walk down to the highest kernel level is folds alone, which the
+    // sequence applies per axis. Reference: Algorithm 1 written out level by level, no early out
+    // (which never changes the result), compared bit for bit.
+    using axis_scene = krs::axis_sequence<krs::sphere, krs::torus_capsule>;
+    constexpr std::size_t W = krs::lane_count<T>;
+    random_source r(404);
+    for (int trial = 0; trial < 12; ++trial) {
+        axis_scene::builder b;
+        b.kernel(krs::sphere({0.2f, 0.1f, -0.3f}, 0.25f));
+        b.kernel(krs::torus_capsule({-0.5f, 0, 0}, {0.5f, 0.1f, 0}, {0, 0.4f, 0.1f}, 0.08f));
+        const std::size_t n = 4 + std::size_t(trial) * 3;
+        const std::size_t middle = trial % 2 ? n / 2 : 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            b.mirror(krs::axis_mirror(int(r.engine() % 3), float(r.uniform(-4, 4)), r.engine() % 4 != 0));
+            if (middle != 0 && i + 1 == middle) b.kernel(krs::sphere({1, 0.5f, 0}, 0.3f));
+        }
+        const axis_scene s = b.build();
+        const auto reference = [&](vec3f p) {
+            float d = std::numeric_limits<float>::infinity();
+            for (std::size_t i = n + 1; i-- > 0;) {
+                if (i < n) p = s.mirrors()[i].fold(p);
+                for (std::uint32_t k = s.level_begin(i); k < s.level_begin(i + 1); ++k)
+                    d = std::min(d, std::visit([&](const auto& kernel) { return kernel.distance(p); }, s.kernels()[k]));
+            }
+            return d;
+        };
+        for (int q = 0; q < 200; ++q) {
+            alignas(64) float c[3][W];
+            for (std::size_t i = 0; i < W; ++i)
+                for (int a = 0; a < 3; ++a) c[a][i] = float(r.uniform(-12, 12));
+            krs::vec3<T> p;
+            if constexpr (std::floating_point<T>)
+                p = {c[0][0], c[1][0], c[2][0]};
+            else
+                p = {T::load_aligned(c[0]), T::load_aligned(c[1]), T::load_aligned(c[2])};
+            const T d = s.distance(p);
+            for (std::size_t i = 0; i < W; ++i) {
+                INFO("n = " << n << ", kernels at level " << middle);
+                REQUIRE(krs::lane_at(d, i) == reference(vec3f{c[0][i], c[1][i], c[2][i]}));
+            }
+        }
     }
 }
 

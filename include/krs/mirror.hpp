@@ -93,6 +93,10 @@ vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * do
 // product and a multiply-add per coordinate. It has the same interface as `mirror` (normal,
 // offset, signed_distance, reflect, fold, reflect_direction), so code written for one takes both.
 struct axis_mirror {
+    // A fold reads and writes one coordinate only, so folds on different axes commute: a sequence
+    // may apply a run of them axis by axis (basic_sequence's fold prefix) with the same result.
+    static constexpr bool folds_one_axis = true;
+
     vec3f normal{1, 0, 0}; // +-e_axis
     float offset = 0.0f;   // normal . x = offset, as for `mirror`
     std::uint8_t axis = 0; // 0, 1, 2 for x, y, z

@@ -88,7 +88,8 @@ public:
     {
         return sizeof(*this) + mirrors_.capacity() * sizeof(Mirror) + kernels_.capacity() * sizeof(kernel_variant) +
                (kernel_levels_.capacity() + level_begin_.capacity()) * sizeof(std::uint32_t) +
-               level_bounds_.capacity() * sizeof(bounding_sphere);
+               level_bounds_.capacity() * sizeof(bounding_sphere) +
+               (axis_prefix_[0].capacity() + axis_prefix_[1].capacity() + axis_prefix_[2].capacity()) * sizeof(axis_fold);
     }
 
     // Algorithm 1.
@@ -117,7 +118,22 @@ public:
         };
         constexpr auto all_k = std::make_index_sequence<K>{};
         each(all_k, [&](auto k) { d[k] = nearest_kernel(p[k], n, T(std::numeric_limits<scalar_t<T>>::infinity())); });
-        for (std::size_t i = n; i-- > 0;) {
+        std::size_t i = n;
+        if constexpr (one_axis_folds) {
+            // Down to the highest kernel level the walk is folds and nothing else (d is infinite,
+            // no bound test, no kernel): apply them axis by axis, each axis's folds in walk order,
+            // in tight loops over the coordinate alone instead of a branch on the axis per level
+            // (a grid of 2^22 copies: its whole walk but the last level's kernels).
+            if (top_kernel_level_ < n) {
+                fold_axis_prefix<0>(p, all_k, each);
+                fold_axis_prefix<1>(p, all_k, each);
+                fold_axis_prefix<2>(p, all_k, each);
+                i = top_kernel_level_;
+                if (level_begin_[i] != level_begin_[i + 1])
+                    each(all_k, [&](auto k) { d[k] = nearest_kernel(p[k], i, d[k]); });
+            }
+        }
+        while (i-- > 0) {
             const Mirror& mirror = mirrors_[i];
             // (A point that has left the walk is folded on regardless: cheaper than testing.)
             each(all_k, [&](auto k) { p[k] = mirror.fold(p[k]); });
@@ -206,6 +222,29 @@ public:
     }
 
 private:
+    static constexpr bool one_axis_folds = requires { Mirror::folds_one_axis; };
+
+    // One fold of an axis prefix: x <- min(x, c - x) (above) or max(x, c - x).
+    struct axis_fold {
+        float twice_position;
+        bool above;
+    };
+
+    // Applies the prefix's folds of coordinate `Axis` to every point, in walk order.
+    template <int Axis, class T, std::size_t K, class Each, class All>
+    void fold_axis_prefix(std::array<vec3<T>, K>& p, All all_k, Each& each) const
+    {
+        std::array<T, K> x;
+        const auto coordinate = [](vec3<T>& q) -> T& { return Axis == 0 ? q.x : (Axis == 1 ? q.y : q.z); };
+        each(all_k, [&](auto k) { x[k] = coordinate(p[k]); });
+        for (const axis_fold& f : axis_prefix_[Axis]) {
+            const T c(f.twice_position);
+            if (f.above) each(all_k, [&](auto k) { x[k] = min(x[k], c - x[k]); });
+            else each(all_k, [&](auto k) { x[k] = max(x[k], c - x[k]); });
+        }
+        each(all_k, [&](auto k) { coordinate(p[k]) = x[k]; });
+    }
+
     template <class T>
     T nearest_kernel(const vec3<T>& p, std::size_t level, T d) const
     {
@@ -221,6 +260,8 @@ private:
     bounding_sphere bound_{};
     std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
     std::size_t top_kernel_level_ = 0;          // the highest level that holds a kernel
+    // Axis mirrors only: the folds of mirrors n-1 ... top_kernel_level_ per axis, in walk order.
+    std::array<std::vector<axis_fold>, 3> axis_prefix_;
 };
 
 // Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
@@ -267,6 +308,11 @@ public:
         for (std::size_t i = 0; i < levels_.size(); ++i)
             if (!levels_[i].empty()) s.top_kernel_level_ = i;
         s.bound_ = expansion_bound(s, &s.level_bounds_);
+        if constexpr (one_axis_folds)
+            for (std::size_t i = s.mirrors_.size(); i-- > s.top_kernel_level_;) {
+                const Mirror& m = s.mirrors_[i];
+                s.axis_prefix_[m.axis].push_back({m.twice_position, m.above});
+            }
         return s;
     }
 
