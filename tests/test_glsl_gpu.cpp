@@ -7,6 +7,7 @@
 
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus.hpp"
 
 #include "support/gl_context.hpp"
 
@@ -303,10 +304,11 @@ TEST_CASE("GLSL sponge scene matches the C++ field on llvmpipe")
 
 TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field on llvmpipe")
 {
-    // An axis-aligned KRS (a grid of capsules and spheres).
-    krs::axis_sequence<krs::capsule, krs::sphere>::builder b;
+    // An axis-aligned KRS (a grid of capsules, spheres and tilted rings).
+    krs::axis_sequence<krs::capsule, krs::sphere, krs::torus>::builder b;
     b.kernel(krs::capsule({0.1f, 0.0f, 0.1f}, {0.2f, 0.6f, 0.15f}, 0.05f));
     b.kernel(krs::sphere({0.2f, 0.7f, 0.1f}, 0.08f));
+    b.kernel(krs::torus({0.15f, 0.3f, 0.12f}, {0.3f, 1.0f, -0.2f}, 0.12f, 0.03f));
     b.mirror(krs::axis_mirror(0, 0.35f));
     b.mirror(krs::axis_mirror(2, 0.4f, false));
     b.mirror(krs::axis_mirror(0, 0.9f));
@@ -314,6 +316,37 @@ TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field o
     const auto grid = b.build();
     const ex::scene<decltype(grid)> s{"grid", grid, {}, {0.8f, 1.0f, 0.4f}, {1.2f, 1.2f, 1.2f}};
     check_scene(s);
+
+    // The torus kernel's GLSL normal (shading uses it; the distances above do not), through the
+    // location slot: kernel_point carries the normal.
+    {
+        const krs::torus ring({0.15f, 0.3f, 0.12f}, {0.3f, 1.0f, -0.2f}, 0.12f, 0.03f);
+        krs::glsl::emitter te({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "ring_data", 0});
+        te.add(grid, "ring_scene"); // brings krs_torus_* and krs_location
+        float c[12];
+        ring.glsl_constants(c);
+        const auto v4 = [&](int i) {
+            return "vec4(" + krs::glsl::float_literal(c[4 * i]) + ", " + krs::glsl::float_literal(c[4 * i + 1]) + ", " +
+                   krs::glsl::float_literal(c[4 * i + 2]) + ", " + krs::glsl::float_literal(c[4 * i + 3]) + ")";
+        };
+        const std::string args = "p, " + v4(0) + ", " + v4(1) + ", " + v4(2);
+        const std::string snippet = te.source() + "float ring(vec3 p) { return krs_torus_distance(" + args + "); }\n" +
+                                    "krs_location ring_locate(vec3 p) { return krs_location(0.0, krs_torus_normal(" + args +
+                                    "), 0u, 0u, uvec2(0u)); }\n";
+        std::vector<vec3f> points = sample_points(s, 4096);
+        // And the normal's fallbacks: on the axis and on the circle.
+        points.push_back(ring.center());
+        points.push_back(ring.center() + ring.axis() * 0.5f);
+        const auto gpu = run_points(snippet, "ring", points, {}, false, "ring_data");
+        float worst_d = 0, worst_n = 0;
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            worst_d = std::max(worst_d, std::abs(gpu[i].distance - ring.distance(points[i])));
+            worst_n = std::max(worst_n, krs::length(gpu[i].kernel_point - ring.normal(points[i])));
+        }
+        std::printf("torus kernel: max |d_gpu - d_cpu| %.3g, max |n_gpu - n_cpu| %.3g\n", double(worst_d), double(worst_n));
+        CHECK(worst_d <= 1e-6f);
+        CHECK(worst_n <= 1e-4f);
+    }
 
     // union_of(lipschitz_warp(sequence, twist), box) through the compute path (distance only).
     const auto tree = ex::tree();

@@ -199,6 +199,41 @@ struct torus_case : tube_case {
     }
 };
 
+// A full circle of radius R around `axis` through `center`, by angle, from a frame built here
+// (not the kernel's), swept by a ball of radius r. Closed, so it has no caps: its surface samples
+// are the tube's sides only.
+struct ring_case {
+    curve_reference curve;
+    double radius;
+    krs::torus kernel;
+    std::string name;
+    static std::function<vec3d(double)> circle(vec3f center, vec3f axis, float major)
+    {
+        const vec3d a = krs::normalize(vec3d(axis)), c(center);
+        const vec3d e1 = krs::normalize(krs::cross(a, std::abs(a.z) < 0.9 ? vec3d{0, 0, 1} : vec3d{1, 0, 0}));
+        const vec3d e2 = krs::cross(a, e1);
+        const double R = major;
+        return [=](double t) {
+            const double phi = 2 * std::numbers::pi * t;
+            return c + (e1 * std::cos(phi) + e2 * std::sin(phi)) * R;
+        };
+    }
+    ring_case(vec3f center, vec3f axis, float major, float minor, std::string n)
+        : curve(circle(center, axis, major)), radius(minor), kernel(center, axis, major, minor), name(std::move(n))
+    {
+    }
+    std::vector<vec3d> surface(random_source& rng, int n) const
+    {
+        std::vector<vec3d> out;
+        for (int i = 0; i < n; ++i) {
+            const double t = rng.uniform(0, 1);
+            out.push_back(curve.at(t) + perpendicular_unit(rng, curve.tangent(t)) * radius);
+        }
+        return out;
+    }
+    double reference(const vec3d& p) const { return curve.distance(p) - radius; }
+};
+
 struct box_case {
     krs::box kernel;
     vec3d center, half, axes[3];
@@ -519,6 +554,14 @@ std::vector<torus_case> torus_cases()
                        "arc far from the origin")};
 }
 
+std::vector<ring_case> ring_cases()
+{
+    return {ring_case({0, 0, 0}, {0, 0, 1}, 1.0f, 0.2f, "ring around z"),
+            ring_case({0.3f, -0.2f, 0.5f}, {0.4f, 0.8f, -0.3f}, 0.7f, 0.15f, "tilted ring"),
+            ring_case({2, 1, -1}, {1, 0, 0}, 2.5f, 0.05f, "thin wide ring"),
+            ring_case({1000, 1000.5f, 999}, {0.2f, 1, 0.1f}, 1.0f, 0.3f, "ring far from the origin")};
+}
+
 } // namespace
 
 // ---- plane ----------------------------------------------------------------------------------------
@@ -807,8 +850,107 @@ TEST_CASE("torus_capsule: invalid parameters are named")
     CHECK_NOTHROW(krs::torus_capsule(s, e, {0.5f, 0, 0}, 0.1f));
 }
 
+// ---- torus ---------------------------------------------------------------------------------------
+
+TEST_CASE_TEMPLATE("torus: distance against brute force, never overestimates, normal", T, float, double)
+{
+    for (const ring_case& c : ring_cases()) {
+        check_against_reference<T>(c);
+        check_never_overestimates<T>(c);
+        check_normal<T>(c);
+    }
+    // A spindle torus (r > R: the tube overlaps itself around the axis) and R = 0 (a ball) keep
+    // the formula "distance to the circle minus r", which the reference computes the same way.
+    // (Their tube sweeps are not their surfaces, so only the distance is compared.)
+    check_against_reference<T>(ring_case({0.1f, 0.2f, 0}, {0, 1, 1}, 0.3f, 0.5f, "spindle torus"));
+    check_against_reference<T>(ring_case({0, 0, 0}, {1, 1, 0}, 0.0f, 0.4f, "R = 0: a ball"));
+}
+
+TEST_CASE("torus: bound holds the surface; packet lanes equal the scalar path")
+{
+    for (const ring_case& c : ring_cases()) {
+        check_bound(c);
+        check_lanes_all(c);
+    }
+}
+
+TEST_CASE_TEMPLATE("torus: the same solid as two semicircle torus capsules", T, float, double)
+{
+    // The ring the Embree peer benchmark built from two half arcs before the torus kernel.
+    const krs::torus ring({0, 0, 0}, {0, 0, 1}, 1.0f, 0.2f);
+    const krs::torus_capsule upper({-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.2f), lower({-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, 0.2f);
+    random_source rng(91);
+    double worst = 0;
+    for (int i = 0; i < 5000; ++i) {
+        const vec3d p = rng.query({0, 0, 0}, 2.0);
+        const double pair = std::min(distance_at<T>(upper, p), distance_at<T>(lower, p));
+        worst = std::max(worst, std::abs(distance_at<T>(ring, p) - pair));
+    }
+    MESSAGE("max |torus - min(two torus capsules)| " << worst);
+    CHECK(worst <= 8 * float_ulp * 3);
+}
+
+TEST_CASE("torus: accurate near its axis")
+{
+    // sqrt(|q|^2 - h^2) would place these points ~3e-4 off; the in-plane offset keeps float rounding.
+    const ring_case c({0.1f, 0.2f, 0.3f}, {0.3f, 1, 0.2f}, 1.0f, 0.2f, "ring");
+    const vec3d a = krs::normalize(vec3d(c.kernel.axis()));
+    random_source rng(17);
+    double worst = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const vec3d off = perpendicular_unit(rng, a) * std::pow(10.0, rng.uniform(-6, -3));
+        const vec3d p = vec3d(to_f(vec3d(c.kernel.center()) + a * rng.uniform(-1, 1) + off));
+        worst = std::max(worst, std::abs(distance_at<float>(c.kernel, p) - c.reference(p)));
+    }
+    MESSAGE("worst error near the axis " << worst);
+    CHECK(worst <= 8 * float_ulp * 2);
+}
+
+TEST_CASE("torus: normals on the axis and on the circle are finite unit vectors")
+{
+    const krs::torus k({0.5f, 0, 0}, {0, 1, 0}, 1.0f, 0.3f);
+    for (const vec3f p : {vec3f{0.5f, 0, 0}, vec3f{0.5f, 2, 0}, vec3f{1.5f, 0, 0}, vec3f{0.5f, 0, -1}}) {
+        const vec3f n = k.normal(p);
+        CHECK(std::abs(krs::length(vec3d(n)) - 1) < 1e-6);
+    }
+    // Off the circle in its plane the normal is radial; above the circle it is the axis.
+    CHECK(krs::length(vec3d(k.normal(vec3f{2.5f, 0, 0})) - vec3d{1, 0, 0}) < 1e-6);
+    CHECK(krs::length(vec3d(k.normal(vec3f{0.5f, 0.7f, 1})) - vec3d{0, 1, 0}) < 1e-6);
+}
+
+TEST_CASE("torus: uv runs around the axis and around the tube")
+{
+    for (const ring_case& c : ring_cases()) {
+        INFO(c.name);
+        const krs::torus& k = c.kernel;
+        const vec3d axis(k.axis());
+        const float u0 = k.uv(vec3f(c.curve.at(0))).u;
+        for (int i = 0; i <= 100; ++i) {
+            const double t = i / 100.0;
+            const vec3d on = c.curve.at(t);
+            const vec3d out = krs::normalize(on - vec3d(k.center()));
+            // u advances with the angle around the axis (one turn = 1), in either sense.
+            const double du = std::fmod(double(k.uv(vec3f(on + out * 0.05)).u - u0) + 2.0, 1.0);
+            CHECK(std::min(std::abs(du - t), std::min(std::abs(du - t + 1), std::abs(du + t - 1))) < 1e-4);
+            CHECK(k.uv(vec3f(on + out * 0.05)).v == doctest::Approx(0.5).epsilon(1e-4));
+            CHECK(k.uv(vec3f(on + axis * 0.05)).v == doctest::Approx(0.75).epsilon(1e-4));
+            CHECK(k.uv(vec3f(on - axis * 0.05)).v == doctest::Approx(0.25).epsilon(1e-4));
+        }
+    }
+}
+
+TEST_CASE("torus: invalid parameters are named")
+{
+    expect_invalid([] { krs::torus({0, 0, 0}, {0, 0, 1}, -1.0f, 0.1f); }, "torus.major_radius");
+    expect_invalid([] { krs::torus({0, 0, 0}, {0, 0, 1}, 1.0f, nan_f); }, "torus.minor_radius");
+    expect_invalid([] { krs::torus({nan_f, 0, 0}, {0, 0, 1}, 1.0f, 0.1f); }, "torus.center");
+    expect_invalid([] { krs::torus({0, 0, 0}, {0, 0, 0}, 1.0f, 0.1f); }, "torus.axis");
+    expect_invalid([] { krs::torus({0, 0, 0}, {0, inf_f, 0}, 1.0f, 0.1f); }, "torus.axis");
+}
+
 TEST_CASE("kernels satisfy the kernel concept")
 {
+    static_assert(krs::kernel<krs::torus>);
     static_assert(krs::kernel<krs::plane>);
     static_assert(krs::kernel<krs::capsule>);
     static_assert(krs::kernel<krs::box>);
