@@ -105,17 +105,26 @@ void for_each_voxel_on_segment(const hypervolume& volume, const vec3d& a, const 
         delta[i] = side[i] / std::abs(dir[i]);
     }
     // The walk ends at the last cell, the Manhattan distance away: finite whatever rounding does.
-    int budget = std::abs(last[0] - cell[0]) + std::abs(last[1] - cell[1]) + std::abs(last[2] - cell[2]);
+    // Each step moves the axis with the nearest boundary crossing among those that still have
+    // cells to go (ties to the lowest axis) one cell toward the last cell. An axis with none left
+    // gets crossing +infinity, so the choice is three comparisons; the index moves by the axis's
+    // signed stride (unsigned arithmetic wraps it back). Kept in registers and free of branches
+    // on the choice, which the segment's slopes make unpredictable.
+    int rx = std::abs(last[0] - cell[0]), ry = std::abs(last[1] - cell[1]), rz = std::abs(last[2] - cell[2]);
+    int budget = rx + ry + rz;
+    const voxel_index sx = voxel_index(step[0]), sy = voxel_index(step[1]) * voxel_index(n[0]),
+                      sz = voxel_index(step[2]) * voxel_index(n[0]) * voxel_index(n[1]);
+    double tx = rx > 0 ? next[0] : INFINITY, ty = ry > 0 ? next[1] : INFINITY, tz = rz > 0 ? next[2] : INFINITY;
+    voxel_index index = volume.index(cell[0], cell[1], cell[2]);
     for (;;) {
-        visit(volume.index(cell[0], cell[1], cell[2]));
+        visit(index);
         if (budget-- <= 0) return;
-        // The nearest boundary crossing among the axes that still have cells to go: each step
-        // moves one axis one cell toward the last cell, so the walk takes exactly `budget` steps.
-        int i = -1;
-        for (int k = 0; k < 3; ++k)
-            if (cell[k] != last[k] && (i < 0 || next[k] < next[i])) i = k;
-        cell[i] += step[i];
-        next[i] += delta[i];
+        const bool x = tx <= ty && tx <= tz, y = !x && ty <= tz, z = !x && !y;
+        index += x ? sx : (y ? sy : sz);
+        rx -= x, ry -= y, rz -= z;
+        tx = x ? (rx > 0 ? tx + delta[0] : INFINITY) : tx;
+        ty = y ? (ry > 0 ? ty + delta[1] : INFINITY) : ty;
+        tz = z ? (rz > 0 ? tz + delta[2] : INFINITY) : tz;
     }
 }
 
