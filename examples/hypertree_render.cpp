@@ -137,7 +137,7 @@ int main(int argc, char** argv)
 
     try {
         build_options options;
-        options.generation.parallel_for = parallel_with_progress(example::thread_count(o.threads), "generate");
+        options.generation.parallel_for = parallel_with_progress(example::thread_count(o.threads), "create");
         hypervolume volume;
         std::vector<stored_voxel> voxels;
         depth_colors colors;
@@ -159,7 +159,7 @@ int main(int argc, char** argv)
             }
             if (o.resolution) tree.ifs.volume = hypervolume(tree.ifs.volume.origin(), tree.ifs.volume.extent(), resolution::cube(*o.resolution));
             const generated_hits hits = generate(tree.ifs, o.seed, options.generation);
-            const std::vector<voxel_entry> entries = compact(hits.hits);
+            const std::vector<voxel_entry> entries = compact(hits.hits, options.generation.parallel_for);
             const density_classes classes(entries, tree.density_class_count.value_or(options.density_class_count));
             voxels = classify(entries, classes, tree.ifs.branch_depth);
             volume = tree.ifs.volume;

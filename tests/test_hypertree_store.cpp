@@ -16,13 +16,16 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
 #include <random>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -227,6 +230,28 @@ TEST_CASE("compact: random hit lists match a map-based reference")
         INFO("hits " << s.hits << " in [" << s.lowest << ", " << s.highest << "]");
         const auto hits = random_hits(g, s.hits, s.lowest, s.highest, 9, 6);
         check_same_entries(hypertree::compact(hits), compact_with_map(hits));
+    }
+}
+
+TEST_CASE("compact on threads gives the entries of one thread")
+{
+    // Tasks run in reverse order on a pool of three threads: any schedule must give the same list.
+    const hypertree::parallel_for_hook pool = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::atomic<std::size_t> next{0};
+        std::vector<std::thread> threads;
+        for (int t = 0; t < 3; ++t)
+            threads.emplace_back([&] {
+                for (std::size_t i; (i = next++) < count;) body(count - 1 - i);
+            });
+        for (std::thread& t : threads) t.join();
+    };
+    std::mt19937_64 g(29);
+    // Large enough to be split; clustered (few buckets in use) and spread over 300^3.
+    for (const voxel_index highest : {voxel_index(5000), voxel_index(300 * 300 * 300 - 1)}) {
+        const auto hits = random_hits(g, 400000, 0, highest, 9, 6);
+        const auto entries = hypertree::compact(hits, pool);
+        check_same_entries(entries, compact_with_map(hits));
+        check_same_entries(entries, hypertree::compact(hits));
     }
 }
 

@@ -24,6 +24,7 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <span>
@@ -105,46 +106,89 @@ inline void append_runs(const std::uint64_t* sorted, std::size_t n, std::vector<
 
 // One entry per distinct voxel of `hits`, in increasing voxel order; see the header comment for
 // which level and part an entry keeps. Hit counts saturate at 2^32 - 1.
-inline std::vector<voxel_entry> compact(std::span<const hit> hits)
+//
+// With `parallel_for`, each pass is split into tasks on the caller's threads: the hits into
+// parts that count and scatter their own share (part p's hits of a bucket go after parts < p's,
+// so a bucket holds the same keys in the same order as one pass would), then the buckets into
+// groups of about equal hit counts, each sorted and merged into its own entries, concatenated in
+// bucket order. The entries are the same whatever the threads.
+inline std::vector<voxel_entry> compact(std::span<const hit> hits, const parallel_for_hook& parallel_for = {})
 {
     std::vector<voxel_entry> entries;
     const std::size_t n = hits.size();
     if (n == 0) return entries;
+    // 4 tasks per pass balance two to four threads; below 2^16 hits a pass takes microseconds.
+    const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
+    const auto run = [&](std::size_t count, const std::function<void(std::size_t)>& body) {
+        if (parallel_for && count > 1) parallel_for(count, body);
+        else
+            for (std::size_t i = 0; i < count; ++i) body(i);
+    };
+    const auto part = [&](std::size_t p) { return hits.subspan(n * p / tasks, n * (p + 1) / tasks - n * p / tasks); };
 
-    voxel_index largest = 0;
-    for (const hit& h : hits) largest = std::max(largest, h.voxel);
+    std::vector<voxel_index> part_largest(tasks, 0);
+    run(tasks, [&](std::size_t p) {
+        for (const hit& h : part(p)) part_largest[p] = std::max(part_largest[p], h.voxel);
+    });
+    const voxel_index largest = *std::max_element(part_largest.begin(), part_largest.end());
     const unsigned voxel_bits = unsigned(std::bit_width(largest));
     const unsigned bucket_bits = std::min(voxel_bits, detail::max_bucket_bits);
     const unsigned low_bits = voxel_bits - bucket_bits; // sorted inside each bucket
     const std::size_t buckets = std::size_t(1) << bucket_bits;
     const auto bucket_of = [low_bits](voxel_index v) { return std::size_t(v >> low_bits); };
 
+    // counts[p * buckets + b]: part p's hits in bucket b; then where part p writes them.
+    std::vector<std::size_t> counts(tasks * buckets, 0);
+    run(tasks, [&](std::size_t p) {
+        std::size_t* c = counts.data() + p * buckets;
+        for (const hit& h : part(p)) ++c[bucket_of(h.voxel)];
+    });
     std::vector<std::size_t> start(buckets + 1, 0);
-    for (const hit& h : hits) ++start[bucket_of(h.voxel) + 1];
-    std::size_t largest_bucket = 0;
-    for (std::size_t b = 0; b < buckets; ++b) {
-        largest_bucket = std::max(largest_bucket, start[b + 1]);
-        start[b + 1] += start[b];
+    for (std::size_t b = 0, offset = 0; b < buckets; ++b) {
+        start[b] = offset;
+        for (std::size_t p = 0; p < tasks; ++p) offset += std::exchange(counts[p * buckets + b], offset);
     }
+    start[buckets] = n;
     // Default-initialized: every element is written by the scatter, so zeroing would only cost.
     const std::unique_ptr<std::uint64_t[]> scattered(new std::uint64_t[n]);
-    {
-        std::vector<std::size_t> next(start.begin(), start.end() - 1);
-        for (const hit& h : hits) scattered[next[bucket_of(h.voxel)]++] = detail::pack_hit(h);
-    }
+    run(tasks, [&](std::size_t p) {
+        std::size_t* next = counts.data() + p * buckets;
+        for (const hit& h : part(p)) scattered[next[bucket_of(h.voxel)]++] = detail::pack_hit(h);
+    });
 
-    // At most one entry per hit. Reserving that much only reserves address space: pages that are
-    // never written are never touched, and shrink_to_fit returns the excess at the end.
-    entries.reserve(n);
-    const std::unique_ptr<std::uint64_t[]> scratch(new std::uint64_t[largest_bucket]);
-    for (std::size_t b = 0; b < buckets; ++b) {
-        const std::size_t size = start[b + 1] - start[b];
-        if (size == 0) continue;
-        const std::uint64_t* sorted = detail::radix_sort_bits(scattered.get() + start[b], scratch.get(), size,
-                                                              detail::packed_voxel_shift, low_bits);
-        detail::append_runs(sorted, size, entries);
+    // Groups of consecutive buckets holding about n / tasks hits each.
+    std::vector<std::size_t> group_begin{0};
+    for (std::size_t b = 1; b < buckets && group_begin.size() < tasks; ++b)
+        if (start[b] >= n * group_begin.size() / tasks) group_begin.push_back(b);
+    const std::size_t groups = group_begin.size();
+    group_begin.push_back(buckets);
+    std::vector<std::vector<voxel_entry>> group_entries(groups);
+    run(groups, [&](std::size_t g) {
+        const std::size_t first = group_begin[g], last = group_begin[g + 1];
+        std::size_t largest_bucket = 0;
+        for (std::size_t b = first; b < last; ++b) largest_bucket = std::max(largest_bucket, start[b + 1] - start[b]);
+        // At most one entry per hit. Reserving that much only reserves address space: pages that
+        // are never written are never touched.
+        std::vector<voxel_entry>& out = group_entries[g];
+        out.reserve(start[last] - start[first]);
+        const std::unique_ptr<std::uint64_t[]> scratch(new std::uint64_t[std::max<std::size_t>(largest_bucket, 1)]);
+        for (std::size_t b = first; b < last; ++b) {
+            const std::size_t size = start[b + 1] - start[b];
+            if (size == 0) continue;
+            const std::uint64_t* sorted = detail::radix_sort_bits(scattered.get() + start[b], scratch.get(), size,
+                                                                  detail::packed_voxel_shift, low_bits);
+            detail::append_runs(sorted, size, out);
+        }
+    });
+    if (groups == 1) {
+        entries = std::move(group_entries[0]);
+        entries.shrink_to_fit();
+        return entries;
     }
-    entries.shrink_to_fit();
+    std::size_t total = 0;
+    for (const auto& e : group_entries) total += e.size();
+    entries.reserve(total);
+    for (const auto& e : group_entries) entries.insert(entries.end(), e.begin(), e.end());
     return entries;
 }
 

@@ -34,7 +34,7 @@ struct generation_options {
     std::uint64_t chunk_cycles = 8192;
     memory_budget budget{};
     // Runs body(0) .. body(count - 1), in any order and on any threads; empty = serially here.
-    std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)> parallel_for;
+    parallel_for_hook parallel_for;
 };
 
 struct generation_stats {

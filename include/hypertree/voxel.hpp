@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 
 namespace hypertree {
 
@@ -41,6 +42,11 @@ struct stored_voxel {
     voxel value;
     std::uint8_t part;
 };
+
+// How the library runs independent work on the caller's threads (it starts none itself, DESIGN
+// rule 6): parallel_for(count, body) calls body(0) ... body(count - 1) in any order, on any
+// threads, and returns when all are done. Empty: the work runs serially on the calling thread.
+using parallel_for_hook = std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)>;
 
 // The most memory a store (or the generator's hit list) may take. A resolution or iteration count
 // whose data would exceed it is refused with a message before anything is allocated.

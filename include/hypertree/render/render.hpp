@@ -35,7 +35,7 @@ struct render_settings {
     int supersampling = 1; // s: s * s samples per pixel
     rgb background{0.78f, 0.86f, 0.95f};
     bool ray_cache = false; // scalar marcher only
-    std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)> parallel_for;
+    parallel_for_hook parallel_for;
 };
 
 // s = ceil(sqrt(area(pixel) / area(projection))) for the smallest voxel side at distance d.
