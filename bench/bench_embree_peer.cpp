@@ -6,11 +6,11 @@
 //     bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] [--tolerance T]
 //                       [--repeat R] [--csv FILE] [--scene grid|unaligned|both] [--krs-floor F]
 //
-// Scenes: a ring (two torus capsules closing a circle) around a sphere, copied 2^n times by n
+// Scenes: a ring (a krs::torus) around a sphere, copied 2^n times by n
 // vertical mirrors (krs::sequence, so krs::expand applies): `grid` with x- and z-normal mirrors,
 // `unaligned` with each normal turned by up to 10 degrees (ring_scene below); both seen whole
 // from above at an angle. n = 8, 10, ... max-n (default 32); Embree runs up to --embree-max-n
-// (default 22). Each image is N x N primary rays (default 512) in 8 x 8 tiles taken from a
+// (default 22). Each image is N x N primary rays (default 512) in 16 x 16 tiles taken from a
 // shared counter by 2 threads (this machine's cores). Timings are the best of R runs (default 2).
 // The table is printed per scene; the CSV (default bench_embree_peer.csv next to the binary) has
 // one row per scene and n.
@@ -33,7 +33,7 @@
 #include "support/text.hpp"
 #include "krs/expansion.hpp"
 #include "krs/kernels/sphere.hpp"
-#include "krs/kernels/torus_capsule.hpp"
+#include "krs/kernels/torus.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_rays.hpp"
@@ -64,12 +64,15 @@ namespace {
 
 using krs::vec3d;
 using krs::vec3f;
-using scene_sequence = krs::sequence<krs::torus_capsule, krs::sphere>;
+using scene_sequence = krs::sequence<krs::torus, krs::sphere>;
 // The grid's mirrors are axis-aligned: the scene says so in its type and folds with one min.
-using grid_sequence = krs::axis_sequence<krs::torus_capsule, krs::sphere>;
+using grid_sequence = krs::axis_sequence<krs::torus, krs::sphere>;
 
 constexpr int thread_count = 2;
-constexpr int tile = 8;
+// 16 x 16: one tile prepass (a scalar march) serves 256 rays; with 8 x 8 tiles the prepasses took
+// about a sixth of the KRS render at n = 22 (measured 31 -> 38 Mrays/s). Embree's 4 x 4 packets
+// tile either size.
+constexpr int tile = 16;
 constexpr double mib = 1024.0 * 1024.0;
 
 // ---- settings ----------------------------------------------------------------------------------
@@ -96,7 +99,7 @@ struct framing {
     float extent;
 };
 
-// One ring (two half-circle torus capsules) standing in the xy plane around a sphere, copied 2^n
+// One ring (a torus) standing in the xy plane around a sphere, copied 2^n
 // times by n vertical mirrors. Each copy fits a ball of radius 1.2 about its center, and each
 // mirror is placed 1.5 beyond the support of the copies so far in its normal's direction, so it
 // separates its kernels and both renderers draw the same geometry.
@@ -109,8 +112,7 @@ scene_sequence ring_scene(int n, bool unaligned, framing& view)
 {
     scene_sequence::builder b;
     const float r = ring_radius;
-    b.kernel(krs::torus_capsule({-r, 0, 0}, {r, 0, 0}, {0, r, 0}, tube_radius));
-    b.kernel(krs::torus_capsule({-r, 0, 0}, {r, 0, 0}, {0, -r, 0}, tube_radius));
+    b.kernel(krs::torus({0, 0, 0}, {0, 0, 1}, r, tube_radius)); // an upright ring
     b.kernel(krs::sphere({0, 0, 0}, core_radius));
     using point = std::array<double, 2>; // (x, z)
     std::vector<point> hull{{0.0, 0.0}};
@@ -233,46 +235,31 @@ void add_ball(mesh& m, const vec3d& center, double radius, const vec3d& x, const
     }
 }
 
-// The torus capsule: a circle of the tube radius swept along the arc, closed by hemispheres.
-// Vertices lie on the surface, so the mesh is inside it by at most `tolerance` (the sagitta of
-// the tube's polygon and of the outer edge's polygon along the arc).
-void add_torus_capsule(mesh& m, const krs::torus_capsule& k, double tolerance)
+// The torus: a circle of the tube radius swept around the axis. Vertices lie on the surface, so
+// the mesh is inside it by at most `tolerance` (the sagitta of the tube's polygon and of the outer
+// edge's polygon around the axis).
+void add_torus(mesh& m, const krs::torus& k, double tolerance)
 {
-    const double r = k.radius(), kappa = k.curvature();
-    const vec3d chord(k.chord_direction()), toward(k.toward_control()), normal(k.plane_normal());
-    const int around = circle_segments(r, tolerance);
-    const double alpha = k.half_angle();
-    const int along = kappa > 0 ? circle_segments(1 / kappa + r, tolerance, 2 * alpha) : 1;
-    // Arc point, outward radial direction and tangent at u in [-1, 1] (start to end).
-    auto frame = [&](double u, vec3d& point, vec3d& radial, vec3d& tangent) {
-        if (kappa > 0) {
-            const double s = u * alpha;
-            radial = chord * std::sin(s) + toward * std::cos(s);
-            tangent = chord * std::cos(s) - toward * std::sin(s);
-            point = vec3d(k.circle_center()) + radial * (1 / kappa);
-        } else {
-            radial = toward, tangent = chord;
-            point = vec3d(k.chord_middle()) + chord * (u * double(k.half_chord()));
-        }
-    };
-    std::vector<std::uint32_t> previous, current;
-    vec3d point, radial, tangent;
-    for (int i = 0; i <= along; ++i) {
-        frame(-1 + 2 * double(i) / double(along), point, radial, tangent);
+    const double R = k.major_radius(), r = k.minor_radius();
+    const vec3d axis(k.axis()), center(k.center());
+    const vec3d e1 = krs::normalize(krs::cross(axis, std::abs(axis.x) < 0.9 ? vec3d{1, 0, 0} : vec3d{0, 1, 0}));
+    const vec3d e2 = krs::cross(axis, e1);
+    const int around = circle_segments(r, tolerance), along = circle_segments(R + r, tolerance);
+    std::vector<std::uint32_t> first, previous, current;
+    for (int i = 0; i < along; ++i) {
+        const double s = 2 * std::numbers::pi * double(i) / double(along);
+        const vec3d radial = e1 * std::cos(s) + e2 * std::sin(s);
         current.clear();
         for (int j = 0; j < around; ++j) {
             const double phi = 2 * std::numbers::pi * double(j) / double(around);
-            current.push_back(m.add(point + (radial * std::cos(phi) + normal * std::sin(phi)) * r));
+            current.push_back(m.add(center + radial * R + (radial * std::cos(phi) + axis * std::sin(phi)) * r));
         }
-        if (i > 0)
-            for (int j = 0; j < around; ++j)
-                m.quad(previous[j], current[j], current[(j + 1) % around], previous[(j + 1) % around]);
+        if (i == 0) first = current;
+        else
+            for (int j = 0; j < around; ++j) m.quad(previous[j], current[j], current[(j + 1) % around], previous[(j + 1) % around]);
         std::swap(previous, current);
     }
-    frame(-1, point, radial, tangent);
-    add_ball(m, point, r, radial, normal, tangent * -1.0, std::numbers::pi / 2, around, tolerance);
-    frame(1, point, radial, tangent);
-    add_ball(m, point, r, radial, normal, tangent, std::numbers::pi / 2, around, tolerance);
+    for (int j = 0; j < around; ++j) m.quad(previous[j], first[j], first[(j + 1) % around], previous[(j + 1) % around]);
 }
 
 void add_sphere(mesh& m, const krs::sphere& k, double tolerance)
@@ -288,8 +275,8 @@ mesh tessellate_level0(const scene_sequence& s, double tolerance)
     for (std::uint32_t k = s.level_begin(0); k < s.level_begin(1); ++k)
         std::visit(
             [&](const auto& kernel) {
-                if constexpr (std::is_same_v<std::decay_t<decltype(kernel)>, krs::torus_capsule>)
-                    add_torus_capsule(m, kernel, tolerance);
+                if constexpr (std::is_same_v<std::decay_t<decltype(kernel)>, krs::torus>)
+                    add_torus(m, kernel, tolerance);
                 else
                     add_sphere(m, kernel, tolerance);
             },
@@ -341,7 +328,7 @@ struct frame {
     double mrays() const { return double(hit.size()) / seconds * 1e-6; }
 };
 
-// Runs `work(take_tile, hit)` on two threads; take_tile(x0, y0, x1, y1) hands out the next 8 x 8
+// Runs `work(take_tile, hit)` on two threads; take_tile(x0, y0, x1, y1) hands out the next 16 x 16
 // tile from a shared counter and returns false when none is left. Best of `repeats`.
 template <class Work>
 frame render_tiles(int size, int repeats, Work&& work)
@@ -690,7 +677,7 @@ int main(int argc, char** argv)
     std::printf("bench_embree_peer: %dx%d primary rays, %d threads, %zu float lanes, budget %.1f GiB, CSV -> %s\n",
                 opt.size, opt.size, thread_count, krs::lane_count<krs::packet_f>, opt.budget_bytes / (1024 * mib),
                 opt.csv_path.c_str());
-    std::printf("kernels: a ring (2 torus capsules, R %.1f, r %.2f) around a sphere (r %.2f); 3 kernels per copy, 2^n "
+    std::printf("kernels: a ring (torus, R %.1f, r %.2f) around a sphere (r %.2f); 2 kernels per copy, 2^n "
                 "copies\n",
                 ring_radius, tube_radius, core_radius);
     std::printf("tessellation: vertices on the surface, deviation <= %.4f (%.1f%% of the tube radius), %zu triangles "
@@ -718,7 +705,11 @@ int main(int argc, char** argv)
         framing v;
         const scene_sequence s = ring_scene(8, false, v);
         const krs::pinhole_camera camera = camera_for(v, opt.size);
-        for (int i = 0; i < 3; ++i) render_krs(s, camera, faithful_options(v, opt.krs_floor), 1, true);
+        const std::optional<grid_sequence> grid = axis_copy(s);
+        for (int i = 0; i < 3; ++i) {
+            render_krs(s, camera, faithful_options(v, opt.krs_floor), 1, true);
+            render_krs(*grid, camera, faithful_options(v, opt.krs_floor), 1, true); // the tuned path's code too
+        }
     }
     for (const bool unaligned : {false, true}) {
         if ((unaligned && opt.scene == "grid") || (!unaligned && opt.scene == "unaligned")) continue;
