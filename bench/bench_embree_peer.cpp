@@ -385,9 +385,12 @@ std::optional<grid_sequence> axis_copy(const scene_sequence& s)
 // its evaluations are counted with the rays'.
 template <class Field>
 frame render_krs(const Field& s, const krs::pinhole_camera& camera, const krs::trace_options& o, int repeats,
-                 bool prepass = false)
+                 bool tuned = false)
 {
     const int size = camera.width();
+    // Tuned: the tile prepass, and every ray clipped to the sequence's bounding box.
+    const bool prepass = tuned;
+    const krs::box_clip clip = tuned ? krs::box_clip(krs::field_box(s), camera.eye(), o) : krs::box_clip();
     std::atomic<long long> evaluations{0};
     frame out = render_tiles(size, repeats, [&](auto& take_tile, std::uint8_t* hit) {
         int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
@@ -402,7 +405,7 @@ frame render_krs(const Field& s, const krs::pinhole_camera& camera, const krs::t
                     pre = krs::prepass_tile(s, camera, x0, y0, x1, y1, o);
                     prepass_evaluations += pre.evaluations;
                 }
-                rays.fill(camera, x0, y0, x1, y1, pre, o.max_distance);
+                rays.fill(camera, x0, y0, x1, y1, pre, o.max_distance, clip);
             }
             return true;
         };

@@ -49,6 +49,7 @@ struct render_settings {
     bool packet = true;
     int threads = 1;
     bool prepass = false;
+    bool clip = true; // rays clipped to the field's bounding box (both paths)
     int tile = 8;
     krs::trace_options options;
 };
@@ -68,13 +69,16 @@ struct frame {
 // 1.5x between builds, and with it every ratio).
 template <class F>
 [[gnu::noinline]] long long trace_tile_scalar(const F& f, const krs::pinhole_camera& camera, const krs::tile_prepass& pre,
-                                              int x0, int y0, int x1, int y1, const krs::trace_options& o, float* depth)
+                                              const krs::box_clip& clip, int x0, int y0, int x1, int y1,
+                                              const krs::trace_options& o, float* depth)
 {
     long long evaluations = 0;
     for (int py = y0; py < y1; ++py)
         for (int px = x0; px < x1; ++px) {
             const krs::ray<float> r = camera.primary_ray(float(px) + 0.5f, float(py) + 0.5f);
-            const krs::hit<float> h = krs::sphere_trace(f, r, pre.start_for(r), o.max_distance, o);
+            float t0 = pre.start_for(r), t1 = o.max_distance;
+            clip.apply(r, t0, t1);
+            const krs::hit<float> h = krs::sphere_trace(f, r, t0, t1, o);
             evaluations += h.evaluations;
             depth[std::size_t(py) * std::size_t(camera.width()) + std::size_t(px)] = h.found ? h.t : INFINITY;
         }
@@ -84,7 +88,7 @@ template <class F>
 // The packet path: one stream over every tile take_tile(x0, y0, x1, y1, pre) hands out.
 template <class F, class TakeTile>
 [[gnu::noinline]] krs::stream_stats trace_stream_packets(const F& f, const krs::pinhole_camera& camera, TakeTile& take_tile,
-                                                         const krs::trace_options& o, float* depth)
+                                                         const krs::box_clip& clip, const krs::trace_options& o, float* depth)
 {
     krs::tile_rays<> rays;
     auto next = [&](krs::ray_job& job) {
@@ -92,7 +96,7 @@ template <class F, class TakeTile>
             int x0, y0, x1, y1;
             const krs::tile_prepass* pre = take_tile(x0, y0, x1, y1);
             if (!pre) return false;
-            rays.fill(camera, x0, y0, x1, y1, *pre, o.max_distance);
+            rays.fill(camera, x0, y0, x1, y1, *pre, o.max_distance, clip);
         }
         return true;
     };
@@ -110,6 +114,7 @@ frame render_once(const F& f, const krs::pinhole_camera& camera, const render_se
     std::atomic<int> next_tile{0};
     std::atomic<long long> evaluations{0}, prepass_evaluations{0}, packet_steps{0}, busy{0};
     const krs::trace_options& o = s.options;
+    const krs::box_clip clip = s.clip ? krs::box_clip(krs::field_box(f), camera.eye(), o) : krs::box_clip();
 
     auto worker = [&] {
         long long my_evaluations = 0, my_prepass = 0;
@@ -133,9 +138,9 @@ frame render_once(const F& f, const krs::pinhole_camera& camera, const render_se
         if (!s.packet) {
             int tx0, ty0, tx1, ty1;
             while (take_tile(tx0, ty0, tx1, ty1))
-                my_evaluations += trace_tile_scalar(f, camera, pre, tx0, ty0, tx1, ty1, o, out.depth.data());
+                my_evaluations += trace_tile_scalar(f, camera, pre, clip, tx0, ty0, tx1, ty1, o, out.depth.data());
         } else {
-            const krs::stream_stats st = trace_stream_packets(f, camera, take_tile, o, out.depth.data());
+            const krs::stream_stats st = trace_stream_packets(f, camera, take_tile, clip, o, out.depth.data());
             my_evaluations += st.evaluations;
             packet_steps += st.packet_steps;
             busy += st.busy_lanes;

@@ -117,6 +117,8 @@ int main(int argc, char** argv)
     using P = krs::packet_f;
     constexpr std::size_t W = krs::lane_count<P>;
 
+    // Rays are clipped to the tree's bounding box (a miss outside it costs no field evaluation).
+    const krs::box_clip clip(krs::field_box(tree), camera.eye(), trace);
     auto worker = [&] {
         // Phase 0: one ray stream per thread over the tiles it takes; a tile's rays start at its
         // prepass depth.
@@ -135,7 +137,7 @@ int main(int argc, char** argv)
         auto next = [&](krs::ray_job& job) {
             while (!rays.pop(job)) {
                 if (!take_tile()) return false;
-                rays.fill(camera, x0, y0, x1, y1, pre, trace.max_distance);
+                rays.fill(camera, x0, y0, x1, y1, pre, trace.max_distance, clip);
             }
             return true;
         };

@@ -5,6 +5,7 @@
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
+#include "krs/trace/box_clip.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/packet_shade.hpp"
 #include "krs/trace/packet_trace.hpp"
@@ -397,6 +398,139 @@ TEST_CASE_TEMPLATE("mask bits: a mask as a word of lane bits and back", T, float
         const krs::mask_t<T> back = krs::mask_from_bits<T>(word);
         for (std::size_t i = 0; i < W; ++i) REQUIRE(krs::mask_lane<T>(back, i) == (((word >> i) & 1u) != 0));
     }
+}
+
+TEST_CASE("box clip: a clipped ray starts before its first possible stop, ends after its last, and a ray that misses the box takes no step")
+{
+    // The grove without its ground (bounded), and a flat grid of rings seen from above at an
+    // angle (most of its sphere is empty); primary and four-pixel thresholds.
+    scene::builder gb;
+    gb.kernel(krs::sphere({0.3f, 1.2f, 0.1f}, 0.25f));
+    gb.kernel(krs::torus_capsule({0, 0, 0}, {0.3f, 1.0f, 0.1f}, {0.05f, 0.5f, 0.1f}, 0.06f));
+    gb.mirror(krs::mirror({1, 0, 0.2f}, 0.8f));
+    gb.mirror(krs::mirror({0.1f, 0, 1}, 0.9f));
+    gb.kernel(krs::sphere({0, -0.5f, 0}, 0.2f));
+    gb.mirror(krs::mirror({1, 0, -0.3f}, 2.5f));
+    gb.mirror(krs::mirror({-0.2f, 0, 1}, 2.6f));
+    const scene grove_only = gb.build();
+    krs::axis_sequence<krs::sphere, krs::torus_capsule>::builder rb;
+    rb.kernel(krs::torus_capsule({-0.5f, 0, 0}, {0.5f, 0, 0}, {0, 0.5f, 0}, 0.1f));
+    rb.kernel(krs::torus_capsule({-0.5f, 0, 0}, {0.5f, 0, 0}, {0, -0.5f, 0}, 0.1f));
+    double reach[2] = {0.6, 0.6};
+    for (int i = 0; i < 6; ++i) {
+        const int a = i % 2;
+        const double position = reach[a] + 0.2;
+        rb.mirror(krs::axis_mirror(a == 0 ? 0 : 2, float(position)));
+        reach[a] = 2 * position + 0.6;
+    }
+    const auto rings = rb.build();
+    const int width = 41, height = 31;
+    long long rays = 0, missed_box = 0, later_start = 0, earlier_end = 0, hits = 0, differ = 0;
+    const auto check_scene = [&](const auto& s, const krs::pinhole_camera& camera, float pixels) {
+        krs::trace_options o = primary_options(camera);
+        o.pixel_footprint *= pixels;
+        const krs::box_clip clip(krs::field_box(s), camera.eye(), o);
+        REQUIRE(clip.clips());
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+                float t0 = o.min_distance, t1 = o.max_distance;
+                clip.apply(r, t0, t1);
+                const krs::hit<float> plain = krs::sphere_trace(s, r, o);
+                const krs::hit<float> clipped = krs::sphere_trace(s, r, t0, t1, o);
+                // Independent check: outside [t0, t1] the field stays above the hit threshold
+                // (sampled every 0.01), so no tracer could stop there.
+                const float last = t1 < t0 ? o.max_distance : t0;
+                for (float t = o.min_distance; t < last; t += 0.01f)
+                    REQUIRE(s.distance(krs::point_at(r, t)) >= o.threshold(t));
+                if (t1 >= t0)
+                    for (float t = t1; t < o.max_distance; t += 0.01f)
+                        REQUIRE(s.distance(krs::point_at(r, t)) >= o.threshold(t));
+                if (t1 < t0) {
+                    ++missed_box;
+                    REQUIRE(!clipped.found);
+                    REQUIRE(clipped.evaluations == 0);
+                } else {
+                    later_start += t0 > o.min_distance;
+                    earlier_end += t1 < o.max_distance;
+                }
+                // The same hits, up to grazing rays: their samples differ, so one may stop in a
+                // thin near-miss region the other stepped over. Where they differ, the miss is a
+                // near miss: the field stays positive along it (steps of half the distance, at
+                // least 1e-4, would land inside a surface it crossed).
+                if (clipped.found != plain.found || (plain.found && std::abs(clipped.t - plain.t) > 2 * o.threshold(plain.t))) {
+                    ++differ;
+                    const krs::hit<float>& other = clipped.found && (!plain.found || clipped.t < plain.t) ? plain : clipped;
+                    const float from = std::min(clipped.found ? clipped.t : o.max_distance, plain.found ? plain.t : o.max_distance);
+                    const float to = other.found ? other.t : o.max_distance;
+                    for (float t = from; t < to;) {
+                        const float d = s.distance(krs::point_at(r, t));
+                        REQUIRE(d > 0.0f);
+                        t += std::max(0.5f * d, 1e-4f);
+                    }
+                }
+                hits += plain.found;
+                ++rays;
+            }
+    };
+    for (int k = 0; k < 3; ++k)
+        for (float pixels : {1.0f, 4.0f}) {
+            check_scene(grove_only, view(k, width, height), pixels);
+            const vec3f middle{float(reach[0]) / 2, 0, float(reach[1]) / 2};
+            const krs::pinhole_camera above(middle + vec3f{-5.0f + 3.0f * float(k), 4.0f, -6.0f}, middle, {0, 1, 0}, 50.0f,
+                                            width, height);
+            check_scene(rings, above, pixels);
+        }
+    MESSAGE("rays ", rays, ": missed the box ", missed_box, ", started later ", later_start, ", ended earlier ",
+            earlier_end, ", hits ", hits, ", near misses that differ ", differ);
+    CHECK(differ <= rays / 200);
+    CHECK(missed_box > rays / 40);
+    CHECK(later_start > rays / 4);
+    CHECK(earlier_end > rays / 4);
+    CHECK(hits > rays / 10);
+}
+
+TEST_CASE("box clip: parallel rays, unbounded boxes and huge footprints")
+{
+    krs::trace_options o;
+    o.threshold_floor = 1e-4f;
+    o.pixel_footprint = 0.0f;
+    const krs::bounding_box box{{-1, -1, -1}, {1, 1, 1}};
+    const krs::box_clip clip(box, {0, 0, -5}, o);
+    // Along z through the box: enters near 4 and leaves near 6, grown by the threshold only.
+    float t0 = 0, t1 = 100;
+    clip.apply(krs::ray<float>{{0, 0, -5}, {0, 0, 1}}, t0, t1);
+    CHECK(t0 == doctest::Approx(4.0f).epsilon(1e-4));
+    CHECK(t1 == doctest::Approx(6.0f).epsilon(1e-4));
+    // Parallel to the x and y slabs but outside the y slab: misses.
+    t0 = 0, t1 = 100;
+    clip.apply(krs::ray<float>{{0, 1.5f, -5}, {0, 0, 1}}, t0, t1);
+    CHECK(t1 < t0);
+    // Starting inside the box: the start stays.
+    const krs::box_clip inside(box, {0, 0, 0}, o);
+    t0 = 0.25f, t1 = 100;
+    inside.apply(krs::ray<float>{{0, 0, 0}, {1, 0, 0}}, t0, t1);
+    CHECK(t0 == 0.25f);
+    CHECK(t1 == doctest::Approx(1.0f).epsilon(1e-3));
+    // A packet gives each lane the scalar answer.
+    alignas(64) float oy[lanes];
+    for (std::size_t i = 0; i < lanes; ++i) oy[i] = -2.0f + 4.0f * float(i) / float(lanes);
+    P pt0(0.0f), pt1(100.0f);
+    clip.apply(krs::ray<P>{{P(0.0f), P::load_aligned(oy), P(-5.0f)}, {P(0.0f), P(0.0f), P(1.0f)}}, pt0, pt1);
+    for (std::size_t i = 0; i < lanes; ++i) {
+        float s0 = 0, s1 = 100;
+        clip.apply(krs::ray<float>{{0, oy[i], -5}, {0, 0, 1}}, s0, s1);
+        CHECK(krs::lane_at(pt0, i) == s0);
+        CHECK(krs::lane_at(pt1, i) == s1);
+    }
+    // Nothing to clip to, or a threshold that grows as fast as the ray: no clipping.
+    CHECK(!krs::box_clip(krs::bounding_box::unbounded(), {0, 0, 0}, o).clips());
+    o.pixel_footprint = 0.6f;
+    CHECK(!krs::box_clip(box, {0, 0, -5}, o).clips());
+    // A ray whose start is past its end reports a miss without a step.
+    const krs::hit<float> h = krs::sphere_trace(krs::sphere({0, 0, 0}, 1.0f), krs::ray<float>{{0, 0, -5}, {0, 0, 1}}, 5.0f, 4.0f, o);
+    CHECK(!h.found);
+    CHECK(h.evaluations == 0);
 }
 
 TEST_CASE("tile rays: every pixel of a clipped tile once, with the scalar camera ray and prepass start")

@@ -3,6 +3,7 @@
 // bound of its own zero set found by sampling.
 
 #include "krs/expansion.hpp"
+#include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
 #include "krs/sequence.hpp"
@@ -166,6 +167,51 @@ TEST_CASE("axis-aligned grid: Algorithm 1 equals the minimum over all 2^n instan
         INFO("n = " << n);
         CHECK(worst <= 1e-5 * std::max(reach[0], reach[1]));
     }
+}
+
+TEST_CASE("the bounding box holds every instance of the expansion, and is flat for a flat grid")
+{
+    // Every instance's bounding sphere, placed by the expansion's isometries (in double, not by
+    // the box's corner reflections), lies inside the box.
+    const auto holds_all = [](const auto& s) {
+        const auto e = krs::expand(s);
+        const krs::bounding_box box = s.bound_box();
+        REQUIRE(box.is_bounded());
+        int outside = 0;
+        for (const auto& in : e.instances) {
+            const krs::bounding_sphere b = std::visit([](const auto& k) { return k.bound(); }, s.kernels()[in.kernel]);
+            const vec3d c = in.to_world.apply(vec3d(b.center));
+            const double r = b.radius;
+            outside += !(c.x - r >= box.lo.x && c.y - r >= box.lo.y && c.z - r >= box.lo.z && c.x + r <= box.hi.x &&
+                         c.y + r <= box.hi.y && c.z + r <= box.hi.z);
+        }
+        CHECK(outside == 0);
+        return box;
+    };
+    for (std::size_t n : {0u, 4u, 9u}) holds_all(separated_sequence(n, 900 + n));
+    // The grid of rings: 2^10 copies over 96 x 96 in x and z, 2.4 high; its sphere's box is as tall as wide.
+    krs::axis_sequence<krs::sphere, krs::torus_capsule>::builder b;
+    b.kernel(krs::torus_capsule({-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.2f));
+    b.kernel(krs::sphere({0, 0, 0}, 0.35f));
+    double reach[2] = {1.2, 1.2};
+    for (int i = 0; i < 10; ++i) {
+        const int a = i % 2;
+        const double position = reach[a] + 0.3;
+        b.mirror(krs::axis_mirror(a == 0 ? 0 : 2, float(position)));
+        reach[a] = 2 * position + 1.2;
+    }
+    const auto grid = b.build();
+    const krs::bounding_box box = holds_all(grid);
+    CHECK(box.hi.y - box.lo.y <= 2.5f);
+    CHECK(box.hi.x - box.lo.x <= float(reach[0] + 1.3));
+    CHECK(krs::box_around(grid.bound()).hi.y > 40.0f);
+    // An unbounded kernel makes an unbounded box.
+    using with_plane = krs::sequence<krs::sphere, krs::plane>;
+    with_plane::builder pb;
+    pb.kernel(krs::sphere({0, 1, 0}, 0.5f));
+    pb.mirror(krs::mirror({1, 0, 0}, 2.0f));
+    pb.kernel(krs::plane({0, 1, 0}, 0.0f));
+    CHECK(!pb.build().bound_box().is_bounded());
 }
 
 TEST_CASE_TEMPLATE("axis mirrors: the fold prefix applied axis by axis equals folding level by level", T, float,

@@ -27,6 +27,7 @@
 #include "krs/shade/lambert.hpp"
 #include "krs/shade/normal.hpp"
 #include "krs/shade/texture.hpp"
+#include "krs/trace/box_clip.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/located_hit.hpp"
 #include "krs/trace/packet_shade.hpp"

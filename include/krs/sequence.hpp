@@ -27,6 +27,7 @@
 #include "krs/field.hpp"
 #include "krs/mirror.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -82,6 +83,9 @@ public:
     }
     // A sphere holding every instance (infinite if any kernel is unbounded).
     const bounding_sphere& bound() const { return bound_; }
+    // An axis-aligned box holding every instance (infinite if any kernel is unbounded): much
+    // tighter than the sphere for flat scenes, for clipping rays (krs/trace/box_clip.hpp).
+    const bounding_box& bound_box() const { return box_; }
     // The sequence's memory: the object plus what its vectors hold (allocator overhead aside). It
     // grows with n and the kernel count, never with the 2^n instances it stands for.
     std::size_t memory_bytes() const
@@ -261,6 +265,7 @@ private:
     std::vector<std::uint32_t> kernel_levels_;   // level of each kernel
     std::vector<std::uint32_t> level_begin_{0, 0}; // n + 2 offsets into kernels_
     bounding_sphere bound_{};
+    bounding_box box_ = bounding_box::unbounded();
     std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
     std::size_t top_kernel_level_ = 0;          // the highest level that holds a kernel
     // Axis mirrors only: the folds of mirrors n-1 ... top_kernel_level_ per axis, in walk order.
@@ -311,6 +316,7 @@ public:
         for (std::size_t i = 0; i < levels_.size(); ++i)
             if (!levels_[i].empty()) s.top_kernel_level_ = i;
         s.bound_ = expansion_bound(s, &s.level_bounds_);
+        s.box_ = expansion_box(s);
         if constexpr (one_axis_folds)
             for (std::size_t i = s.mirrors_.size(); i-- > s.top_kernel_level_;) {
                 const Mirror& m = s.mirrors_[i];
@@ -336,6 +342,43 @@ private:
             }
         }
         return *b;
+    }
+
+    // Box of L_{i+1} = K_{i+1} u L_i u R_i L_i, level by level in double: a kernel's box is its
+    // bounding sphere's, R_i L_i's the box of L_i's reflected corners (exact for axis mirrors,
+    // larger than needed for others). Rounded outward to float, and cut to the bounding sphere's
+    // box, which holds every instance too.
+    static bounding_box expansion_box(const basic_sequence& s)
+    {
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+        const auto add = [&](const vec3d& p) {
+            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        };
+        for (std::size_t i = 0; i <= s.mirrors_.size(); ++i) {
+            if (i > 0 && lo.x <= hi.x) {
+                const Mirror& m = s.mirrors_[i - 1];
+                const vec3d a = lo, b = hi;
+                for (int corner = 0; corner < 8; ++corner)
+                    add(m.reflect(vec3d{corner & 1 ? b.x : a.x, corner & 2 ? b.y : a.y, corner & 4 ? b.z : a.z}));
+            }
+            for (std::uint32_t k = s.level_begin_[i]; k < s.level_begin_[i + 1]; ++k) {
+                const bounding_sphere kb = std::visit([](const auto& kernel) { return kernel.bound(); }, s.kernels_[k]);
+                if (!kb.is_bounded()) return bounding_box::unbounded();
+                const vec3d c(kb.center), r{kb.radius, kb.radius, kb.radius};
+                add(c - r), add(c + r);
+            }
+        }
+        // Margin for the float rounding the walk's folds make (a float mirror normal is unit to
+        // about 1e-7): a relative 1e-6 of the largest coordinate.
+        const double margin = 1e-6 * std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x),
+                                                std::abs(hi.y), std::abs(hi.z), 1e-30});
+        const vec3d pad{margin, margin, margin};
+        const bounding_box sphere_box = box_around(s.bound_);
+        const bounding_box box = box_around(lo - pad, hi + pad);
+        return {{std::max(box.lo.x, sphere_box.lo.x), std::max(box.lo.y, sphere_box.lo.y), std::max(box.lo.z, sphere_box.lo.z)},
+                {std::min(box.hi.x, sphere_box.hi.x), std::min(box.hi.y, sphere_box.hi.y), std::min(box.hi.z, sphere_box.hi.z)}};
     }
 
     std::vector<Mirror> mirrors_;

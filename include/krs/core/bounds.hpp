@@ -5,6 +5,7 @@
 
 #include "krs/core/vec3.hpp"
 
+#include <cmath>
 #include <limits>
 
 namespace krs {
@@ -37,6 +38,46 @@ inline bounding_sphere enclose(const bounding_sphere& a, const bounding_sphere& 
     if (dist + a.radius <= b.radius) return b;
     const double r = 0.5 * (dist + a.radius + b.radius);
     return bound_around(ca + (cb - ca) * ((r - a.radius) / dist), r);
+}
+
+// Axis-aligned bounding boxes: a flat scene (a grid of 2^n copies, a forest) fills a small part
+// of its bounding sphere, so a ray clipped to the box skips the empty space above and below it
+// (krs/trace/box_clip.hpp). An unbounded field reports infinite extents.
+struct bounding_box {
+    vec3f lo{}, hi{};
+
+    static bounding_box unbounded()
+    {
+        constexpr float inf = std::numeric_limits<float>::infinity();
+        return {{-inf, -inf, -inf}, {inf, inf, inf}};
+    }
+    bool is_bounded() const
+    {
+        constexpr float inf = std::numeric_limits<float>::infinity();
+        return lo.x > -inf && lo.y > -inf && lo.z > -inf && hi.x < inf && hi.y < inf && hi.z < inf;
+    }
+};
+
+// The float box holding the double box [lo, hi]: each bound rounded outward.
+inline bounding_box box_around(const vec3d& lo, const vec3d& hi)
+{
+    const auto down = [](double v) {
+        const float f = static_cast<float>(v);
+        return double(f) <= v ? f : std::nextafter(f, -std::numeric_limits<float>::infinity());
+    };
+    const auto up = [](double v) {
+        const float f = static_cast<float>(v);
+        return double(f) >= v ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
+    };
+    return {{down(lo.x), down(lo.y), down(lo.z)}, {up(hi.x), up(hi.y), up(hi.z)}};
+}
+
+// The box around a bounding sphere (infinite for an unbounded one).
+inline bounding_box box_around(const bounding_sphere& b)
+{
+    if (!b.is_bounded()) return bounding_box::unbounded();
+    const vec3d c(b.center), r{b.radius, b.radius, b.radius};
+    return box_around(c - r, c + r);
 }
 
 } // namespace krs

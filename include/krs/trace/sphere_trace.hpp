@@ -104,7 +104,9 @@ march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, co
     m.r = r;
     const T dir_len2 = length_squared(r.direction);
     m.result.invalid = !(is_finite(r.origin) && is_finite(r.direction) && dir_len2 > T(0) && is_finite(t_start));
-    m.active = !m.result.invalid;
+    // A lane whose start is already past its end (a ray clipped away, krs/trace/box_clip.hpp)
+    // misses without a step.
+    m.active = !m.result.invalid && t_start <= t_max;
     m.result.found = m.active && !m.active; // all false, in the mask's own type
     m.result.t = T(std::numeric_limits<S>::infinity());
     m.t = t_start;

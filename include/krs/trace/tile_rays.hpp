@@ -20,6 +20,7 @@
 //         return true;
 //     };
 
+#include "krs/trace/box_clip.hpp"
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
 
@@ -36,9 +37,11 @@ public:
 
     // Replaces the queue by the rays through the pixel centers of [x0, x1) x [y0, y1), row by
     // row. Each starts at `prepass.start_for(ray)` (a default tile_prepass starts every ray at
-    // its `start`) and ends at t_max; its id is the pixel index y * camera.width() + x. The
-    // rectangle is clipped to the image.
-    void fill(const pinhole_camera& camera, int x0, int y0, int x1, int y1, const tile_prepass& prepass, float t_max)
+    // its `start`) and ends at t_max, both narrowed to the field's box by `clip` when given (a
+    // ray that misses it is queued with an empty range and reported as a miss without a step);
+    // its id is the pixel index y * camera.width() + x. The rectangle is clipped to the image.
+    void fill(const pinhole_camera& camera, int x0, int y0, int x1, int y1, const tile_prepass& prepass, float t_max,
+              const box_clip& clip = {})
     {
         jobs_.clear();
         next_ = 0;
@@ -48,7 +51,7 @@ public:
         const int columns = x1 - x0;
         const std::size_t count = std::size_t(columns) * std::size_t(y1 - y0);
         jobs_.resize(count);
-        alignas(64) float px[W], py[W], ox[W], oy[W], oz[W], dx[W], dy[W], dz[W], start[W];
+        alignas(64) float px[W], py[W], ox[W], oy[W], oz[W], dx[W], dy[W], dz[W], start[W], end[W];
         std::uint32_t id[W];
         for (std::size_t first = 0; first < count; first += W) {
             // Lanes past the tile's last pixel repeat it; their results are not kept.
@@ -61,12 +64,14 @@ public:
             const ray<P> r = camera.primary_ray(P::load_aligned(px), P::load_aligned(py));
             r.origin.x.store_aligned(ox), r.origin.y.store_aligned(oy), r.origin.z.store_aligned(oz);
             r.direction.x.store_aligned(dx), r.direction.y.store_aligned(dy), r.direction.z.store_aligned(dz);
-            prepass.start_for(r).store_aligned(start);
+            P t0 = prepass.start_for(r), t1(t_max);
+            clip.apply(r, t0, t1);
+            t0.store_aligned(start), t1.store_aligned(end);
             for (std::size_t i = 0; i < W && first + i < count; ++i) {
                 ray_job& job = jobs_[first + i];
                 job.r = {{ox[i], oy[i], oz[i]}, {dx[i], dy[i], dz[i]}};
                 job.t_start = start[i];
-                job.t_max = t_max;
+                job.t_max = end[i];
                 job.id = id[i];
             }
         }
