@@ -687,7 +687,8 @@ int main(int argc, char** argv)
                 "per copy\n",
                 opt.tolerance * tube_radius, 100 * opt.tolerance, kernel_mesh.triangles());
     std::printf("KRS: packet tracer; faithful threshold = pixel_footprint 0, floor max(%g, 4e-7 extent), 4096 steps;\n"
-                "     KRS = tile prepass, axis mirrors on the grid; plain = general mirrors, no prepass;\n"
+                "     KRS = tile prepass, rays clipped to the sequence's box, axis mirrors on the grid;\n"
+                "     plain = general mirrors, no prepass, no clipping;\n"
                 "     evals = field evaluations per ray (the prepass's included); '= plain' hit/miss agreement\n"
                 "     of KRS with plain; px = plain with a 0.5 px footprint threshold, 'px agree' its agreement\n",
                 double(opt.krs_floor));
@@ -820,8 +821,12 @@ int main(int argc, char** argv)
             std::printf("targets (%s): KRS beats Embree's best at every n it ran: worst KRS/Embree %.2fx at n = %d -> %s; "
                         ">= 10x at n = 22: %s; KRS memory < 64 KiB: largest %zu B -> %s\n",
                         scene_name, worst_ratio, worst_n, worst_ratio > 1 ? "met" : "NOT met",
-                        ratio_at_22 > 0 ? format("%.2fx -> %s", ratio_at_22, ratio_at_22 >= 10 ? "met" : "NOT met").c_str()
-                                        : "not measured",
+                        ratio_at_22 <= 0 ? "not measured"
+                        // Issue 9 sets the 10x on the grid (its reference figures are the grid's); the
+                        // unaligned scene reports the ratio. It is sparse (its tilted copies spread out:
+                        // 3% of pixels hit at n = 22), so Embree culls most rays at its root.
+                        : unaligned ? format("%.2fx (the 10x target is the grid's)", ratio_at_22).c_str()
+                                    : format("%.2fx -> %s", ratio_at_22, ratio_at_22 >= 10 ? "met" : "NOT met").c_str(),
                         largest_krs_bytes, largest_krs_bytes < 65536 ? "met" : "NOT met");
         // The prepass and the axis copy change the work, not the picture (up to near misses).
         std::printf("check (%s): KRS (prepass, mirror kind) draws the plain render's image up to n = %d: worst hit/miss "
