@@ -169,6 +169,45 @@ TEST_CASE("axis-aligned grid: Algorithm 1 equals the minimum over all 2^n instan
     }
 }
 
+TEST_CASE("a sequence holding a plane above bounded levels equals Algorithm 1 without early outs")
+{
+    // Separated kernels on levels 0 ... 3 (vertical mirrors beyond the copies so far), a ground
+    // plane on level 4, more mirrors and kernels above: levels from 4 up have an unbounded L_i and
+    // are walked without bound tests, levels below with them. Reference: Algorithm 1 written out
+    // level by level with no early out (which never changes the result), compared bit for bit.
+    using mixed = krs::sequence<krs::sphere, krs::torus_capsule, krs::plane>;
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        random_source r(600 + seed);
+        mixed::builder b;
+        b.kernel(krs::sphere({0, 0.5f, 0}, 0.4f));
+        b.kernel(krs::torus_capsule({-0.3f, 0, 0}, {0.3f, 0.9f, 0}, {0, 0.5f, 0.1f}, 0.05f));
+        double reach = 1.0;
+        for (int i = 0; i < 8; ++i) {
+            const double angle = r.uniform(0, 6.283);
+            b.mirror(krs::mirror(to_f(vec3d{std::cos(angle), 0, std::sin(angle)}), float(reach + 0.2)));
+            reach = 2 * reach + 0.5;
+            if (i == 3) b.kernel(krs::plane({0, 1, 0}, float(r.uniform(-0.5, 0.0))));
+            else if (i % 2 == 0) b.kernel(krs::sphere(to_f(r.in_ball(0.5)), float(r.uniform(0.1, 0.4))));
+        }
+        const mixed s = b.build();
+        const std::size_t n = s.mirror_count();
+        const auto full_walk = [&](vec3f p) {
+            float d = std::numeric_limits<float>::infinity();
+            for (std::size_t i = n + 1; i-- > 0;) {
+                if (i < n) p = s.mirrors()[i].fold(p);
+                for (std::uint32_t k = s.level_begin(i); k < s.level_begin(i + 1); ++k)
+                    d = std::min(d, std::visit([&](const auto& kernel) { return kernel.distance(p); }, s.kernels()[k]));
+            }
+            return d;
+        };
+        for (int k = 0; k < 3000; ++k) {
+            const vec3f x = to_f(r.in_ball(2 * reach));
+            INFO("seed " << seed);
+            REQUIRE(s.distance(x) == full_walk(x));
+        }
+    }
+}
+
 TEST_CASE("the bounding box holds every instance of the expansion, and is flat for a flat grid")
 {
     // Every instance's bounding sphere, placed by the expansion's isometries (in double, not by

@@ -148,7 +148,8 @@ public:
             // levels (most sphere-tracing steps) the walk stops after a few levels. Down to the
             // highest level that holds kernels d is still infinite: no test there, which leaves
             // a grid of copies (every kernel at level 0) with folds alone until its last level.
-            if (i < top_kernel_level_) {
+            // Nor where L_i is unbounded (it holds a plane): a terrain of planes never tests.
+            if (i < bound_tests_below_) {
                 const bounding_sphere& b = level_bounds_[i];
                 const T radius(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
                 const vec3<T> center(b.center);
@@ -268,6 +269,9 @@ private:
     bounding_box box_ = bounding_box::unbounded();
     std::vector<bounding_sphere> level_bounds_; // bound of L_i (levels <= i, mirrors < i), i < n
     std::size_t top_kernel_level_ = 0;          // the highest level that holds a kernel
+    // Levels i below this have a finite L_i bound and a finite d to compare it with: below both
+    // the highest kernel level and the lowest level whose L_i holds an unbounded kernel.
+    std::size_t bound_tests_below_ = 0;
     // Axis mirrors only: the folds of mirrors n-1 ... top_kernel_level_ per axis, in walk order.
     std::array<std::vector<axis_fold>, 3> axis_prefix_;
 };
@@ -316,6 +320,12 @@ public:
         for (std::size_t i = 0; i < levels_.size(); ++i)
             if (!levels_[i].empty()) s.top_kernel_level_ = i;
         s.bound_ = expansion_bound(s, &s.level_bounds_);
+        s.bound_tests_below_ = s.top_kernel_level_;
+        for (std::size_t i = 0; i < s.level_bounds_.size(); ++i)
+            if (!s.level_bounds_[i].is_bounded()) {
+                s.bound_tests_below_ = std::min(s.bound_tests_below_, i);
+                break;
+            }
         s.box_ = expansion_box(s);
         if constexpr (one_axis_folds)
             for (std::size_t i = s.mirrors_.size(); i-- > s.top_kernel_level_;) {
