@@ -132,9 +132,8 @@ public:
                 fold_axis_prefix<0>(p, all_k, each);
                 fold_axis_prefix<1>(p, all_k, each);
                 fold_axis_prefix<2>(p, all_k, each);
-                i = top_kernel_level_;
-                if (level_begin_[i] != level_begin_[i + 1])
-                    each(all_k, [&](auto k) { d[k] = nearest_kernel(p[k], i, d[k]); });
+                i = top_kernel_level_; // a level with kernels, by its definition
+                each(all_k, [&](auto k) { d[k] = nearest_kernel(p[k], i, d[k]); });
             }
         }
         while (i-- > 0) {
