@@ -7,6 +7,7 @@
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
 #include "krs/sequence.hpp"
+#include "support/grid.hpp"
 
 #include <doctest/doctest.h>
 
@@ -92,6 +93,21 @@ test_sequence random_plane_sequence(std::size_t n, std::uint64_t seed)
     return b.build();
 }
 
+// Algorithm 1 written out level by level, with no early out and no fold prefix: every mirror
+// folds, every kernel counts. The sequence's walk must give the same float, bit for bit.
+template <class Sequence>
+float full_walk(const Sequence& s, vec3f p)
+{
+    const std::size_t n = s.mirror_count();
+    float d = std::numeric_limits<float>::infinity();
+    for (std::size_t i = n + 1; i-- > 0;) {
+        if (i < n) p = s.mirrors()[i].fold(p);
+        for (std::uint32_t k = s.level_begin(i); k < s.level_begin(i + 1); ++k)
+            d = std::min(d, std::visit([&](const auto& kernel) { return kernel.distance(p); }, s.kernels()[k]));
+    }
+    return d;
+}
+
 } // namespace
 
 TEST_CASE("separated KRS: Algorithm 1 equals the minimum over all 2^n instances")
@@ -148,13 +164,7 @@ TEST_CASE("axis-aligned grid: Algorithm 1 equals the minimum over all 2^n instan
         b.kernel(krs::torus_capsule({-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.2f));
         b.kernel(krs::torus_capsule({-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, 0.2f));
         b.kernel(krs::sphere({0, 0, 0}, 0.35f));
-        double reach[2] = {1.2, 1.2};
-        for (std::size_t i = 0; i < n; ++i) {
-            const int a = int(i % 2);
-            const double position = reach[a] + 0.3;
-            b.mirror(krs::axis_mirror(a == 0 ? 0 : 2, float(position)));
-            reach[a] = 2 * position + 1.2;
-        }
+        const std::array<double, 2> reach = krs_test::add_grid_mirrors(b, int(n), 1.2, 0.3);
         const grid_sequence s = b.build();
         const auto e = krs::expand(s);
         REQUIRE(e.instances.size() == 3 * (std::size_t(1) << n));
@@ -190,20 +200,10 @@ TEST_CASE("a sequence holding a plane above bounded levels equals Algorithm 1 wi
             else if (i % 2 == 0) b.kernel(krs::sphere(to_f(r.in_ball(0.5)), float(r.uniform(0.1, 0.4))));
         }
         const mixed s = b.build();
-        const std::size_t n = s.mirror_count();
-        const auto full_walk = [&](vec3f p) {
-            float d = std::numeric_limits<float>::infinity();
-            for (std::size_t i = n + 1; i-- > 0;) {
-                if (i < n) p = s.mirrors()[i].fold(p);
-                for (std::uint32_t k = s.level_begin(i); k < s.level_begin(i + 1); ++k)
-                    d = std::min(d, std::visit([&](const auto& kernel) { return kernel.distance(p); }, s.kernels()[k]));
-            }
-            return d;
-        };
         for (int k = 0; k < 3000; ++k) {
             const vec3f x = to_f(r.in_ball(2 * reach));
             INFO("seed " << seed);
-            REQUIRE(s.distance(x) == full_walk(x));
+            REQUIRE(s.distance(x) == full_walk(s, x));
         }
     }
 }
@@ -232,13 +232,7 @@ TEST_CASE("the bounding box holds every instance of the expansion, and is flat f
     krs::axis_sequence<krs::sphere, krs::torus_capsule>::builder b;
     b.kernel(krs::torus_capsule({-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.2f));
     b.kernel(krs::sphere({0, 0, 0}, 0.35f));
-    double reach[2] = {1.2, 1.2};
-    for (int i = 0; i < 10; ++i) {
-        const int a = i % 2;
-        const double position = reach[a] + 0.3;
-        b.mirror(krs::axis_mirror(a == 0 ? 0 : 2, float(position)));
-        reach[a] = 2 * position + 1.2;
-    }
+    const std::array<double, 2> reach = krs_test::add_grid_mirrors(b, 10, 1.2, 0.3);
     const auto grid = b.build();
     const krs::bounding_box box = holds_all(grid);
     CHECK(box.hi.y - box.lo.y <= 2.5f);
@@ -274,15 +268,6 @@ TEST_CASE_TEMPLATE("axis mirrors: the fold prefix applied axis by axis equals fo
             if (middle != 0 && i + 1 == middle) b.kernel(krs::sphere({1, 0.5f, 0}, 0.3f));
         }
         const axis_scene s = b.build();
-        const auto reference = [&](vec3f p) {
-            float d = std::numeric_limits<float>::infinity();
-            for (std::size_t i = n + 1; i-- > 0;) {
-                if (i < n) p = s.mirrors()[i].fold(p);
-                for (std::uint32_t k = s.level_begin(i); k < s.level_begin(i + 1); ++k)
-                    d = std::min(d, std::visit([&](const auto& kernel) { return kernel.distance(p); }, s.kernels()[k]));
-            }
-            return d;
-        };
         for (int q = 0; q < 200; ++q) {
             alignas(64) float c[3][W];
             for (std::size_t i = 0; i < W; ++i)
@@ -295,7 +280,7 @@ TEST_CASE_TEMPLATE("axis mirrors: the fold prefix applied axis by axis equals fo
             const T d = s.distance(p);
             for (std::size_t i = 0; i < W; ++i) {
                 INFO("n = " << n << ", kernels at level " << middle);
-                REQUIRE(krs::lane_at(d, i) == reference(vec3f{c[0][i], c[1][i], c[2][i]}));
+                REQUIRE(krs::lane_at(d, i) == full_walk(s, vec3f{c[0][i], c[1][i], c[2][i]}));
             }
         }
     }

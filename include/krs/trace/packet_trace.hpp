@@ -62,14 +62,16 @@ struct packet_lanes {
     std::uint32_t id[W];
     std::uint64_t live = 0; // lanes holding a ray that has not been reported yet
 
-    // Fills lane i from the queue. A lane left empty gets a ray the tracer rejects at once; it
-    // keeps the origin of the lane's last ray, so the point the field is evaluated at for the
-    // idle lane (its origin, see trace_stream) is a finite one the caller chose.
-    template <class Next>
-    void pull(std::size_t i, Next& next, bool& queue_open)
+    // Fills lane i from the queue. A job whose range is empty (t_start > t_max: a ray clipped
+    // away) goes to `empty` at once instead of taking the lane for a step it would not take. A
+    // lane left empty gets a ray the tracer rejects at once; it keeps the origin of the lane's
+    // last ray, so the point the field is evaluated at for the idle lane (its origin, see
+    // trace_stream) is a finite one the caller chose.
+    template <class Next, class Empty>
+    void pull(std::size_t i, Next& next, bool& queue_open, Empty& empty)
     {
         ray_job job;
-        if (queue_open) queue_open = next(job);
+        while (queue_open && (queue_open = next(job)) && job.t_start > job.t_max) empty(job);
         const std::uint64_t bit = std::uint64_t(1) << i;
         live = queue_open ? (live | bit) : (live & ~bit);
         if (!queue_open)
@@ -135,8 +137,15 @@ stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_opti
     std::array<detail::packet_lanes<P>, Interleave> lanes;
     std::array<march_state<P>, Interleave> state;
     bool queue_open = true;
+    // A job with an empty range is a miss without a step, reported as it is pulled.
+    auto empty = [&](const ray_job& job) {
+        hit<float> h;
+        h.t = std::numeric_limits<float>::infinity();
+        ++stats.rays;
+        done(job.id, h);
+    };
     for (int k = 0; k < Interleave; ++k) {
-        for (std::size_t i = 0; i < W; ++i) lanes[k].pull(i, next, queue_open);
+        for (std::size_t i = 0; i < W; ++i) lanes[k].pull(i, next, queue_open, empty);
         state[k] = lanes[k].start(options);
     }
     // Reports the finished lanes of packet k and refills them. Lanes whose ray was rejected at
@@ -161,7 +170,7 @@ stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_opti
             stats.evaluations += h.evaluations;
             stats.busy_lanes += h.steps;
             done(L.id[i], h);
-            L.pull(i, next, queue_open);
+            L.pull(i, next, queue_open, empty);
         }
         // Every finished lane was pulled again: those lanes start afresh.
         detail::blend(mask_from_bits<P>(finished), m, L.start(options));
