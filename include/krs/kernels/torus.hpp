@@ -1,8 +1,8 @@
 #pragma once
 // Torus kernel: every point within `minor_radius` of a circle (center, axis, major_radius), a
 // closed ring. A torus_capsule bent into a full turn would be the same solid, but it stops short
-// of one (its arcs end in caps), so a ring took two of them: one torus costs about half of that
-// pair (a grid of 2^22 rings, bench_embree_peer).
+// of one (its arcs end in caps), so a ring took two of them: a ring and a sphere evaluate in 10 ns
+// per 16-lane packet where two torus capsules and the sphere took 21 (a grid of 2^22 copies).
 //
 // With q = p - center, h = dot(q, axis) the height over the circle's plane and w = q - h axis the
 // in-plane offset, the circle's nearest point lies in the half-plane through the axis and p, at
