@@ -378,18 +378,47 @@ const int KRS_MAX_STEPS = 256;
 const float KRS_THRESHOLD_FLOOR = 1e-05;
 const float KRS_FOOTPRINT_SCALE = 0.5;
 const float KRS_BAND_PIXELS = 4.0;
+const bool KRS_CLIP = false;
+const vec3 KRS_BOX_LO = vec3(0.0, 0.0, 0.0);
+const vec3 KRS_BOX_HI = vec3(0.0, 0.0, 0.0);
 float krs_scene(vec3 p) { return forest(p); }
-// Sphere tracing from t0; a hit when the distance drops under footprint * t + floor + bias.
-float krs_trace(vec3 origin, vec3 direction, float t0, float footprint, float bias, out bool found) {
+// Sphere tracing from t0 to t1; a hit when the distance drops under footprint * t + floor + bias.
+float krs_trace(vec3 origin, vec3 direction, float t0, float t1, float footprint, float bias, out bool found) {
     float t = t0;
     found = false;
     for (int i = 0; i < KRS_MAX_STEPS; ++i) {
         float d = krs_scene(origin + direction * t);
         if (d < footprint * t + KRS_THRESHOLD_FLOOR + bias) { found = true; return t; }
         t += d;
-        if (!(t <= KRS_MAX_DISTANCE)) return t;
+        if (!(t <= t1)) return t;
     }
     return t;
+}
+// [t0, t1] cut to the scene's box grown by the largest threshold a stop in it can have (a stop
+// within threshold(t) of the box lies at t <= (reach + floor) / (1 - footprint)); false when the
+// ray misses it.
+bool krs_clip(vec3 origin, vec3 direction, float footprint, inout float t0, inout float t1) {
+    if (!KRS_CLIP || !(footprint < 0.5)) return true;
+    float reach = length(max(abs(KRS_BOX_LO - origin), abs(KRS_BOX_HI - origin)));
+    float grow = footprint * ((reach + KRS_THRESHOLD_FLOOR) / (1.0 - footprint)) + KRS_THRESHOLD_FLOOR + 1e-6 * reach;
+    vec3 lo = KRS_BOX_LO - vec3(grow);
+    vec3 hi = KRS_BOX_HI + vec3(grow);
+    float enter = t0;
+    float leave = t1;
+    for (int k = 0; k < 3; ++k) {
+        if (direction[k] == 0.0) {
+            if (origin[k] < lo[k] || origin[k] > hi[k]) return false;
+        } else {
+            float a = (lo[k] - origin[k]) / direction[k];
+            float b = (hi[k] - origin[k]) / direction[k];
+            enter = max(enter, min(a, b));
+            leave = min(leave, max(a, b));
+        }
+    }
+    if (!(enter <= leave)) return false;
+    t0 = enter;
+    t1 = leave;
+    return true;
 }
 vec3 krs_sky(vec3 direction) {
     return mix(vec3(0.78, 0.86, 0.95), vec3(0.36, 0.55, 0.88), clamp(direction.y, 0.0, 1.0));
@@ -401,8 +430,11 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     vec3 d = KRS_FORWARD + KRS_RIGHT * sx + KRS_UP * sy;
     vec3 direction = d / sqrt(dot(d, d));
     float footprint = KRS_FOOTPRINT_SCALE * scale;
-    bool found;
-    float t = krs_trace(KRS_EYE, direction, 0.0, footprint, 0.0, found);
+    bool found = false;
+    float t0 = 0.0;
+    float t1 = KRS_MAX_DISTANCE;
+    float t = KRS_MAX_DISTANCE;
+    if (krs_clip(KRS_EYE, direction, footprint, t0, t1)) t = krs_trace(KRS_EYE, direction, t0, t1, footprint, 0.0, found);
     vec3 color = krs_sky(direction);
     if (found) {
         vec3 p = KRS_EYE + direction * t;
@@ -414,7 +446,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
             bool shadowed;
             // Start where the surface is at least two thresholds away along the light
             // (t cos >= 2 threshold): no self-shadowing acne at grazing light.
-            krs_trace(p, KRS_TO_LIGHT, hitThreshold * (1.0 + 2.0 / max(diffuse, 0.1)), footprint, hitThreshold, shadowed);
+            krs_trace(p, KRS_TO_LIGHT, hitThreshold * (1.0 + 2.0 / max(diffuse, 0.1)), KRS_MAX_DISTANCE, footprint, hitThreshold, shadowed);
             if (shadowed) diffuse = 0.0;
         }
         color = krs_albedo(s.kind) * (0.25 + 0.75 * diffuse);

@@ -7,11 +7,15 @@
 // shades with Lambert in kernel space (Algorithm 2: the kernel's own normal against the light
 // carried down the mirrors, blended over a band of `band_pixels` footprints) and a hard shadow
 // ray that inherits the hit's threshold and starts far enough along the light to clear the
-// surface. `render_reference` below is the same math in C++ on the CPU field, pixel for pixel, so
-// the GLSL can be checked against it. Alpha is 1 where the ray hit the scene and 0 on the sky.
+// surface. A primary ray is first clipped to the sequence's bounding box, grown by the largest
+// hit threshold a stop in it can have, as krs::box_clip does (a flat forest fills a small part of
+// the picture and of its bounding sphere). `render_reference` below is the same math in C++ on
+// the CPU field, pixel for pixel, so the GLSL can be checked against it. Alpha is 1 where the ray
+// hit the scene and 0 on the sky.
 
 #include "krs/glsl/emitter.hpp"
 #include "krs/shade/kernel_light.hpp"
+#include "krs/trace/box_clip.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -95,18 +99,48 @@ std::string shadertoy(const basic_sequence<M, Kinds...>& s, const view& v, const
     out += "const float KRS_THRESHOLD_FLOOR = " + float_literal(v.threshold_floor) + ";\n";
     out += "const float KRS_FOOTPRINT_SCALE = " + float_literal(v.footprint_scale) + ";\n";
     out += "const float KRS_BAND_PIXELS = " + float_literal(v.band_pixels) + ";\n";
+    const bounding_box box = s.bound_box();
+    out += std::string("const bool KRS_CLIP = ") + (box.is_bounded() ? "true" : "false") + ";\n";
+    out += "const vec3 KRS_BOX_LO = " + vec3_literal(box.is_bounded() ? box.lo : vec3f{}) + ";\n";
+    out += "const vec3 KRS_BOX_HI = " + vec3_literal(box.is_bounded() ? box.hi : vec3f{}) + ";\n";
     out += "float krs_scene(vec3 p) { return " + name + "(p); }\n";
-    out += R"(// Sphere tracing from t0; a hit when the distance drops under footprint * t + floor + bias.
-float krs_trace(vec3 origin, vec3 direction, float t0, float footprint, float bias, out bool found) {
+    out += R"(// Sphere tracing from t0 to t1; a hit when the distance drops under footprint * t + floor + bias.
+float krs_trace(vec3 origin, vec3 direction, float t0, float t1, float footprint, float bias, out bool found) {
     float t = t0;
     found = false;
     for (int i = 0; i < KRS_MAX_STEPS; ++i) {
         float d = krs_scene(origin + direction * t);
         if (d < footprint * t + KRS_THRESHOLD_FLOOR + bias) { found = true; return t; }
         t += d;
-        if (!(t <= KRS_MAX_DISTANCE)) return t;
+        if (!(t <= t1)) return t;
     }
     return t;
+}
+// [t0, t1] cut to the scene's box grown by the largest threshold a stop in it can have (a stop
+// within threshold(t) of the box lies at t <= (reach + floor) / (1 - footprint)); false when the
+// ray misses it.
+bool krs_clip(vec3 origin, vec3 direction, float footprint, inout float t0, inout float t1) {
+    if (!KRS_CLIP || !(footprint < 0.5)) return true;
+    float reach = length(max(abs(KRS_BOX_LO - origin), abs(KRS_BOX_HI - origin)));
+    float grow = footprint * ((reach + KRS_THRESHOLD_FLOOR) / (1.0 - footprint)) + KRS_THRESHOLD_FLOOR + 1e-6 * reach;
+    vec3 lo = KRS_BOX_LO - vec3(grow);
+    vec3 hi = KRS_BOX_HI + vec3(grow);
+    float enter = t0;
+    float leave = t1;
+    for (int k = 0; k < 3; ++k) {
+        if (direction[k] == 0.0) {
+            if (origin[k] < lo[k] || origin[k] > hi[k]) return false;
+        } else {
+            float a = (lo[k] - origin[k]) / direction[k];
+            float b = (hi[k] - origin[k]) / direction[k];
+            enter = max(enter, min(a, b));
+            leave = min(leave, max(a, b));
+        }
+    }
+    if (!(enter <= leave)) return false;
+    t0 = enter;
+    t1 = leave;
+    return true;
 }
 vec3 krs_sky(vec3 direction) {
     return mix(vec3(0.78, 0.86, 0.95), vec3(0.36, 0.55, 0.88), clamp(direction.y, 0.0, 1.0));
@@ -118,8 +152,11 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     vec3 d = KRS_FORWARD + KRS_RIGHT * sx + KRS_UP * sy;
     vec3 direction = d / sqrt(dot(d, d));
     float footprint = KRS_FOOTPRINT_SCALE * scale;
-    bool found;
-    float t = krs_trace(KRS_EYE, direction, 0.0, footprint, 0.0, found);
+    bool found = false;
+    float t0 = 0.0;
+    float t1 = KRS_MAX_DISTANCE;
+    float t = KRS_MAX_DISTANCE;
+    if (krs_clip(KRS_EYE, direction, footprint, t0, t1)) t = krs_trace(KRS_EYE, direction, t0, t1, footprint, 0.0, found);
     vec3 color = krs_sky(direction);
     if (found) {
         vec3 p = KRS_EYE + direction * t;
@@ -131,7 +168,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
             bool shadowed;
             // Start where the surface is at least two thresholds away along the light
             // (t cos >= 2 threshold): no self-shadowing acne at grazing light.
-            krs_trace(p, KRS_TO_LIGHT, hitThreshold * (1.0 + 2.0 / max(diffuse, 0.1)), footprint, hitThreshold, shadowed);
+            krs_trace(p, KRS_TO_LIGHT, hitThreshold * (1.0 + 2.0 / max(diffuse, 0.1)), KRS_MAX_DISTANCE, footprint, hitThreshold, shadowed);
             if (shadowed) diffuse = 0.0;
         }
         color = krs_albedo(s.kind) * (0.25 + 0.75 * diffuse);
@@ -144,8 +181,8 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
 
 namespace detail {
 template <field F>
-float trace_reference(const F& f, const vec3f& origin, const vec3f& direction, float t0, float footprint, float bias,
-                      const view& v, bool& found)
+float trace_reference(const F& f, const vec3f& origin, const vec3f& direction, float t0, float t1, float footprint,
+                      float bias, const view& v, bool& found)
 {
     float t = t0;
     found = false;
@@ -156,21 +193,27 @@ float trace_reference(const F& f, const vec3f& origin, const vec3f& direction, f
             return t;
         }
         t += d;
-        if (!(t <= v.max_distance)) return t;
+        if (!(t <= t1)) return t;
     }
     return t;
 }
 } // namespace detail
 
 // The Shadertoy program's math in C++ on the CPU field: RGBA rows bottom-up (as glReadPixels
-// returns them), width x height x 4 floats.
+// returns them), width x height x 4 floats. `clip_to_box` false traces primary rays unclipped
+// (what the program did before it clipped them, for comparison).
 template <class M, class... Kinds>
-std::vector<float> render_reference(const basic_sequence<M, Kinds...>& s, const view& v, int width, int height)
+std::vector<float> render_reference(const basic_sequence<M, Kinds...>& s, const view& v, int width, int height,
+                                    bool clip_to_box = true)
 {
     std::vector<float> rgba(std::size_t(width) * std::size_t(height) * 4);
     const float w = float(width), h = float(height);
     const float scale = v.tan_half_fov * 2.0f / h;
     const float footprint = v.footprint_scale * scale;
+    trace_options clip_options;
+    clip_options.pixel_footprint = footprint;
+    clip_options.threshold_floor = v.threshold_floor;
+    const box_clip clip = clip_to_box ? box_clip(s.bound_box(), v.eye, clip_options) : box_clip();
     for (int j = 0; j < height; ++j)
         for (int i = 0; i < width; ++i) {
             const float sx = (float(i) + 0.5f - 0.5f * w) * scale;
@@ -178,7 +221,10 @@ std::vector<float> render_reference(const basic_sequence<M, Kinds...>& s, const 
             const vec3f d = v.forward + v.right * sx + v.up * sy;
             const vec3f direction = d / std::sqrt(dot(d, d));
             bool found = false;
-            const float t = detail::trace_reference(s, v.eye, direction, 0.0f, footprint, 0.0f, v, found);
+            float t0 = 0.0f, t1 = v.max_distance;
+            clip.apply(ray<float>{v.eye, direction}, t0, t1);
+            const float t = t1 < t0 ? v.max_distance
+                                    : detail::trace_reference(s, v.eye, direction, t0, t1, footprint, 0.0f, v, found);
             const float y = std::clamp(direction.y, 0.0f, 1.0f);
             vec3f color = vec3f{0.78f, 0.86f, 0.95f} + (vec3f{0.36f, 0.55f, 0.88f} - vec3f{0.78f, 0.86f, 0.95f}) * y;
             if (found) {
@@ -190,7 +236,7 @@ std::vector<float> render_reference(const basic_sequence<M, Kinds...>& s, const 
                     const float hit_threshold = footprint * t + v.threshold_floor;
                     bool shadowed = false;
                     detail::trace_reference(s, p, v.to_light, hit_threshold * (1.0f + 2.0f / std::max(diffuse, 0.1f)),
-                                            footprint, hit_threshold, v, shadowed);
+                                            v.max_distance, footprint, hit_threshold, v, shadowed);
                     if (shadowed) diffuse = 0.0f;
                 }
                 color = albedo(s, std::uint32_t(s.kernels()[k.where.kernel].index())) * (0.25f + 0.75f * diffuse);
