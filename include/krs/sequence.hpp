@@ -96,6 +96,11 @@ public:
                (axis_prefix_[0].capacity() + axis_prefix_[1].capacity() + axis_prefix_[2].capacity()) * sizeof(axis_fold);
     }
 
+    // Whether the walk can end early (some level below a kernel has a bounded L_i): then an
+    // evaluation's cost depends on where the point is, shallow far from the finer levels and deep
+    // near them, and packet tracers keep the points of a packet together (krs/trace/packet_trace.hpp).
+    bool varying_cost() const { return bound_tests_below_ > 0; }
+
     // Algorithm 1.
     template <class T>
     T distance(const vec3<T>& x) const
