@@ -258,9 +258,11 @@ def packet_trace_section(path, images, md):
     levels = s.get("levels", [])
     if levels:
         md.append("\nTime per ray against the expansion level n (paper section 8; 1 thread):\n")
-        md.append(table(["n", "tree scalar us", "tree packet us", "terrain scalar us", "terrain packet us"],
+        md.append(table(["n", "tree scalar us", "tree packet us", "terrain scalar us", "terrain packet us",
+                         "axis terrain scalar us", "axis terrain packet us"],
                         [[r.get("n"), r.get("tree_scalar_us"), r.get("tree_packet_us"), r.get("terrain_scalar_us"),
-                          r.get("terrain_packet_us")] for r in levels]))
+                          r.get("terrain_packet_us"), r.get("terrain_axis_scalar_us", "-"),
+                          r.get("terrain_axis_packet_us", "-")] for r in levels]))
     slopes = s.get("levels_slope", [])
     if slopes:
         md.append("\nSlope of time per ray against n, and time(32) / time(16):\n")
