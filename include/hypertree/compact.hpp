@@ -24,7 +24,6 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <limits>
 #include <memory>
 #include <span>
@@ -119,15 +118,10 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
     if (n == 0) return entries;
     // 4 tasks per pass balance two to four threads; below 2^16 hits a pass takes microseconds.
     const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
-    const auto run = [&](std::size_t count, const std::function<void(std::size_t)>& body) {
-        if (parallel_for && count > 1) parallel_for(count, body);
-        else
-            for (std::size_t i = 0; i < count; ++i) body(i);
-    };
     const auto part = [&](std::size_t p) { return hits.subspan(n * p / tasks, n * (p + 1) / tasks - n * p / tasks); };
 
     std::vector<voxel_index> part_largest(tasks, 0);
-    run(tasks, [&](std::size_t p) {
+    run_tasks(parallel_for, tasks, [&](std::size_t p) {
         for (const hit& h : part(p)) part_largest[p] = std::max(part_largest[p], h.voxel);
     });
     const voxel_index largest = *std::max_element(part_largest.begin(), part_largest.end());
@@ -139,7 +133,7 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
 
     // counts[p * buckets + b]: part p's hits in bucket b; then where part p writes them.
     std::vector<std::size_t> counts(tasks * buckets, 0);
-    run(tasks, [&](std::size_t p) {
+    run_tasks(parallel_for, tasks, [&](std::size_t p) {
         std::size_t* c = counts.data() + p * buckets;
         for (const hit& h : part(p)) ++c[bucket_of(h.voxel)];
     });
@@ -151,7 +145,7 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
     start[buckets] = n;
     // Default-initialized: every element is written by the scatter, so zeroing would only cost.
     const std::unique_ptr<std::uint64_t[]> scattered(new std::uint64_t[n]);
-    run(tasks, [&](std::size_t p) {
+    run_tasks(parallel_for, tasks, [&](std::size_t p) {
         std::size_t* next = counts.data() + p * buckets;
         for (const hit& h : part(p)) scattered[next[bucket_of(h.voxel)]++] = detail::pack_hit(h);
     });
@@ -163,7 +157,7 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
     const std::size_t groups = group_begin.size();
     group_begin.push_back(buckets);
     std::vector<std::vector<voxel_entry>> group_entries(groups);
-    run(groups, [&](std::size_t g) {
+    run_tasks(parallel_for, groups, [&](std::size_t g) {
         const std::size_t first = group_begin[g], last = group_begin[g + 1];
         std::size_t largest_bucket = 0;
         for (std::size_t b = first; b < last; ++b) largest_bucket = std::max(largest_bucket, start[b + 1] - start[b]);

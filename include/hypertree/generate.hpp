@@ -330,10 +330,7 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
         else chunk_hits[c].lines.reserve(std::size_t(double(count) * double(depth) * voxels_per_generator / 3.0));
         detail::generate_chunk(tree, seed, c, count, chunk_hits[c], chunk_stats[c], observer);
     };
-    if (options.parallel_for && chunks > 1)
-        options.parallel_for(std::size_t(chunks), run);
-    else
-        for (std::size_t c = 0; c < chunks; ++c) run(c);
+    run_tasks(options.parallel_for, std::size_t(chunks), run);
 
     generated_hits result{definition.volume, {}, {}};
     std::size_t total = 0;

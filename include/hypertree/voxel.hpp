@@ -48,6 +48,15 @@ struct stored_voxel {
 // threads, and returns when all are done. Empty: the work runs serially on the calling thread.
 using parallel_for_hook = std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)>;
 
+// Runs body(0) ... body(count - 1) through the hook, or in order on this thread without one (or
+// for a single task).
+inline void run_tasks(const parallel_for_hook& parallel_for, std::size_t count, const std::function<void(std::size_t)>& body)
+{
+    if (parallel_for && count > 1) parallel_for(count, body);
+    else
+        for (std::size_t i = 0; i < count; ++i) body(i);
+}
+
 // The most memory a store (or the generator's hit list) may take. A resolution or iteration count
 // whose data would exceed it is refused with a message before anything is allocated.
 struct memory_budget {

@@ -166,10 +166,7 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
             o[0] = r * inv, o[1] = g * inv, o[2] = b * inv;
         }
     };
-    if (settings.parallel_for)
-        settings.parallel_for(std::size_t(h), render_row);
-    else
-        for (int y = 0; y < h; ++y) render_row(std::size_t(y));
+    run_tasks(settings.parallel_for, std::size_t(h), render_row);
     for (auto n : row_lookups) out.lookups += n;
     return out;
 }

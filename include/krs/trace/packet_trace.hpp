@@ -121,8 +121,6 @@ void blend(const mask_t<T>& m, march_state<T>& into, const march_state<T>& from)
     into.result.evaluations = select(m, from.result.evaluations, into.result.evaluations);
 }
 
-} // namespace detail
-
 // When to refill. Lanes that finish early idle until refilled, but a lane refilled alone starts
 // its ray while its neighbours are deep into theirs: the packet's points then lie far apart. Where
 // every evaluation costs about the same (a grid of copies walks every level at every point) that
@@ -132,7 +130,6 @@ void blend(const mask_t<T>& m, march_state<T>& into, const march_state<T>& from)
 // branches and late near them), a packet walks as deep as its deepest lane, and packets of
 // neighbouring rays started together walk alike: refilled whole, a tree's packets go 1.4x faster
 // with 92% of lanes busy instead of 98% (bench_packet_trace).
-namespace detail {
 template <class F>
 int default_refill(const F& f, int width)
 {
@@ -140,6 +137,7 @@ int default_refill(const F& f, int width)
         if (f.varying_cost()) return width;
     return width >= 4 ? width / 4 : 1;
 }
+
 } // namespace detail
 
 // Traces every ray `next` yields through f with packets of type P, refilling finished lanes.
