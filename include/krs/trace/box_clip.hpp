@@ -45,9 +45,12 @@ public:
     box_clip() = default;
     // Clips rays from `origin` traced with `options` to `box` grown as above. An unbounded box,
     // or a footprint of 0.5 radian or more (a threshold that grows as fast as the ray), clips
-    // nothing.
+    // nothing. A non-finite origin or invalid options are refused by name (a NaN origin would
+    // otherwise clip every ray away as a silent miss).
     box_clip(const bounding_box& box, const vec3f& origin, const trace_options& options)
     {
+        require_finite("box_clip.origin", origin);
+        options.validate();
         if (!box.is_bounded() || !(options.pixel_footprint < 0.5f)) return;
         const vec3d lo(box.lo), hi(box.hi), o(origin);
         const vec3d far{std::max(std::abs(lo.x - o.x), std::abs(hi.x - o.x)), std::max(std::abs(lo.y - o.y), std::abs(hi.y - o.y)),
