@@ -15,9 +15,12 @@ struct krs_kernel_shading {
 };
 float krs_plane_distance(vec3 p, vec4 n) { return dot(n.xyz, p) - n.w; }
 vec3 krs_plane_normal(vec3 p, vec4 n) { return n.xyz; }
-float krs_mirror_signed_distance(vec3 p, vec4 m) { return dot(m.xyz, p) - m.w; }
+float krs_mirror_signed_distance(vec3 p, vec4 m) { return (m.x * p.x - m.w) + m.y * p.y + m.z * p.z; }
 vec3 krs_mirror_reflect(vec3 p, vec4 m) { return p - m.xyz * (2.0 * krs_mirror_signed_distance(p, m)); }
-vec3 krs_mirror_fold(vec3 p, vec4 m) { return p - m.xyz * (2.0 * max(krs_mirror_signed_distance(p, m), 0.0)); }
+vec3 krs_mirror_fold(vec3 p, vec4 m) {
+    float twice_e = ((2.0 * m.x) * p.x - 2.0 * m.w) + (2.0 * m.y) * p.y + (2.0 * m.z) * p.z;
+    return p - m.xyz * max(twice_e, 0.0);
+}
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 layout(std430, binding = 0) readonly buffer terrain_data_block {
     vec4 terrain_data[32];

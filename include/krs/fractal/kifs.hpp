@@ -104,20 +104,21 @@ struct plane_fold {
     // flipped, which is exact in floating point).
     explicit plane_fold(const mirror& m) : normal(-m.normal), offset(-m.offset) {}
 
+    // Keeping the negative side of (-n, -c) is keeping the positive side of (n, c): the mirror's
+    // fold on the flipped plane (negation is exact).
     template <class T>
     vec3<T> apply(const vec3<T>& p) const
     {
-        const vec3<T> n(normal);
-        return p - n * (T(2) * min(dot(n, p) - T(offset), T(0)));
+        return fold_positive_side(-normal, -offset, p);
     }
     double scale() const { return 1.0; }
 
-    // GLSL: one vec4 (normal, offset); the dot product spelled out in the C++ order.
+    // GLSL: one vec4 (normal, offset); the arithmetic spelled out in the C++ order.
     static constexpr std::string_view glsl_name = "krs_plane_fold";
     static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_plane_fold_apply(vec3 p, vec4 m) {
-    float e = m.x * p.x + m.y * p.y + m.z * p.z - m.w;
-    return p - m.xyz * (2.0 * min(e, 0.0));
+    float twice_e = ((-2.0 * m.x) * p.x + 2.0 * m.w) - (2.0 * m.y) * p.y - (2.0 * m.z) * p.z;
+    return p + m.xyz * max(twice_e, 0.0);
 }
 )";
     void glsl_constants(float* out) const

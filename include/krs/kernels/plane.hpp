@@ -43,7 +43,7 @@ struct plane {
     template <class T>
     T distance(const vec3<T>& p) const
     {
-        return dot(vec3<T>(normal_direction), p) - T(offset);
+        return plane_value(vec3<T>(normal_direction), p, T(offset));
     }
 
     template <class T>
