@@ -319,6 +319,10 @@ TEST_CASE("hypertree segment voxel walk")
         for_each_voxel_on_segment(v, a, b, [&](voxel_index i) { walk.push_back(i); });
         const std::set<voxel_index> unique(walk.begin(), walk.end());
         CHECK(unique.size() == walk.size());
+        // The generator makes room for 4 + 2 |b - a| x the finest cells per unit voxels before it
+        // walks a line (1 + the cell span per axis, each at most |d_i| cells_per_unit_i + 1).
+        const vec3d per = v.cells_per_unit();
+        CHECK(double(walk.size()) <= 4.0 + 2.0 * krs::length(b - a) * std::max({per.x, per.y, per.z}));
         // Every voxel dense sampling finds is walked...
         const int samples = 20000;
         for (int s = 0; s <= samples; ++s)

@@ -63,8 +63,9 @@ struct generator_event {
 // Calls visit(index) for each voxel the segment [a, b] passes through, in order from a, each once
 // (a 3D digital differential analyser over the part of the segment inside the box). A point
 // (a == b) visits its voxel. Outside parts visit nothing.
+// (Always inlined: a generator's loop keeps its write pointer in a register across the walk.)
 template <class Visit>
-void for_each_voxel_on_segment(const hypervolume& volume, const vec3d& a, const vec3d& b, Visit&& visit)
+[[gnu::always_inline]] inline void for_each_voxel_on_segment(const hypervolume& volume, const vec3d& a, const vec3d& b, Visit&& visit)
 {
     const vec3d d = b - a;
     if (d.x == 0 && d.y == 0 && d.z == 0) {
@@ -147,16 +148,29 @@ struct segment {
     vec3d a, b;
 };
 
-// Where a chunk's hits go. Points write into a buffer sized for one hit per generator, each
-// generator storing its hit unconditionally and advancing the end only when it counts: whether a
-// generator is recorded (dummy rule) and inside the box are data-dependent coin flips the branch
-// predictor cannot learn. Lines append to a vector (their hit count per generator varies).
+// Where a chunk's hits go: a buffer the chunk loop writes through a local end pointer, which the
+// compiler keeps in a register (a std::vector's push_back reloaded and stored its end in memory for
+// every voxel of a line, and that round trip was the walk's slowest step). Points store their hit
+// unconditionally and advance the end only when it counts: whether a generator is recorded (dummy
+// rule) and inside the box are data-dependent coin flips the branch predictor cannot learn. Lines
+// make room for the most voxels one segment can visit before walking it, so the walk writes
+// without a check.
 struct chunk_output {
-    std::unique_ptr<hit[]> points;
-    std::size_t point_count = 0;
-    std::vector<hit> lines;
-    std::size_t size() const { return points ? point_count : lines.size(); }
-    const hit* data() const { return points ? points.get() : lines.data(); }
+    std::unique_ptr<hit[]> hits;
+    std::size_t count = 0, capacity = 0;
+    std::size_t size() const { return count; }
+    const hit* data() const { return hits.get(); }
+    // Room for at least `more` hits past `count`, keeping those written (grows geometrically).
+    void make_room(std::size_t more)
+    {
+        if (capacity - count >= more) return;
+        const std::size_t grown = std::max(count + more, capacity + capacity / 2);
+        // Default-initialized: only the hits written are read, so zeroing would only cost.
+        std::unique_ptr<hit[]> bigger(new hit[grown]);
+        std::copy_n(hits.get(), count, bigger.get());
+        hits = std::move(bigger);
+        capacity = grown;
+    }
 };
 
 // The chunk loop, specialized at compile time for the generator's shape (Line), noise
@@ -182,7 +196,12 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
     // Counted in locals, not through `stats`: the compiler cannot keep a referenced counter in a
     // register across the hit list's stores.
     std::uint64_t generators = 0, recorded_count = 0, escaped = 0, per_depth[max_tree_depth] = {};
-    hit* point_end = Line ? nullptr : out.points.get() + out.point_count;
+    hit* end = out.hits.get() + out.count; // where the next hit goes
+    // The most voxels one segment visits: 1 + sum over axes of its cell span, each at most
+    // |d_i| cells_per_unit_i + 1, so at most 4 + sqrt(3) length x the finest cells per unit
+    // (2 covers sqrt(3) and the rounding of the length a transformed line is rescaled to).
+    const double finest = std::max({per.x, per.y, per.z});
+    const std::size_t segment_voxels = Line ? 4 + std::size_t(std::ceil(2.0 * 2.0 * half_length * finest)) : 1;
 
     // One cell-coordinate test decides both "inside" (for the escape count) and the voxel, which
     // voxel_at would otherwise recompute; written so that NaN counts as outside.
@@ -213,14 +232,19 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
             voxel_index i;
             const bool in = cell_of(a, i);
             escaped += counts & !in;
-            *point_end = hit{i, level, part};
-            point_end += counts & in;
+            *end = hit{i, level, part};
+            end += counts & in;
         } else {
             if (counts) {
                 voxel_index ia, ib;
                 const bool a_in = cell_of(a, ia), b_in = cell_of(b, ib);
                 escaped += !(a_in && b_in);
-                for_each_voxel_on_segment(volume, a, b, [&](voxel_index i) { out.lines.push_back({i, level, part}); });
+                if (out.capacity - std::size_t(end - out.hits.get()) < segment_voxels) {
+                    out.count = std::size_t(end - out.hits.get());
+                    out.make_room(segment_voxels);
+                    end = out.hits.get() + out.count;
+                }
+                for_each_voxel_on_segment(volume, a, b, [&](voxel_index i) { *end++ = hit{i, level, part}; });
             }
         }
     };
@@ -275,7 +299,7 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
                 observer(generator_event{s, std::span<const std::uint8_t>(selected, std::size_t(s)), a, Line ? b : a, recorded});
         }
     }
-    if constexpr (!Line) out.point_count = std::size_t(point_end - out.points.get());
+    out.count = std::size_t(end - out.hits.get());
     stats.cycles += cycles, stats.generators += generators, stats.recorded += recorded_count, stats.escaped += escaped;
     for (int d = 0; d < depth; ++d) stats.recorded_per_depth[std::size_t(d)] += per_depth[d];
 }
@@ -325,9 +349,10 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
         const std::uint64_t first = c * options.chunk_cycles;
         const std::uint64_t count = std::min(options.chunk_cycles, cycles - first);
         chunk_stats[c].recorded_per_depth.assign(depth, 0);
-        // Default-initialized: only the hits written are read, so zeroing would only cost.
-        if (definition.generator.is_point()) chunk_hits[c].points.reset(new hit[std::size_t(count * depth)]);
-        else chunk_hits[c].lines.reserve(std::size_t(double(count) * double(depth) * voxels_per_generator / 3.0));
+        // Points: one hit per generator at most. Lines: a third of the worst case to start with.
+        chunk_hits[c].make_room(definition.generator.is_point()
+                                    ? std::size_t(count * depth)
+                                    : std::size_t(double(count) * double(depth) * voxels_per_generator / 3.0));
         detail::generate_chunk(tree, seed, c, count, chunk_hits[c], chunk_stats[c], observer);
     };
     run_tasks(options.parallel_for, std::size_t(chunks), run);

@@ -198,21 +198,21 @@ public:
                 const krs::vec3f pi{px[i], py[i], pz[i]};
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
                 const probe_result found = probe(pi, inverse[i]);
-                if (!found.index) {
+                if (!found.occupied()) {
                     advance[i] = float(found.skip);
                     continue;
                 }
-                const std::optional<voxel_index>& index = found.index;
+                const voxel_index index = found.index;
                 voxel v;
                 if constexpr (std::floating_point<T>) {
-                    v = cache ? fetch_cached(*index, std::size_t(ks[i]), *cache, cache_valid, lookups[i])
-                              : (++lookups[i], store_->at(*index));
+                    v = cache ? fetch_cached(index, std::size_t(ks[i]), *cache, cache_valid, lookups[i])
+                              : (++lookups[i], store_->at(index));
                 } else {
-                    v = (++lookups[i], store_->at(*index));
+                    v = (++lookups[i], store_->at(index));
                 }
                 if (v.density == 0) continue;
                 alpha[i] = alpha_[v.density];
-                const rgb c = shade(pi, *index, v.level, -di, context.shading, context.shared_shading, lookups[i]);
+                const rgb c = shade(pi, index, v.level, -di, context.shading, context.shared_shading, lookups[i]);
                 r[i] = c.r, g[i] = c.g, b[i] = c.b;
             }
             const T a = load<T>(alpha);
@@ -241,12 +241,12 @@ public:
             if (!(t < t1 && transmittance >= options_.min_transmittance)) break;
             const krs::vec3f q = p + l * t;
             const probe_result found = probe(q, inverse);
-            if (!found.index) {
+            if (!found.occupied()) {
                 j += found.skip;
                 continue;
             }
             ++lookups;
-            transmittance *= 1.0f - alpha_[store_->at(*found.index).density];
+            transmittance *= 1.0f - alpha_[store_->at(found.index).density];
             ++j;
         }
         return transmittance;
@@ -271,9 +271,14 @@ public:
     // (direction given by its slopes) that certainly lie in empty space (at least 1): the step
     // count to the exit of the largest empty brick holding p, rounded so that a sample on the
     // exit face is never skipped.
+    // (A sentinel index, not std::optional: the optional's flag and index were stored as two
+    // narrow writes and read back as one wide load, a store-forwarding stall on every sample
+    // that was a fifth of the shadow rays' time.)
     struct probe_result {
-        std::optional<voxel_index> index;
+        static constexpr voxel_index none = ~voxel_index(0);
+        voxel_index index = none;
         int skip = 1;
+        bool occupied() const { return index != none; }
     };
     probe_result probe(const krs::vec3f& p, const cell_slopes& slope) const
     {
@@ -300,7 +305,7 @@ public:
         }
         // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
         const float steps = std::ceil(exit / step_ - 1e-3f);
-        return {std::nullopt, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
+        return {probe_result::none, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
     }
 
     bool inside_a_sphere(const krs::vec3f& p) const
