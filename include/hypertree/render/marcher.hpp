@@ -181,6 +181,7 @@ public:
             if (cache && cache->index.size() < max_samples()) cache->index.resize(max_samples(), ~voxel_index(0)), cache->value.resize(max_samples());
         }
         const auto dx = krs::lanes_of(ray.direction.x), dy = krs::lanes_of(ray.direction.y), dz = krs::lanes_of(ray.direction.z);
+        const grid_probe probe = probe_view();
         std::array<cell_slopes, lanes<T>> inverse;
         for (std::size_t i = 0; i < lanes<T>; ++i) inverse[i] = slopes({dx[i], dy[i], dz[i]});
         while (any(active)) {
@@ -236,19 +237,24 @@ public:
         // Sample j at base + j ds from j = 1: one step out, so the sample does not shadow itself.
         const float base = std::max(t0, 0.0f);
         const cell_slopes inverse = slopes(l);
+        const grid_probe probe = probe_view();
+        const S& store = *store_;
+        const float step = step_, least = options_.min_transmittance;
+        int looked = 0;
         for (int j = 1;; ) {
-            const float t = base + float(j) * step_;
-            if (!(t < t1 && transmittance >= options_.min_transmittance)) break;
+            const float t = base + float(j) * step;
+            if (!(t < t1 && transmittance >= least)) break;
             const krs::vec3f q = p + l * t;
             const probe_result found = probe(q, inverse);
             if (!found.occupied()) {
                 j += found.skip;
                 continue;
             }
-            ++lookups;
-            transmittance *= 1.0f - alpha_[store_->at(found.index).density];
+            ++looked;
+            transmittance *= 1.0f - alpha_[store.at(found.index).density];
             ++j;
         }
+        lookups += float(looked);
         return transmittance;
     }
 
@@ -280,33 +286,71 @@ public:
         int skip = 1;
         bool occupied() const { return index != none; }
     };
-    probe_result probe(const krs::vec3f& p, const cell_slopes& slope) const
-    {
-        const float f[3] = {(p.x - origin_.x) * cells_per_unit_.x, (p.y - origin_.y) * cells_per_unit_.y, (p.z - origin_.z) * cells_per_unit_.z};
-        if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < float(grid_[0]) && f[1] < float(grid_[1]) && f[2] < float(grid_[2]))) return {};
-        int c[3];
-        for (int a = 0; a < 3; ++a) c[a] = std::min(int(f[a]), grid_[a] - 1);
-        if (occupancy_[0].occupied(c[0], c[1], c[2])) {
-            if (options_.use_spheres && !inside_a_sphere(p)) return {};
-            return {voxel_index(c[0]) + voxel_index(grid_[0]) * (voxel_index(c[1]) + voxel_index(grid_[1]) * voxel_index(c[2])), 1};
-        }
-        const occupancy* empty = &occupancy_[0];
-        for (auto level = occupancy_.rbegin(); level != occupancy_.rend(); ++level)
-            if (!level->occupied(c[0], c[1], c[2])) {
-                empty = &*level;
-                break;
+    // What probing reads, copied by value into a march's local variable: the loops around it
+    // write floats through references (lookup counts, the lanes' arrays), which the compiler must
+    // assume may alias the marcher's own float members, so probing through `this` reloaded the
+    // grid from memory for every sample. A local copy whose address is never taken stays in
+    // registers.
+    struct grid_probe {
+        struct level {
+            const std::uint64_t* bits;
+            std::size_t count_x, count_xy;
+            int shift;
+            std::size_t brick(int x, int y, int z) const
+            {
+                return std::size_t(x >> shift) + count_x * std::size_t(y >> shift) + count_xy * std::size_t(z >> shift);
             }
-        float exit = 3.0e38f;
-        for (int a = 0; a < 3; ++a) {
-            const float lo = float((c[a] >> empty->shift) << empty->shift), hi = lo + float(empty->side());
-            const float inv = slope.inverse[a];
-            if (inv > 0) exit = std::min(exit, (hi - f[a]) * inv);
-            else if (inv < 0) exit = std::min(exit, (lo - f[a]) * inv);
+            bool occupied(int x, int y, int z) const
+            {
+                const std::size_t b = brick(x, y, z);
+                return (bits[b >> 6] >> (b & 63)) & 1;
+            }
+        };
+        krs::vec3f origin, cells_per_unit;
+        float size[3];
+        int last[3];
+        voxel_index stride_y, stride_z;
+        level fine, coarse;
+        float step;
+        const volume_marcher* spheres; // set when use_spheres: the rare path through the marcher
+
+        probe_result operator()(const krs::vec3f& p, const cell_slopes& slope) const
+        {
+            const float f[3] = {(p.x - origin.x) * cells_per_unit.x, (p.y - origin.y) * cells_per_unit.y, (p.z - origin.z) * cells_per_unit.z};
+            if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < size[0] && f[1] < size[1] && f[2] < size[2])) return {};
+            int c[3];
+            for (int a = 0; a < 3; ++a) c[a] = std::min(int(f[a]), last[a]);
+            if (fine.occupied(c[0], c[1], c[2])) {
+                if (spheres && !spheres->inside_a_sphere(p)) return {};
+                return {voxel_index(c[0]) + stride_y * voxel_index(c[1]) + stride_z * voxel_index(c[2]), 1};
+            }
+            const int shift = coarse.occupied(c[0], c[1], c[2]) ? fine.shift : coarse.shift; // the largest empty brick
+            float exit = 3.0e38f;
+            for (int a = 0; a < 3; ++a) {
+                const float lo = float((c[a] >> shift) << shift), hi = lo + float(1 << shift);
+                const float inv = slope.inverse[a];
+                if (inv > 0) exit = std::min(exit, (hi - f[a]) * inv);
+                else if (inv < 0) exit = std::min(exit, (lo - f[a]) * inv);
+            }
+            // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
+            const float steps = std::ceil(exit / step - 1e-3f);
+            return {probe_result::none, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
         }
-        // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
-        const float steps = std::ceil(exit / step_ - 1e-3f);
-        return {probe_result::none, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
+    };
+    grid_probe probe_view() const
+    {
+        return {origin_,
+                cells_per_unit_,
+                {float(grid_[0]), float(grid_[1]), float(grid_[2])},
+                {grid_[0] - 1, grid_[1] - 1, grid_[2] - 1},
+                voxel_index(grid_[0]),
+                voxel_index(grid_[0]) * voxel_index(grid_[1]),
+                occupancy_[0].view(),
+                occupancy_[1].view(),
+                step_,
+                options_.use_spheres ? this : nullptr};
     }
+    probe_result probe(const krs::vec3f& p, const cell_slopes& slope) const { return probe_view()(p, slope); }
 
     bool inside_a_sphere(const krs::vec3f& p) const
     {
@@ -483,18 +527,10 @@ private:
         std::array<std::size_t, 3> count{};
         std::vector<std::uint64_t> bits;
         int side() const { return 1 << shift; }
-        std::size_t brick(int x, int y, int z) const
-        {
-            return std::size_t(x >> shift) + count[0] * (std::size_t(y >> shift) + count[1] * std::size_t(z >> shift));
-        }
-        bool occupied(int x, int y, int z) const
-        {
-            const std::size_t b = brick(x, y, z);
-            return (bits[b >> 6] >> (b & 63)) & 1;
-        }
+        typename grid_probe::level view() const { return {bits.data(), count[0], count[0] * count[1], shift}; }
         void mark(int x, int y, int z)
         {
-            const std::size_t b = brick(x, y, z);
+            const std::size_t b = view().brick(x, y, z);
             bits[b >> 6] |= std::uint64_t(1) << (b & 63);
         }
     };
