@@ -23,6 +23,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
@@ -493,6 +494,35 @@ TEST_CASE("stores: all four kinds return the reference voxel for every voxel of 
             wrong += again[k].index != voxels[k].index || again[k].part != voxels[k].part;
         CHECK(wrong == 0);
     }
+}
+
+TEST_CASE("zeroed arrays start zero and copy deeply; copied stores answer like their originals")
+{
+    hypertree::zeroed_array<std::uint64_t> a(1 << 20); // 8 MiB: calloc maps fresh pages
+    REQUIRE(a.size() == std::size_t(1) << 20);
+    CHECK(std::all_of(a.data(), a.data() + a.size(), [](std::uint64_t w) { return w == 0; }));
+    a[12345] = 7;
+    hypertree::zeroed_array<std::uint64_t> b = a;
+    b[12345] = 9;
+    CHECK(a[12345] == 7);
+    CHECK(b[12345] == 9);
+    hypertree::zeroed_array<std::uint64_t> c = std::move(b);
+    CHECK(b.size() == 0);
+    CHECK(c[12345] == 9);
+    c = a;
+    CHECK(c[12345] == 7);
+    CHECK(hypertree::zeroed_array<int>(0).size() == 0);
+
+    std::mt19937_64 g(10);
+    const auto voxels = random_voxels(g, small_volume, 0.15);
+    const auto reference = grid_of(small_volume, voxels);
+    std::optional<hypertree::dense_store> dense = hypertree::dense_store::build(small_volume, voxels);
+    std::optional<hypertree::bit_array_store> bits = hypertree::bit_array_store::build(small_volume, voxels);
+    const hypertree::dense_store dense_copy = *dense;
+    const hypertree::bit_array_store bits_copy = *bits;
+    dense.reset(), bits.reset(); // the copies own their memory
+    CHECK(count_differences(grid_of_store(dense_copy), reference) == 0);
+    CHECK(count_differences(grid_of_store(bits_copy), reference) == 0);
 }
 
 TEST_CASE("stores: all four kinds match the reference on a sparse 300 cubed tree")

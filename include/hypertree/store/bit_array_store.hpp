@@ -15,6 +15,7 @@
 // and one load of its value, at any list length.
 
 #include "hypertree/store/store.hpp"
+#include "hypertree/store/zeroed_array.hpp"
 
 #include <bit>
 #include <cstddef>
@@ -55,18 +56,21 @@ public:
             store.first_ = voxels.front().index;
             store.span_ = std::uint64_t(voxels.back().index) - store.first_ + 1;
         }
-        store.bits_.assign(word_count(voxels), 0);
+        // The bits start zero without being written (zeroed_array.hpp): only the pages holding a
+        // set bit are touched. The block counts come from the sorted list, not from reading the
+        // bits back: block b's count is the number of voxels whose offset lies below b's first bit.
+        store.bits_ = zeroed_array<std::uint64_t>(word_count(voxels));
+        store.ranks_.resize(store.bits_.size() / words_per_block);
+        std::size_t block = 0;
+        std::uint32_t before = 0;
         for (const stored_voxel& v : voxels) {
             const std::uint64_t offset = v.index - store.first_;
             store.bits_[offset >> 6] |= std::uint64_t(1) << (offset & 63);
+            for (const std::size_t own = std::size_t(offset / (64 * words_per_block)); block <= own; ++block)
+                store.ranks_[block] = before;
+            ++before;
         }
-        store.ranks_.resize(store.bits_.size() / words_per_block);
-        std::uint32_t before = 0;
-        for (std::size_t block = 0; block < store.ranks_.size(); ++block) {
-            store.ranks_[block] = before;
-            for (std::size_t w = 0; w < words_per_block; ++w)
-                before += std::uint32_t(std::popcount(store.bits_[block * words_per_block + w]));
-        }
+        for (; block < store.ranks_.size(); ++block) store.ranks_[block] = before;
         return store;
     }
 
@@ -100,7 +104,7 @@ public:
     std::size_t memory_bytes() const
     {
         return indices_.capacity() * sizeof(voxel_index) + values_.capacity() * sizeof(voxel) +
-               bits_.capacity() * sizeof(std::uint64_t) + ranks_.capacity() * sizeof(std::uint32_t);
+               bits_.size() * sizeof(std::uint64_t) + ranks_.capacity() * sizeof(std::uint32_t);
     }
     std::size_t nonempty_count() const { return indices_.size(); }
     index_box bounds() const { return bounds_; }
@@ -134,7 +138,7 @@ private:
     std::vector<voxel> values_;
     voxel_index first_ = 0;
     std::uint64_t span_ = 0; // indices first_ .. first_ + span_ - 1 have a bit
-    std::vector<std::uint64_t> bits_;
+    zeroed_array<std::uint64_t> bits_; // pages without a set bit are never written
     std::vector<std::uint32_t> ranks_; // set bits before each block of words_per_block words
     index_box bounds_{};
 };

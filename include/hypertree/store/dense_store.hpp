@@ -7,12 +7,12 @@
 // `voxel`, so a lookup touches one cache line, not two arrays.
 
 #include "hypertree/store/store.hpp"
+#include "hypertree/store/zeroed_array.hpp"
 
 #include <cassert>
 #include <cstddef>
 #include <span>
 #include <string>
-#include <vector>
 
 namespace hypertree {
 
@@ -49,7 +49,7 @@ public:
         assert(i < voxels_.size());
         return voxels_[i];
     }
-    std::size_t memory_bytes() const { return voxels_.capacity() * sizeof(voxel); }
+    std::size_t memory_bytes() const { return voxels_.size() * sizeof(voxel); }
     std::size_t nonempty_count() const { return count_; }
     index_box bounds() const { return bounds_; }
 
@@ -66,7 +66,7 @@ private:
     explicit dense_store(const hypervolume& volume) : volume_(volume), voxels_(std::size_t(volume.voxel_count())) {}
 
     hypervolume volume_{};
-    std::vector<voxel> voxels_;
+    zeroed_array<voxel> voxels_; // the empty voxels cost nothing until written (zeroed_array.hpp)
     std::size_t count_ = 0;
     index_box bounds_{};
     voxel_index first_ = 0, last_ = 0;
