@@ -9,8 +9,8 @@
 // s = ceil(sqrt(area(pixel) / area(voxel projection))): `supersampling_for` computes it for a
 // voxel of the tree's smallest side at the distance of the tree's center.
 //
-// Rows are the unit of work: `parallel_for(rows, body)` may run them on any threads (the library
-// starts none); an empty function renders serially.
+// Bands of rows_per_band rows are the unit of work: `parallel_for(bands, body)` may run them on
+// any threads (the library starts none); an empty function renders serially.
 
 #include "hypertree/render/marcher.hpp"
 #include "krs/trace/camera.hpp"
@@ -86,6 +86,9 @@ inline float jitter(std::uint32_t x, std::uint32_t y, std::uint32_t sample, std:
     return float(h >> 8) * 0x1.0p-24f;
 }
 } // namespace detail
+
+// Rows per task of a render (see the end of render()).
+inline constexpr std::size_t rows_per_band = 8;
 
 template <class T = float, voxel_store S>
 image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera, const render_settings& settings = {})
@@ -166,7 +169,14 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
             o[0] = r * inv, o[1] = g * inv, o[2] = b * inv;
         }
     };
-    run_tasks(settings.parallel_for, std::size_t(h), render_row);
+    // Tasks are bands of rows, not rows: a voxel is shaded for one row and looked up again by the
+    // next rows, and within a band those lookups stay in the rendering thread's own memo, where
+    // rows dealt out one at a time went to the shared memo (another core's cache lines) for most
+    // of them.
+    const std::size_t bands = (std::size_t(h) + rows_per_band - 1) / rows_per_band;
+    run_tasks(settings.parallel_for, bands, [&](std::size_t band) {
+        for (std::size_t row = band * rows_per_band; row < std::min(std::size_t(h), (band + 1) * rows_per_band); ++row) render_row(row);
+    });
     for (auto n : row_lookups) out.lookups += n;
     return out;
 }
