@@ -13,7 +13,7 @@ struct krs_kernel_shading {
     vec3 view;         // world view direction carried into kernel space
     uint kind;         // index of the kernel's type in the sequence's type list
 };
-float krs_plane_distance(vec3 p, vec4 n) { return dot(n.xyz, p) - n.w; }
+float krs_plane_distance(vec3 p, vec4 n) { return (n.x * p.x - n.w) + n.y * p.y + n.z * p.z; }
 vec3 krs_plane_normal(vec3 p, vec4 n) { return n.xyz; }
 float krs_mirror_signed_distance(vec3 p, vec4 m) { return (m.x * p.x - m.w) + m.y * p.y + m.z * p.z; }
 vec3 krs_mirror_reflect(vec3 p, vec4 m) { return p - m.xyz * (2.0 * krs_mirror_signed_distance(p, m)); }

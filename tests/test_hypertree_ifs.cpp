@@ -9,6 +9,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -307,6 +308,38 @@ TEST_CASE("hypertree condensation samples the cone uniformly")
     CHECK(double(lower_half) / n == doctest::Approx(lower.volume() / c.volume()).epsilon(0.01));
 }
 
+TEST_CASE("hypertree segment voxel walk: the most voxels it visits, and non-finite ends")
+{
+    // The generator makes room for max_voxels_on_segment voxels before walking a line. The worst
+    // case for that bound is a cubic grid and a segment along a cube diagonal, crossing a boundary
+    // on every axis at each end: walks of such segments, at many offsets and lengths, must fit.
+    const hypervolume v({0, 0, 0}, {1, 1, 1}, hypertree::resolution::cube(64));
+    std::mt19937_64 g(17);
+    std::size_t longest_share = 0; // percent of the bound the longest walk used
+    for (int trial = 0; trial < 20000; ++trial) {
+        const double length = uniform(g, 0.001, 0.5);
+        const vec3d direction = krs::normalize(vec3d{trial % 2 ? 1.0 : -1.0, trial % 3 ? 1.0 : -1.0, 1.0} +
+                                               krs_test::random_direction(g) * uniform(g, 0.0, 0.05));
+        const vec3d a{uniform(g, 0.25, 0.75), uniform(g, 0.25, 0.75), uniform(g, 0.25, 0.75)};
+        const vec3d b = a + direction * length;
+        std::size_t visits = 0;
+        for_each_voxel_on_segment(v, a, b, [&](voxel_index) { ++visits; });
+        const std::size_t bound = hypertree::max_voxels_on_segment(v, length);
+        REQUIRE(visits <= bound);
+        longest_share = std::max(longest_share, 100 * visits / bound);
+    }
+    // The bound is not loose beyond the factor 2 / sqrt(3) it allows for rounding.
+    CHECK(longest_share >= 80);
+    // A non-finite end visits nothing (the walk's cell count would be undefined).
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    for (const vec3d bad : {vec3d{nan, 0.5, 0.5}, vec3d{0.5, inf, 0.5}, vec3d{0.5, 0.5, -inf}}) {
+        std::size_t visits = 0;
+        for_each_voxel_on_segment(v, vec3d{0.5, 0.5, 0.5}, bad, [&](voxel_index) { ++visits; });
+        for_each_voxel_on_segment(v, bad, vec3d{0.5, 0.5, 0.5}, [&](voxel_index) { ++visits; });
+        CHECK(visits == 0);
+    }
+}
+
 TEST_CASE("hypertree segment voxel walk")
 {
     const hypervolume v({-1, -2, 0.5}, {2, 3, 1.5}, {17, 23, 11});
@@ -319,10 +352,7 @@ TEST_CASE("hypertree segment voxel walk")
         for_each_voxel_on_segment(v, a, b, [&](voxel_index i) { walk.push_back(i); });
         const std::set<voxel_index> unique(walk.begin(), walk.end());
         CHECK(unique.size() == walk.size());
-        // The generator makes room for 4 + 2 |b - a| x the finest cells per unit voxels before it
-        // walks a line (1 + the cell span per axis, each at most |d_i| cells_per_unit_i + 1).
-        const vec3d per = v.cells_per_unit();
-        CHECK(double(walk.size()) <= 4.0 + 2.0 * krs::length(b - a) * std::max({per.x, per.y, per.z}));
+        CHECK(walk.size() <= hypertree::max_voxels_on_segment(v, krs::length(b - a)));
         // Every voxel dense sampling finds is walked...
         const int samples = 20000;
         for (int s = 0; s <= samples; ++s)

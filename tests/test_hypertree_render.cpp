@@ -96,8 +96,8 @@ TEST_CASE("hypertree render packets give the scalar pixels")
     const image scalar = render<float>(m, camera, s);
     const image packet = render<krs::packet_f>(m, camera, s);
     CHECK(max_difference(scalar, packet) == 0.0);
-    // Threads share a shading memo behind their own: which thread renders a row changes no
-    // pixel, and a voxel's shadow rays are marched about once whatever the thread count.
+    // Threads share a shading memo behind their own: which thread renders a band of rows changes
+    // no pixel, and a voxel's shadow rays are marched about once whatever the thread count.
     render_settings threaded = s;
     threaded.parallel_for = [](std::size_t count, const std::function<void(std::size_t)>& body) {
         std::vector<std::thread> workers;

@@ -511,7 +511,11 @@ TEST_CASE("zeroed arrays start zero and copy deeply; copied stores answer like t
     CHECK(c[12345] == 9);
     c = a;
     CHECK(c[12345] == 7);
+    c[12345] = 11; // the assigned copy is deep too
+    CHECK(a[12345] == 7);
     CHECK(hypertree::zeroed_array<int>(0).size() == 0);
+    const hypertree::zeroed_array<voxel> grid(3 << 20); // 6 MiB of empty voxels
+    CHECK(std::all_of(grid.data(), grid.data() + grid.size(), [](const voxel& v) { return v == voxel{}; }));
 
     std::mt19937_64 g(10);
     const auto voxels = random_voxels(g, small_volume, 0.15);

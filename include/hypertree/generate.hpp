@@ -20,6 +20,7 @@
 #include "krs/core/noise.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -62,11 +63,27 @@ struct generator_event {
 
 // Calls visit(index) for each voxel the segment [a, b] passes through, in order from a, each once
 // (a 3D digital differential analyser over the part of the segment inside the box). A point
-// (a == b) visits its voxel. Outside parts visit nothing.
+// (a == b) visits its voxel. Outside parts visit nothing, nor does a segment with a non-finite end.
+// It visits at most max_voxels_on_segment(volume, |b - a|) voxels.
 // (Always inlined: a generator's loop keeps its write pointer in a register across the walk.)
+// The most voxels for_each_voxel_on_segment visits on a segment of the given length: 1 + the cell
+// span per axis, each at most |d_i| cells_per_unit_i + 1, so 4 + sqrt(3) length x the finest cells
+// per unit (2 stands for sqrt(3) with room for rounding), and never more than the grid's
+// nx + ny + nz (the walk moves one cell at a time toward its last cell, inside the grid).
+inline std::size_t max_voxels_on_segment(const hypervolume& volume, double length)
+{
+    const vec3d per = volume.cells_per_unit();
+    const double finest = std::max({per.x, per.y, per.z});
+    const resolution n = volume.grid();
+    const double across = double(n.x) + double(n.y) + double(n.z);
+    return std::size_t(std::min(4.0 + std::ceil(2.0 * length * finest), across));
+}
+
 template <class Visit>
 [[gnu::always_inline]] inline void for_each_voxel_on_segment(const hypervolume& volume, const vec3d& a, const vec3d& b, Visit&& visit)
 {
+    if (!(std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z) && std::isfinite(b.x) && std::isfinite(b.y) && std::isfinite(b.z)))
+        return; // a NaN would pass the clipping below (max(t, NaN) = t) and make the cell count undefined
     const vec3d d = b - a;
     if (d.x == 0 && d.y == 0 && d.z == 0) {
         if (const auto i = volume.voxel_at(a)) visit(*i);
@@ -197,11 +214,10 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
     // register across the hit list's stores.
     std::uint64_t generators = 0, recorded_count = 0, escaped = 0, per_depth[max_tree_depth] = {};
     hit* end = out.hits.get() + out.count; // where the next hit goes
-    // The most voxels one segment visits: 1 + sum over axes of its cell span, each at most
-    // |d_i| cells_per_unit_i + 1, so at most 4 + sqrt(3) length x the finest cells per unit
-    // (2 covers sqrt(3) and the rounding of the length a transformed line is rescaled to).
-    const double finest = std::max({per.x, per.y, per.z});
-    const std::size_t segment_voxels = Line ? 4 + std::size_t(std::ceil(2.0 * 2.0 * half_length * finest)) : 1;
+    // Room made before walking a line: its length is the generator's (transformed lines are
+    // rescaled to it; perturbation moves both ends alike), up to rounding, which the bound's
+    // factor 2 for sqrt(3) leaves ample room for.
+    const std::size_t segment_voxels = Line ? max_voxels_on_segment(volume, 2.0 * half_length) : 1;
 
     // One cell-coordinate test decides both "inside" (for the escape count) and the voxel, which
     // voxel_at would otherwise recompute; written so that NaN counts as outside.
@@ -244,7 +260,9 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
                     out.make_room(segment_voxels);
                     end = out.hits.get() + out.count;
                 }
+                [[maybe_unused]] const hit* const walk_start = end;
                 for_each_voxel_on_segment(volume, a, b, [&](voxel_index i) { *end++ = hit{i, level, part}; });
+                assert(std::size_t(end - walk_start) <= segment_voxels);
             }
         }
     };

@@ -25,9 +25,10 @@ namespace krs {
 // x - 2 max(m . x - c, 0) m for the plane (m, c), |m| = 1: Algorithm 1's fold, shared by `mirror`
 // and the KIFS `plane_fold` so both are the same bit for bit.
 // 2 max(e, 0) = max(2e, 0), and 2e is the plane (2m, 2c) at x, exactly (doubling is exact): with
-// the factor inside the constants the fold is a fused dot, a max and three fused multiply-adds,
-// seven operations where doubling e took one more. Spelled per coordinate: GCC kept a temporary
-// doubled vector on the stack.
+// the factor inside the constants, a level's chain of dependent operations is a fused dot, a max
+// and three fused multiply-adds, seven where doubling e took one more (the doubled constants are
+// computed off that chain, once per level for all the points walked together). Spelled per
+// coordinate: GCC kept a temporary doubled vector on the stack.
 template <class T>
 inline vec3<T> fold_positive_side(const vec3f& m, float c, const vec3<T>& p)
 {

@@ -40,7 +40,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <optional>
 #include <vector>
 
 namespace hypertree {
@@ -181,7 +180,7 @@ public:
             if (cache && cache->index.size() < max_samples()) cache->index.resize(max_samples(), ~voxel_index(0)), cache->value.resize(max_samples());
         }
         const auto dx = krs::lanes_of(ray.direction.x), dy = krs::lanes_of(ray.direction.y), dz = krs::lanes_of(ray.direction.z);
-        const grid_probe probe = probe_view();
+        const grid_probe grid = probe_view();
         std::array<cell_slopes, lanes<T>> inverse;
         for (std::size_t i = 0; i < lanes<T>; ++i) inverse[i] = slopes({dx[i], dy[i], dz[i]});
         while (any(active)) {
@@ -198,7 +197,7 @@ public:
                 if (!((running >> i) & 1u)) continue;
                 const krs::vec3f pi{px[i], py[i], pz[i]};
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
-                const probe_result found = probe(pi, inverse[i]);
+                const probe_result found = grid(pi, inverse[i]);
                 if (!found.occupied()) {
                     advance[i] = float(found.skip);
                     continue;
@@ -237,7 +236,7 @@ public:
         // Sample j at base + j ds from j = 1: one step out, so the sample does not shadow itself.
         const float base = std::max(t0, 0.0f);
         const cell_slopes inverse = slopes(l);
-        const grid_probe probe = probe_view();
+        const grid_probe grid = probe_view();
         const S& store = *store_;
         const float step = step_, least = options_.min_transmittance;
         int looked = 0;
@@ -245,7 +244,7 @@ public:
             const float t = base + float(j) * step;
             if (!(t < t1 && transmittance >= least)) break;
             const krs::vec3f q = p + l * t;
-            const probe_result found = probe(q, inverse);
+            const probe_result found = grid(q, inverse);
             if (!found.occupied()) {
                 j += found.skip;
                 continue;
@@ -281,7 +280,7 @@ public:
     // narrow writes and read back as one wide load, a store-forwarding stall on every sample
     // that was a fifth of the shadow rays' time.)
     struct probe_result {
-        static constexpr voxel_index none = ~voxel_index(0);
+        static constexpr voxel_index none = ~voxel_index(0); // no voxel: indices stop at max_voxel_count - 1 (volume.hpp)
         voxel_index index = none;
         int skip = 1;
         bool occupied() const { return index != none; }
@@ -324,7 +323,8 @@ public:
                 if (spheres && !spheres->inside_a_sphere(p)) return {};
                 return {voxel_index(c[0]) + stride_y * voxel_index(c[1]) + stride_z * voxel_index(c[2]), 1};
             }
-            const int shift = coarse.occupied(c[0], c[1], c[2]) ? fine.shift : coarse.shift; // the largest empty brick
+            // The largest empty brick (two levels: the marcher's occupancy_, finest first).
+            const int shift = coarse.occupied(c[0], c[1], c[2]) ? fine.shift : coarse.shift;
             float exit = 3.0e38f;
             for (int a = 0; a < 3; ++a) {
                 const float lo = float((c[a] >> shift) << shift), hi = lo + float(1 << shift);
@@ -534,7 +534,8 @@ private:
             bits[b >> 6] |= std::uint64_t(1) << (b & 63);
         }
     };
-    std::array<occupancy, 2> occupancy_{occupancy{2, {}, {}}, occupancy{4, {}, {}}}; // 4^3 and 16^3, finest first
+    // 4^3 and 16^3, finest first: grid_probe reads exactly these two.
+    std::array<occupancy, 2> occupancy_{occupancy{2, {}, {}}, occupancy{4, {}, {}}};
     std::array<float, 256> alpha_{};
     std::array<rgb, 256> level_color_{};
     std::vector<krs::vec3f> light_dirs_;

@@ -57,8 +57,10 @@ public:
             store.span_ = std::uint64_t(voxels.back().index) - store.first_ + 1;
         }
         // The bits start zero without being written (zeroed_array.hpp): only the pages holding a
-        // set bit are touched. The block counts come from the sorted list, not from reading the
-        // bits back: block b's count is the number of voxels whose offset lies below b's first bit.
+        // set bit are touched. The block counts come from the list, not from reading the bits
+        // back: block b's count is the number of voxels whose offset lies below b's first bit,
+        // which a walk in list order gives because build's check made the list sorted and unique
+        // (store.hpp); word_count rounds the bits up to whole blocks, so every block gets one.
         store.bits_ = zeroed_array<std::uint64_t>(word_count(voxels));
         store.ranks_.resize(store.bits_.size() / words_per_block);
         std::size_t block = 0;

@@ -46,9 +46,9 @@ inline T dot(const vec3<T>& a, const vec3<T>& b)
 {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }
-// n . p - c, the value of the plane n . x = c at p, summed from the constant outward: a compiler
-// that fuses multiply-adds (GCC's default outside strict ISO mode, and every GPU) makes three
-// fused operations of it where dot(n, p) - c takes four. A KRS walk evaluates one or two per level.
+// n . p - c, the value of the plane n . x = c at p, summed from the constant outward: where the
+// compiler may fuse multiply-adds (GCC's default, -ffp-contract=fast) it makes three fused
+// operations of it where dot(n, p) - c takes four. A KRS walk evaluates one or two per level.
 template <class T>
 inline T plane_value(const vec3<T>& n, const vec3<T>& p, const T& c)
 {

@@ -57,7 +57,7 @@ struct plane {
     // GLSL: one vec4 (unit normal, offset).
     static constexpr std::string_view glsl_name = "krs_plane";
     static constexpr int glsl_vec4_count = 1;
-    static constexpr std::string_view glsl_source = R"(float krs_plane_distance(vec3 p, vec4 n) { return dot(n.xyz, p) - n.w; }
+    static constexpr std::string_view glsl_source = R"(float krs_plane_distance(vec3 p, vec4 n) { return (n.x * p.x - n.w) + n.y * p.y + n.z * p.z; }
 vec3 krs_plane_normal(vec3 p, vec4 n) { return n.xyz; }
 )";
     void glsl_constants(float* out) const
