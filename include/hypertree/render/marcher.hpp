@@ -350,7 +350,6 @@ public:
                 step_,
                 options_.use_spheres ? this : nullptr};
     }
-    probe_result probe(const krs::vec3f& p, const cell_slopes& slope) const { return probe_view()(p, slope); }
 
     bool inside_a_sphere(const krs::vec3f& p) const
     {
