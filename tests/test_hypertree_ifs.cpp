@@ -14,6 +14,7 @@
 #include <numbers>
 #include <set>
 #include <thread>
+#include <tuple>
 
 using namespace hypertree;
 using krs_test::uniform;
@@ -288,6 +289,73 @@ TEST_CASE("hypertree generation is the same on one thread and many")
                      [](const hit& x, const hit& y) { return x.voxel == y.voxel && x.level == y.level && x.part == y.part; }));
     CHECK(a.stats.recorded == b.stats.recorded);
     CHECK(a.stats.recorded_per_depth == b.stats.recorded_per_depth);
+}
+
+TEST_CASE("hypertree lanes run in step make the same hits as lanes run one by one")
+{
+    // In a build with AVX-512 the point generator's eight lanes of cycles run in SIMD registers
+    // (point_lanes.hpp); vector_lanes = false runs them through the scalar loop. The tree must not
+    // depend on which: the same hits (in another order) and the same counts. Without AVX-512
+    // both runs take the scalar loop.
+    const auto sorted_hits = [](const generated_hits& g) {
+        std::vector<std::tuple<voxel_index, int, int>> v;
+        for (const hit& h : g.hits) v.emplace_back(h.voxel, h.level, h.part);
+        std::sort(v.begin(), v.end());
+        return v;
+    };
+    const auto same_tree = [&](const auto& tree, std::uint64_t seed, std::uint64_t chunk_cycles) {
+        CHECK(detail::point_lanes_fit(drawn_ifs(tree, seed)) == detail::point_lanes_built);
+        generation_options lanes, scalar;
+        lanes.chunk_cycles = scalar.chunk_cycles = chunk_cycles;
+        scalar.vector_lanes = false;
+        const generated_hits a = generate(tree, seed, lanes), b = generate(tree, seed, scalar);
+        CHECK(a.hits.size() == b.hits.size());
+        CHECK(sorted_hits(a) == sorted_hits(b));
+        CHECK(a.stats.cycles == b.stats.cycles);
+        CHECK(a.stats.generators == b.stats.generators);
+        CHECK(a.stats.recorded == b.stats.recorded);
+        CHECK(a.stats.escaped == b.stats.escaped);
+        CHECK(a.stats.recorded_per_depth == b.stats.recorded_per_depth);
+        return a;
+    };
+    SUBCASE("plain tree")
+    {
+        same_tree(small_tree(6), 5, 8192);
+    }
+    SUBCASE("unequal probabilities, last level, dummies, lanes of unequal length")
+    {
+        auto tree = small_tree(8);
+        tree.transforms[0].probability = 3.0;
+        tree.transforms[2].probability = 0.4;
+        tree.transforms[0].last_level = 3; // cycles end early in some lanes, not in others
+        tree.transforms[1].dummy_from = 2;
+        tree.iterations = 60001;
+        const generated_hits g = same_tree(tree, 11, 777); // 7501 cycles: chunks of 777 and 506, lanes of 98 and 97
+        CHECK(g.stats.generators < g.stats.cycles * 8); // the last-level rule did end cycles early
+    }
+    SUBCASE("sixteen transformations (both permute registers), a forked stem, points escaping the volume")
+    {
+        auto tree = small_tree(9);
+        for (int k = 0; k < 12; ++k)
+            tree.transforms.push_back({branch_pipeline(scale(0.4 + 0.01 * k), rotate({0, 0, 1}, (20 + 3 * k) * degrees),
+                                                       rotate({0, 1, 0}, 30.0 * k * degrees), translate(0, 0.3 + 0.04 * k, 0)),
+                                       0.5 + 0.1 * k});
+        REQUIRE(tree.transforms.size() == 16);
+        tree.condensations.push_back(condensation{cone{1, 0.0, 0.4, 0.04, 0.02}, {}});
+        tree.volume = hypervolume({-0.5, -0.05, -0.5}, {1, 1, 1}, resolution{40, 50, 60});
+        const generated_hits g = same_tree(tree, 23, 1000);
+        CHECK(g.stats.escaped > 100);
+    }
+    SUBCASE("seventeen transformations: beyond the permute tables, the scalar loop")
+    {
+        auto tree = small_tree(5);
+        for (int k = 0; k < 13; ++k) tree.transforms.push_back(tree.transforms[std::size_t(k % 4)]);
+        REQUIRE(tree.transforms.size() == 17);
+        CHECK_FALSE(detail::point_lanes_fit(drawn_ifs(tree, 1)));
+        generation_options scalar;
+        scalar.vector_lanes = false;
+        CHECK(sorted_hits(generate(tree, 3)) == sorted_hits(generate(tree, 3, scalar)));
+    }
 }
 
 TEST_CASE("hypertree condensation samples the cone uniformly")

@@ -10,12 +10,18 @@
 // more level-3+ map applied: each row costs three chain applications instead of s ("only the last
 // m transformations in each row need to be recalculated", section 3.4).
 //
-// Determinism and threads: cycles are cut into chunks of `chunk_cycles`; chunk c draws from its
-// own stream derive(seed, c + 1), and chunk results are concatenated in chunk order. So the hit
-// list is the same bit for bit whether the chunks run on one thread or many. The library starts
-// no thread itself (DESIGN rule 6): pass `generation_options::parallel_for` to run chunks on yours.
+// Determinism and threads: cycles are cut into chunks of `chunk_cycles`, and each chunk into
+// cycle_lanes = 8 lanes of cycles: lane j of chunk c draws from its own stream
+// derive(seed, 8 c + j + 1) and runs its share of the chunk's cycles (an eighth of them, the first
+// lanes taking the remainder). Chunk results are concatenated in chunk order, so the hit list
+// is the same bit for bit whether the chunks run on one thread or many. A chunk's lanes run one
+// after the other through the scalar loop, or, for point generators in a build with AVX-512, in
+// step in SIMD registers (point_lanes.hpp): the same hits either way, interleaved differently. The
+// library starts no thread itself (DESIGN rule 6): pass `generation_options::parallel_for` to run
+// chunks on yours.
 
 #include "hypertree/ifs.hpp"
+#include "hypertree/point_lanes.hpp"
 #include "hypertree/voxel.hpp"
 #include "krs/core/noise.hpp"
 
@@ -36,6 +42,9 @@ struct generation_options {
     memory_budget budget{};
     // Runs body(0) .. body(count - 1), in any order and on any threads; empty = serially here.
     parallel_for_hook parallel_for;
+    // Run a chunk's lanes in step in SIMD registers where the build and the tree allow it
+    // (point_lanes.hpp). The generated tree does not depend on it, only the order of its hits.
+    bool vector_lanes = true;
 };
 
 struct generation_stats {
@@ -194,8 +203,8 @@ struct chunk_output {
 // perturbation (Perturb) and the map type of the drawn IFS (a bare affine map when no chain has a
 // shear, else the whole chain), so the per-generator work carries no runtime flags.
 template <bool Line, bool Perturb, class Map, transform_pipeline P, class Observer>
-void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t seed, std::uint64_t chunk,
-                       std::uint64_t cycles, chunk_output& out, generation_stats& stats, Observer& observer)
+void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, random_stream random, std::uint64_t cycles, chunk_output& out,
+                       generation_stats& stats, Observer& observer)
 {
     constexpr bool observed = !std::is_same_v<Observer, no_observer>;
     const ifs<P>& def = tree.definition();
@@ -208,7 +217,6 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
     const vec3d origin = volume.origin(), per = volume.cells_per_unit();
     const resolution grid = volume.grid();
     const double nx = grid.x, ny = grid.y, nz = grid.z;
-    random_stream random = random_stream::derive(seed, chunk + 1);
     std::uint8_t selected[max_tree_depth];
     // Counted in locals, not through `stats`: the compiler cannot keep a referenced counter in a
     // register across the hit list's stores.
@@ -322,19 +330,37 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, std::uint64_t 
     for (int d = 0; d < depth; ++d) stats.recorded_per_depth[std::size_t(d)] += per_depth[d];
 }
 
+// Chunk `chunk` of `cycles` cycles: its lanes, in step when they can be, else one by one.
 template <transform_pipeline P, class Observer>
-void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
+void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles, bool vector_lanes,
                     chunk_output& out, generation_stats& stats, Observer& observer)
 {
+    constexpr std::uint64_t lanes = cycle_lanes;
+    std::uint64_t lane_cycles[cycle_lanes];
+    for (std::uint64_t j = 0; j < lanes; ++j) lane_cycles[j] = cycles / lanes + (j < cycles % lanes ? 1 : 0);
+    const auto stream = [&](std::uint64_t j) { return random_stream::derive(seed, chunk * lanes + j + 1); };
+    if constexpr (std::is_same_v<Observer, no_observer>) {
+        if (vector_lanes && point_lanes_fit(tree)) {
+            std::uint64_t state[cycle_lanes];
+            for (std::uint64_t j = 0; j < lanes; ++j) state[j] = stream(j).state();
+            lane_counts counts{0, 0, 0, stats.recorded_per_depth.data()};
+            out.make_room(std::size_t(cycles) * std::size_t(tree.definition().tree_depth) + lanes);
+            out.count = std::size_t(generate_point_lanes(tree, state, lane_cycles, out.hits.get() + out.count, counts) - out.hits.get());
+            stats.cycles += cycles, stats.generators += counts.generators, stats.recorded += counts.recorded, stats.escaped += counts.escaped;
+            return;
+        }
+    }
     const bool line = !tree.definition().generator.is_point(), perturb = tree.definition().perturb.enabled();
-    const auto with_maps = [&](const auto* maps) {
-        if (line && perturb) generate_chunk_as<true, true>(tree, maps, seed, chunk, cycles, out, stats, observer);
-        else if (line) generate_chunk_as<true, false>(tree, maps, seed, chunk, cycles, out, stats, observer);
-        else if (perturb) generate_chunk_as<false, true>(tree, maps, seed, chunk, cycles, out, stats, observer);
-        else generate_chunk_as<false, false>(tree, maps, seed, chunk, cycles, out, stats, observer);
-    };
-    if (!tree.affine_table().empty()) with_maps(tree.affine_table().data());
-    else with_maps(tree.chain_table().data());
+    for (std::uint64_t j = 0; j < lanes; ++j) {
+        const auto with_maps = [&](const auto* maps) {
+            if (line && perturb) generate_chunk_as<true, true>(tree, maps, stream(j), lane_cycles[j], out, stats, observer);
+            else if (line) generate_chunk_as<true, false>(tree, maps, stream(j), lane_cycles[j], out, stats, observer);
+            else if (perturb) generate_chunk_as<false, true>(tree, maps, stream(j), lane_cycles[j], out, stats, observer);
+            else generate_chunk_as<false, false>(tree, maps, stream(j), lane_cycles[j], out, stats, observer);
+        };
+        if (!tree.affine_table().empty()) with_maps(tree.affine_table().data());
+        else with_maps(tree.chain_table().data());
+    }
 }
 
 } // namespace detail
@@ -367,11 +393,12 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
         const std::uint64_t first = c * options.chunk_cycles;
         const std::uint64_t count = std::min(options.chunk_cycles, cycles - first);
         chunk_stats[c].recorded_per_depth.assign(depth, 0);
-        // Points: one hit per generator at most. Lines: a third of the worst case to start with.
+        // Points: one hit per generator at most (and a register's more for the lanes' whole-register
+        // stores). Lines: a third of the worst case to start with.
         chunk_hits[c].make_room(definition.generator.is_point()
-                                    ? std::size_t(count * depth)
+                                    ? std::size_t(count * depth) + detail::cycle_lanes
                                     : std::size_t(double(count) * double(depth) * voxels_per_generator / 3.0));
-        detail::generate_chunk(tree, seed, c, count, chunk_hits[c], chunk_stats[c], observer);
+        detail::generate_chunk(tree, seed, c, count, options.vector_lanes, chunk_hits[c], chunk_stats[c], observer);
     };
     run_tasks(options.parallel_for, std::size_t(chunks), run);
 

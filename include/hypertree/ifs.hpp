@@ -185,6 +185,9 @@ public:
         const std::size_t keep = std::size_t(x - double(column) < keep_[column]);
         return keep * column + (1 - keep) * alias_[column];
     }
+    // The alias table select() draws from: each column's share kept, and the column it defers to.
+    std::span<const double> alias_keep() const { return keep_; }
+    std::span<const std::size_t> alias_of() const { return alias_; }
     // A point of the stem: with two condensations, each is chosen in proportion to its volume so
     // the forked stem's density is even.
     vec3d sample_stem(random_stream& random) const

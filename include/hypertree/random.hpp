@@ -20,6 +20,8 @@ public:
         state_ += 0x9e3779b97f4a7c15ull;
         return mix(state_);
     }
+    // The whole state: random_stream(state()) continues this stream.
+    std::uint64_t state() const { return state_; }
     // Uniform in [0, 1): the top 53 bits, so every value is exact in double.
     double uniform() { return double(next() >> 11) * 0x1.0p-53; }
     // Uniform in [-1, 1).
