@@ -346,6 +346,20 @@ TEST_CASE("hypertree lanes run in step make the same hits as lanes run one by on
         const generated_hits g = same_tree(tree, 23, 1000);
         CHECK(g.stats.escaped > 100);
     }
+    SUBCASE("the presets: affine maps (A, B), a shear in every chain and sheared stems (D)")
+    {
+        for (auto tree : {presets::tree_a(64), presets::tree_b(64), presets::tree_d(64)}) {
+            CAPTURE(tree.name);
+            tree.iterations = 120000;
+            same_tree(tree, 9, 2000);
+        }
+    }
+    SUBCASE("shears of different shapes: the scalar loop")
+    {
+        auto tree = presets::tree_d(64);
+        tree.transforms[0].transform = runtime_pipeline({shear(0, 0.08, 0, 2), scale(0.5), translate(0, 0.3, 0)});
+        CHECK_FALSE(detail::point_lanes_fit(drawn_ifs(tree, 1)));
+    }
     SUBCASE("seventeen transformations: beyond the permute tables, the scalar loop")
     {
         auto tree = small_tree(5);

@@ -188,6 +188,12 @@ public:
     // The alias table select() draws from: each column's share kept, and the column it defers to.
     std::span<const double> alias_keep() const { return keep_; }
     std::span<const std::size_t> alias_of() const { return alias_; }
+    // The drawn condensations: their cones, their chains, and the share of the first by volume
+    // (sample_stem's choice between two).
+    std::span<const cone> stems() const { return stems_; }
+    std::span<const runtime_pipeline::chain> stem_chains() const { return stem_chains_; }
+    double stem_volume_total() const { return stem_volume_total_; }
+    double first_stem_volume() const { return stem_cumulative_[0]; }
     // A point of the stem: with two condensations, each is chosen in proportion to its volume so
     // the forked stem's density is even.
     vec3d sample_stem(random_stream& random) const

@@ -6,24 +6,30 @@
 // drawing from its own random stream, in every build: the lanes are what the tree is defined by,
 // and how they run is the build's choice. Without AVX-512 they run one after the other through
 // the scalar loop. With it, and for the common case this file handles (point generators, no noise
-// perturbation, no shears, at most 16 transformations), all eight run in step: lane j holds
-// cycle i of stream j, for i = 0, 1, ... The scalar loop's per-generator work (a draw, Walker's
-// alias selection, three affine maps, the voxel and its rules) is a chain of dependent steps on
-// scalars; in lanes it is the same steps on eight generators, and the per-lane choice of map
-// becomes a permute: for each level and coefficient a pair of registers holds that coefficient
-// of every transformation, and vpermt2pd picks each lane's. Where the scalar loop branches
+// perturbation, at most 16 transformations, chains whose shears share one shape: the same count,
+// axes and whole exponent in every transformation and level), all eight run in step: lane j
+// holds cycle i of stream j, for i = 0, 1, ... The scalar loop's per-generator work (a draw,
+// Walker's alias selection, three chains of maps, the voxel and its rules) is a chain of dependent
+// steps on scalars; in lanes it is the same steps on eight generators, and the per-lane choice of
+// map becomes a permute: for each level and coefficient a pair of registers holds that
+// coefficient of every transformation, and vpermt2pd picks each lane's. Where the scalar loop branches
 // (a lane's cycle ends by the last-level rule), a mask stops the lane's draws and hits.
 //
 // Every step is the scalar loop's arithmetic in the same order (multiplies and adds, with no
 // fused multiply-add written here), so where the compiler does not contract the two paths give
-// the same hits, only interleaved differently (tested with contraction off); stem samples, one per
-// cycle, come from the scalar sampler in each lane's stream.
+// the same hits, only interleaved differently (tested with contraction off). That includes the
+// stems: each cycle's condensation sample is the scalar sampler's rejection loops run in lanes,
+// a lane drawing until it accepts.
 
 #include "hypertree/ifs.hpp"
 #include "hypertree/voxel.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
 
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
 #include <immintrin.h>
@@ -48,13 +54,72 @@ struct lane_counts {
 
 inline constexpr bool point_lanes_built = true;
 
-// Whether the lanes loop handles this tree (else the scalar loop runs each lane).
+// The shape all chains share in the lanes: how many shears, and per shear its axes and whole
+// exponent (what differs per transformation, the affine maps and the shears' amounts, is looked up
+// per lane).
+struct lane_chain_shape {
+    static constexpr int max_shears = 4;
+    struct shear_shape {
+        int axis = 1, first = 0, second = 2, whole_exponent = 1;
+        bool operator==(const shear_shape&) const = default;
+    };
+    int shears = 0;
+    shear_shape shear[max_shears]{};
+};
+
+// The common shape of chains, or nothing when they differ or the lanes cannot take them.
+template <class Chain>
+std::optional<lane_chain_shape> common_shape(std::span<const Chain> chains)
+{
+    std::optional<lane_chain_shape> shape;
+    for (const Chain& chain : chains) {
+        lane_chain_shape c;
+        c.shears = chain.shears;
+        if (c.shears > lane_chain_shape::max_shears) return std::nullopt;
+        for (int k = 0; k < c.shears; ++k) {
+            const shear_map& m = chain.shear[std::size_t(k)];
+            if (m.whole_exponent < 1) return std::nullopt;
+            c.shear[k] = {m.axis, m.first, m.second, m.whole_exponent};
+        }
+        if (!shape) shape = c;
+        else if (shape->shears != c.shears || !std::equal(c.shear, c.shear + c.shears, shape->shear)) return std::nullopt;
+    }
+    return shape;
+}
+
+// Whether the lanes loop handles this tree (else the scalar loop runs each lane): the
+// transformations' chains share a shape, and so do the condensations'.
 template <transform_pipeline P>
 bool point_lanes_fit(const drawn_ifs<P>& tree)
 {
     const ifs<P>& def = tree.definition();
-    return def.generator.is_point() && !def.perturb.enabled() && !tree.affine_table().empty() && tree.transform_count() <= 16;
+    return def.generator.is_point() && !def.perturb.enabled() && tree.transform_count() <= 16 && common_shape(tree.chain_table()) &&
+           common_shape(tree.stem_chains());
 }
+
+// Chains of one shape as lookup tables of 16 entries (two registers) per quantity: the affine
+// maps' 12 coefficients each, and the shears' displacement per axis and inverse height.
+struct lane_chain_tables {
+    alignas(64) double affine[lane_chain_shape::max_shears + 1][12][16];
+    alignas(64) double shear[lane_chain_shape::max_shears][4][16]; // along x, y, z; inverse height
+
+    // Entry j holds `chain`.
+    template <class Chain>
+    void set(std::size_t j, const lane_chain_shape& shape, const Chain& chain)
+    {
+        for (int a = 0; a <= shape.shears; ++a) {
+            const affine_map& m = chain.affine[std::size_t(a)];
+            for (int k = 0; k < 9; ++k) affine[a][k][j] = m.m[std::size_t(k)];
+            affine[a][9][j] = m.t.x, affine[a][10][j] = m.t.y, affine[a][11][j] = m.t.z;
+        }
+        for (int k = 0; k < shape.shears; ++k) {
+            const shear_map& m = chain.shear[std::size_t(k)];
+            // shear_map::operator()'s along(i), per axis.
+            for (int i = 0; i < 3; ++i) shear[k][i][j] = (m.first == i ? m.dmax_first : 0.0) + (m.second == i ? m.dmax_second : 0.0);
+            shear[k][3][j] = m.inverse_height;
+        }
+    }
+};
 
 // Runs lane j's `cycles[j]` cycles from random state `state[j]` (updated), with cycles[j] in
 // non-increasing order of j, writing each recorded hit inside the hypervolume at `end` and
@@ -67,19 +132,18 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
     const ifs<P>& def = tree.definition();
     const int depth = def.tree_depth;
     const std::size_t n = tree.transform_count();
-    const std::span<const affine_map> maps = tree.affine_table();
+    const lane_chain_shape shape = *common_shape(tree.chain_table()), stem_shape = *common_shape(tree.stem_chains());
 
-    // Tables of 16 entries (two registers) per looked-up quantity, padded with entry 0.
-    alignas(64) double coefficient[distinct_levels][12][16];
+    // Per level, the transformations' chains; the condensations' chains; and the small tables of
+    // selection and level rules. Entries past the last are copies of entry 0.
+    const std::unique_ptr<lane_chain_tables[]> tables(new lane_chain_tables[distinct_levels + 1]); // 40 KiB: not on the stack
+    lane_chain_tables& stem_tables = tables[distinct_levels];
     alignas(64) double keep[16];
     alignas(64) std::int64_t alias[16], last_level[16], dummy_from[16];
     for (std::size_t j = 0; j < 16; ++j) {
         const std::size_t t = j < n ? j : 0;
-        for (int l = 0; l < distinct_levels; ++l) {
-            const affine_map& m = maps[t * distinct_levels + std::size_t(l)];
-            for (int k = 0; k < 9; ++k) coefficient[l][k][j] = m.m[std::size_t(k)];
-            coefficient[l][9][j] = m.t.x, coefficient[l][10][j] = m.t.y, coefficient[l][11][j] = m.t.z;
-        }
+        for (int l = 0; l < distinct_levels; ++l) tables[l].set(j, shape, tree.chain_table()[t * distinct_levels + std::size_t(l)]);
+        stem_tables.set(j, stem_shape, tree.stem_chains()[j < tree.stem_chains().size() ? j : 0]);
         keep[j] = tree.alias_keep()[t];
         alias[j] = std::int64_t(tree.alias_of()[t]);
         last_level[j] = tree.last_levels()[t];
@@ -95,8 +159,8 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
         __m512d x, y, z;
     };
     // affine_map::operator() term by term: ((m0 x + m1 y) + m2 z) + t.
-    const auto apply = [&](int level, __m512i w, const points& p) {
-        const auto c = [&](int k) { return lookup(coefficient[level][k], w); };
+    const auto apply_affine = [&](const double (&coefficient)[12][16], __m512i w, const points& p) {
+        const auto c = [&](int k) { return lookup(coefficient[k], w); };
         const auto row = [&](int r, int t) {
             return _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(c(3 * r), p.x), _mm512_mul_pd(c(3 * r + 1), p.y)),
                                                _mm512_mul_pd(c(3 * r + 2), p.z)),
@@ -104,6 +168,25 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
         };
         return points{row(0, 9), row(1, 10), row(2, 11)};
     };
+    // shear_map::operator() step by step: h = min(|p_axis| / height, 1), f = h^e by repeated
+    // squaring, then p + along * f per axis.
+    const __m512d one = _mm512_set1_pd(1.0);
+    const auto apply_shear = [&](const double (&table)[4][16], const lane_chain_shape::shear_shape& k, __m512i w, const points& p) {
+        const __m512d height = k.axis == 0 ? p.x : k.axis == 1 ? p.y : p.z;
+        // min_pd(a, b) is a < b ? a : b, so min_pd(1, x) is std::min(x, 1), NaN included.
+        const __m512d h = _mm512_min_pd(one, _mm512_mul_pd(_mm512_abs_pd(height), lookup(table[3], w)));
+        __m512d f = one, base = h;
+        for (int e = k.whole_exponent; e > 0; e >>= 1, base = _mm512_mul_pd(base, base))
+            if (e & 1) f = _mm512_mul_pd(f, base);
+        return points{_mm512_add_pd(p.x, _mm512_mul_pd(lookup(table[0], w), f)), _mm512_add_pd(p.y, _mm512_mul_pd(lookup(table[1], w), f)),
+                      _mm512_add_pd(p.z, _mm512_mul_pd(lookup(table[2], w), f))};
+    };
+    // map_chain::operator(): each shear after its affine map, then the last affine map.
+    const auto apply_chain = [&](const lane_chain_tables& t, const lane_chain_shape& form, __m512i w, points p) {
+        for (int k = 0; k < form.shears; ++k) p = apply_shear(t.shear[k], form.shear[k], w, apply_affine(t.affine[k], w, p));
+        return apply_affine(t.affine[form.shears], w, p);
+    };
+    const auto apply = [&](int level, __m512i w, const points& p) { return apply_chain(tables[std::size_t(level)], shape, w, p); };
 
     // splitmix64 in each lane (random_stream::next, then uniform()), advancing only the lanes in m.
     __m512i random = _mm512_loadu_si512(state);
@@ -124,7 +207,7 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
     const __m512d ox = _mm512_set1_pd(origin.x), oy = _mm512_set1_pd(origin.y), oz = _mm512_set1_pd(origin.z);
     const __m512d px = _mm512_set1_pd(per.x), py = _mm512_set1_pd(per.y), pz = _mm512_set1_pd(per.z);
     const __m512d nx = _mm512_set1_pd(grid.x), ny = _mm512_set1_pd(grid.y), nz = _mm512_set1_pd(grid.z);
-    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+    const __m512d zero = _mm512_setzero_pd();
     const __m256i stride_y = _mm256_set1_epi32(grid.x), stride_z = _mm256_set1_epi32(int(std::uint32_t(grid.x) * std::uint32_t(grid.y)));
     // Records the lanes of `mask` whose point is inside; counts those outside as escaped.
     const auto record = [&](const points& p, __mmask8 mask, int level, __m512i part) {
@@ -151,25 +234,50 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
 
     const __m512i last_column = _mm512_set1_epi64(std::int64_t(n) - 1);
     const __m512d columns = _mm512_set1_pd(double(n));
-    alignas(64) double stem_x[cycle_lanes], stem_y[cycle_lanes], stem_z[cycle_lanes];
+    // drawn_ifs::sample_stem and cone::sample in the lanes of `alive`, each drawing exactly what the
+    // scalar sampler draws: a lane repeats a rejection loop until it accepts, and the lanes that
+    // have accepted stop drawing.
+    const std::span<const cone> stems = tree.stems();
+    const auto sample_stems = [&](__mmask8 alive) {
+        __mmask8 second = 0; // the lanes whose stem is the second condensation
+        if (stems.size() > 1)
+            second = alive & _mm512_cmp_pd_mask(_mm512_mul_pd(uniform(alive), _mm512_set1_pd(tree.stem_volume_total())),
+                                                 _mm512_set1_pd(tree.first_stem_volume()), _CMP_NLT_UQ);
+        const cone& c0 = stems[0];
+        const cone& c1 = stems[stems.size() > 1 ? 1 : 0];
+        const auto per_stem = [&](double a, double b) { return _mm512_mask_blend_pd(second, _mm512_set1_pd(a), _mm512_set1_pd(b)); };
+        const __m512d r0 = per_stem(c0.bottom_radius, c1.bottom_radius), r1 = per_stem(c0.top_radius, c1.top_radius);
+        const __m512d r_max = per_stem(std::max(c0.bottom_radius, c0.top_radius), std::max(c1.bottom_radius, c1.top_radius));
+        __m512d t = _mm512_setzero_pd(), radius = t;
+        for (__mmask8 pending = alive; pending;) {
+            const __m512d tt = uniform(pending), rr = _mm512_add_pd(r0, _mm512_mul_pd(_mm512_sub_pd(r1, r0), tt));
+            t = _mm512_mask_mov_pd(t, pending, tt), radius = _mm512_mask_mov_pd(radius, pending, rr);
+            const __m512d v = _mm512_mul_pd(_mm512_mul_pd(uniform(pending), r_max), r_max);
+            pending &= _mm512_cmp_pd_mask(v, _mm512_mul_pd(rr, rr), _CMP_GE_OQ);
+        }
+        __m512d a = _mm512_setzero_pd(), b = a;
+        const __m512d two = _mm512_set1_pd(2.0);
+        for (__mmask8 pending = alive; pending;) {
+            const __m512d aa = _mm512_sub_pd(_mm512_mul_pd(two, uniform(pending)), one);
+            const __m512d bb = _mm512_sub_pd(_mm512_mul_pd(two, uniform(pending)), one);
+            a = _mm512_mask_mov_pd(a, pending, aa), b = _mm512_mask_mov_pd(b, pending, bb);
+            pending &= _mm512_cmp_pd_mask(_mm512_add_pd(_mm512_mul_pd(aa, aa), _mm512_mul_pd(bb, bb)), one, _CMP_GE_OQ);
+        }
+        a = _mm512_mul_pd(a, radius), b = _mm512_mul_pd(b, radius);
+        const __m512d bottom = per_stem(c0.bottom, c1.bottom), top = per_stem(c0.top, c1.top);
+        const __m512d along = _mm512_add_pd(bottom, _mm512_mul_pd(_mm512_sub_pd(top, bottom), t));
+        // (along, a, b) with `along` on the cone's axis: (along, a, b), (a, along, b) or (a, b, along).
+        const auto on = [&](int axis) { return __mmask8((c0.axis == axis ? ~second : 0) | (c1.axis == axis ? second : 0)); };
+        const __mmask8 on_x = on(0), on_y = on(1), on_z = on(2);
+        const points sample{_mm512_mask_blend_pd(on_x, a, along), _mm512_mask_blend_pd(on_x, _mm512_mask_blend_pd(on_y, b, along), a),
+                            _mm512_mask_blend_pd(on_z, b, along)};
+        return apply_chain(stem_tables, stem_shape, _mm512_maskz_mov_epi64(second, _mm512_set1_epi64(1)), sample);
+    };
     for (std::uint64_t i = 0; i < cycles[0]; ++i) {
         // The lanes that still have cycle i (cycles[] does not increase with the lane).
         __mmask8 alive = 0;
         for (int j = 0; j < cycle_lanes; ++j) alive |= __mmask8((cycles[j] > i ? 1u : 0u) << j);
-        // Stems from the scalar sampler, in each lane's own stream.
-        _mm512_storeu_si512(state, random);
-        for (int j = 0; j < cycle_lanes; ++j) {
-            if (!((alive >> j) & 1)) {
-                stem_x[j] = stem_y[j] = stem_z[j] = 0;
-                continue;
-            }
-            random_stream lane(state[j]);
-            const vec3d s = tree.sample_stem(lane);
-            state[j] = lane.state();
-            stem_x[j] = s.x, stem_y[j] = s.y, stem_z[j] = s.z;
-        }
-        random = _mm512_loadu_si512(state);
-        points inner{_mm512_load_pd(stem_x), _mm512_load_pd(stem_y), _mm512_load_pd(stem_z)};
+        points inner = sample_stems(alive);
         counts.generators += unsigned(std::popcount(unsigned(alive)));
         record(inner, alive, 0, _mm512_setzero_si512());
 
