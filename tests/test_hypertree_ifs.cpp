@@ -294,7 +294,7 @@ TEST_CASE("hypertree generation is the same on one thread and many")
 TEST_CASE("hypertree lanes run in step make the same hits as lanes run one by one")
 {
     // In a build with AVX-512 the point generator's eight lanes of cycles run in SIMD registers
-    // (point_lanes.hpp); vector_lanes = false runs them through the scalar loop. The tree must not
+    // (generator_lanes.hpp); vector_lanes = false runs them through the scalar loop. The tree must not
     // depend on which: the same hits (in another order) and the same counts. Without AVX-512
     // both runs take the scalar loop.
     const auto sorted_hits = [](const generated_hits& g) {
@@ -304,7 +304,7 @@ TEST_CASE("hypertree lanes run in step make the same hits as lanes run one by on
         return v;
     };
     const auto same_tree = [&](const auto& tree, std::uint64_t seed, std::uint64_t chunk_cycles) {
-        CHECK(detail::point_lanes_fit(drawn_ifs(tree, seed)) == detail::point_lanes_built);
+        CHECK(detail::lanes_fit(drawn_ifs(tree, seed)) == detail::lanes_built);
         generation_options lanes, scalar;
         lanes.chunk_cycles = scalar.chunk_cycles = chunk_cycles;
         scalar.vector_lanes = false;
@@ -354,18 +354,31 @@ TEST_CASE("hypertree lanes run in step make the same hits as lanes run one by on
             same_tree(tree, 9, 2000);
         }
     }
+    SUBCASE("line generators: preset C, and lines along an axis clipped by a volume that cuts the tree")
+    {
+        auto c = presets::tree_c(64);
+        c.iterations = 60000;
+        same_tree(c, 13, 3000);
+        auto tree = small_tree(6);
+        tree.generator = generator_shape::line({0, -0.04, 0}, {0, 0.04, 0}); // the stem's lines move along y only
+        // x from 0: half the stem's lines lie beside the volume, parallel to it (walks nothing).
+        tree.volume = hypervolume({0.0, 0.1, -0.4}, {0.4, 0.7, 0.8}, resolution{33, 47, 29});
+        const generated_hits g = same_tree(tree, 31, 1000);
+        CHECK(g.stats.escaped > 100);
+        CHECK(g.hits.size() > 2 * (g.stats.recorded - g.stats.escaped)); // lines walk several voxels
+    }
     SUBCASE("shears of different shapes: the scalar loop")
     {
         auto tree = presets::tree_d(64);
         tree.transforms[0].transform = runtime_pipeline({shear(0, 0.08, 0, 2), scale(0.5), translate(0, 0.3, 0)});
-        CHECK_FALSE(detail::point_lanes_fit(drawn_ifs(tree, 1)));
+        CHECK_FALSE(detail::lanes_fit(drawn_ifs(tree, 1)));
     }
     SUBCASE("seventeen transformations: beyond the permute tables, the scalar loop")
     {
         auto tree = small_tree(5);
         for (int k = 0; k < 13; ++k) tree.transforms.push_back(tree.transforms[std::size_t(k % 4)]);
         REQUIRE(tree.transforms.size() == 17);
-        CHECK_FALSE(detail::point_lanes_fit(drawn_ifs(tree, 1)));
+        CHECK_FALSE(detail::lanes_fit(drawn_ifs(tree, 1)));
         generation_options scalar;
         scalar.vector_lanes = false;
         CHECK(sorted_hits(generate(tree, 3)) == sorted_hits(generate(tree, 3, scalar)));

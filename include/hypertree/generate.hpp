@@ -15,13 +15,13 @@
 // derive(seed, 8 c + j + 1) and runs its share of the chunk's cycles (an eighth of them, the first
 // lanes taking the remainder). Chunk results are concatenated in chunk order, so the hit list
 // is the same bit for bit whether the chunks run on one thread or many. A chunk's lanes run one
-// after the other through the scalar loop, or, for point generators in a build with AVX-512, in
-// step in SIMD registers (point_lanes.hpp): the same hits either way, interleaved differently. The
+// after the other through the scalar loop, or, in a build with AVX-512 and for most trees, in
+// step in SIMD registers (generator_lanes.hpp): the same hits either way, interleaved differently. The
 // library starts no thread itself (DESIGN rule 6): pass `generation_options::parallel_for` to run
 // chunks on yours.
 
 #include "hypertree/ifs.hpp"
-#include "hypertree/point_lanes.hpp"
+#include "hypertree/generator_lanes.hpp"
 #include "hypertree/voxel.hpp"
 #include "krs/core/noise.hpp"
 
@@ -43,7 +43,7 @@ struct generation_options {
     // Runs body(0) .. body(count - 1), in any order and on any threads; empty = serially here.
     parallel_for_hook parallel_for;
     // Run a chunk's lanes in step in SIMD registers where the build and the tree allow it
-    // (point_lanes.hpp). The generated tree does not depend on it, only the order of its hits.
+    // (generator_lanes.hpp). The generated tree does not depend on it, only the order of its hits.
     bool vector_lanes = true;
 };
 
@@ -339,18 +339,28 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
     std::uint64_t lane_cycles[cycle_lanes];
     for (std::uint64_t j = 0; j < lanes; ++j) lane_cycles[j] = cycles / lanes + (j < cycles % lanes ? 1 : 0);
     const auto stream = [&](std::uint64_t j) { return random_stream::derive(seed, chunk * lanes + j + 1); };
+    const bool line = !tree.definition().generator.is_point();
     if constexpr (std::is_same_v<Observer, no_observer>) {
-        if (vector_lanes && point_lanes_fit(tree)) {
+        if (vector_lanes && lanes_fit(tree)) {
             std::uint64_t state[cycle_lanes];
             for (std::uint64_t j = 0; j < lanes; ++j) state[j] = stream(j).state();
             lane_counts counts{0, 0, 0, stats.recorded_per_depth.data()};
-            out.make_room(std::size_t(cycles) * std::size_t(tree.definition().tree_depth) + lanes);
-            out.count = std::size_t(generate_point_lanes(tree, state, lane_cycles, out.hits.get() + out.count, counts) - out.hits.get());
+            const auto room = [&](hit* end, std::size_t more) {
+                out.count = std::size_t(end - out.hits.get());
+                out.make_room(more);
+                return out.hits.get() + out.count;
+            };
+            const ifs<P>& def = tree.definition();
+            hit* const start = out.hits.get() + out.count;
+            const std::size_t segment_voxels = max_voxels_on_segment(def.volume, 2.0 * krs::length((def.generator.end - def.generator.start) * 0.5));
+            hit* const end = line ? generate_in_lanes<true>(tree, state, lane_cycles, start, counts, segment_voxels, room)
+                                  : generate_in_lanes<false>(tree, state, lane_cycles, start, counts, segment_voxels, room);
+            out.count = std::size_t(end - out.hits.get());
             stats.cycles += cycles, stats.generators += counts.generators, stats.recorded += counts.recorded, stats.escaped += counts.escaped;
             return;
         }
     }
-    const bool line = !tree.definition().generator.is_point(), perturb = tree.definition().perturb.enabled();
+    const bool perturb = tree.definition().perturb.enabled();
     for (std::uint64_t j = 0; j < lanes; ++j) {
         const auto with_maps = [&](const auto* maps) {
             if (line && perturb) generate_chunk_as<true, true>(tree, maps, stream(j), lane_cycles[j], out, stats, observer);

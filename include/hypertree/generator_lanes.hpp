@@ -1,25 +1,23 @@
 #pragma once
-// The generator's loop for point generators, eight cycles at a time in the lanes of AVX-512
-// registers.
+// The generator's loop, eight cycles at a time in the lanes of AVX-512 registers.
 //
 // A chunk of the generator (generate.hpp) is cut into `cycle_lanes` = 8 lanes of cycles, each
 // drawing from its own random stream, in every build: the lanes are what the tree is defined by,
 // and how they run is the build's choice. Without AVX-512 they run one after the other through
-// the scalar loop. With it, and for the common case this file handles (point generators, no noise
-// perturbation, at most 16 transformations, chains whose shears share one shape: the same count,
-// axes and whole exponent in every transformation and level), all eight run in step: lane j
-// holds cycle i of stream j, for i = 0, 1, ... The scalar loop's per-generator work (a draw,
-// Walker's alias selection, three chains of maps, the voxel and its rules) is a chain of dependent
-// steps on scalars; in lanes it is the same steps on eight generators, and the per-lane choice of
-// map becomes a permute: for each level and coefficient a pair of registers holds that
-// coefficient of every transformation, and vpermt2pd picks each lane's. Where the scalar loop branches
-// (a lane's cycle ends by the last-level rule), a mask stops the lane's draws and hits.
+// the scalar loop. With it, and for the trees this file handles (no noise perturbation, at most 16
+// transformations, chains whose shears share one shape: the same count, axes and whole exponent
+// in every transformation and level; all four presets), all eight run in step: lane j holds
+// cycle i of stream j, for i = 0, 1, ... The scalar loop's per-generator work (a draw, Walker's
+// alias selection, three chains of maps, the voxel or the walk along a line, and the level rules)
+// is a chain of dependent steps on scalars; in lanes it is the same steps on eight generators.
+// The per-lane choice of map becomes a permute: for each level and coefficient a pair of
+// registers holds that coefficient of every transformation, and vpermt2pd picks each lane's.
+// Where the scalar loop branches (a lane's cycle ends by the last-level rule, a rejection
+// sampler retries, a line walk has voxels left), a mask keeps the lanes that go on.
 //
 // Every step is the scalar loop's arithmetic in the same order (multiplies and adds, with no
 // fused multiply-add written here), so where the compiler does not contract the two paths give
-// the same hits, only interleaved differently (tested with contraction off). That includes the
-// stems: each cycle's condensation sample is the scalar sampler's rejection loops run in lanes,
-// a lane drawing until it accepts.
+// the same hits, only interleaved differently (tested with contraction off).
 
 #include "hypertree/ifs.hpp"
 #include "hypertree/voxel.hpp"
@@ -52,7 +50,7 @@ struct lane_counts {
 
 #if HYPERTREE_POINT_LANES
 
-inline constexpr bool point_lanes_built = true;
+inline constexpr bool lanes_built = true;
 
 // The shape all chains share in the lanes: how many shears, and per shear its axes and whole
 // exponent (what differs per transformation, the affine maps and the shears' amounts, is looked up
@@ -90,10 +88,10 @@ std::optional<lane_chain_shape> common_shape(std::span<const Chain> chains)
 // Whether the lanes loop handles this tree (else the scalar loop runs each lane): the
 // transformations' chains share a shape, and so do the condensations'.
 template <transform_pipeline P>
-bool point_lanes_fit(const drawn_ifs<P>& tree)
+bool lanes_fit(const drawn_ifs<P>& tree)
 {
     const ifs<P>& def = tree.definition();
-    return def.generator.is_point() && !def.perturb.enabled() && tree.transform_count() <= 16 && common_shape(tree.chain_table()) &&
+    return !def.perturb.enabled() && tree.transform_count() <= 16 && common_shape(tree.chain_table()) &&
            common_shape(tree.stem_chains());
 }
 
@@ -122,12 +120,14 @@ struct lane_chain_tables {
 };
 
 // Runs lane j's `cycles[j]` cycles from random state `state[j]` (updated), with cycles[j] in
-// non-increasing order of j, writing each recorded hit inside the hypervolume at `end` and
-// returning the new end. The buffer needs room for cycle_lanes hits more than it keeps: each
-// row stores a whole register of hits and advances by those that count.
-template <transform_pipeline P>
-hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle_lanes], const std::uint64_t (&cycles)[cycle_lanes],
-                          hit* end, lane_counts& counts)
+// non-increasing order of j, writing each recorded hit at `end` and returning the new end. Every
+// store writes a whole register of hits and advances by those that count: before each row,
+// room(end, k) must return where `end` now is (the buffer may move) with room for k hits past it;
+// the lanes ask for cycle_lanes per row of points and cycle_lanes (segment_voxels + 1) per row of
+// lines, segment_voxels being the most one line visits (generate.hpp).
+template <bool Line, transform_pipeline P, class Room>
+hit* generate_in_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle_lanes], const std::uint64_t (&cycles)[cycle_lanes],
+                       hit* end, lane_counts& counts, std::size_t segment_voxels, Room&& room)
 {
     const ifs<P>& def = tree.definition();
     const int depth = def.tree_depth;
@@ -209,27 +209,127 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
     const __m512d nx = _mm512_set1_pd(grid.x), ny = _mm512_set1_pd(grid.y), nz = _mm512_set1_pd(grid.z);
     const __m512d zero = _mm512_setzero_pd();
     const __m256i stride_y = _mm256_set1_epi32(grid.x), stride_z = _mm256_set1_epi32(int(std::uint32_t(grid.x) * std::uint32_t(grid.y)));
-    // Records the lanes of `mask` whose point is inside; counts those outside as escaped.
-    const auto record = [&](const points& p, __mmask8 mask, int level, __m512i part) {
-        const __m512d fx = _mm512_mul_pd(_mm512_sub_pd(p.x, ox), px), fy = _mm512_mul_pd(_mm512_sub_pd(p.y, oy), py),
-                      fz = _mm512_mul_pd(_mm512_sub_pd(p.z, oz), pz);
-        const __mmask8 in = _mm512_cmp_pd_mask(fx, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(fy, zero, _CMP_GE_OQ) &
-                            _mm512_cmp_pd_mask(fz, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(fx, nx, _CMP_LE_OQ) &
-                            _mm512_cmp_pd_mask(fy, ny, _CMP_LE_OQ) & _mm512_cmp_pd_mask(fz, nz, _CMP_LE_OQ);
+    // Whether each lane's point lies inside (the scalar loop's cell_of), and its voxel.
+    const auto cells = [&](const points& p, __m512d& fx, __m512d& fy, __m512d& fz) {
+        fx = _mm512_mul_pd(_mm512_sub_pd(p.x, ox), px), fy = _mm512_mul_pd(_mm512_sub_pd(p.y, oy), py),
+        fz = _mm512_mul_pd(_mm512_sub_pd(p.z, oz), pz);
+        return __mmask8(_mm512_cmp_pd_mask(fx, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(fy, zero, _CMP_GE_OQ) &
+                        _mm512_cmp_pd_mask(fz, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(fx, nx, _CMP_LE_OQ) &
+                        _mm512_cmp_pd_mask(fy, ny, _CMP_LE_OQ) & _mm512_cmp_pd_mask(fz, nz, _CMP_LE_OQ));
+    };
+    const auto inside = [&](const points& p) {
+        __m512d fx, fy, fz;
+        return cells(p, fx, fy, fz);
+    };
+    const auto voxel_of = [&](__m512d fx, __m512d fy, __m512d fz) {
         const auto cell = [&](__m512d f, __m512d size) {
             return _mm512_cvttpd_epi32(_mm512_min_pd(_mm512_max_pd(f, zero), _mm512_sub_pd(size, one)));
         };
         const __m256i x = cell(fx, nx), y = cell(fy, ny), z = cell(fz, nz);
-        const __m256i index = _mm256_add_epi32(x, _mm256_add_epi32(_mm256_mullo_epi32(y, stride_y), _mm256_mullo_epi32(z, stride_z)));
-        // A hit as its 8 bytes: voxel, level, part (then padding).
-        const __m512i packed = _mm512_or_si512(_mm512_cvtepu32_epi64(index),
-                                               _mm512_or_si512(_mm512_set1_epi64(std::int64_t(level) << 32), _mm512_slli_epi64(part, 40)));
-        const __mmask8 kept = mask & in;
+        return _mm512_cvtepu32_epi64(_mm256_add_epi32(x, _mm256_add_epi32(_mm256_mullo_epi32(y, stride_y), _mm256_mullo_epi32(z, stride_z))));
+    };
+    // Stores the hits of the lanes in `kept`: voxel (low 32 bits of `index`) with the tag of
+    // level and part, as a hit's 8 bytes (then padding).
+    const auto store = [&](__m512i index, __mmask8 kept, __m512i tag) {
+        const __m512i packed = _mm512_or_si512(_mm512_and_si512(index, _mm512_set1_epi64(0xffffffffll)), tag);
         _mm512_storeu_si512(end, _mm512_maskz_compress_epi64(kept, packed));
         end += std::popcount(unsigned(kept));
+    };
+    const auto tag_of = [](int level, __m512i part) {
+        return _mm512_or_si512(_mm512_set1_epi64(std::int64_t(level) << 32), _mm512_slli_epi64(part, 40));
+    };
+    const auto count = [&](__mmask8 mask, __mmask8 escaped, int level) {
         counts.recorded += unsigned(std::popcount(unsigned(mask)));
-        counts.escaped += unsigned(std::popcount(unsigned(mask & ~in)));
+        counts.escaped += unsigned(std::popcount(unsigned(escaped)));
         counts.per_depth[level] += unsigned(std::popcount(unsigned(mask)));
+    };
+    // Records the lanes of `mask` whose point is inside; counts those outside as escaped.
+    const auto record = [&](const points& p, __mmask8 mask, int level, __m512i part) {
+        __m512d fx, fy, fz;
+        const __mmask8 in = cells(p, fx, fy, fz);
+        store(voxel_of(fx, fy, fz), mask & in, tag_of(level, part));
+        count(mask, mask & ~in, level);
+    };
+    // Records the lanes of `mask` whose segment [a, b] visits voxels: for_each_voxel_on_segment
+    // in lanes, step for step (its clipping, cells and walk; see generate.hpp), each lane walking
+    // until its own budget is spent. Lanes with an end outside count as escaped.
+    const vec3d low_corner = volume.origin(), high_corner = volume.maximum(), voxel_side = volume.voxel_size();
+    const double low_[3] = {low_corner.x, low_corner.y, low_corner.z}, high_[3] = {high_corner.x, high_corner.y, high_corner.z};
+    const double side_[3] = {voxel_side.x, voxel_side.y, voxel_side.z}, per_[3] = {per.x, per.y, per.z};
+    const std::int64_t cells_[3] = {grid.x, grid.y, grid.z};
+    const std::int64_t strides_[3] = {1, std::int64_t(grid.x), std::int64_t(grid.x) * std::int64_t(grid.y)};
+    const __m512d infinity = _mm512_set1_pd(INFINITY);
+    const __m512i zero_i = _mm512_setzero_si512(), one_i = _mm512_set1_epi64(1);
+    const auto finite = [](__m512d v) { return __mmask8(_mm512_fpclass_pd_mask(v, 0x99) ^ 0xff); }; // not NaN nor +-inf
+    const auto record_line = [&](const points& a, const points& b, __mmask8 mask, int level, __m512i part) {
+        count(mask, mask & ~(inside(a) & inside(b)), level);
+        if (!mask) return;
+        const __m512i tag = tag_of(level, part);
+        __mmask8 walking = mask & finite(a.x) & finite(a.y) & finite(a.z) & finite(b.x) & finite(b.y) & finite(b.z);
+        const __m512d start[3] = {a.x, a.y, a.z};
+        const __m512d dir[3] = {_mm512_sub_pd(b.x, a.x), _mm512_sub_pd(b.y, a.y), _mm512_sub_pd(b.z, a.z)};
+        __mmask8 still = walking, moves[3];
+        for (int i = 0; i < 3; ++i) {
+            moves[i] = _mm512_cmp_pd_mask(dir[i], zero, _CMP_NEQ_UQ);
+            still &= ~moves[i];
+        }
+        if (still) { // a point: its voxel, if inside
+            __m512d fx, fy, fz;
+            const __mmask8 in = cells(a, fx, fy, fz);
+            store(voxel_of(fx, fy, fz), still & in, tag);
+            walking &= ~still;
+        }
+        if (!walking) return;
+        __m512d t0 = zero, t1 = one;
+        for (int i = 0; i < 3; ++i) {
+            const __m512d lo = _mm512_set1_pd(low_[i]), hi = _mm512_set1_pd(high_[i]);
+            walking &= moves[i] | ~(_mm512_cmp_pd_mask(start[i], lo, _CMP_LT_OQ) | _mm512_cmp_pd_mask(start[i], hi, _CMP_GT_OQ));
+            const __m512d ta = _mm512_div_pd(_mm512_sub_pd(lo, start[i]), dir[i]), tb = _mm512_div_pd(_mm512_sub_pd(hi, start[i]), dir[i]);
+            const __mmask8 swap = _mm512_cmp_pd_mask(ta, tb, _CMP_GT_OQ);
+            const __m512d near = _mm512_mask_blend_pd(swap, ta, tb), far = _mm512_mask_blend_pd(swap, tb, ta);
+            t0 = _mm512_mask_max_pd(t0, moves[i], near, t0); // std::max(t0, near)
+            t1 = _mm512_mask_min_pd(t1, moves[i], far, t1);  // std::min(t1, far)
+        }
+        walking &= _mm512_cmp_pd_mask(t0, t1, _CMP_LE_OQ);
+        if (!walking) return;
+        __m512i index = zero_i, remaining[3], budget = zero_i, stride[3];
+        __m512d crossing[3], delta[3];
+        for (int i = 0; i < 3; ++i) {
+            const __m512d lo = _mm512_set1_pd(low_[i]), per_unit = _mm512_set1_pd(per_[i]), side = _mm512_set1_pd(side_[i]);
+            const __m512d top = _mm512_set1_pd(double(cells_[i] - 1));
+            const auto cell_at = [&](__m512d t) {
+                const __m512d c = _mm512_roundscale_pd(_mm512_mul_pd(_mm512_sub_pd(_mm512_add_pd(start[i], _mm512_mul_pd(dir[i], t)), lo), per_unit),
+                                                       _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+                return _mm512_cvttpd_epi64(_mm512_min_pd(_mm512_max_pd(c, zero), top)); // std::clamp(c, 0, n - 1)
+            };
+            const __m512i cell = cell_at(t0), last = cell_at(t1);
+            const __mmask8 up = _mm512_cmp_pd_mask(dir[i], zero, _CMP_GT_OQ), down = _mm512_cmp_pd_mask(dir[i], zero, _CMP_LT_OQ);
+            const __m512i step = _mm512_mask_mov_epi64(_mm512_maskz_mov_epi64(up, one_i), down, _mm512_set1_epi64(-1));
+            const __m512d boundary = _mm512_add_pd(lo, _mm512_mul_pd(_mm512_cvtepi64_pd(_mm512_mask_add_epi64(cell, up, cell, one_i)), side));
+            const __m512d next = _mm512_div_pd(_mm512_sub_pd(boundary, start[i]), dir[i]);
+            delta[i] = _mm512_div_pd(side, _mm512_abs_pd(dir[i]));
+            remaining[i] = _mm512_abs_epi64(_mm512_sub_epi64(last, cell));
+            budget = _mm512_add_epi64(budget, remaining[i]);
+            crossing[i] = _mm512_mask_mov_pd(infinity, _mm512_cmp_epi64_mask(remaining[i], zero_i, _MM_CMPINT_GT), next);
+            stride[i] = _mm512_mullo_epi64(step, _mm512_set1_epi64(strides_[i]));
+            index = _mm512_add_epi64(index, _mm512_mullo_epi64(cell, _mm512_set1_epi64(strides_[i])));
+        }
+        for (;;) {
+            store(index, walking, tag);
+            walking &= _mm512_cmp_epi64_mask(budget, zero_i, _MM_CMPINT_GT);
+            if (!walking) return;
+            budget = _mm512_sub_epi64(budget, one_i);
+            const __mmask8 x = _mm512_cmp_pd_mask(crossing[0], crossing[1], _CMP_LE_OQ) & _mm512_cmp_pd_mask(crossing[0], crossing[2], _CMP_LE_OQ);
+            const __mmask8 y = __mmask8(~x) & _mm512_cmp_pd_mask(crossing[1], crossing[2], _CMP_LE_OQ);
+            const __mmask8 moved[3] = {x, y, __mmask8(~x & ~y)};
+            for (int i = 0; i < 3; ++i) {
+                index = _mm512_mask_add_epi64(index, moved[i], index, stride[i]);
+                remaining[i] = _mm512_mask_sub_epi64(remaining[i], moved[i], remaining[i], one_i);
+                const __m512d ahead = _mm512_mask_mov_pd(infinity, _mm512_cmp_epi64_mask(remaining[i], zero_i, _MM_CMPINT_GT),
+                                                         _mm512_add_pd(crossing[i], delta[i]));
+                crossing[i] = _mm512_mask_mov_pd(crossing[i], moved[i], ahead);
+            }
+        }
     };
 
     const __m512i last_column = _mm512_set1_epi64(std::int64_t(n) - 1);
@@ -273,13 +373,41 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
                             _mm512_mask_blend_pd(on_z, b, along)};
         return apply_chain(stem_tables, stem_shape, _mm512_maskz_mov_epi64(second, _mm512_set1_epi64(1)), sample);
     };
+    // A line's half (generator end - start) / 2, and the rescaling of a transformed line about its
+    // midpoint to the generator's length (the scalar loop's keep_length).
+    const vec3d half = (def.generator.end - def.generator.start) * 0.5;
+    const double half_length = krs::length(half);
+    const __m512d half_x = _mm512_set1_pd(half.x), half_y = _mm512_set1_pd(half.y), half_z = _mm512_set1_pd(half.z);
+    const auto keep_length = [&](points& a, points& b) {
+        const __m512d point_five = _mm512_set1_pd(0.5);
+        const points mid{_mm512_mul_pd(_mm512_add_pd(a.x, b.x), point_five), _mm512_mul_pd(_mm512_add_pd(a.y, b.y), point_five),
+                         _mm512_mul_pd(_mm512_add_pd(a.z, b.z), point_five)};
+        const points dir{_mm512_sub_pd(b.x, a.x), _mm512_sub_pd(b.y, a.y), _mm512_sub_pd(b.z, a.z)};
+        const __m512d len = _mm512_sqrt_pd(
+            _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dir.x, dir.x), _mm512_mul_pd(dir.y, dir.y)), _mm512_mul_pd(dir.z, dir.z)));
+        const __mmask8 positive = _mm512_cmp_pd_mask(len, zero, _CMP_GT_OQ);
+        const __m512d scale = _mm512_div_pd(_mm512_set1_pd(half_length), len);
+        const points h{_mm512_mask_mov_pd(half_x, positive, _mm512_mul_pd(dir.x, scale)), _mm512_mask_mov_pd(half_y, positive, _mm512_mul_pd(dir.y, scale)),
+                       _mm512_mask_mov_pd(half_z, positive, _mm512_mul_pd(dir.z, scale))};
+        a = {_mm512_sub_pd(mid.x, h.x), _mm512_sub_pd(mid.y, h.y), _mm512_sub_pd(mid.z, h.z)};
+        b = {_mm512_add_pd(mid.x, h.x), _mm512_add_pd(mid.y, h.y), _mm512_add_pd(mid.z, h.z)};
+    };
+    const std::size_t row_room = cycle_lanes * (Line ? segment_voxels + 1 : 1);
     for (std::uint64_t i = 0; i < cycles[0]; ++i) {
         // The lanes that still have cycle i (cycles[] does not increase with the lane).
         __mmask8 alive = 0;
         for (int j = 0; j < cycle_lanes; ++j) alive |= __mmask8((cycles[j] > i ? 1u : 0u) << j);
-        points inner = sample_stems(alive);
+        const points stem = sample_stems(alive);
+        // The generator at depth 0: the stem point, or the segment stem -/+ half.
+        points inner = stem, inner_b = stem;
+        if constexpr (Line) {
+            inner = {_mm512_sub_pd(stem.x, half_x), _mm512_sub_pd(stem.y, half_y), _mm512_sub_pd(stem.z, half_z)};
+            inner_b = {_mm512_add_pd(stem.x, half_x), _mm512_add_pd(stem.y, half_y), _mm512_add_pd(stem.z, half_z)};
+        }
         counts.generators += unsigned(std::popcount(unsigned(alive)));
-        record(inner, alive, 0, _mm512_setzero_si512());
+        end = room(end, row_room);
+        if constexpr (Line) record_line(inner, inner_b, alive, 0, _mm512_setzero_si512());
+        else record(inner, alive, 0, _mm512_setzero_si512());
 
         // w_{s-1} and w_{s-2}: the selections one and two rows back.
         __m512i previous = _mm512_setzero_si512(), before = _mm512_setzero_si512();
@@ -299,7 +427,18 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
             a = apply(0, w, a);
             counts.generators += unsigned(std::popcount(unsigned(alive)));
             const __mmask8 recorded = alive & _mm512_cmp_epi64_mask(_mm512_set1_epi64(s), lookup_int(dummy_from, w), _MM_CMPINT_LT);
-            record(a, recorded, s, _mm512_add_epi64(w, _mm512_set1_epi64(1)));
+            const __m512i part = _mm512_add_epi64(w, _mm512_set1_epi64(1));
+            end = room(end, row_room);
+            if constexpr (Line) {
+                if (s >= 3) inner_b = apply(2, before, inner_b);
+                points b = inner_b;
+                if (s >= 2) b = apply(1, previous, b);
+                b = apply(0, w, b);
+                keep_length(a, b);
+                record_line(a, b, recorded, s, part);
+            } else {
+                record(a, recorded, s, part);
+            }
             before = previous, previous = w;
         }
     }
@@ -309,18 +448,19 @@ hit* generate_point_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle
 
 #else
 
-inline constexpr bool point_lanes_built = false;
+inline constexpr bool lanes_built = false;
 
 template <transform_pipeline P>
-bool point_lanes_fit(const drawn_ifs<P>&)
+bool lanes_fit(const drawn_ifs<P>&)
 {
     return false;
 }
 
-template <transform_pipeline P>
-hit* generate_point_lanes(const drawn_ifs<P>&, std::uint64_t (&)[cycle_lanes], const std::uint64_t (&)[cycle_lanes], hit* end, lane_counts&)
+template <bool Line, transform_pipeline P, class Room>
+hit* generate_in_lanes(const drawn_ifs<P>&, std::uint64_t (&)[cycle_lanes], const std::uint64_t (&)[cycle_lanes], hit* end, lane_counts&,
+                       std::size_t, Room&&)
 {
-    return end; // never called: point_lanes_fit is false
+    return end; // never called: lanes_fit is false
 }
 
 #endif
