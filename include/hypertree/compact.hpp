@@ -10,8 +10,9 @@
 // The paper quick-sorts. A tree makes 0.5 to 2 million hits and should be built in a few
 // milliseconds, so `compact` radix-sorts instead, over only the bits the largest voxel index needs
 // (25 bits at 300^3): one most-significant-digit pass scatters the hits into up to 2^8 buckets of
-// neighbouring voxels, then each bucket, small enough to stay in cache, is sorted by a
-// least-significant-digit radix sort on its remaining bits and merged into entries while still hot.
+// neighbouring voxels, then each bucket, small enough to stay in cache, is merged into entries
+// while still hot: through a table indexed by the voxel's remaining bits when they are few
+// (direct_merge), else sorted by a least-significant-digit radix sort on them and merged by runs.
 // Main memory is thus crossed once by the scatter, and only one extra hit-sized buffer is touched
 // (fresh pages cost more than the sorting itself at this size). Only the voxel is a sort key: the
 // level and part are reduced by a minimum over each run, which gives the same result as sorting on
@@ -101,6 +102,49 @@ inline void append_runs(const std::uint64_t* sorted, std::size_t n, std::vector<
     }
 }
 
+// Buckets whose voxels span at most 2^17 indices (trees up to about 128^3 voxels, and 300^3 with
+// its 2^25 voxels over 2^8 buckets) are merged without sorting: each hit adds to its voxel's slot
+// in a table indexed by the voxel's low bits (count, and the minimum of level and part, which is
+// what a sorted run reduces to), and a bit per slot marks the slots used, so the entries come out
+// in voxel order by walking the set bits. One pass over the bucket and a walk over its distinct
+// voxels, where the radix sort made two passes of counting and scattering. The table (768 KiB at
+// the widest) stays in a core's L2 cache.
+inline constexpr unsigned max_direct_bits = 17;
+
+class direct_merge {
+public:
+    explicit direct_merge(unsigned low_bits)
+        : size_(std::size_t(1) << low_bits), count_(new std::uint32_t[size_]()), best_(new std::uint16_t[size_]),
+          used_(new std::uint64_t[(size_ + 63) / 64]())
+    {
+        std::fill_n(best_.get(), size_, std::uint16_t(0xffff));
+    }
+    // Appends the entries of one bucket's keys (fewer than 2^32 of them), whose voxels start at
+    // `base`, and leaves the table empty again.
+    void merge(const std::uint64_t* keys, std::size_t n, voxel_index base, std::vector<voxel_entry>& entries)
+    {
+        const std::uint64_t mask = size_ - 1;
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::size_t slot = std::size_t((keys[i] >> packed_voxel_shift) & mask);
+            ++count_[slot];
+            best_[slot] = std::min(best_[slot], std::uint16_t(keys[i]));
+            used_[slot >> 6] |= std::uint64_t(1) << (slot & 63);
+        }
+        for (std::size_t w = 0; w < (size_ + 63) / 64; ++w)
+            for (std::uint64_t bits = std::exchange(used_[w], 0); bits != 0; bits &= bits - 1) {
+                const std::size_t slot = w * 64 + std::size_t(std::countr_zero(bits));
+                entries.push_back({base + voxel_index(slot), count_[slot], std::uint8_t(best_[slot] >> 8), std::uint8_t(best_[slot] & 0xff)});
+                count_[slot] = 0, best_[slot] = 0xffff;
+            }
+    }
+
+private:
+    std::size_t size_;
+    std::unique_ptr<std::uint32_t[]> count_;
+    std::unique_ptr<std::uint16_t[]> best_;
+    std::unique_ptr<std::uint64_t[]> used_;
+};
+
 } // namespace detail
 
 // One entry per distinct voxel of `hits`, in increasing voxel order; see the header comment for
@@ -165,6 +209,12 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
         // are never written are never touched.
         std::vector<voxel_entry>& out = group_entries[g];
         out.reserve(start[last] - start[first]);
+        if (low_bits <= detail::max_direct_bits && largest_bucket < (std::size_t(1) << 32)) {
+            detail::direct_merge table(low_bits);
+            for (std::size_t b = first; b < last; ++b)
+                table.merge(scattered.get() + start[b], start[b + 1] - start[b], voxel_index(b << low_bits), out);
+            return;
+        }
         const std::unique_ptr<std::uint64_t[]> scratch(new std::uint64_t[std::max<std::size_t>(largest_bucket, 1)]);
         for (std::size_t b = first; b < last; ++b) {
             const std::size_t size = start[b + 1] - start[b];
