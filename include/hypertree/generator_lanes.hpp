@@ -24,6 +24,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -31,9 +32,9 @@
 
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
 #include <immintrin.h>
-#define HYPERTREE_POINT_LANES 1
+#define HYPERTREE_GENERATOR_LANES 1
 #else
-#define HYPERTREE_POINT_LANES 0
+#define HYPERTREE_GENERATOR_LANES 0
 #endif
 
 namespace hypertree::detail {
@@ -48,7 +49,7 @@ struct lane_counts {
     std::uint64_t* per_depth = nullptr; // tree_depth entries
 };
 
-#if HYPERTREE_POINT_LANES
+#if HYPERTREE_GENERATOR_LANES
 
 inline constexpr bool lanes_built = true;
 

@@ -175,7 +175,7 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
         const double origins[3] = {v.origin().x, v.origin().y, v.origin().z};
         const double sides[3] = {v.voxel_size().x, v.voxel_size().y, v.voxel_size().z};
         for (int a = 0; a < 3; ++a) {
-            std::vector<float> centers(std::size_t(counts[a]));
+            std::vector<float> centers(static_cast<std::size_t>(counts[a]));
             for (int c = 0; c < counts[a]; ++c) centers[std::size_t(c)] = float(origins[a] + (c + 0.5) * sides[a]);
             s += detail::glsl_float_array(n + "_center_" + axes[a], centers);
         }
