@@ -192,6 +192,36 @@ const hypervolume small_volume({-1.5, 0.25, 2.0}, {2.0, 1.2, 0.9}, {40, 30, 20})
 
 // ---- compaction -----------------------------------------------------------------------------------
 
+TEST_CASE("the coordinate walker places every index as the volume does, in any order")
+{
+    std::mt19937_64 g(77);
+    using hypertree::resolution;
+    for (const resolution grid : {resolution{7, 5, 9}, resolution{300, 300, 300}, resolution{1, 1, 40}, resolution{40, 1, 1}}) {
+        const hypervolume volume({0, 0, 0}, {1, 1, 1}, grid);
+        const voxel_index count = voxel_index(volume.voxel_count());
+        std::vector<voxel_index> order;
+        // Increasing with every kind of gap (same row, next rows, far rows), from index 0 and from
+        // the last row, then random order (backwards steps divide).
+        std::uniform_int_distribution<voxel_index> gap_kind(0, 3);
+        for (voxel_index i = 0; i < count;) {
+            order.push_back(i);
+            const voxel_index row = voxel_index(grid.x);
+            const voxel_index k = gap_kind(g);
+            const voxel_index gap = k == 0 ? 1 : k == 1 ? row : k == 2 ? 3 * row + 1 : 70 * row + 5;
+            if (count - i <= gap) break;
+            i += gap;
+        }
+        order.push_back(count - 1);
+        for (int k = 0; k < 2000; ++k) order.push_back(std::uniform_int_distribution<voxel_index>(0, count - 1)(g));
+        hypertree::detail::coordinate_walker walker(volume);
+        std::size_t wrong = 0;
+        for (const voxel_index i : order) wrong += walker(i) != volume.coordinates(i);
+        CHECK(wrong == 0);
+        hypertree::detail::coordinate_walker from_last(volume); // a first index in the last row
+        CHECK(from_last(count - 1) == volume.coordinates(count - 1));
+    }
+}
+
 TEST_CASE("compact: the shallowest level prevails and ties take the smallest part")
 {
     const std::vector<hit> hits = {{5, 2, 3}, {9, 4, 1}, {5, 1, 4}, {5, 1, 2}, {5, 3, 0}, {2, 7, 7}, {9, 4, 0}};
@@ -334,6 +364,30 @@ TEST_CASE("density classes: near-equal populations on a geometric hit distributi
         const double share = double(entries.size()) / double(c - 1);
         for (const std::size_t population : check_classes(entries, classes))
             CHECK(std::abs(double(population) - share) <= bound);
+    }
+}
+
+TEST_CASE("density classes: small, large and huge hit counts are counted alike")
+{
+    // The histogram is built three ways by the largest count: below 2^16 (four interleaved
+    // tables), up to four per voxel (one table) and beyond (sorted). Each must give every class
+    // the population counted by hand, here with list lengths that are not multiples of four.
+    std::mt19937_64 g(11);
+    struct shape {
+        std::size_t voxels;
+        double p; // geometric hit counts of mean 1 / p
+    };
+    for (const shape s : {shape{10002, 0.01}, shape{50003, 0.0001}, shape{30001, 0.00005}}) {
+        std::vector<voxel_entry> entries(s.voxels);
+        std::uint32_t most = 0;
+        for (std::size_t i = 0; i < entries.size(); ++i) {
+            entries[i] = {voxel_index(i), geometric_hits(g, s.p), 3, 1};
+            most = std::max(most, entries[i].hits);
+        }
+        INFO(s.voxels << " voxels, largest count " << most);
+        if (s.p == 0.0001) CHECK((most >= 65536 && most <= 4 * s.voxels + 1024));
+        if (s.p == 0.00005) CHECK(most > 4 * s.voxels + 1024);
+        for (const int c : {2, 32, 255}) check_classes(entries, hypertree::density_classes(entries, c));
     }
 }
 

@@ -128,7 +128,22 @@ private:
         // indexed by count costs no more than the hit list did; counts far beyond the number of
         // voxels (entries from elsewhere) are sorted instead, so a single huge count allocates
         // nothing huge.
-        if (std::size_t(most) <= 4 * hit_voxels + 1024) {
+        if (std::size_t(most) < (std::size_t(1) << 16)) {
+            // Four interleaved tables: most voxels share a few small counts, and one table's
+            // increments of the same count wait for each other's stores (that chain was most of
+            // building the classes).
+            const std::size_t size = std::size_t(most) + 1;
+            std::vector<std::uint32_t> population(4 * size, 0);
+            const std::size_t n = entries.size();
+            std::size_t i = 0;
+            for (; i + 4 <= n; i += 4)
+                for (std::size_t k = 0; k < 4; ++k) ++population[k * size + entries[i + k].hits];
+            for (; i < n; ++i) ++population[entries[i].hits];
+            for (std::size_t h = 1; h < size; ++h) {
+                const std::size_t voxels = std::size_t(population[h]) + population[size + h] + population[2 * size + h] + population[3 * size + h];
+                if (voxels != 0) histogram.emplace_back(std::uint32_t(h), voxels);
+            }
+        } else if (std::size_t(most) <= 4 * hit_voxels + 1024) {
             std::vector<std::size_t> population(std::size_t(most) + 1, 0);
             for (const voxel_entry& e : entries) ++population[e.hits];
             for (std::size_t h = 1; h < population.size(); ++h)
@@ -187,13 +202,17 @@ inline std::vector<stored_voxel> classify(std::span<const voxel_entry> entries, 
         return hits < density_by_hits.size() ? density_by_hits[hits] : classes.density_of(hits);
     };
 
-    std::vector<stored_voxel> voxels;
-    voxels.reserve(entries.size());
+    // Written through a local count into a sized vector: push_back's end pointer lives in the
+    // vector, and the byte-sized fields written in between may alias it, so it was reloaded and
+    // stored for every voxel.
+    std::vector<stored_voxel> voxels(entries.size());
+    std::size_t kept = 0;
     for (const voxel_entry& e : entries) {
-        if (e.hits == 0) continue;
         const std::uint8_t density = int(e.level) <= branch_depth ? std::uint8_t(255) : density_of(e.hits);
-        voxels.push_back({e.voxel, voxel{density, e.level}, e.part});
+        voxels[kept] = {e.voxel, voxel{density, e.level}, e.part};
+        kept += e.hits != 0;
     }
+    voxels.resize(kept);
     return voxels;
 }
 

@@ -31,6 +31,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -79,9 +80,11 @@ inline world_box world_bounds(const hypervolume& volume, const index_box& box)
 
 namespace detail {
 
-// The coordinates of voxel indices met in (mostly) increasing order, with one division per row
-// of the grid instead of two per voxel: sorted lists of a sparse tree have about ten voxels per
-// row, and a division costs more than the rest of a lookup.
+// The coordinates of voxel indices met in (mostly) increasing order without dividing for each
+// voxel: the walker keeps the grid row it is in and steps forward row by row (y, then z) to reach
+// a later index's row, so a pass over a sorted list steps at most once per row of the whole grid
+// (ny nz steps, a few operations each) where a division per row met cost more than the rest of
+// the pass. An index more than a few rows ahead, or behind, is placed by dividing.
 class coordinate_walker {
 public:
     explicit coordinate_walker(const hypervolume& volume)
@@ -90,7 +93,12 @@ public:
     }
     std::array<int, 3> operator()(voxel_index i)
     {
-        if (i < row_start_ || i >= row_end_) {
+        if (i >= row_end_ && i < row_end_ + std::uint64_t(steps_before_dividing) * nx_) {
+            do {
+                row_start_ = voxel_index(row_end_), row_end_ += nx_;
+                if (++y_ == int(ny_)) y_ = 0, ++z_;
+            } while (i >= row_end_);
+        } else if (i < row_start_ || i >= row_end_) {
             const voxel_index row = i / nx_;
             row_start_ = row * nx_;
             row_end_ = std::uint64_t(row_start_) + nx_;
@@ -101,10 +109,11 @@ public:
     }
 
 private:
+    static constexpr int steps_before_dividing = 64; // a division costs about as much
     voxel_index nx_, ny_;
     voxel_index row_start_ = 0;
-    std::uint64_t row_end_ = 0; // empty row: the first call divides
-    int y_ = 0, z_ = 0;
+    std::uint64_t row_end_ = 0; // the row before row 0 (y = -1): a first index in the first rows steps there
+    int y_ = -1, z_ = 0;
 };
 
 // The sphere around the cells of voxels given by index (in roughly increasing order, for the
@@ -191,16 +200,16 @@ struct index_directory {
 
     // Writes column `list` of the directory: sorted[0, n) is that list, its indices within
     // [first, last] of the shape.
+    // (Counted, then summed: each bucket's start is the number of indices in the buckets before
+    // it. Searching each bucket's start in the list branched on every index unpredictably.)
     void fill(const voxel_index* sorted, std::size_t n, std::uint32_t* starts, std::size_t list = 0) const
     {
         if (buckets == 0) return;
-        std::size_t p = 0;
-        for (std::uint64_t b = 0; b < buckets; ++b) {
-            const std::uint64_t bucket_first = std::uint64_t(first) + (b << shift);
-            while (p < n && sorted[p] < bucket_first) ++p;
-            starts[b * lists + list] = std::uint32_t(p);
-        }
-        starts[buckets * lists + list] = std::uint32_t(n);
+        assert(n == 0 || (sorted[0] >= first && bucket_of(sorted[n - 1]) != npos));
+        for (std::uint64_t b = 0; b <= buckets; ++b) starts[b * lists + list] = 0;
+        // Index k counts in the entry after its bucket's (all in [first, last] of the shape).
+        for (std::size_t k = 0; k < n; ++k) ++starts[((std::uint64_t(sorted[k] - first) >> shift) + 1) * lists + list];
+        for (std::uint64_t b = 1; b <= buckets; ++b) starts[b * lists + list] += starts[(b - 1) * lists + list];
     }
 
     // The bucket of index i, or npos when i is outside every bucket.
