@@ -367,6 +367,36 @@ TEST_CASE("hypertree lanes run in step make the same hits as lanes run one by on
         CHECK(g.stats.escaped > 100);
         CHECK(g.hits.size() > 2 * (g.stats.recorded - g.stats.escaped)); // lines walk several voxels
     }
+    SUBCASE("stems along x and z, two shears per chain on other axes with odd exponents")
+    {
+        // Every preset's cones and shears stand along y with exponent 2: here the other axes, odd
+        // exponents and a second shear in each chain (its own table), for points and for lines.
+        ifs<> tree;
+        tree.name = "sideways";
+        for (int k = 0; k < 5; ++k)
+            tree.transforms.push_back({runtime_pipeline({shear(0, 0.04 + 0.01 * k, -0.03, 1, 0.8), scale(0.5),
+                                                         rotate({0, 0, 1}, (30 + 9 * k) * degrees), shear(2, -0.02, 0.05 + 0.01 * k, 3, 0.6),
+                                                         rotate({0, 1, 0}, 70.0 * k * degrees), translate(0.1 * k, 0.35 + 0.08 * k, 0)}),
+                                       1.0 + 0.2 * k});
+        tree.condensations = {condensation{cone{0, -0.3, 0.4, 0.05, 0.02}, {}}, condensation{cone{2, -0.2, 0.5, 0.04, 0.03}, {}}};
+        tree.tree_depth = 6;
+        tree.branch_depth = 1;
+        tree.iterations = 60000;
+        tree.volume = hypervolume({-1, -0.5, -1}, {2, 2, 2}, resolution{50, 40, 45});
+        same_tree(tree, 41, 1500);
+        tree.generator = generator_shape::line({-0.03, 0.02, -0.01}, {0.03, -0.02, 0.01});
+        same_tree(tree, 42, 1500);
+    }
+    SUBCASE("generators that overflow: infinite and not-a-number ends record nothing")
+    {
+        auto tree = small_tree(6);
+        tree.require_contraction = false;
+        tree.transforms.push_back({branch_pipeline(scale(1e200), rotate({0, 0, 1}, 0.3), rotate({0, 1, 0}, 0.2), translate(0, 0.5, 0)), 0.5});
+        same_tree(tree, 43, 1000);
+        tree.generator = generator_shape::line({0, -0.04, 0}, {0, 0.04, 0});
+        const generated_hits g = same_tree(tree, 44, 1000);
+        CHECK(g.stats.escaped > 1000);
+    }
     SUBCASE("shears of different shapes: the scalar loop")
     {
         auto tree = presets::tree_d(64);

@@ -108,7 +108,8 @@ inline void append_runs(const std::uint64_t* sorted, std::size_t n, std::vector<
 // slots used, so the entries come out in voxel order by walking the set bits. One pass over the
 // bucket and a walk over its distinct voxels, where the radix sort made two passes of counting
 // and scattering.
-inline constexpr unsigned max_direct_bits = 17; // 2^8 buckets of 2^17 voxels
+// (The direct path's limit, as bits below 2^8 buckets: 8 + 17 = 25 bits of voxel index.)
+inline constexpr unsigned max_direct_bits = 17;
 // When every bucket can be merged directly the scatter makes up to 2^11 buckets instead of 2^8,
 // so a bucket spans at most 2^14 voxels and its table (96 KiB) stays in L2 with room to spare:
 // the merge gains more than the wider scatter loses (compaction of tree C at 300: 5 to 10%

@@ -235,8 +235,11 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, random_stream 
     const auto cell_of = [&](const vec3d& p, voxel_index& index) {
         const double fx = (p.x - origin.x) * per.x, fy = (p.y - origin.y) * per.y, fz = (p.z - origin.z) * per.z;
         const bool in = fx >= 0 && fy >= 0 && fz >= 0 && fx <= nx && fy <= ny && fz <= nz;
-        // Clamped before converting, so an outside (or NaN) point still makes a valid integer.
-        const int x = int(std::clamp(fx, 0.0, nx - 1)), y = int(std::clamp(fy, 0.0, ny - 1)), z = int(std::clamp(fz, 0.0, nz - 1));
+        // Clamped before converting, so an outside point still makes a valid integer, and NaN
+        // becomes 0 (std::clamp would pass NaN on, and converting NaN is undefined); the lanes
+        // compute the same (generator_lanes.hpp).
+        const auto cell = [](double f, double n) { return int(f >= 0 ? std::min(f, n - 1) : 0.0); };
+        const int x = cell(fx, nx), y = cell(fy, ny), z = cell(fz, nz);
         index = volume.index(x, y, z);
         return in;
     };
