@@ -117,7 +117,7 @@ int main(int argc, char** argv)
             base.tree = tree.name;
             base.resolution = resolution_;
             base.generate_s = bench::best_seconds(reps, [&] { hits = generate(tree, 1, generation); });
-            base.compact_s = bench::best_seconds(reps, [&] { entries = compact(hits.hits, generation.parallel_for); });
+            base.compact_s = bench::best_seconds(reps, [&] { entries = compact(hits.hits, generation.parallel_for, hits.volume.voxel_count()); });
             base.classify_s = bench::best_seconds(reps, [&] {
                 const density_classes classes(entries, 32);
                 voxels = classify(entries, classes, tree.branch_depth);

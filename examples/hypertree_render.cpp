@@ -159,7 +159,7 @@ int main(int argc, char** argv)
             }
             if (o.resolution) tree.ifs.volume = hypervolume(tree.ifs.volume.origin(), tree.ifs.volume.extent(), resolution::cube(*o.resolution));
             const generated_hits hits = generate(tree.ifs, o.seed, options.generation);
-            const std::vector<voxel_entry> entries = compact(hits.hits, options.generation.parallel_for);
+            const std::vector<voxel_entry> entries = compact(hits.hits, options.generation.parallel_for, hits.volume.voxel_count());
             const density_classes classes(entries, tree.density_class_count.value_or(options.density_class_count));
             voxels = classify(entries, classes, tree.ifs.branch_depth);
             volume = tree.ifs.volume;

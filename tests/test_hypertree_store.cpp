@@ -264,6 +264,29 @@ TEST_CASE("compact: random hit lists match a map-based reference")
     }
 }
 
+TEST_CASE("compact: levels of 64 and more, parts up to 255, and the grid's voxel count as the bound")
+{
+    // Grids to 2^25 voxels move 32-bit keys when every level is below 64; deeper levels and any
+    // part take the 64-bit keys. Passing the voxel count skips the search for the largest index
+    // and gives the same entries; a hit at or past it is refused.
+    std::mt19937_64 g(64);
+    for (const voxel_index highest : {voxel_index(4095), voxel_index(300 * 300 * 300 - 1), voxel_index(1) << 30}) {
+        INFO("voxels up to " << highest);
+        for (const int levels : {64, 65, 256}) {
+            const auto hits = random_hits(g, 50000, 0, highest, levels, 256);
+            const auto reference = compact_with_map(hits);
+            check_same_entries(hypertree::compact(hits), reference);
+            check_same_entries(hypertree::compact(hits, {}, std::uint64_t(highest) + 1), reference);
+            check_same_entries(hypertree::compact(hits, {}, std::uint64_t(highest) + 1000), reference);
+        }
+        auto hits = random_hits(g, 1000, 0, highest - 1, 9, 6);
+        hits.push_back({highest, 3, 1}); // one hit in the last voxel: a count of `highest` is one short
+        CHECK_NOTHROW(hypertree::compact(hits, {}, std::uint64_t(highest) + 1));
+        CHECK_THROWS_WITH_AS(hypertree::compact(hits, {}, std::uint64_t(highest)), doctest::Contains("compact.voxel_count"),
+                             krs::invalid_parameter);
+    }
+}
+
 TEST_CASE("compact on threads gives the entries of one thread")
 {
     // Tasks run in reverse order on a pool of three threads: any schedule must give the same list.

@@ -23,7 +23,7 @@ template <class Store, transform_pipeline P>
 Store build_tree(const ifs<P>& definition, std::uint64_t seed, const build_options& options = {})
 {
     const generated_hits generated = generate(definition, seed, options.generation);
-    const std::vector<voxel_entry> entries = compact(generated.hits, options.generation.parallel_for);
+    const std::vector<voxel_entry> entries = compact(generated.hits, options.generation.parallel_for, generated.volume.voxel_count());
     const density_classes classes(entries, options.density_class_count);
     const std::vector<stored_voxel> voxels = classify(entries, classes, definition.branch_depth);
     return Store::build(definition.volume, voxels, options.generation.budget);

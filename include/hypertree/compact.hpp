@@ -28,6 +28,8 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -115,6 +117,9 @@ inline constexpr unsigned max_direct_bits = 17;
 // the merge gains more than the wider scatter loses (compaction of tree C at 300: 5 to 10%
 // faster, A and D within noise). The radix sort's buckets stay at 2^8, where the scatter's cost decides.
 inline constexpr unsigned direct_bucket_bits = 11;
+// Then the keys the scatter moves are 32 bits, half the bytes, when every level is below 64 (the
+// generator's are: max_tree_depth = 64): slot << 14 | level << 8 | part, the slot below 2^14.
+inline constexpr unsigned short_key_shift = 14;
 
 class direct_merge {
 public:
@@ -125,14 +130,16 @@ public:
         std::fill_n(best_.get(), size_, std::uint16_t(0xffff));
     }
     // Appends the entries of one bucket's keys (fewer than 2^32 of them), whose voxels start at
-    // `base`, and leaves the table empty again.
-    void merge(const std::uint64_t* keys, std::size_t n, voxel_index base, std::vector<voxel_entry>& entries)
+    // `base`, and leaves the table empty again. A key holds the voxel from bit `shift` up and
+    // level << 8 | part below it.
+    template <class Key>
+    void merge(const Key* keys, std::size_t n, unsigned shift, voxel_index base, std::vector<voxel_entry>& entries)
     {
-        const std::uint64_t mask = size_ - 1;
+        const Key mask = Key(size_ - 1), below = Key((Key(1) << shift) - 1);
         for (std::size_t i = 0; i < n; ++i) {
-            const std::size_t slot = std::size_t((keys[i] >> packed_voxel_shift) & mask);
+            const std::size_t slot = std::size_t((keys[i] >> shift) & mask);
             ++count_[slot];
-            best_[slot] = std::min(best_[slot], std::uint16_t(keys[i]));
+            best_[slot] = std::min(best_[slot], std::uint16_t(keys[i] & below));
             used_[slot >> 6] |= std::uint64_t(1) << (slot & 63);
         }
         for (std::size_t w = 0; w < (size_ + 63) / 64; ++w)
@@ -155,12 +162,17 @@ private:
 // One entry per distinct voxel of `hits`, in increasing voxel order; see the header comment for
 // which level and part an entry keeps. Hit counts saturate at 2^32 - 1.
 //
+// `voxel_count`, when the caller knows it (the hypervolume's: compact(generated) passes it), bounds
+// the voxel indices and spares a pass over the hits to find the largest; a hit at or past it is
+// refused. 0 = unknown.
+//
 // With `parallel_for`, each pass is split into tasks on the caller's threads: the hits into
 // parts that count and scatter their own share (part p's hits of a bucket go after parts < p's,
 // so a bucket holds the same keys in the same order as one pass would), then the buckets into
 // groups of about equal hit counts, each sorted and merged into its own entries, concatenated in
 // bucket order. The entries are the same whatever the threads.
-inline std::vector<voxel_entry> compact(std::span<const hit> hits, const parallel_for_hook& parallel_for = {})
+inline std::vector<voxel_entry> compact(std::span<const hit> hits, const parallel_for_hook& parallel_for = {},
+                                        std::uint64_t voxel_count = 0)
 {
     std::vector<voxel_entry> entries;
     const std::size_t n = hits.size();
@@ -169,11 +181,14 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
     const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
     const auto part = [&](std::size_t p) { return hits.subspan(n * p / tasks, n * (p + 1) / tasks - n * p / tasks); };
 
-    std::vector<voxel_index> part_largest(tasks, 0);
-    run_tasks(parallel_for, tasks, [&](std::size_t p) {
-        for (const hit& h : part(p)) part_largest[p] = std::max(part_largest[p], h.voxel);
-    });
-    const voxel_index largest = *std::max_element(part_largest.begin(), part_largest.end());
+    voxel_index largest = voxel_index(std::min<std::uint64_t>(voxel_count, std::uint64_t(1) << 32) - 1);
+    if (voxel_count == 0) {
+        std::vector<voxel_index> part_largest(tasks, 0);
+        run_tasks(parallel_for, tasks, [&](std::size_t p) {
+            for (const hit& h : part(p)) part_largest[p] = std::max(part_largest[p], h.voxel);
+        });
+        largest = *std::max_element(part_largest.begin(), part_largest.end());
+    }
     const unsigned voxel_bits = unsigned(std::bit_width(largest));
     // Grids whose buckets can all be merged directly split finer (see direct_bucket_bits).
     const bool direct = voxel_bits <= detail::max_bucket_bits + detail::max_direct_bits;
@@ -182,24 +197,32 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
     const std::size_t buckets = std::size_t(1) << bucket_bits;
     const auto bucket_of = [low_bits](voxel_index v) { return std::size_t(v >> low_bits); };
 
-    // counts[p * buckets + b]: part p's hits in bucket b; then where part p writes them.
+    // counts[p * buckets + b]: part p's hits in bucket b; then where part p writes them. The same
+    // pass finds the largest index (a hit past voxel_count is counted in the last bucket, then
+    // refused) and the deepest level (whether 32-bit keys hold the hits).
     std::vector<std::size_t> counts(tasks * buckets, 0);
+    std::vector<voxel_index> part_largest(tasks, 0);
+    std::vector<unsigned> part_deepest(tasks, 0);
     run_tasks(parallel_for, tasks, [&](std::size_t p) {
         std::size_t* c = counts.data() + p * buckets;
-        for (const hit& h : part(p)) ++c[bucket_of(h.voxel)];
+        voxel_index most = 0;
+        unsigned deepest = 0;
+        for (const hit& h : part(p)) {
+            ++c[std::min(bucket_of(h.voxel), buckets - 1)];
+            most = std::max(most, h.voxel), deepest = std::max(deepest, unsigned(h.level));
+        }
+        part_largest[p] = most, part_deepest[p] = deepest;
     });
+    if (const voxel_index most = *std::max_element(part_largest.begin(), part_largest.end()); most > largest)
+        throw invalid_parameter("compact.voxel_count", "must be above every hit's voxel index (it is the hypervolume's voxel count)",
+                                std::to_string(voxel_count) + " with a hit in voxel " + std::to_string(most));
+    const bool short_keys = direct && *std::max_element(part_deepest.begin(), part_deepest.end()) < 64;
     std::vector<std::size_t> start(buckets + 1, 0);
     for (std::size_t b = 0, offset = 0; b < buckets; ++b) {
         start[b] = offset;
         for (std::size_t p = 0; p < tasks; ++p) offset += std::exchange(counts[p * buckets + b], offset);
     }
     start[buckets] = n;
-    // Default-initialized: every element is written by the scatter, so zeroing would only cost.
-    const std::unique_ptr<std::uint64_t[]> scattered(new std::uint64_t[n]);
-    run_tasks(parallel_for, tasks, [&](std::size_t p) {
-        std::size_t* next = counts.data() + p * buckets;
-        for (const hit& h : part(p)) scattered[next[bucket_of(h.voxel)]++] = detail::pack_hit(h);
-    });
 
     // Groups of consecutive buckets holding about n / tasks hits each.
     std::vector<std::size_t> group_begin{0};
@@ -208,29 +231,50 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
     const std::size_t groups = group_begin.size();
     group_begin.push_back(buckets);
     std::vector<std::vector<voxel_entry>> group_entries(groups);
-    run_tasks(parallel_for, groups, [&](std::size_t g) {
-        const std::size_t first = group_begin[g], last = group_begin[g + 1];
-        std::size_t largest_bucket = 0;
-        for (std::size_t b = first; b < last; ++b) largest_bucket = std::max(largest_bucket, start[b + 1] - start[b]);
-        // At most one entry per hit. Reserving that much only reserves address space: pages that
-        // are never written are never touched.
-        std::vector<voxel_entry>& out = group_entries[g];
-        out.reserve(start[last] - start[first]);
-        if (direct && largest_bucket < (std::size_t(1) << 32)) {
-            detail::direct_merge table(low_bits);
-            for (std::size_t b = first; b < last; ++b)
-                table.merge(scattered.get() + start[b], start[b + 1] - start[b], voxel_index(b << low_bits), out);
-            return;
-        }
-        const std::unique_ptr<std::uint64_t[]> scratch(new std::uint64_t[std::max<std::size_t>(largest_bucket, 1)]);
-        for (std::size_t b = first; b < last; ++b) {
-            const std::size_t size = start[b + 1] - start[b];
-            if (size == 0) continue;
-            const std::uint64_t* sorted = detail::radix_sort_bits(scattered.get() + start[b], scratch.get(), size,
-                                                                  detail::packed_voxel_shift, low_bits);
-            detail::append_runs(sorted, size, out);
-        }
-    });
+
+    // Scatters the hits into their buckets as keys (the voxel from bit `shift` up, level << 8 |
+    // part below), then merges each group of buckets into its entries.
+    const auto scatter_and_merge = [&]<class Key>(unsigned shift, const auto& key_of) {
+        // Default-initialized: every element is written by the scatter, so zeroing would only cost.
+        const std::unique_ptr<Key[]> scattered(new Key[n]);
+        run_tasks(parallel_for, tasks, [&](std::size_t p) {
+            std::size_t* next = counts.data() + p * buckets;
+            for (const hit& h : part(p)) scattered[next[bucket_of(h.voxel)]++] = key_of(h);
+        });
+        run_tasks(parallel_for, groups, [&](std::size_t g) {
+            const std::size_t first = group_begin[g], last = group_begin[g + 1];
+            std::size_t largest_bucket = 0;
+            for (std::size_t b = first; b < last; ++b) largest_bucket = std::max(largest_bucket, start[b + 1] - start[b]);
+            // At most one entry per hit. Reserving that much only reserves address space: pages
+            // that are never written are never touched.
+            std::vector<voxel_entry>& out = group_entries[g];
+            out.reserve(start[last] - start[first]);
+            if (direct && largest_bucket < (std::size_t(1) << 32)) {
+                detail::direct_merge table(low_bits);
+                for (std::size_t b = first; b < last; ++b)
+                    table.merge(scattered.get() + start[b], start[b + 1] - start[b], shift, voxel_index(b << low_bits), out);
+                return;
+            }
+            if constexpr (std::is_same_v<Key, std::uint64_t>) {
+                const std::unique_ptr<std::uint64_t[]> scratch(new std::uint64_t[std::max<std::size_t>(largest_bucket, 1)]);
+                for (std::size_t b = first; b < last; ++b) {
+                    const std::size_t size = start[b + 1] - start[b];
+                    if (size == 0) continue;
+                    const std::uint64_t* sorted = detail::radix_sort_bits(scattered.get() + start[b], scratch.get(), size,
+                                                                          detail::packed_voxel_shift, low_bits);
+                    detail::append_runs(sorted, size, out);
+                }
+            }
+        });
+    };
+    if (short_keys) {
+        const voxel_index low_mask = voxel_index((std::uint64_t(1) << low_bits) - 1);
+        scatter_and_merge.template operator()<std::uint32_t>(detail::short_key_shift, [low_mask](const hit& h) {
+            return std::uint32_t((h.voxel & low_mask) << detail::short_key_shift) | std::uint32_t(h.level) << 8 | std::uint32_t(h.part);
+        });
+    } else {
+        scatter_and_merge.template operator()<std::uint64_t>(detail::packed_voxel_shift, detail::pack_hit);
+    }
     if (groups == 1) {
         entries = std::move(group_entries[0]);
         entries.shrink_to_fit();
