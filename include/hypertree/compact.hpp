@@ -10,7 +10,7 @@
 // The paper quick-sorts. A tree makes 0.5 to 2 million hits and should be built in a few
 // milliseconds, so `compact` radix-sorts instead, over only the bits the largest voxel index needs
 // (25 bits at 300^3): one most-significant-digit pass scatters the hits into up to 2^8 buckets of
-// neighbouring voxels, then each bucket, small enough to stay in cache, is merged into entries
+// neighbouring voxels (2^11 where every bucket is merged directly), then each bucket, small enough to stay in cache, is merged into entries
 // while still hot: through a table indexed by the voxel's remaining bits when they are few
 // (direct_merge), else sorted by a least-significant-digit radix sort on them and merged by runs.
 // Main memory is thus crossed once by the scatter, and only one extra hit-sized buffer is touched
