@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <type_traits>
 #include <vector>
@@ -338,8 +339,8 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, random_stream 
 
 // Chunk `chunk` of `cycles` cycles: its lanes, in step when they can be, else one by one.
 template <transform_pipeline P, class Observer>
-void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles, bool vector_lanes,
-                    chunk_output& out, generation_stats& stats, Observer& observer)
+void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
+                    const lane_tables* lanes_in_step, chunk_output& out, generation_stats& stats, Observer& observer)
 {
     constexpr std::uint64_t lanes = cycle_lanes;
     std::uint64_t lane_cycles[cycle_lanes];
@@ -347,7 +348,7 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
     const auto stream = [&](std::uint64_t j) { return random_stream::derive(seed, chunk * lanes + j + 1); };
     const bool line = !tree.definition().generator.is_point();
     if constexpr (std::is_same_v<Observer, no_observer>) {
-        if (vector_lanes && lanes_fit(tree)) {
+        if (lanes_in_step) {
             std::uint64_t state[cycle_lanes];
             for (std::uint64_t j = 0; j < lanes; ++j) state[j] = stream(j).state();
             lane_counts counts{0, 0, 0, stats.recorded_per_depth.data()};
@@ -359,8 +360,8 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
             const ifs<P>& def = tree.definition();
             hit* const start = out.hits.get() + out.count;
             const std::size_t segment_voxels = max_voxels_on_segment(def.volume, 2.0 * krs::length((def.generator.end - def.generator.start) * 0.5));
-            hit* const end = line ? generate_in_lanes<true>(tree, state, lane_cycles, start, counts, segment_voxels, room)
-                                  : generate_in_lanes<false>(tree, state, lane_cycles, start, counts, segment_voxels, room);
+            hit* const end = line ? generate_in_lanes<true>(tree, *lanes_in_step, state, lane_cycles, start, counts, segment_voxels, room)
+                                  : generate_in_lanes<false>(tree, *lanes_in_step, state, lane_cycles, start, counts, segment_voxels, room);
             out.count = std::size_t(end - out.hits.get());
             stats.cycles += cycles, stats.generators += counts.generators, stats.recorded += counts.recorded, stats.escaped += counts.escaped;
             return;
@@ -403,6 +404,9 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
     if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
 
     const std::uint64_t chunks = (cycles + options.chunk_cycles - 1) / options.chunk_cycles;
+    // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
+    const std::optional<detail::lane_tables> lanes_in_step =
+        options.vector_lanes && std::is_same_v<Observer, detail::no_observer> ? detail::lane_tables::of(tree) : std::nullopt;
     std::vector<detail::chunk_output> chunk_hits(chunks);
     std::vector<generation_stats> chunk_stats(chunks);
     const auto run = [&](std::size_t c) {
@@ -414,7 +418,7 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
         chunk_hits[c].make_room(definition.generator.is_point()
                                     ? std::size_t(count * depth) + detail::cycle_lanes
                                     : std::size_t(double(count) * double(depth) * voxels_per_generator / 3.0));
-        detail::generate_chunk(tree, seed, c, count, options.vector_lanes, chunk_hits[c], chunk_stats[c], observer);
+        detail::generate_chunk(tree, seed, c, count, lanes_in_step ? &*lanes_in_step : nullptr, chunk_hits[c], chunk_stats[c], observer);
     };
     run_tasks(options.parallel_for, std::size_t(chunks), run);
 

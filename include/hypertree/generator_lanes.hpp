@@ -120,6 +120,37 @@ struct lane_chain_tables {
     }
 };
 
+// What the lanes look up, built once per generated tree (generate() shares it among its chunks):
+// per level, the transformations' chains; the condensations' chains; and the small tables of
+// selection and level rules. Entries past the last are copies of entry 0.
+struct lane_tables {
+    lane_chain_shape shape, stem_shape;
+    std::unique_ptr<lane_chain_tables[]> chains; // distinct_levels levels, then the stems (40 KiB)
+    alignas(64) double keep[16];
+    alignas(64) std::int64_t alias[16], last_level[16], dummy_from[16];
+
+    // The tables of a tree the lanes handle (lanes_fit), else nothing.
+    template <transform_pipeline P>
+    static std::optional<lane_tables> of(const drawn_ifs<P>& tree)
+    {
+        if (!lanes_fit(tree)) return std::nullopt;
+        std::optional<lane_tables> t(std::in_place);
+        t->shape = *common_shape(tree.chain_table()), t->stem_shape = *common_shape(tree.stem_chains());
+        t->chains.reset(new lane_chain_tables[distinct_levels + 1]);
+        const std::size_t n = tree.transform_count();
+        for (std::size_t j = 0; j < 16; ++j) {
+            const std::size_t k = j < n ? j : 0;
+            for (int l = 0; l < distinct_levels; ++l) t->chains[l].set(j, t->shape, tree.chain_table()[k * distinct_levels + std::size_t(l)]);
+            t->chains[distinct_levels].set(j, t->stem_shape, tree.stem_chains()[j < tree.stem_chains().size() ? j : 0]);
+            t->keep[j] = tree.alias_keep()[k];
+            t->alias[j] = std::int64_t(tree.alias_of()[k]);
+            t->last_level[j] = tree.last_levels()[k];
+            t->dummy_from[j] = tree.dummies_from()[k];
+        }
+        return t;
+    }
+};
+
 // Runs lane j's `cycles[j]` cycles from random state `state[j]` (updated), with cycles[j] in
 // non-increasing order of j, writing each recorded hit at `end` and returning the new end. Every
 // store writes a whole register of hits and advances by those that count: before each row,
@@ -127,29 +158,17 @@ struct lane_chain_tables {
 // the lanes ask for cycle_lanes per row of points and cycle_lanes (segment_voxels + 1) per row of
 // lines, segment_voxels being the most one line visits (generate.hpp).
 template <bool Line, transform_pipeline P, class Room>
-hit* generate_in_lanes(const drawn_ifs<P>& tree, std::uint64_t (&state)[cycle_lanes], const std::uint64_t (&cycles)[cycle_lanes],
-                       hit* end, lane_counts& counts, std::size_t segment_voxels, Room&& room)
+hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std::uint64_t (&state)[cycle_lanes],
+                       const std::uint64_t (&cycles)[cycle_lanes], hit* end, lane_counts& counts, std::size_t segment_voxels, Room&& room)
 {
     const ifs<P>& def = tree.definition();
     const int depth = def.tree_depth;
     const std::size_t n = tree.transform_count();
-    const lane_chain_shape shape = *common_shape(tree.chain_table()), stem_shape = *common_shape(tree.stem_chains());
-
-    // Per level, the transformations' chains; the condensations' chains; and the small tables of
-    // selection and level rules. Entries past the last are copies of entry 0.
-    const std::unique_ptr<lane_chain_tables[]> tables(new lane_chain_tables[distinct_levels + 1]); // 40 KiB: not on the stack
-    lane_chain_tables& stem_tables = tables[distinct_levels];
-    alignas(64) double keep[16];
-    alignas(64) std::int64_t alias[16], last_level[16], dummy_from[16];
-    for (std::size_t j = 0; j < 16; ++j) {
-        const std::size_t t = j < n ? j : 0;
-        for (int l = 0; l < distinct_levels; ++l) tables[l].set(j, shape, tree.chain_table()[t * distinct_levels + std::size_t(l)]);
-        stem_tables.set(j, stem_shape, tree.stem_chains()[j < tree.stem_chains().size() ? j : 0]);
-        keep[j] = tree.alias_keep()[t];
-        alias[j] = std::int64_t(tree.alias_of()[t]);
-        last_level[j] = tree.last_levels()[t];
-        dummy_from[j] = tree.dummies_from()[t];
-    }
+    const lane_chain_shape &shape = lookups.shape, &stem_shape = lookups.stem_shape;
+    const lane_chain_tables* const tables = lookups.chains.get();
+    const lane_chain_tables& stem_tables = tables[distinct_levels];
+    const double* const keep = lookups.keep;
+    const std::int64_t *const alias = lookups.alias, *const last_level = lookups.last_level, *const dummy_from = lookups.dummy_from;
     const auto lookup = [](const double* table, __m512i index) {
         return _mm512_permutex2var_pd(_mm512_load_pd(table), index, _mm512_load_pd(table + 8));
     };
@@ -457,11 +476,19 @@ bool lanes_fit(const drawn_ifs<P>&)
     return false;
 }
 
+struct lane_tables {
+    template <transform_pipeline P>
+    static std::optional<lane_tables> of(const drawn_ifs<P>&)
+    {
+        return std::nullopt;
+    }
+};
+
 template <bool Line, transform_pipeline P, class Room>
-hit* generate_in_lanes(const drawn_ifs<P>&, std::uint64_t (&)[cycle_lanes], const std::uint64_t (&)[cycle_lanes], hit* end, lane_counts&,
-                       std::size_t, Room&&)
+hit* generate_in_lanes(const drawn_ifs<P>&, const lane_tables&, std::uint64_t (&)[cycle_lanes], const std::uint64_t (&)[cycle_lanes], hit* end,
+                       lane_counts&, std::size_t, Room&&)
 {
-    return end; // never called: lanes_fit is false
+    return end; // never called: there are no lane tables
 }
 
 #endif
