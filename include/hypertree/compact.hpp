@@ -10,9 +10,10 @@
 // The paper quick-sorts. A tree makes 0.5 to 2 million hits and should be built in a few
 // milliseconds, so `compact` radix-sorts instead, over only the bits the largest voxel index needs
 // (25 bits at 300^3): one most-significant-digit pass scatters the hits into up to 2^8 buckets of
-// neighbouring voxels (2^11 where every bucket is merged directly), then each bucket, small enough to stay in cache, is merged into entries
-// while still hot: through a table indexed by the voxel's remaining bits when they are few
-// (direct_merge), else sorted by a least-significant-digit radix sort on them and merged by runs.
+// neighbouring voxels (2^11 where every bucket is merged directly), then each bucket, small enough
+// to stay in cache, is merged into entries while still hot: through a table indexed by the
+// voxel's remaining bits when they are few (direct_merge), else sorted by a least-significant-digit
+// radix sort on them and merged by runs.
 // Main memory is thus crossed once by the scatter, and only one extra hit-sized buffer is touched
 // (fresh pages cost more than the sorting itself at this size). Only the voxel is a sort key: the
 // level and part are reduced by a minimum over each run, which gives the same result as sorting on
@@ -115,7 +116,8 @@ inline constexpr unsigned max_direct_bits = 17;
 // When every bucket can be merged directly the scatter makes up to 2^11 buckets instead of 2^8,
 // so a bucket spans at most 2^14 voxels and its table (96 KiB) stays in L2 with room to spare:
 // the merge gains more than the wider scatter loses (compaction of tree C at 300: 5 to 10%
-// faster, A and D within noise). The radix sort's buckets stay at 2^8, where the scatter's cost decides.
+// faster, A and D within noise). The radix sort's buckets stay at 2^8, where the scatter's cost
+// decides.
 inline constexpr unsigned direct_bucket_bits = 11;
 // Then the keys the scatter moves are 32 bits, half the bytes, when every level is below 64 (the
 // generator's are: max_tree_depth = 64): slot << 14 | level << 8 | part, the slot below 2^14.
@@ -162,7 +164,7 @@ private:
 // One entry per distinct voxel of `hits`, in increasing voxel order; see the header comment for
 // which level and part an entry keeps. Hit counts saturate at 2^32 - 1.
 //
-// `voxel_count`, when the caller knows it (the hypervolume's: compact(generated) passes it), bounds
+// `voxel_count`, when the caller knows it (the hypervolume's: build_tree passes it), bounds
 // the voxel indices and spares a pass over the hits to find the largest; a hit at or past it is
 // refused. 0 = unknown.
 //
