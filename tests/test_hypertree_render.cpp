@@ -7,6 +7,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <thread>
@@ -176,19 +177,19 @@ TEST_CASE("hypertree render framing_camera sees the whole box and refuses an emp
     CHECK_THROWS_WITH_AS(framing_camera(world_box{}, 64, 64), doctest::Contains("framing_camera.box"), krs::invalid_parameter);
 }
 
-TEST_CASE("hypertree shade memo: concurrent readers only ever see whole entries")
+TEST_CASE("hypertree shade memo: concurrent readers only ever see whole entries, and a sealed table is whole")
 {
-    // Two threads store and look up voxels that collide in a small table; an entry's values are
-    // a function of its voxel, so a torn copy (values of two voxels) would show.
-    shade_memo memo(64, 5);
-    const auto value = [](voxel_index v, std::size_t i) { return float(v) * 8.0f + float(i); };
+    // Two threads store and look up the same slots; an entry's values are a function of its
+    // slot, so a copy seen before its values were all written would show.
+    shade_memo memo(1000, 5);
+    const auto value = [](std::size_t v, std::size_t i) { return float(v) * 8.0f + float(i); };
     std::atomic<long long> found{0}, wrong{0};
     const auto work = [&](std::uint32_t seed) {
         std::uint32_t state = seed;
         float out[5], in[5];
         for (int n = 0; n < 200000; ++n) {
             state = state * 1664525u + 1013904223u;
-            const voxel_index v = (state >> 8) % 1000;
+            const std::size_t v = (state >> 8) % 1000;
             if (memo.find(v, out)) {
                 ++found;
                 for (std::size_t i = 0; i < 5; ++i) wrong += out[i] != value(v, i) ? 1 : 0;
@@ -203,7 +204,180 @@ TEST_CASE("hypertree shade memo: concurrent readers only ever see whole entries"
     other.join();
     CHECK(wrong == 0);
     CHECK(found > 1000); // the table is used, not just written
-    // An index it never stored is not found.
-    float out[5];
+    // A slot past the table is neither found nor stored.
+    float out[5] = {};
     CHECK_FALSE(memo.find(5000, out));
+    memo.store(5000, out);
+    // Sealed only when every slot is recorded; then its values read directly.
+    shade_memo partial(10, 2);
+    const float in[2] = {1.0f, 2.0f};
+    for (std::size_t v = 0; v < 9; ++v) partial.store(v, in);
+    CHECK_FALSE(partial.seal());
+    CHECK_FALSE(partial.complete());
+    partial.store(9, in);
+    CHECK(partial.seal());
+    CHECK(partial.values()[2 * 9 + 1] == 2.0f);
+}
+
+namespace {
+
+// A store whose voxels are scattered at random over a 37 x 21 x 50 grid (sides that are not
+// multiples of 4 or 16), with a dense run along one row and whole empty 16^3 blocks.
+index_list_store scattered_store(std::uint32_t seed)
+{
+    const hypervolume v({0, 0, 0}, {3.7, 2.1, 5.0}, resolution{37, 21, 50});
+    std::vector<stored_voxel> voxels;
+    std::uint32_t state = seed;
+    for (voxel_index i = 0; i < v.voxel_count(); ++i) {
+        state = state * 1664525u + 1013904223u;
+        const auto c = v.coordinates(i);
+        const bool row = c[1] == 20 && c[2] == 49;
+        if (c[2] >= 16 && c[2] < 32 && !row) continue; // an empty slab of blocks
+        if (row || (state >> 24) < 8) voxels.push_back({i, {std::uint8_t(1 + (state >> 8) % 255), std::uint8_t((state >> 16) % 7)}, 0});
+    }
+    return index_list_store::build(v, voxels);
+}
+
+} // namespace
+
+TEST_CASE("hypertree voxel bricks hold exactly the store's voxels")
+{
+    for (std::uint32_t seed : {1u, 2u}) {
+        const auto store = scattered_store(seed);
+        const voxel_bricks bricks(store);
+        const hypervolume& v = store.volume();
+        CHECK(bricks.voxel_count() == store.nonempty_count());
+        std::vector<int> slot_seen(bricks.voxel_count(), 0);
+        const voxel_bricks::view view = bricks.view_of();
+        std::size_t empty_bricks = 0, empty_blocks = 0;
+        for (int z = 0; z < v.grid().z; ++z)
+            for (int y = 0; y < v.grid().y; ++y)
+                for (int x = 0; x < v.grid().x; ++x) {
+                    const voxel expect = store.at(v.index(x, y, z));
+                    const voxel got = bricks.at(x, y, z);
+                    REQUIRE(got.density == expect.density);
+                    REQUIRE(got.level == expect.level);
+                    // The place's sign says whether the brick (and the block) holds a voxel,
+                    // checked against the store by brute force over the brick's cells.
+                    const std::int32_t place = view.place(x, y, z);
+                    bool brick_holds = false, block_holds = false;
+                    for (int dz = 0; dz < 16; ++dz)
+                        for (int dy = 0; dy < 16; ++dy)
+                            for (int dx = 0; dx < 16 && !(brick_holds && block_holds); ++dx) {
+                                const int cx = (x & ~15) + dx, cy = (y & ~15) + dy, cz = (z & ~15) + dz;
+                                if (cx >= v.grid().x || cy >= v.grid().y || cz >= v.grid().z) continue;
+                                if (store.at(v.index(cx, cy, cz)).density == 0) continue;
+                                block_holds = true;
+                                if ((cx >> 2) == (x >> 2) && (cy >> 2) == (y >> 2) && (cz >> 2) == (z >> 2)) brick_holds = true;
+                            }
+                    REQUIRE((place >= 0) == brick_holds);
+                    REQUIRE((place < -64) == !block_holds);
+                    empty_bricks += place < 0, empty_blocks += place < -64;
+                    if (expect.density != 0) ++slot_seen[bricks.slot(std::size_t(place))];
+                }
+        // Every non-empty voxel has its own slot.
+        CHECK(std::count(slot_seen.begin(), slot_seen.end(), 1) == std::ptrdiff_t(slot_seen.size()));
+        CHECK(empty_bricks > 1000); // the cases occur
+        CHECK(empty_blocks > 1000);
+        // The lanes' lookup gives each lane the scalar place.
+        using I = krs::index_lanes<krs::packet_f>;
+        constexpr std::size_t n = krs::lane_count<krs::packet_f>;
+        std::uint32_t state = seed;
+        for (int round = 0; round < 200; ++round) {
+            alignas(64) std::int32_t c[3][n];
+            for (std::size_t k = 0; k < n; ++k) {
+                state = state * 1664525u + 1013904223u;
+                c[0][k] = std::int32_t((state >> 8) % 37), c[1][k] = std::int32_t((state >> 12) % 21), c[2][k] = std::int32_t((state >> 17) % 50);
+            }
+            alignas(64) std::int32_t places[n];
+            view.place(I::load_aligned(c[0]), I::load_aligned(c[1]), I::load_aligned(c[2])).store_aligned(places);
+            for (std::size_t k = 0; k < n; ++k) REQUIRE(places[k] == view.place(c[0][k], c[1][k], c[2][k]));
+        }
+    }
+}
+
+TEST_CASE("hypertree shadow rays: a packet of points gives each lane the scalar transmittance")
+{
+    const small_scene scene(small_tree());
+    const auto shape = tree_shape::of(scene.list);
+    for (bool spheres : {false, true}) {
+        march_options o;
+        o.use_spheres = spheres;
+        const volume_marcher<index_list_store> m(scene.list, shape, depth_colors::tree(3, 6), o);
+        const hypervolume& v = scene.list.volume();
+        constexpr std::size_t n = krs::lane_count<krs::packet_f>;
+        // Shadow rays from every non-empty voxel's center (and from points between voxels),
+        // toward two lights, n at a time; the last packet runs part of its lanes.
+        std::vector<krs::vec3f> points;
+        scene.list.for_each([&](voxel_index i, const voxel&) {
+            const krs::vec3d c = v.voxel_center(i);
+            points.push_back(krs::vec3f(c));
+            points.push_back(krs::vec3f(c + v.voxel_size() * 0.37));
+        });
+        if (points.size() % n == 0) points.push_back(points.back() + krs::vec3f{0.01f, 0.02f, 0.03f});
+        REQUIRE(points.size() % n != 0); // a last packet with idle lanes
+        std::size_t shadowed = 0;
+        for (const krs::vec3f l : {krs::normalize(krs::vec3f{0.4f, 0.8f, 0.45f}), krs::vec3f{0, 0, -1}}) {
+            for (std::size_t first = 0; first < points.size(); first += n) {
+                const std::size_t count = std::min(n, points.size() - first);
+                std::array<float, n> x{}, y{}, z{};
+                for (std::size_t k = 0; k < n; ++k) {
+                    const krs::vec3f q = points[first + std::min(k, count - 1)];
+                    x[k] = q.x, y[k] = q.y, z[k] = q.z;
+                }
+                const krs::vec3<krs::packet_f> p{krs::packet_f::load_unaligned(x.data()), krs::packet_f::load_unaligned(y.data()),
+                                                 krs::packet_f::load_unaligned(z.data())};
+                krs::packet_f lookups(0.0f);
+                const auto running = krs::mask_from_bits<krs::packet_f>((std::uint64_t(1) << count) - 1);
+                const auto t = krs::lanes_of(m.shadow_transmittance<krs::packet_f>(p, l, lookups, running));
+                const auto looked = krs::lanes_of(lookups);
+                for (std::size_t k = 0; k < count; ++k) {
+                    float scalar_lookups = 0;
+                    const float expect = m.shadow_transmittance(points[first + k], l, scalar_lookups);
+                    REQUIRE(t[k] == expect);
+                    REQUIRE(looked[k] == scalar_lookups);
+                    shadowed += expect < 0.5f;
+                }
+                for (std::size_t k = count; k < n; ++k) REQUIRE(looked[k] == 0.0f); // idle lanes read nothing
+            }
+        }
+        CHECK(shadowed > points.size() / 10);
+    }
+}
+
+TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of voxels shaded as rays meet them")
+{
+    const small_scene scene(small_tree());
+    const auto shape = tree_shape::of(scene.list);
+    march_options two_lights;
+    two_lights.lights.push_back({{-0.7f, 0.3f, -0.2f}, {0.3f, 0.4f, 0.9f}});
+    march_options spheres;
+    spheres.use_spheres = true;
+    const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 48, 40);
+    for (const march_options& o : {march_options{}, two_lights, spheres}) {
+        const volume_marcher<index_list_store> m(scene.list, shape, depth_colors::tree(3, 6), o);
+        // The shading pass: packets of voxels and one voxel at a time store the same values.
+        shade_memo packets = m.new_shade_memo(), scalars = m.new_shade_memo();
+        m.shade_bricks<krs::packet_f>(packets, 0, m.bricks().brick_count());
+        m.shade_bricks<float>(scalars, 0, m.bricks().brick_count());
+        REQUIRE(packets.seal());
+        REQUIRE(scalars.seal());
+        const std::size_t values = packets.slots() * packets.stride();
+        CHECK(std::equal(packets.values(), packets.values() + values, scalars.values()));
+        // Rays reading a sealed table (march_shaded) and rays shading as they go (march_shading).
+        render_settings ahead, as_met;
+        as_met.shade_ahead = false;
+        for (int s : {1, 2}) {
+            ahead.supersampling = as_met.supersampling = s;
+            const image a = render<krs::packet_f>(m, camera, ahead), b = render<krs::packet_f>(m, camera, as_met);
+            const image c = render<float>(m, camera, ahead), d = render<float>(m, camera, as_met);
+            CHECK(max_difference(a, b) == 0.0);
+            CHECK(max_difference(a, c) == 0.0);
+            CHECK(max_difference(a, d) == 0.0);
+            // Shading ahead shades every voxel, visible or not; as met, only those rays reach.
+            CHECK(a.lookups == c.lookups);
+            CHECK(b.lookups == d.lookups);
+            CHECK(b.lookups < a.lookups);
+        }
+    }
 }

@@ -9,23 +9,28 @@
 // side so k = 1 makes a voxel of density mu, crossed along one side, exactly mu opaque). It is
 // shaded, multiplied by alpha and by the transmittance so far, and added; the march ends when the
 // transmittance falls below `min_transmittance` (full opacity) or the ray leaves the box.
-// Empty space is skipped by occupancy bricks (4^3 and 16^3 voxels): a sample in an empty brick is
-// not looked up, and the ray jumps by whole steps to the brick's exit, so it takes exactly the
-// samples it would have stepped through. Optionally, samples outside every secondary bounding
-// sphere are not looked up either (tree_shape.hpp: the spheres hold every non-empty cell).
-// Neither changes a pixel, only the work.
+// Rays read the marcher's copy of the voxels, regrouped into 4^3 bricks (voxel_bricks.hpp), not
+// the store: the store kind only changes how long the copy takes to make. Empty space is skipped
+// by those bricks and their 16^3 blocks: a sample in an empty brick is not looked up, and the ray
+// jumps by whole steps to the brick's exit, so it takes exactly the samples it would have stepped
+// through. Optionally, samples outside every secondary bounding sphere are not looked up either
+// (tree_shape.hpp: the spheres hold every non-empty cell). Neither changes a pixel, only the work.
 //
 // Shading (8.3): ambient light attenuated toward the interior (Reeves' exponential falloff with
 // the depth below the crown's bounding sphere), Lambert diffuse and Blinn-Phong specular with the
 // procedural normals of the structure flow, each light's term attenuated by the opacity a shadow
 // ray accumulates toward it (same step, same early exit). The base color comes from the voxel's
 // depth (transfer.hpp). By default a sample is shaded at its voxel's center (shade_per_voxel), so
-// a voxel's shading is computed about once per render, whatever the thread count.
+// a voxel's shading is computed once per render and kept in a table (shade_memo.hpp): either all
+// voxels before the rays, their shadow rays marched 16 at a time (shade_bricks), or each when a
+// ray first meets it.
 //
 // One template: the loop over samples, the masks and the accumulation are written once over T.
-// What each lane looks up (store access, sphere test, shading of a sample) runs per lane in scalar
-// code, so a packet's lanes compute exactly what the scalar marcher computes for the same ray:
-// packet and scalar images are equal pixel for pixel (tested).
+// Rays through voxels shaded ahead march lanes in step, gathering places, opacities and colors
+// (march_shaded); otherwise what each lane looks up and shades runs per lane in scalar code
+// (march_shading). Either way a packet's lanes compute exactly what the scalar marcher computes
+// for the same ray: packet and scalar images, and images shaded ahead or as met, are equal pixel
+// for pixel (tested).
 //
 // The ray cache of 8.2 is an option of the scalar marcher: entry k remembers the voxel index and
 // voxel of sample k of the previous ray; a ray reads it until its first mismatch and then
@@ -34,11 +39,13 @@
 #include "hypertree/render/shade_memo.hpp"
 #include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
+#include "hypertree/render/voxel_bricks.hpp"
 #include "krs/core/lanes.hpp"
 #include "krs/trace/ray.hpp"
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <vector>
 
@@ -87,30 +94,18 @@ struct ray_cache {
     std::size_t hits = 0, misses = 0;
 };
 
-// Per-voxel shading remembered by one thread: a direct-mapped table (slot = hash of the voxel
-// index) in plain memory, sized by the marcher on first use. It sits in front of the render's
-// shared memo (shade_memo.hpp): a thread meets the same voxels again and again along its rows,
-// and its own table answers those without touching memory another core writes.
-struct thread_shade_memo {
-    std::size_t slots = 0;
-    std::vector<voxel_index> index;
-    std::vector<float> value; // per slot: lit rgb, then one shadow per light
-};
-
-// What a thread brings to a march: its caches, each optional. `shared_shading` may be shared by
-// all threads of a render (make it with volume_marcher::new_shade_memo()); it is consulted where
-// the thread's own `shading` misses.
+// What a thread brings to a march: its caches, each optional. `shading` may be shared by all
+// threads of a render (make it with volume_marcher::new_shade_memo()).
 struct march_context {
     ray_cache* rays = nullptr; // scalar marcher only
-    thread_shade_memo* shading = nullptr;
-    shade_memo* shared_shading = nullptr;
+    shade_memo* shading = nullptr;
 };
 
 template <voxel_store S>
 class volume_marcher {
 public:
     volume_marcher(const S& store, tree_shape shape, depth_colors colors, march_options options = {})
-        : store_(&store), shape_(std::move(shape)), colors_(std::move(colors)), options_(std::move(options))
+        : store_(&store), bricks_(store), shape_(std::move(shape)), colors_(std::move(colors)), options_(std::move(options))
     {
         krs::require_positive("march_options.step_factor", options_.step_factor);
         krs::require_positive("march_options.density_scale", options_.density_scale);
@@ -125,20 +120,8 @@ public:
         const double exponent = double(options_.density_scale) * double(options_.step_factor);
         for (int d = 0; d < 256; ++d) alpha_[d] = d == 255 ? 1.0f : float(1.0 - std::pow(1.0 - d / 255.0, exponent));
         for (int l = 0; l < 256; ++l) level_color_[l] = colors_.at(l);
-        // Empty-space skipping: one bit per brick of 4^3 voxels, and per brick of 16^3, that holds
-        // a non-empty voxel. A sample in an empty brick needs no store lookup, and a ray skips the
-        // rest of the largest empty brick it is in.
-        for (occupancy& level : occupancy_) {
-            for (int a = 0; a < 3; ++a) level.count[std::size_t(a)] = std::size_t((grid_[a] + level.side() - 1) >> level.shift);
-            level.bits.assign((level.count[0] * level.count[1] * level.count[2] + 63) / 64, 0);
-        }
-        store.for_each([&](voxel_index i, const voxel&) {
-            const auto c = v.coordinates(i);
-            for (occupancy& level : occupancy_) level.mark(c[0], c[1], c[2]);
-        });
-        // Room for twice the non-empty voxels (up to 2^20 slots), so few voxels evict each other
-        // from the shading memo.
-        while (memo_slots_ < 2 * store.nonempty_count() && memo_slots_ < (std::size_t(1) << 20)) memo_slots_ *= 2;
+        alpha_at_.resize(bricks_.brick_count() * voxel_bricks::brick_voxels);
+        for (std::size_t place = 0; place < alpha_at_.size(); ++place) alpha_at_[place] = alpha_[bricks_.at_place(place).density];
         box_lo_ = {float(shape_.box.lo.x), float(shape_.box.lo.y), float(shape_.box.lo.z)};
         box_hi_ = {float(shape_.box.hi.x), float(shape_.box.hi.y), float(shape_.box.hi.z)};
         if (options_.lights.size() > max_lights)
@@ -156,13 +139,74 @@ public:
     const march_options& options() const { return options_; }
     // An empty shading memo sized for this marcher (its voxel count and lights), for one render:
     // all its threads may share it.
-    shade_memo new_shade_memo() const { return shade_memo(memo_slots_, 3 + light_dirs_.size()); }
+    shade_memo new_shade_memo() const { return shade_memo(bricks_.voxel_count(), 3 + light_dirs_.size()); }
+    // The marcher's copy of the store's voxels (voxel_bricks.hpp), which every ray reads.
+    const voxel_bricks& bricks() const { return bricks_; }
     const tree_shape& shape() const { return shape_; }
     float step() const { return step_; }
 
     // Marches the rays of the lanes.
     template <class T>
     march_result<T> march(const krs::ray<T>& ray, march_context context = {}) const
+    {
+        // With every voxel shaded ahead (and nothing left to compute per sample), the rays only
+        // read: the lanes march in step (march_shaded). Otherwise each lane looks up and shades
+        // its samples on its own (march_shading). Both give the same pixels (tested).
+        const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || (std::floating_point<T> && context.rays);
+        if (!per_sample && context.shading && context.shading->complete() && fits(*context.shading)) return march_shaded(ray, *context.shading);
+        return march_shading(ray, context);
+    }
+
+    // Whether a memo was made by this marcher's new_shade_memo() (its voxel count and lights).
+    // (And whose entries a gather can index: fewer than 2^31 floats.)
+    bool fits(const shade_memo& memo) const
+    {
+        return memo.slots() == bricks_.voxel_count() && memo.stride() == 3 + light_dirs_.size() &&
+               memo.slots() * memo.stride() < (std::size_t(1) << 31);
+    }
+
+    // The march of rays through voxels all shaded ahead: per sample, each lane's place in the
+    // bricks, its opacity and its voxel's lit color are gathered, in the accumulation of
+    // march_shading, the same operations in the same order.
+    template <class T>
+    march_result<T> march_shaded(const krs::ray<T>& ray, const shade_memo& memo) const
+    {
+        using I = krs::index_lanes<T>;
+        using krs::any, krs::select;
+        march_result<T> out;
+        T t0, t1;
+        enter_box(ray, t0, t1);
+        const T ds(step_), half(0.5f), zero(0.0f), one(1.0f), least(options_.min_transmittance);
+        T k(0.0f);
+        auto active = t0 + half * ds < t1;
+        T slope[3];
+        slopes_of(ray.direction, slope);
+        const float* alpha_at = alpha_at_.data();
+        const std::int32_t* slot_at = bricks_.slots();
+        const float* lit = memo.values();
+        const I stride(std::int32_t(memo.stride()));
+        while (any(active)) {
+            const T t = t0 + (k + half) * ds;
+            const krs::vec3<T> p = ray.origin + ray.direction * t;
+            const lane_probe<T> found = probe_lanes(p, slope, active);
+            const I place = krs::index_max(found.place, I(0));
+            const T a = select(found.looks, krs::gather(alpha_at, place), zero);
+            const I entry = krs::gather(slot_at, place) * stride;
+            out.r = out.r + out.transmittance * a * krs::gather(lit, entry);
+            out.g = out.g + out.transmittance * a * krs::gather(lit, entry + I(1));
+            out.b = out.b + out.transmittance * a * krs::gather(lit, entry + I(2));
+            out.transmittance = out.transmittance * (one - a);
+            out.lookups = out.lookups + select(found.looks, one, zero);
+            k = k + found.advance;
+            active = active & (t0 + (k + half) * ds < t1) & (out.transmittance >= least);
+        }
+        return out;
+    }
+
+    // The march of rays that shade as they go: lane by lane, each sample is looked up (through
+    // the ray cache if there is one) and shaded (from the memo, or computed and recorded there).
+    template <class T>
+    march_result<T> march_shading(const krs::ray<T>& ray, march_context context) const
     {
         ray_cache* cache = std::floating_point<T> ? context.rays : nullptr;
         using krs::any;
@@ -205,14 +249,14 @@ public:
                 const voxel_index index = found.index;
                 voxel v;
                 if constexpr (std::floating_point<T>) {
-                    v = cache ? fetch_cached(index, std::size_t(ks[i]), *cache, cache_valid, lookups[i])
-                              : (++lookups[i], store_->at(index));
+                    v = cache ? fetch_cached(index, found.place, std::size_t(ks[i]), *cache, cache_valid, lookups[i])
+                              : (++lookups[i], bricks_.at_place(found.place));
                 } else {
-                    v = (++lookups[i], store_->at(index));
+                    v = (++lookups[i], bricks_.at_place(found.place));
                 }
                 if (v.density == 0) continue;
                 alpha[i] = alpha_[v.density];
-                const rgb c = shade(pi, index, v.level, -di, context.shading, context.shared_shading, lookups[i]);
+                const rgb c = shade(pi, index, found.place, v.level, -di, context.shading, lookups[i]);
                 r[i] = c.r, g[i] = c.g, b[i] = c.b;
             }
             const T a = load<T>(alpha);
@@ -227,34 +271,91 @@ public:
         return out;
     }
 
-    // Transmittance from p toward the light along direction l (unit), within the tree's box.
+    // Transmittance from p toward the light along direction l (unit), within the tree's box:
+    // samples at base + j ds from j = 1 (one step out, so a sample does not shadow itself), with
+    // the primary rays' empty-space skipping and early exit. One template for one point (T =
+    // float) and for a packet of points, one per lane, toward the same light: the shading pass
+    // marches the shadow rays of 16 voxels at once (shade_bricks), each lane computing exactly what
+    // the scalar march computes for its point. `lookups` counts each lane's voxel reads.
+    template <class T>
+    T shadow_transmittance(const krs::vec3<T>& p, const krs::vec3f& l, T& lookups, krs::mask_t<T> running = krs::mask_t<T>(true)) const
+    {
+        using krs::select, krs::max, krs::any;
+        const krs::vec3<T> direction{T(l.x), T(l.y), T(l.z)};
+        T t0, t1;
+        enter_box(krs::ray<T>{p, direction}, t0, t1);
+        const T base = max(t0, T(0.0f));
+        T slope[3];
+        slopes_of(direction, slope);
+        const float* alpha_at = alpha_at_.data();
+        const T step(step_), least(options_.min_transmittance), zero(0.0f), one(1.0f);
+        T transmittance = one, looked = zero, j = one;
+        for (;;) {
+            const T t = base + j * step;
+            running = running & (t < t1) & (transmittance >= least);
+            if (!any(running)) break;
+            const lane_probe<T> found = probe_lanes(p + direction * t, slope, running);
+            const T alpha = krs::gather(alpha_at, krs::index_max(found.place, krs::index_lanes<T>(0)));
+            transmittance = select(found.looks, transmittance * (one - alpha), transmittance);
+            looked = looked + select(found.looks, one, zero);
+            j = j + found.advance;
+        }
+        lookups = lookups + looked;
+        return transmittance;
+    }
     float shadow_transmittance(const krs::vec3f& p, const krs::vec3f& l, float& lookups) const
     {
-        float t0, t1;
-        enter_box(krs::ray<float>{p, l}, t0, t1);
-        float transmittance = 1.0f;
-        // Sample j at base + j ds from j = 1: one step out, so the sample does not shadow itself.
-        const float base = std::max(t0, 0.0f);
-        const cell_slopes inverse = slopes(l);
-        const grid_probe grid = probe_view();
-        const S& store = *store_;
-        const float step = step_, least = options_.min_transmittance;
-        int looked = 0;
-        for (int j = 1;; ) {
-            const float t = base + float(j) * step;
-            if (!(t < t1 && transmittance >= least)) break;
-            const krs::vec3f q = p + l * t;
-            const probe_result found = grid(q, inverse);
-            if (!found.occupied()) {
-                j += found.skip;
-                continue;
-            }
-            ++looked;
-            transmittance *= 1.0f - alpha_[store.at(found.index).density];
-            ++j;
+        return shadow_transmittance<float>(p, l, lookups, true);
+    }
+
+    // What a sample finds, lane by lane: its place in the bricks (negative in an empty brick),
+    // whether it reads a voxel (`looks`: a running lane in a non-empty brick and, with
+    // use_spheres, in a part's sphere), and how many samples to advance: 1, or in an empty brick
+    // the steps to the exit of the largest empty brick or block, rounded so that a sample on the
+    // exit face is never skipped (the 1e-3 covers the rounding of exit / step, a few float ulps
+    // of a number < 64). The per-lane grid_probe computes the same.
+    template <class T>
+    struct lane_probe {
+        krs::index_lanes<T> place;
+        krs::mask_t<T> looks;
+        T advance;
+    };
+    template <class T>
+    lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running) const
+    {
+        using I = krs::index_lanes<T>;
+        using krs::select, krs::min, krs::ceil, krs::index_to_float, krs::truncate_to_index;
+        const T zero(0.0f), one(1.0f);
+        const T f[3] = {(p.x - T(origin_.x)) * T(cells_per_unit_.x), (p.y - T(origin_.y)) * T(cells_per_unit_.y),
+                        (p.z - T(origin_.z)) * T(cells_per_unit_.z)};
+        auto inside = running;
+        for (int a = 0; a < 3; ++a) inside = inside & (f[a] >= zero) & (f[a] < T(float(grid_[std::size_t(a)])));
+        // Lanes outside the grid look up cell 0 (their result is not used): a float to int
+        // conversion outside int's range would be undefined.
+        I c[3];
+        for (int a = 0; a < 3; ++a) c[a] = krs::index_min(truncate_to_index(select(inside, f[a], zero)), I(grid_[std::size_t(a)] - 1));
+        const I place = bricks_.view_of().place(c[0], c[1], c[2]);
+        const T found = index_to_float(place); // >= 0: a voxel; < -64: an empty 16^3 block
+        krs::mask_t<T> looks = inside & (found >= zero);
+        if (options_.use_spheres) looks = looks & inside_a_sphere(p);
+        const auto in_block = found < T(-64.5f);
+        T exit(3.0e38f);
+        for (int a = 0; a < 3; ++a) {
+            const T lo = select(in_block, index_to_float(c[a] & I(~15)), index_to_float(c[a] & I(~3)));
+            const T hi = lo + select(in_block, T(16.0f), T(4.0f));
+            exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
         }
-        lookups += float(looked);
-        return transmittance;
+        const T steps = ceil(exit / T(step_) - T(1e-3f));
+        const T skip = select(steps > one, min(steps, T(1.0e6f)), one);
+        return {place, looks, select(inside & (found < zero), skip, one)};
+    }
+    // slopes() for the lanes of a direction.
+    template <class T>
+    void slopes_of(const krs::vec3<T>& d, T (&slope)[3]) const
+    {
+        using krs::select;
+        const T zero(0.0f), dir[3] = {d.x * T(cells_per_unit_.x), d.y * T(cells_per_unit_.y), d.z * T(cells_per_unit_.z)};
+        for (int a = 0; a < 3; ++a) slope[a] = select(dir[a] != zero, T(1.0f) / dir[a], zero);
     }
 
     // A ray direction d as the t it takes to cross one cell along each axis, 1 / (d * cells per
@@ -282,6 +383,7 @@ public:
     struct probe_result {
         static constexpr voxel_index none = ~voxel_index(0); // no voxel: indices stop at max_voxel_count - 1 (volume.hpp)
         voxel_index index = none;
+        std::size_t place = 0; // where the bricks keep the voxel (when there is one)
         int skip = 1;
         bool occupied() const { return index != none; }
     };
@@ -291,25 +393,11 @@ public:
     // grid from memory for every sample. A local copy whose address is never taken stays in
     // registers.
     struct grid_probe {
-        struct level {
-            const std::uint64_t* bits;
-            std::size_t count_x, count_xy;
-            int shift;
-            std::size_t brick(int x, int y, int z) const
-            {
-                return std::size_t(x >> shift) + count_x * std::size_t(y >> shift) + count_xy * std::size_t(z >> shift);
-            }
-            bool occupied(int x, int y, int z) const
-            {
-                const std::size_t b = brick(x, y, z);
-                return (bits[b >> 6] >> (b & 63)) & 1;
-            }
-        };
         krs::vec3f origin, cells_per_unit;
         float size[3];
         int last[3];
         voxel_index stride_y, stride_z;
-        level fine, coarse;
+        voxel_bricks::view bricks;
         float step;
         const volume_marcher* spheres; // set when use_spheres: the rare path through the marcher
 
@@ -319,12 +407,13 @@ public:
             if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < size[0] && f[1] < size[1] && f[2] < size[2])) return {};
             int c[3];
             for (int a = 0; a < 3; ++a) c[a] = std::min(int(f[a]), last[a]);
-            if (fine.occupied(c[0], c[1], c[2])) {
+            const std::int32_t place = bricks.place(c[0], c[1], c[2]);
+            if (place >= 0) {
                 if (spheres && !spheres->inside_a_sphere(p)) return {};
-                return {voxel_index(c[0]) + stride_y * voxel_index(c[1]) + stride_z * voxel_index(c[2]), 1};
+                return {voxel_index(c[0]) + stride_y * voxel_index(c[1]) + stride_z * voxel_index(c[2]), std::size_t(place), 1};
             }
-            // The largest empty brick (two levels: the marcher's occupancy_, finest first).
-            const int shift = coarse.occupied(c[0], c[1], c[2]) ? fine.shift : coarse.shift;
+            // The largest empty brick (4^3 or 16^3).
+            const int shift = place < -64 ? voxel_bricks::coarse_shift : voxel_bricks::fine_shift;
             float exit = 3.0e38f;
             for (int a = 0; a < 3; ++a) {
                 const float lo = float((c[a] >> shift) << shift), hi = lo + float(1 << shift);
@@ -334,7 +423,7 @@ public:
             }
             // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
             const float steps = std::ceil(exit / step - 1e-3f);
-            return {probe_result::none, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
+            return {probe_result::none, 0, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
         }
     };
     grid_probe probe_view() const
@@ -345,8 +434,7 @@ public:
                 {grid_[0] - 1, grid_[1] - 1, grid_[2] - 1},
                 voxel_index(grid_[0]),
                 voxel_index(grid_[0]) * voxel_index(grid_[1]),
-                occupancy_[0].view(),
-                occupancy_[1].view(),
+                bricks_.view_of(),
                 step_,
                 options_.use_spheres ? this : nullptr};
     }
@@ -359,6 +447,76 @@ public:
             if (krs::dot(d, d) <= s.radius * s.radius) return true;
         }
         return false;
+    }
+    template <class T>
+    krs::mask_t<T> inside_a_sphere(const krs::vec3<T>& p) const
+    {
+        if constexpr (std::floating_point<T>) {
+            return inside_a_sphere(krs::vec3f(p));
+        } else {
+            krs::mask_t<T> inside(shape_.spheres.empty());
+            for (const auto& s : shape_.spheres) {
+                const krs::vec3<T> d{p.x - T(s.center.x), p.y - T(s.center.y), p.z - T(s.center.z)};
+                inside = inside | (d.x * d.x + d.y * d.y + d.z * d.z <= T(s.radius * s.radius));
+            }
+            return inside;
+        }
+    }
+
+    // Shades the non-empty voxels of bricks [first, last) into `memo` (shade_per_voxel), their
+    // shadow rays marched a packet of voxels at a time, and returns the lookups made. What it
+    // stores equals what shade() computes for the same voxel (tested), so a render may shade its
+    // voxels ahead of its rays (render_settings::shade_ahead) or as its rays meet them.
+    template <class T = krs::packet_f>
+    std::uint64_t shade_bricks(shade_memo& memo, std::size_t first, std::size_t last) const
+    {
+        constexpr std::size_t n = lanes<T>;
+        const std::size_t lights = light_dirs_.size(), stride = 3 + lights;
+        if (memo.slots() != bricks_.voxel_count() || memo.stride() != stride)
+            throw krs::invalid_parameter("shade_bricks.memo", "must come from this marcher's new_shade_memo()");
+        std::array<float, n> x{}, y{}, z{};
+        std::array<std::uint32_t, n> slots{};
+        std::array<std::uint8_t, n> levels{};
+        std::size_t count = 0;
+        double lookups = 0;
+        const auto shade_packet = [&] {
+            for (std::size_t k = count; k < n; ++k) x[k] = x[0], y[k] = y[0], z[k] = z[0]; // idle lanes: a copy of lane 0
+            const krs::vec3<T> p{load<T>(x), load<T>(y), load<T>(z)};
+            const auto running = krs::mask_from_bits<T>(count == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << count) - 1);
+            std::array<std::array<float, n>, max_lights> shadows{};
+            for (std::size_t i = 0; i < lights; ++i) {
+                if (!options_.shadows) {
+                    shadows[i].fill(1.0f);
+                    continue;
+                }
+                T looked(0.0f);
+                shadows[i] = krs::lanes_of(shadow_transmittance<T>(p, light_dirs_[i], looked, running));
+                const auto per_lane = krs::lanes_of(looked);
+                for (std::size_t k = 0; k < count; ++k) lookups += double(per_lane[k]);
+            }
+            std::array<float, 3 + max_lights> entry{};
+            for (std::size_t k = 0; k < count; ++k) {
+                for (std::size_t i = 0; i < lights; ++i) entry[3 + i] = shadows[i][k];
+                const rgb c = lit({x[k], y[k], z[k]}, levels[k], entry.data() + 3);
+                entry[0] = c.r, entry[1] = c.g, entry[2] = c.b;
+                memo.store(slots[k], entry.data());
+            }
+            count = 0;
+        };
+        const hypervolume& volume = store_->volume();
+        for (std::size_t b = first; b < last && b < bricks_.brick_count(); ++b) {
+            for (std::uint64_t mask = bricks_.mask(b); mask != 0; mask &= mask - 1) {
+                const std::size_t offset = std::size_t(std::countr_zero(mask)), place = b * voxel_bricks::brick_voxels + offset;
+                const std::array<int, 3> c = voxel_bricks::cell_at(bricks_.origin(b), offset);
+                const krs::vec3f q = center_of(volume.index(c[0], c[1], c[2]));
+                x[count] = q.x, y[count] = q.y, z[count] = q.z;
+                slots[count] = bricks_.slot(place);
+                levels[count] = bricks_.at_place(place).level;
+                if (++count == n) shade_packet();
+            }
+        }
+        if (count > 0) shade_packet();
+        return std::uint64_t(lookups);
     }
 
     // The most samples a ray can take through the box (the paper's cache size q).
@@ -401,7 +559,7 @@ private:
         }
     }
 
-    voxel fetch_cached(voxel_index index, std::size_t k, ray_cache& cache, bool& valid, float& lookups) const
+    voxel fetch_cached(voxel_index index, std::size_t place, std::size_t k, ray_cache& cache, bool& valid, float& lookups) const
     {
         if (k < cache.index.size()) {
             if (valid && cache.index[k] == index) {
@@ -411,12 +569,12 @@ private:
             valid = false; // past the first mismatch the rest of the ray overwrites the cache
             ++cache.misses;
             ++lookups;
-            const voxel v = store_->at(index);
+            const voxel v = bricks_.at_place(place);
             cache.index[k] = index, cache.value[k] = v;
             return v;
         }
         ++lookups;
-        return store_->at(index);
+        return bricks_.at_place(place);
     }
 
     krs::vec3f center_of(voxel_index index) const
@@ -427,44 +585,30 @@ private:
 
     // The lit color of a sample: base color x (ambient + diffuse), plus specular. With
     // shade_per_voxel the shading point is the voxel's center, so all but the view-dependent
-    // specular term is a pure function of the voxel and is memoized: in the thread's own table,
-    // and behind it in the render's shared one.
-    rgb shade(const krs::vec3f& p, voxel_index index, int level, const krs::vec3f& view, thread_shade_memo* memo,
-              shade_memo* shared, float& lookups) const
+    // specular term is a pure function of the voxel and is memoized by its slot (voxel_bricks.hpp)
+    // in the render's table.
+    rgb shade(const krs::vec3f& p, voxel_index index, std::size_t place, int level, const krs::vec3f& view, shade_memo* memo,
+              float& lookups) const
     {
         // The shading point, computed only where needed: a memo hit needs none (unless specular).
         const auto point = [&] { return options_.shade_per_voxel ? center_of(index) : p; };
-        const std::size_t lights = light_dirs_.size();
-        std::array<float, 3 + max_lights> local{}; // an entry: lit rgb, then one shadow per light
-        const float* shadows = local.data() + 3;
-        rgb lit;
-        if (options_.shade_per_voxel && memo) {
-            const std::size_t stride = 3 + lights;
-            // (Re)sized for this marcher: its slot count and its number of lights. With a shared
-            // memo behind it, the thread's own is a small one (recent voxels, in the core's cache).
-            const std::size_t slots = shared ? std::min(memo_slots_, thread_memo_slots) : memo_slots_;
-            if (memo->slots != slots || memo->value.size() != slots * stride) {
-                memo->slots = slots;
-                memo->index.assign(slots, ~voxel_index(0));
-                memo->value.assign(slots * stride, 0.0f);
+        std::array<float, 3 + max_lights> entry{}; // lit rgb, then one shadow per light
+        const float* shadows = entry.data() + 3;
+        // A memo made for another marcher (its voxel count or lights) is not used.
+        const std::size_t stride = 3 + light_dirs_.size();
+        if (options_.shade_per_voxel && memo && memo->slots() == bricks_.voxel_count() && memo->stride() == stride) {
+            const std::uint32_t slot = bricks_.slot(place);
+            if (!memo->find(slot, entry.data())) {
+                const rgb lit = light_at(point(), level, entry.data() + 3, lookups);
+                entry[0] = lit.r, entry[1] = lit.g, entry[2] = lit.b;
+                memo->store(slot, entry.data());
             }
-            const std::size_t slot = (std::size_t(index) * 0x9e3779b1u >> 7) & (memo->slots - 1);
-            float* entry = &memo->value[slot * stride];
-            if (memo->index[slot] != index) {
-                // Behind this thread's table, the render's (a memo of another size is not used).
-                const bool usable = shared && shared->stride() == stride && shared->slots() == memo_slots_;
-                if (!(usable && shared->find(index, entry))) {
-                    lit = light_at(point(), level, entry + 3, lookups);
-                    entry[0] = lit.r, entry[1] = lit.g, entry[2] = lit.b;
-                    if (usable) shared->store(index, entry);
-                }
-                memo->index[slot] = index;
-            }
-            lit = {entry[0], entry[1], entry[2]};
-            shadows = entry + 3;
         } else {
-            lit = light_at(point(), level, local.data() + 3, lookups);
+            const rgb lit = light_at(point(), level, entry.data() + 3, lookups);
+            entry[0] = lit.r, entry[1] = lit.g, entry[2] = lit.b;
         }
+        rgb lit{entry[0], entry[1], entry[2]};
+        const std::size_t lights = light_dirs_.size();
         if (!(options_.specular > 0)) return lit;
         const krs::vec3d nd = shape_.normal_at(krs::vec3d(point()));
         if (nd.x == 0 && nd.y == 0 && nd.z == 0) return lit;
@@ -483,6 +627,14 @@ private:
     // light's shadow transmittance to `shadows`.
     rgb light_at(const krs::vec3f& q, int level, float* shadows, float& lookups) const
     {
+        for (std::size_t i = 0; i < light_dirs_.size(); ++i)
+            shadows[i] = options_.shadows ? shadow_transmittance(q, light_dirs_[i], lookups) : 1.0f;
+        return lit(q, level, shadows);
+    }
+    // Base color x (Reeves' attenuated ambient + shadowed Lambert) at q, given each light's shadow
+    // transmittance.
+    rgb lit(const krs::vec3f& q, int level, const float* shadows) const
+    {
         const rgb base = level_color_[std::clamp(level, 0, 255)];
         const krs::vec3d qd(q);
         const krs::vec3d c(shape_.crown.center);
@@ -494,7 +646,6 @@ private:
         const bool has_normal = nd.x != 0 || nd.y != 0 || nd.z != 0;
         for (std::size_t i = 0; i < light_dirs_.size(); ++i) {
             const krs::vec3f& l = light_dirs_[i];
-            shadows[i] = options_.shadows ? shadow_transmittance(q, l, lookups) : 1.0f;
             // Without a normal (no flow) the diffuse term is the shadow alone: "shadow attenuated
             // diffuse" of 8.3 for isotropic leaves.
             const float lambert = has_normal ? std::max(0.0f, krs::dot(n, l)) * 0.75f + 0.25f : 1.0f;
@@ -506,6 +657,7 @@ private:
     }
 
     const S* store_;
+    voxel_bricks bricks_;
     tree_shape shape_;
     depth_colors colors_;
     march_options options_;
@@ -513,29 +665,8 @@ private:
     std::array<int, 3> grid_{};
     float side_ = 1, step_ = 1;
     static constexpr std::size_t max_lights = 8;
-    std::size_t memo_slots_ = 1024;
-    // A thread's own memo in front of the shared one: 16384 entries (about 320 KiB with one light,
-    // within a core's L2). With 4096, a close 300 x 300 view of tree A at resolution 100 (eye 1.4
-    // box diagonals away) went to the shared memo's cache lines for most voxels and rendered in
-    // 16.3 ms instead of 12.3 on 2 threads (Table 1's framing shows no difference either way).
-    static constexpr std::size_t thread_memo_slots = 16384;
-    // Occupancy bits of one brick size (2^shift voxels a side): whether a brick holds any
-    // non-empty voxel. Shifts, not divisions: this runs for every sample.
-    struct occupancy {
-        int shift;
-        std::array<std::size_t, 3> count{};
-        std::vector<std::uint64_t> bits;
-        int side() const { return 1 << shift; }
-        typename grid_probe::level view() const { return {bits.data(), count[0], count[0] * count[1], shift}; }
-        void mark(int x, int y, int z)
-        {
-            const std::size_t b = view().brick(x, y, z);
-            bits[b >> 6] |= std::uint64_t(1) << (b & 63);
-        }
-    };
-    // 4^3 and 16^3, finest first: grid_probe reads exactly these two.
-    std::array<occupancy, 2> occupancy_{occupancy{2, {}, {}}, occupancy{4, {}, {}}};
     std::array<float, 256> alpha_{};
+    std::vector<float> alpha_at_; // per place of the bricks: its voxel's opacity for one step
     std::array<rgb, 256> level_color_{};
     std::vector<krs::vec3f> light_dirs_;
 };

@@ -35,6 +35,12 @@ struct render_settings {
     int supersampling = 1; // s: s * s samples per pixel
     rgb background{0.78f, 0.86f, 0.95f};
     bool ray_cache = false; // scalar marcher only
+    // With shade_per_voxel: shade every non-empty voxel before the rays, a packet of shadow rays
+    // at a time on all threads (volume_marcher::shade_bricks), instead of each voxel when a ray
+    // first meets it. Ahead is faster when the view shows most of the tree (tree A at resolution
+    // 300: see bench_hypertree_render); a close view of a small part may prefer off. Pixels are
+    // the same either way.
+    bool shade_ahead = true;
     parallel_for_hook parallel_for;
 };
 
@@ -101,27 +107,27 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
     out.width = w, out.height = h;
     out.rgb.assign(std::size_t(w) * std::size_t(h) * 3, 0.0f);
     std::vector<std::uint64_t> row_lookups(std::size_t(h), 0);
-    // Shading memos (marcher.hpp): one per thread, kept across the rows it renders in this call,
-    // and behind them one shared by the call's threads, so that a voxel's shadow rays are
-    // marched about once whatever the thread count. Both are emptied for each call (every render
-    // pays for its shading, and timings compare); the shared one is made only where it can pay:
-    // several threads and shadow rays to share. They only hold pure functions of voxels: which
-    // thread renders which row changes nothing.
-    static std::atomic<std::uint64_t> renders{0};
-    const std::uint64_t render_id = ++renders;
+    // The shading memo (shade_memo.hpp), shared by the call's threads, so that a voxel's shadow
+    // rays are marched about once whatever the thread count. It is made for each call (every
+    // render pays for its shading, and timings compare). It only holds pure functions of voxels:
+    // which thread renders which row changes nothing.
     const march_options& options = marcher.options();
-    std::optional<shade_memo> shared;
-    if (settings.parallel_for && options.shade_per_voxel && options.shadows && !options.lights.empty())
-        shared.emplace(marcher.new_shade_memo());
+    std::optional<shade_memo> memo;
+    if (options.shade_per_voxel) memo.emplace(marcher.new_shade_memo());
+    std::atomic<std::uint64_t> shading_lookups{0};
+    if (memo && settings.shade_ahead) {
+        // Runs of 64 bricks (about 700 voxels in tree A) per task.
+        constexpr std::size_t bricks_per_task = 64;
+        const std::size_t tasks = (marcher.bricks().brick_count() + bricks_per_task - 1) / bricks_per_task;
+        const auto shade_task = [&](std::size_t task) {
+            shading_lookups += marcher.template shade_bricks<krs::packet_f>(*memo, task * bricks_per_task, (task + 1) * bricks_per_task);
+        };
+        run_tasks(settings.parallel_for, tasks, shade_task);
+        memo->seal(); // the threads that shaded are done: rays read the table directly
+    }
     const auto render_row = [&](std::size_t row) {
         const int y = int(row);
         ray_cache cache;
-        thread_local thread_shade_memo memo;
-        thread_local std::uint64_t memo_render = 0;
-        if (memo_render != render_id) {
-            std::fill(memo.index.begin(), memo.index.end(), ~voxel_index(0));
-            memo_render = render_id;
-        }
         // Every sample ray of the row, in order; packets take them `lanes` at a time.
         const std::size_t count = std::size_t(w) * std::size_t(s * s);
         std::vector<float> px(count), py(count);
@@ -147,7 +153,7 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
                 tx = T::load_unaligned(lx.data()), ty = T::load_unaligned(ly.data());
             const krs::ray<T> r = camera.primary_ray(tx, ty);
             const march_result<T> m =
-                marcher.march(r, march_context{settings.ray_cache ? &cache : nullptr, &memo, shared ? &*shared : nullptr});
+                marcher.march(r, march_context{settings.ray_cache ? &cache : nullptr, memo ? &*memo : nullptr});
             // Each lane's result, spilled once per packet.
             const auto tr = krs::lanes_of(m.transmittance), mr = krs::lanes_of(m.r), mg = krs::lanes_of(m.g),
                        mb = krs::lanes_of(m.b), ml = krs::lanes_of(m.lookups);
@@ -169,14 +175,13 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
             o[0] = r * inv, o[1] = g * inv, o[2] = b * inv;
         }
     };
-    // Tasks are bands of rows, not rows: a voxel is shaded for one row and looked up again by the
-    // next rows, and within a band those lookups stay in the rendering thread's own memo, where
-    // rows dealt out one at a time went to the shared memo (another core's cache lines) for most
-    // of them.
+    // Tasks are bands of rows, not rows: neighbouring rows meet the same voxels, whose bricks and
+    // shading then stay in one core's cache.
     const std::size_t bands = (std::size_t(h) + rows_per_band - 1) / rows_per_band;
     run_tasks(settings.parallel_for, bands, [&](std::size_t band) {
         for (std::size_t row = band * rows_per_band; row < std::min(std::size_t(h), (band + 1) * rows_per_band); ++row) render_row(row);
     });
+    out.lookups = shading_lookups;
     for (auto n : row_lookups) out.lookups += n;
     return out;
 }

@@ -96,6 +96,11 @@ inline T sqrt(T a) noexcept
 {
     return std::sqrt(a);
 }
+template <std::floating_point T>
+inline T ceil(T a) noexcept
+{
+    return std::ceil(a);
+}
 inline bool any(bool m) noexcept { return m; }
 inline bool all(bool m) noexcept { return m; }
 inline bool none(bool m) noexcept { return !m; }
@@ -198,6 +203,88 @@ inline mask_t<T> mask_from_bits(std::uint64_t bits) noexcept
             for (std::size_t i = 0; i < lane_count<T>; ++i) lanes[i] = ((bits >> i) & 1u) != 0;
             return mask_t<T>::load_aligned(lanes);
         }
+    }
+}
+
+// ---- index lanes -----------------------------------------------------------------------------
+// Integer lanes beside float lanes, for table lookups done lane by lane in one template (a
+// voxel's place in a sparse grid): std::int32_t beside float, xsimd::batch<std::int32_t, A>
+// (same lane count) beside xsimd::batch<float, A>. Masks do not cross between the two (xsimd 8.1
+// has no mask cast): code decides in the float domain and looks up in the integer one.
+template <class T>
+struct index_lane_traits {
+    using type = std::int32_t;
+};
+template <class A>
+struct index_lane_traits<xsimd::batch<float, A>> {
+    using type = xsimd::batch<std::int32_t, A>;
+};
+template <class T>
+using index_lanes = typename index_lane_traits<T>::type;
+
+// Truncation toward zero. Precondition: every lane is finite and within the int32 range (the
+// scalar conversion is undefined otherwise), so callers select a safe value first.
+inline std::int32_t truncate_to_index(float x) noexcept { return std::int32_t(x); }
+template <class A>
+inline xsimd::batch<std::int32_t, A> truncate_to_index(const xsimd::batch<float, A>& x) noexcept
+{
+    return xsimd::to_int(x);
+}
+inline float index_to_float(std::int32_t i) noexcept { return float(i); }
+template <class A>
+inline xsimd::batch<float, A> index_to_float(const xsimd::batch<std::int32_t, A>& i) noexcept
+{
+    return xsimd::to_float(i);
+}
+inline std::int32_t index_min(std::int32_t a, std::int32_t b) noexcept { return std::min(a, b); }
+inline std::int32_t index_max(std::int32_t a, std::int32_t b) noexcept { return std::max(a, b); }
+template <class A>
+inline xsimd::batch<std::int32_t, A> index_min(const xsimd::batch<std::int32_t, A>& a, const xsimd::batch<std::int32_t, A>& b) noexcept
+{
+    return xsimd::min(a, b);
+}
+template <class A>
+inline xsimd::batch<std::int32_t, A> index_max(const xsimd::batch<std::int32_t, A>& a, const xsimd::batch<std::int32_t, A>& b) noexcept
+{
+    return xsimd::max(a, b);
+}
+// table[i] in each lane (a gather for packets). Precondition: every lane indexes the table.
+// xsimd 8.1's integer gathers never match (their enable_if is not deducible) and fall back to
+// inserting one lane at a time, so the AVX-512 and AVX2 gathers are called here directly; other
+// targets load lane by lane.
+template <class V>
+inline V gather(const V* table, std::int32_t i) noexcept
+{
+    return table[i];
+}
+template <class V, class A>
+inline xsimd::batch<V, A> gather(const V* table, const xsimd::batch<std::int32_t, A>& i) noexcept
+{
+    static_assert(sizeof(V) == 4, "gathers of 32-bit values");
+    [[maybe_unused]] constexpr bool is_float = std::is_same_v<V, float>;
+#if defined(__AVX512F__)
+    if constexpr (std::is_base_of_v<xsimd::avx512f, A>) {
+        if constexpr (is_float)
+            return _mm512_i32gather_ps(i, table, 4);
+        else
+            return _mm512_i32gather_epi32(i, table, 4);
+    } else
+#endif
+#if defined(__AVX2__)
+        if constexpr (std::is_base_of_v<xsimd::avx2, A>) {
+        if constexpr (is_float)
+            return _mm256_i32gather_ps(table, i, 4);
+        else
+            return _mm256_i32gather_epi32(reinterpret_cast<const int*>(table), i, 4);
+    } else
+#endif
+    {
+        constexpr std::size_t n = xsimd::batch<V, A>::size;
+        alignas(64) std::int32_t index[n];
+        alignas(64) V value[n];
+        i.store_aligned(index);
+        for (std::size_t k = 0; k < n; ++k) value[k] = table[index[k]];
+        return xsimd::batch<V, A>::load_aligned(value);
     }
 }
 
