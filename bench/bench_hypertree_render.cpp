@@ -6,13 +6,17 @@
 // Table: trees A-D (hypertree/presets.hpp) in a 300 x 300 image, at resolution 100 without
 // supersampling and at 300 with factor 2 (the paper's two settings), for each store kind, on T
 // threads (default all cores), scalar and packet marchers; next to the paper's times (an Athlon at
-// 1.4 GHz; its "3D array + bit array" column against our dense store).
+// 1.4 GHz; its "3D array + bit array" column against our dense store). A frame is a render from a
+// marcher already made; `setup` is the making of the marcher (its brick copy of the store,
+// voxel_bricks.hpp), once per tree and lighting whatever the frames. Speedups are given per frame
+// and for one frame with its setup.
 //
 // Speed against error: tree A at resolution 300 in an N x N image (default 200); each setting's
 // time and root-mean-square error (linear RGB, over all pixels) against a converged reference:
 // step factor 0.25, supersampling 4, shading (shadow rays included) at every sample. Settings: step factor,
 // resolution through level of detail (lod.hpp), supersampling, per-voxel shading, bounding
-// spheres, ray cache. Each timing is the best of 2 runs.
+// spheres, ray cache, voxels shaded as rays meet them instead of ahead. Each timing is the best of
+// 2 runs.
 
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
@@ -89,10 +93,10 @@ int main(int argc, char** argv)
 
     if (only.empty() || only == "table") {
         std::printf("hypertree rendering (paper Table 1): 300x300, %u thread(s), best of 2\n\n", threads);
-        std::printf("%-4s %4s %2s %-12s %10s %10s %8s | %9s %8s\n", "tree", "res", "s", "store", "scalar", "packet", "lookups", "paper RT",
-                    "speedup");
+        std::printf("%-4s %4s %2s %-12s %10s %10s %10s %8s | %9s %8s %11s\n", "tree", "res", "s", "store", "setup", "scalar", "packet", "lookups",
+                    "paper RT", "speedup", "with setup");
         const std::array makers{presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d};
-        double worst = 1e300;
+        double worst = 1e300, worst_with_setup = 1e300;
         for (auto [res, s] : {std::pair{100, 1}, std::pair{300, 2}}) {
             for (std::size_t t = 0; t < makers.size(); ++t) {
                 const ifs<> tree = makers[t](res);
@@ -103,20 +107,27 @@ int main(int argc, char** argv)
                 rs.supersampling = s;
                 rs.parallel_for = bench::parallel_for(threads);
                 const auto row = [&]<class S>(const char* name, const S& store, std::optional<double> paper) {
-                    const volume_marcher<S> marcher(store, shape, depth_colors::tree(tree.branch_depth, tree.tree_depth));
+                    const auto make = [&] { return volume_marcher<S>(store, shape, depth_colors::tree(tree.branch_depth, tree.tree_depth)); };
+                    const double setup = bench::best_seconds(2, [&] { (void)make(); });
+                    const volume_marcher<S> marcher = make();
                     image img;
                     const double scalar = bench::best_seconds(2, [&] { img = render<float>(marcher, camera, rs); });
                     const double packet = bench::best_seconds(2, [&] { img = render<krs::packet_f>(marcher, camera, rs); });
                     const double best = std::min(scalar, packet);
-                    std::string paper_text = "-", speedup = "-";
+                    std::string paper_text = "-", speedup = "-", with_setup = "-";
                     if (paper) {
                         char b[32];
                         std::snprintf(b, sizeof b, "%.1f s", *paper), paper_text = b;
                         std::snprintf(b, sizeof b, "%.0fx", *paper / best), speedup = b;
+                        std::snprintf(b, sizeof b, "%.0fx", *paper / (setup + best)), with_setup = b;
                         worst = std::min(worst, *paper / best);
+                        worst_with_setup = std::min(worst_with_setup, *paper / (setup + best));
                     }
-                    std::printf("%-4s %4d %2d %-12s %8.1fms %8.1fms %7.2fM | %9s %8s\n", tree.name.c_str(), res, s, name, scalar * 1e3,
-                                packet * 1e3, double(img.lookups) / 1e6, paper_text.c_str(), speedup.c_str());
+                    std::printf("%-4s %4d %2d %-12s %8.1fms %8.1fms %8.1fms %7.2fM | %9s %8s %11s\n", tree.name.c_str(), res, s, name,
+                                setup * 1e3, scalar * 1e3, packet * 1e3, double(img.lookups) / 1e6, paper_text.c_str(), speedup.c_str(),
+                                with_setup.c_str());
+                    csv << "table," << tree.name << ',' << res << ',' << s << ',' << name << ",setup,," << setup << ",,,"
+                        << (paper ? std::to_string(*paper) : "") << '\n';
                     for (auto [marcher_name, secs] : {std::pair{"scalar", scalar}, std::pair{"packet", packet}})
                         csv << "table," << tree.name << ',' << res << ',' << s << ',' << name << ',' << marcher_name << ",," << secs << ','
                             << img.lookups << ",," << (paper ? std::to_string(*paper) : "") << '\n';
@@ -129,8 +140,9 @@ int main(int argc, char** argv)
             }
             std::printf("\n");
         }
-        std::printf("target: rendering >= 100x faster than the paper's on both cores: worst %.0fx -> %s\n\n", worst,
-                    worst >= 100 ? "met" : "NOT met");
+        std::printf("target: rendering >= 100x faster than the paper's on both cores: worst %.0fx per frame -> %s; "
+                    "worst %.0fx for one frame with its setup -> %s\n\n",
+                    worst, worst >= 100 ? "met" : "NOT met", worst_with_setup, worst_with_setup >= 100 ? "met" : "NOT met");
     }
 
     if (only.empty() || only == "error") {
@@ -186,6 +198,9 @@ int main(int argc, char** argv)
             render_settings rs = one;
             rs.ray_cache = true;
             measure("ray cache", store, shape, defaults, rs);
+            rs = one;
+            rs.shade_ahead = false;
+            measure("voxels shaded as rays meet them", store, shape, defaults, rs);
         }
         for (int res : {200, 150, 100}) {
             const std::vector<stored_voxel> reduced = reduce(store, resolution::cube(res));

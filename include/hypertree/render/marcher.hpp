@@ -494,10 +494,24 @@ public:
                 const auto per_lane = krs::lanes_of(looked);
                 for (std::size_t k = 0; k < count; ++k) lookups += double(per_lane[k]);
             }
+            // The structure-flow normals, a packet of doubles at a time.
+            using D = std::conditional_t<std::floating_point<T>, double, krs::packet_d>;
+            constexpr std::size_t m = krs::lane_count<D>;
+            std::array<krs::vec3d, n> normal{};
+            for (std::size_t first = 0; lights > 0 && first < count; first += m) {
+                std::array<double, m> nx{}, ny{}, nz{};
+                for (std::size_t k = 0; k < m; ++k) {
+                    const std::size_t lane = std::min(first + k, count - 1);
+                    nx[k] = double(x[lane]), ny[k] = double(y[lane]), nz[k] = double(z[lane]);
+                }
+                const krs::vec3<D> nd = shape_.normal_at(krs::vec3<D>{load<D>(nx), load<D>(ny), load<D>(nz)});
+                const auto ox = krs::lanes_of(nd.x), oy = krs::lanes_of(nd.y), oz = krs::lanes_of(nd.z);
+                for (std::size_t k = 0; k < m && first + k < count; ++k) normal[first + k] = {ox[k], oy[k], oz[k]};
+            }
             std::array<float, 3 + max_lights> entry{};
             for (std::size_t k = 0; k < count; ++k) {
                 for (std::size_t i = 0; i < lights; ++i) entry[3 + i] = shadows[i][k];
-                const rgb c = lit({x[k], y[k], z[k]}, levels[k], entry.data() + 3);
+                const rgb c = lit({x[k], y[k], z[k]}, levels[k], entry.data() + 3, normal[k]);
                 entry[0] = c.r, entry[1] = c.g, entry[2] = c.b;
                 memo.store(slots[k], entry.data());
             }
@@ -531,7 +545,7 @@ private:
     static constexpr std::size_t lanes = krs::lane_count<T>;
 
     template <class T>
-    static T load(const std::array<float, lanes<T>>& a)
+    static T load(const std::array<krs::scalar_t<T>, lanes<T>>& a)
     {
         if constexpr (std::floating_point<T>)
             return a[0];
@@ -632,8 +646,12 @@ private:
         return lit(q, level, shadows);
     }
     // Base color x (Reeves' attenuated ambient + shadowed Lambert) at q, given each light's shadow
-    // transmittance.
+    // transmittance and the structure-flow normal at q.
     rgb lit(const krs::vec3f& q, int level, const float* shadows) const
+    {
+        return lit(q, level, shadows, light_dirs_.empty() ? krs::vec3d{} : shape_.normal_at(krs::vec3d(q)));
+    }
+    rgb lit(const krs::vec3f& q, int level, const float* shadows, const krs::vec3d& nd) const
     {
         const rgb base = level_color_[std::clamp(level, 0, 255)];
         const krs::vec3d qd(q);
@@ -641,7 +659,6 @@ private:
         const double depth = std::max(0.0, double(shape_.crown.radius) - krs::length(qd - c)) / std::max(double(shape_.crown.radius), 1e-30);
         const float ambient = options_.ambient * float(std::exp(-double(options_.ambient_falloff) * depth));
         float lr = ambient, lg = ambient, lb = ambient;
-        const krs::vec3d nd = light_dirs_.empty() ? krs::vec3d{} : shape_.normal_at(qd);
         const krs::vec3f n{float(nd.x), float(nd.y), float(nd.z)};
         const bool has_normal = nd.x != 0 || nd.y != 0 || nd.z != 0;
         for (std::size_t i = 0; i < light_dirs_.size(); ++i) {

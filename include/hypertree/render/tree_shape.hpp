@@ -18,6 +18,7 @@
 
 #include "hypertree/store/store.hpp"
 #include "krs/core/bounds.hpp"
+#include "krs/core/lanes.hpp"
 
 #include <array>
 #include <cmath>
@@ -88,19 +89,30 @@ struct tree_shape {
         return of(store.volume(), voxels);
     }
 
-    // The blended outward normal at p (zero when there is no flow).
-    vec3d normal_at(const vec3d& p) const
+    // The blended outward normal at p (zero when there is no flow). One template for a point
+    // (D = double) and for a packet of points (D = krs::packet_d, a point per lane), each lane
+    // computing exactly what the scalar does: square roots and divisions are correctly rounded.
+    template <class D = double>
+    krs::vec3<D> normal_at(const krs::vec3<D>& p) const
     {
-        vec3d n{};
+        using krs::select, krs::sqrt;
+        const D zero(0.0);
+        krs::vec3<D> n{zero, zero, zero};
         for (const part_flow& f : flows) {
-            const vec3d d = p - f.centroid;
-            const vec3d radial = d - f.axis * krs::dot(d, f.axis);
-            const double w = 1.0 / (krs::dot(d, d) + f.weight_radius * f.weight_radius * 0.05);
-            const double len = krs::length(radial);
-            if (len > 0) n += radial * (w / len);
+            const krs::vec3<D> centroid{D(f.centroid.x), D(f.centroid.y), D(f.centroid.z)}, axis{D(f.axis.x), D(f.axis.y), D(f.axis.z)};
+            const krs::vec3<D> d = p - centroid;
+            const krs::vec3<D> radial = d - axis * krs::dot(d, axis);
+            const D w = D(1.0) / (krs::dot(d, d) + D(f.weight_radius * f.weight_radius * 0.05));
+            const D len = sqrt(krs::dot(radial, radial));
+            const auto some = len > zero;
+            // (A lane with no radial part divides by 0 and discards it.)
+            const D scale = w / select(some, len, D(1.0));
+            n = {n.x + select(some, radial.x * scale, zero), n.y + select(some, radial.y * scale, zero), n.z + select(some, radial.z * scale, zero)};
         }
-        const double len = krs::length(n);
-        return len > 0 ? n / len : vec3d{};
+        const D len = sqrt(krs::dot(n, n));
+        const auto some = len > zero;
+        const D safe = select(some, len, D(1.0));
+        return {select(some, n.x / safe, zero), select(some, n.y / safe, zero), select(some, n.z / safe, zero)};
     }
 
 private:
