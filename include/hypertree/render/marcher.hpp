@@ -149,12 +149,21 @@ public:
     template <class T>
     march_result<T> march(const krs::ray<T>& ray, march_context context = {}) const
     {
-        // With every voxel shaded ahead (and nothing left to compute per sample), the rays only
-        // read: the lanes march in step (march_shaded). Otherwise each lane looks up and shades
-        // its samples on its own (march_shading). Both give the same pixels (tested).
+        return march_packets<T, 1>({ray}, context)[0];
+    }
+    // Marches K packets of rays. With every voxel shaded ahead (and nothing left to compute per
+    // sample), the rays only read, and the packets march in turn within one loop, their lanes in
+    // step (march_shaded). Otherwise each lane of each packet looks up and shades its samples on
+    // its own (march_shading). Both give the same pixels (tested).
+    template <class T, std::size_t K>
+    std::array<march_result<T>, K> march_packets(const std::array<krs::ray<T>, K>& rays, march_context context = {}) const
+    {
         const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || (std::floating_point<T> && context.rays);
-        if (!per_sample && context.shading && context.shading->complete() && fits(*context.shading)) return march_shaded(ray, *context.shading);
-        return march_shading(ray, context);
+        if (!per_sample && context.shading && context.shading->complete() && fits(*context.shading))
+            return march_shaded<T, K>(rays, *context.shading);
+        std::array<march_result<T>, K> out;
+        for (std::size_t k = 0; k < K; ++k) out[k] = march_shading(rays[k], context);
+        return out;
     }
 
     // Whether a memo was made by this marcher's new_shade_memo() (its voxel count and lights).
@@ -167,38 +176,49 @@ public:
 
     // The march of rays through voxels all shaded ahead: per sample, each lane's place in the
     // bricks, its opacity and its voxel's lit color are gathered, in the accumulation of
-    // march_shading, the same operations in the same order.
-    template <class T>
-    march_result<T> march_shaded(const krs::ray<T>& ray, const shade_memo& memo) const
+    // march_shading, the same operations in the same order. K packets march in turn within one
+    // loop: a sample's place comes from gathers that depend on the previous sample's, so one
+    // packet alone waits on memory at every step, and K independent ones give the core other work.
+    template <class T, std::size_t K>
+    std::array<march_result<T>, K> march_shaded(const std::array<krs::ray<T>, K>& rays, const shade_memo& memo) const
     {
         using I = krs::index_lanes<T>;
         using krs::any, krs::select;
-        march_result<T> out;
-        T t0, t1;
-        enter_box(ray, t0, t1);
         const T ds(step_), half(0.5f), zero(0.0f), one(1.0f), least(options_.min_transmittance);
-        T k(0.0f);
-        auto active = t0 + half * ds < t1;
-        T slope[3];
-        slopes_of(ray.direction, slope);
         const float* alpha_at = alpha_at_.data();
         const std::int32_t* slot_at = bricks_.slots();
         const float* lit = memo.values();
         const I stride(std::int32_t(memo.stride()));
-        while (any(active)) {
-            const T t = t0 + (k + half) * ds;
-            const krs::vec3<T> p = ray.origin + ray.direction * t;
-            const lane_probe<T> found = probe_lanes(p, slope, active);
-            const I place = krs::index_max(found.place, I(0));
-            const T a = select(found.looks, krs::gather(alpha_at, place), zero);
-            const I entry = krs::gather(slot_at, place) * stride;
-            out.r = out.r + out.transmittance * a * krs::gather(lit, entry);
-            out.g = out.g + out.transmittance * a * krs::gather(lit, entry + I(1));
-            out.b = out.b + out.transmittance * a * krs::gather(lit, entry + I(2));
-            out.transmittance = out.transmittance * (one - a);
-            out.lookups = out.lookups + select(found.looks, one, zero);
-            k = k + found.advance;
-            active = active & (t0 + (k + half) * ds < t1) & (out.transmittance >= least);
+        std::array<march_result<T>, K> out;
+        std::array<T, K> t0, t1, k;
+        std::array<krs::mask_t<T>, K> active;
+        T slope[K][3];
+        for (std::size_t r = 0; r < K; ++r) {
+            enter_box(rays[r], t0[r], t1[r]);
+            k[r] = zero;
+            active[r] = t0[r] + half * ds < t1[r];
+            slopes_of(rays[r].direction, slope[r]);
+        }
+        for (bool marching = true; marching;) {
+            marching = false;
+            for (std::size_t r = 0; r < K; ++r) {
+                if (!any(active[r])) continue;
+                marching = true;
+                march_result<T>& o = out[r];
+                const T t = t0[r] + (k[r] + half) * ds;
+                const krs::vec3<T> p = rays[r].origin + rays[r].direction * t;
+                const lane_probe<T> found = probe_lanes(p, slope[r], active[r]);
+                const I place = krs::index_max(found.place, I(0));
+                const T a = select(found.looks, krs::gather(alpha_at, place), zero);
+                const I entry = krs::gather(slot_at, place) * stride;
+                o.r = o.r + o.transmittance * a * krs::gather(lit, entry);
+                o.g = o.g + o.transmittance * a * krs::gather(lit, entry + I(1));
+                o.b = o.b + o.transmittance * a * krs::gather(lit, entry + I(2));
+                o.transmittance = o.transmittance * (one - a);
+                o.lookups = o.lookups + select(found.looks, one, zero);
+                k[r] = k[r] + found.advance;
+                active[r] = active[r] & (t0[r] + (k[r] + half) * ds < t1[r]) & (o.transmittance >= least);
+            }
         }
         return out;
     }
@@ -275,32 +295,51 @@ public:
     // samples at base + j ds from j = 1 (one step out, so a sample does not shadow itself), with
     // the primary rays' empty-space skipping and early exit. One template for one point (T =
     // float) and for a packet of points, one per lane, toward the same light: the shading pass
-    // marches the shadow rays of 16 voxels at once (shade_bricks), each lane computing exactly what
-    // the scalar march computes for its point. `lookups` counts each lane's voxel reads.
+    // marches the shadow rays of voxels a packet at a time (shade_bricks), each lane computing
+    // exactly what the scalar march computes for its point. `lookups` counts each lane's voxel
+    // reads.
     template <class T>
     T shadow_transmittance(const krs::vec3<T>& p, const krs::vec3f& l, T& lookups, krs::mask_t<T> running = krs::mask_t<T>(true)) const
     {
+        std::array<T, 1> looked{lookups};
+        const T transmittance = shadow_transmittances<T, 1>({p}, l, looked, {running})[0];
+        lookups = looked[0];
+        return transmittance;
+    }
+    // The same for K packets at once, marched in turn within one loop: a sample's place comes
+    // from gathers that depend on the previous sample's, so one packet alone waits on memory at
+    // every step; K independent packets give the core other work meanwhile.
+    template <class T, std::size_t K>
+    std::array<T, K> shadow_transmittances(const std::array<krs::vec3<T>, K>& p, const krs::vec3f& l, std::array<T, K>& lookups,
+                                           std::array<krs::mask_t<T>, K> running) const
+    {
         using krs::select, krs::max, krs::any;
         const krs::vec3<T> direction{T(l.x), T(l.y), T(l.z)};
-        T t0, t1;
-        enter_box(krs::ray<T>{p, direction}, t0, t1);
-        const T base = max(t0, T(0.0f));
         T slope[3];
         slopes_of(direction, slope);
         const float* alpha_at = alpha_at_.data();
         const T step(step_), least(options_.min_transmittance), zero(0.0f), one(1.0f);
-        T transmittance = one, looked = zero, j = one;
-        for (;;) {
-            const T t = base + j * step;
-            running = running & (t < t1) & (transmittance >= least);
-            if (!any(running)) break;
-            const lane_probe<T> found = probe_lanes(p + direction * t, slope, running);
-            const T alpha = krs::gather(alpha_at, krs::index_max(found.place, krs::index_lanes<T>(0)));
-            transmittance = select(found.looks, transmittance * (one - alpha), transmittance);
-            looked = looked + select(found.looks, one, zero);
-            j = j + found.advance;
+        std::array<T, K> base, t1, transmittance, j;
+        for (std::size_t k = 0; k < K; ++k) {
+            T t0;
+            enter_box(krs::ray<T>{p[k], direction}, t0, t1[k]);
+            base[k] = max(t0, zero);
+            transmittance[k] = one, j[k] = one;
         }
-        lookups = lookups + looked;
+        for (bool marching = true; marching;) {
+            marching = false;
+            for (std::size_t k = 0; k < K; ++k) {
+                const T t = base[k] + j[k] * step;
+                running[k] = running[k] & (t < t1[k]) & (transmittance[k] >= least);
+                if (!any(running[k])) continue;
+                marching = true;
+                const lane_probe<T> found = probe_lanes(p[k] + direction * t, slope, running[k]);
+                const T alpha = krs::gather(alpha_at, krs::index_max(found.place, krs::index_lanes<T>(0)));
+                transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
+                lookups[k] = lookups[k] + select(found.looks, one, zero);
+                j[k] = j[k] + found.advance;
+            }
+        }
         return transmittance;
     }
     float shadow_transmittance(const krs::vec3f& p, const krs::vec3f& l, float& lookups) const
@@ -464,13 +503,13 @@ public:
     }
 
     // Shades the non-empty voxels of bricks [first, last) into `memo` (shade_per_voxel), their
-    // shadow rays marched a packet of voxels at a time, and returns the lookups made. What it
+    // shadow rays marched four packets of voxels at a time, and returns the lookups made. What it
     // stores equals what shade() computes for the same voxel (tested), so a render may shade its
     // voxels ahead of its rays (render_settings::shade_ahead) or as its rays meet them.
     template <class T = krs::packet_f>
     std::uint64_t shade_bricks(shade_memo& memo, std::size_t first, std::size_t last) const
     {
-        constexpr std::size_t n = lanes<T>;
+        constexpr std::size_t packets = std::floating_point<T> ? 1 : 4, w = lanes<T>, n = packets * w;
         const std::size_t lights = light_dirs_.size(), stride = 3 + lights;
         if (memo.slots() != bricks_.voxel_count() || memo.stride() != stride)
             throw krs::invalid_parameter("shade_bricks.memo", "must come from this marcher's new_shade_memo()");
@@ -481,18 +520,32 @@ public:
         double lookups = 0;
         const auto shade_packet = [&] {
             for (std::size_t k = count; k < n; ++k) x[k] = x[0], y[k] = y[0], z[k] = z[0]; // idle lanes: a copy of lane 0
-            const krs::vec3<T> p{load<T>(x), load<T>(y), load<T>(z)};
-            const auto running = krs::mask_from_bits<T>(count == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << count) - 1);
+            std::array<krs::vec3<T>, packets> p;
+            std::array<krs::mask_t<T>, packets> running;
+            for (std::size_t k = 0; k < packets; ++k) {
+                const auto segment = [&](const std::array<float, n>& a) {
+                    std::array<float, w> lanes_k;
+                    std::copy_n(a.begin() + std::ptrdiff_t(k * w), w, lanes_k.begin());
+                    return load<T>(lanes_k);
+                };
+                p[k] = {segment(x), segment(y), segment(z)};
+                const std::size_t live = std::min(w, count > k * w ? count - k * w : 0);
+                running[k] = krs::mask_from_bits<T>(live == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << live) - 1);
+            }
             std::array<std::array<float, n>, max_lights> shadows{};
             for (std::size_t i = 0; i < lights; ++i) {
                 if (!options_.shadows) {
                     shadows[i].fill(1.0f);
                     continue;
                 }
-                T looked(0.0f);
-                shadows[i] = krs::lanes_of(shadow_transmittance<T>(p, light_dirs_[i], looked, running));
-                const auto per_lane = krs::lanes_of(looked);
-                for (std::size_t k = 0; k < count; ++k) lookups += double(per_lane[k]);
+                std::array<T, packets> looked;
+                looked.fill(T(0.0f));
+                const std::array<T, packets> t = shadow_transmittances<T, packets>(p, light_dirs_[i], looked, running);
+                for (std::size_t k = 0; k < packets; ++k) {
+                    const auto transmittance = krs::lanes_of(t[k]), per_lane = krs::lanes_of(looked[k]);
+                    std::copy(transmittance.begin(), transmittance.end(), shadows[i].begin() + std::ptrdiff_t(k * w));
+                    for (std::size_t lane = 0; lane < w && k * w + lane < count; ++lane) lookups += double(per_lane[lane]);
+                }
             }
             // The structure-flow normals, a packet of doubles at a time.
             using D = std::conditional_t<std::floating_point<T>, double, krs::packet_d>;

@@ -140,28 +140,38 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
                 if (s == 1) px[i] = float(x) + 0.5f, py[i] = float(y) + 0.5f;
             }
         std::vector<float> cr(count), cg(count), cb(count);
-        for (std::size_t first = 0; first < count; first += lanes) {
-            std::array<float, lanes> lx{}, ly{};
-            for (std::size_t l = 0; l < lanes; ++l) {
-                const std::size_t i = std::min(first + l, count - 1); // the last packet repeats its last ray
-                lx[l] = px[i], ly[l] = py[i];
+        // Packets go to the marcher `group` at a time (marching several at once hides the latency
+        // of each one's lookups: volume_marcher::march_shaded); the last ones repeat the last ray.
+        constexpr std::size_t group = 2, rays_per_group = group * lanes;
+        for (std::size_t first = 0; first < count; first += rays_per_group) {
+            std::array<krs::ray<T>, group> rays;
+            for (std::size_t g = 0; g < group; ++g) {
+                std::array<float, lanes> lx{}, ly{};
+                for (std::size_t l = 0; l < lanes; ++l) {
+                    const std::size_t i = std::min(first + g * lanes + l, count - 1);
+                    lx[l] = px[i], ly[l] = py[i];
+                }
+                T tx, ty;
+                if constexpr (std::floating_point<T>)
+                    tx = lx[0], ty = ly[0];
+                else
+                    tx = T::load_unaligned(lx.data()), ty = T::load_unaligned(ly.data());
+                rays[g] = camera.primary_ray(tx, ty);
             }
-            T tx, ty;
-            if constexpr (std::floating_point<T>)
-                tx = lx[0], ty = ly[0];
-            else
-                tx = T::load_unaligned(lx.data()), ty = T::load_unaligned(ly.data());
-            const krs::ray<T> r = camera.primary_ray(tx, ty);
-            const march_result<T> m =
-                marcher.march(r, march_context{settings.ray_cache ? &cache : nullptr, memo ? &*memo : nullptr});
-            // Each lane's result, spilled once per packet.
-            const auto tr = krs::lanes_of(m.transmittance), mr = krs::lanes_of(m.r), mg = krs::lanes_of(m.g),
-                       mb = krs::lanes_of(m.b), ml = krs::lanes_of(m.lookups);
-            for (std::size_t l = 0; l < lanes && first + l < count; ++l) {
-                cr[first + l] = mr[l] + tr[l] * settings.background.r;
-                cg[first + l] = mg[l] + tr[l] * settings.background.g;
-                cb[first + l] = mb[l] + tr[l] * settings.background.b;
-                row_lookups[row] += std::uint64_t(ml[l]);
+            const std::array<march_result<T>, group> marched =
+                marcher.template march_packets<T, group>(rays, march_context{settings.ray_cache ? &cache : nullptr, memo ? &*memo : nullptr});
+            for (std::size_t g = 0; g < group; ++g) {
+                // Each lane's result, spilled once per packet.
+                const march_result<T>& m = marched[g];
+                const auto tr = krs::lanes_of(m.transmittance), mr = krs::lanes_of(m.r), mg = krs::lanes_of(m.g),
+                           mb = krs::lanes_of(m.b), ml = krs::lanes_of(m.lookups);
+                for (std::size_t l = 0; l < lanes && first + g * lanes + l < count; ++l) {
+                    const std::size_t i = first + g * lanes + l;
+                    cr[i] = mr[l] + tr[l] * settings.background.r;
+                    cg[i] = mg[l] + tr[l] * settings.background.g;
+                    cb[i] = mb[l] + tr[l] * settings.background.b;
+                    row_lookups[row] += std::uint64_t(ml[l]);
+                }
             }
         }
         for (int x = 0; x < w; ++x) {
