@@ -360,7 +360,7 @@ public:
         T advance;
     };
     template <class T>
-    lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running) const
+    [[gnu::always_inline]] lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running) const
     {
         using I = krs::index_lanes<T>;
         using krs::select, krs::min, krs::ceil, krs::index_to_float, krs::truncate_to_index;

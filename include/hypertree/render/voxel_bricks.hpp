@@ -7,15 +7,17 @@
 // and a bisection per step for an index list), and the shadow rays, most of a render's work
 // (paper 8.1), repeat that for every shaded voxel. Here each 4^3 brick that holds a non-empty
 // voxel keeps its 64 densities in one cache line (and its 64 levels in another), so a ray reads
-// one line per brick it crosses, and the whole of tree A at resolution 300 (25 000 bricks) fits
-// in 3.5 MB.
+// one line per brick it crosses. Tree A at resolution 300 has 25 000 bricks: 3.2 MB of densities
+// and levels, 6.4 MB of slots (below) and 1.7 MB of directory, against 54 MB of dense store.
 //
-// Finding a voxel's brick is two table reads, the same in scalar and SIMD code (a gather per
-// table), from a tree of three levels like OpenVDB's: each 16^3 block of the grid names its table
-// of 64 entries, one per 4^3 brick in it; an entry is the brick's rank (its place among the
-// stored bricks) or -1 when the brick is empty, and every empty block names one shared table of
-// -2. A voxel's place is rank * 64 + its offset in the brick (x, y, z low bits): negative when its
-// brick is empty, below -64 when its whole block is, which is what a ray needs to skip it.
+// Finding a voxel's place is one table read, the same in scalar and SIMD code (a gather): each
+// 4^3 brick of the grid has its rank (its place among the stored bricks) or -1 when it is empty,
+// 4 bytes per 64 voxels of the grid (62 MB at 1000^3, against 2 GB for a dense store). A voxel's
+// place is rank * 64 + its offset in the brick (x, y, z low bits): negative when its brick is
+// empty. A second read, independent of the first, tells whether the whole 16^3 block around the
+// brick is empty, and then the place is below -64: what a ray needs to skip the block. (Two
+// levels, a block naming a table of its bricks' ranks, took less memory, but the second read
+// waited for the first at every sample: tree A at resolution 100 rendered 10% slower.)
 //
 // A voxel that needs more than a density (the shading memo: shade_memo.hpp) gets a dense number
 // among the non-empty voxels, its slot, kept per place (a gather for packets, where a popcount of
@@ -56,9 +58,9 @@ struct cache_line_allocator {
 class voxel_bricks {
 public:
     static constexpr int fine_shift = 2;   // 4^3 voxels: densities in one 64-byte line
-    static constexpr int coarse_shift = 4; // 16^3 voxels: 64 bricks per table
+    static constexpr int coarse_shift = 4; // 16^3 voxels: a block, skipped whole when empty
     static constexpr std::size_t brick_voxels = std::size_t(1) << (3 * fine_shift);
-    static constexpr std::int32_t empty_brick = -1, empty_block = -2;
+    static constexpr std::int32_t empty_brick = -1;
     // Places must stay within int32 (the lanes' gathers): rank * 64 + 63 < 2^31.
     static constexpr std::size_t max_bricks = std::size_t(1) << 25;
 
@@ -69,10 +71,13 @@ public:
     {
         const hypervolume& v = store.volume();
         const std::array<int, 3> grid{v.grid().x, v.grid().y, v.grid().z};
-        for (std::size_t a = 0; a < 3; ++a) block_count_[a] = std::size_t((grid[a] + 15) >> coarse_shift);
-        const std::size_t blocks = block_count_[0] * block_count_[1] * block_count_[2];
-        if (blocks >= (std::size_t(1) << 31))
-            throw krs::invalid_parameter("voxel_bricks.volume", "must have fewer than 2^31 blocks of 16^3 voxels", std::to_string(blocks));
+        for (std::size_t a = 0; a < 3; ++a) {
+            brick_count_[a] = std::size_t((grid[a] + 3) >> fine_shift);
+            block_count_[a] = std::size_t((grid[a] + 15) >> coarse_shift);
+        }
+        const std::size_t grid_bricks = brick_count_[0] * brick_count_[1] * brick_count_[2];
+        if (grid_bricks >= (std::size_t(1) << 31))
+            throw krs::invalid_parameter("voxel_bricks.volume", "must have fewer than 2^31 bricks of 4^3 voxels", std::to_string(grid_bricks));
         // One pass over the store (a dense store's pass reads the whole grid), kept as cells.
         struct cell {
             std::array<int, 3> c;
@@ -80,20 +85,14 @@ public:
         };
         std::vector<cell> cells;
         cells.reserve(store.nonempty_count());
-        // Table 0 is the shared table of empty blocks; a block's table is made when a voxel
-        // first falls in it, and a brick's rank when a voxel first falls in it.
-        block_table_.assign(blocks, 0);
-        brick_rank_.assign(brick_voxels, empty_block);
+        brick_rank_.assign(grid_bricks, empty_brick);
+        block_code_.assign(block_count_[0] * block_count_[1] * block_count_[2], -std::int32_t(brick_voxels));
         store.for_each([&](voxel_index i, const voxel& value) {
             if (value.density == 0) return;
             const std::array<int, 3> c = v.coordinates(i);
             cells.push_back({c, value});
-            std::int32_t& table = block_table_[block_of(c[0], c[1], c[2])];
-            if (table == 0) {
-                table = std::int32_t(brick_rank_.size());
-                brick_rank_.resize(brick_rank_.size() + brick_voxels, empty_brick);
-            }
-            std::int32_t& rank = brick_rank_[std::size_t(table) + brick_in_block(c[0], c[1], c[2])];
+            block_code_[block_of(c[0], c[1], c[2])] = 0;
+            std::int32_t& rank = brick_rank_[brick_of(c[0], c[1], c[2])];
             if (rank == empty_brick) {
                 if (brick_origin_.size() == max_bricks)
                     throw krs::invalid_parameter("voxel_bricks.store", "must have at most 2^25 non-empty bricks of 4^3 voxels");
@@ -121,9 +120,9 @@ public:
 
     // What the hot loops read, by value (a local copy stays in registers; see volume_marcher).
     struct view {
-        const std::int32_t* block_table;
         const std::int32_t* brick_rank;
-        std::int32_t blocks_x, blocks_xy;
+        const std::int32_t* block_code; // per block: 0 when it holds a voxel, else -64
+        std::int32_t bricks_x, bricks_xy, blocks_x, blocks_xy;
 
         // The voxel's place in the bricks (rank * 64 + offset); in [-64, -1] when its brick is
         // empty, below -64 when its block is. I is std::int32_t or a batch of them (one lane per
@@ -131,15 +130,17 @@ public:
         template <class I>
         I place(const I& x, const I& y, const I& z) const
         {
+            const I brick = (x >> fine_shift) + (y >> fine_shift) * bricks_x + (z >> fine_shift) * bricks_xy;
             const I block = (x >> coarse_shift) + (y >> coarse_shift) * blocks_x + (z >> coarse_shift) * blocks_xy;
-            const I brick = ((x >> fine_shift) & 3) | (((y >> fine_shift) & 3) << 2) | (((z >> fine_shift) & 3) << 4);
-            const I rank = krs::gather(brick_rank, krs::gather(block_table, block) + brick);
-            return (rank << 6) | (x & 3) | ((y & 3) << 2) | ((z & 3) << 4);
+            const I rank = krs::gather(brick_rank, brick), code = krs::gather(block_code, block);
+            // rank >> 31 is all ones for an empty brick (-1), which then takes its block's code.
+            return ((rank << 6) | (x & 3) | ((y & 3) << 2) | ((z & 3) << 4)) + ((rank >> 31) & code);
         }
     };
     view view_of() const
     {
-        return {block_table_.data(), brick_rank_.data(), std::int32_t(block_count_[0]), std::int32_t(block_count_[0] * block_count_[1])};
+        return {brick_rank_.data(), block_code_.data(), std::int32_t(brick_count_[0]), std::int32_t(brick_count_[0] * brick_count_[1]),
+                std::int32_t(block_count_[0]), std::int32_t(block_count_[0] * block_count_[1])};
     }
 
     // The voxel at a place >= 0 (density 0 for an empty voxel of a non-empty brick).
@@ -168,24 +169,24 @@ public:
     std::size_t brick_count() const { return mask_.size(); }
     std::size_t memory_bytes() const
     {
-        return block_table_.capacity() * 4 + brick_rank_.capacity() * 4 + density_.capacity() + level_.capacity() +
+        return brick_rank_.capacity() * 4 + block_code_.capacity() * 4 + density_.capacity() + level_.capacity() +
                mask_.capacity() * 8 + slot_.capacity() * 4 + brick_origin_.capacity() * sizeof(std::array<int, 3>);
     }
 
 private:
+    std::size_t brick_of(int x, int y, int z) const
+    {
+        return std::size_t(x >> fine_shift) + brick_count_[0] * (std::size_t(y >> fine_shift) + brick_count_[1] * std::size_t(z >> fine_shift));
+    }
     std::size_t block_of(int x, int y, int z) const
     {
         return std::size_t(x >> coarse_shift) +
                block_count_[0] * (std::size_t(y >> coarse_shift) + block_count_[1] * std::size_t(z >> coarse_shift));
     }
-    static std::size_t brick_in_block(int x, int y, int z)
-    {
-        return std::size_t(((x >> fine_shift) & 3) | (((y >> fine_shift) & 3) << 2) | (((z >> fine_shift) & 3) << 4));
-    }
 
-    std::array<std::size_t, 3> block_count_{};
-    std::vector<std::int32_t> block_table_; // per 16^3 block: where its 64 ranks start in brick_rank_
-    std::vector<std::int32_t> brick_rank_;  // 64 per table; table 0 (empty blocks) is all empty_block
+    std::array<std::size_t, 3> brick_count_{}, block_count_{};
+    std::vector<std::int32_t> brick_rank_; // per 4^3 brick of the grid: its rank, or -1
+    std::vector<std::int32_t> block_code_; // per 16^3 block: 0 when it holds a voxel, else -64
     std::vector<std::uint8_t, detail::cache_line_allocator<std::uint8_t>> density_, level_; // 64 per brick, by rank
     std::vector<std::uint64_t> mask_;              // per brick: its non-empty voxels
     std::vector<std::int32_t> slot_;               // 64 per brick: each voxel's slot
