@@ -25,15 +25,17 @@ double best_seconds(int repeat, F&& f)
     return best;
 }
 
-// Runs body(0 .. count-1) on `threads` threads taking items in order from a shared counter.
+// Runs body(0 .. count-1) on `threads` threads (the caller and threads - 1 started for the call)
+// taking items in order from a shared counter.
 inline void run_parallel(unsigned threads, std::size_t count, const std::function<void(std::size_t)>& body)
 {
     std::atomic<std::size_t> next{0};
+    const auto work = [&] {
+        for (std::size_t i; (i = next++) < count;) body(i);
+    };
     std::vector<std::thread> pool;
-    for (unsigned w = 0; w < threads; ++w)
-        pool.emplace_back([&] {
-            for (std::size_t i; (i = next++) < count;) body(i);
-        });
+    for (unsigned w = 1; w < threads; ++w) pool.emplace_back(work);
+    work();
     for (auto& t : pool) t.join();
 }
 
