@@ -86,6 +86,24 @@ TEST_CASE("hypertree render stops at full opacity and shadows behind an opaque w
     CHECK(m.shadow_transmittance({5, 16.5f, 16.5f}, {1, 0, 0}, lookups) == 0.0f);
 }
 
+TEST_CASE("hypertree render of an empty tree is the background")
+{
+    const hypervolume v({0, 0, 0}, {1, 1, 1}, resolution::cube(8));
+    const index_list_store empty = index_list_store::build(v, {});
+    const volume_marcher<index_list_store> m(empty, tree_shape::of(empty), depth_colors{});
+    float lookups = 0;
+    CHECK(m.shadow_transmittance({0.5f, 0.5f, 0.5f}, {0, 1, 0}, lookups) == 1.0f);
+    const krs::pinhole_camera camera({0.5f, 0.5f, -2.0f}, {0.5f, 0.5f, 0.5f}, {0, 1, 0}, 40, 16, 12);
+    render_settings s;
+    for (const image& i : {render<float>(m, camera, s), render<krs::packet_f>(m, camera, s)}) {
+        CHECK(i.lookups == 0);
+        for (std::size_t p = 0; p < i.rgb.size(); p += 3) {
+            REQUIRE(i.rgb[p] == s.background.r);
+            REQUIRE(i.rgb[p + 2] == s.background.b);
+        }
+    }
+}
+
 TEST_CASE("hypertree render packets give the scalar pixels")
 {
     const small_scene scene(small_tree());

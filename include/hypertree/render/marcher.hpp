@@ -120,8 +120,10 @@ public:
         const double exponent = double(options_.density_scale) * double(options_.step_factor);
         for (int d = 0; d < 256; ++d) alpha_[d] = d == 255 ? 1.0f : float(1.0 - std::pow(1.0 - d / 255.0, exponent));
         for (int l = 0; l < 256; ++l) level_color_[l] = colors_.at(l);
-        alpha_at_.resize(bricks_.brick_count() * voxel_bricks::brick_voxels);
-        for (std::size_t place = 0; place < alpha_at_.size(); ++place) alpha_at_[place] = alpha_[bricks_.at_place(place).density];
+        // (At least one entry: lanes with no voxel read entry 0, even in an empty tree.)
+        alpha_at_.resize(std::max<std::size_t>(1, bricks_.brick_count() * voxel_bricks::brick_voxels));
+        for (std::size_t place = 0; place < bricks_.brick_count() * voxel_bricks::brick_voxels; ++place)
+            alpha_at_[place] = alpha_[bricks_.at_place(place).density];
         box_lo_ = {float(shape_.box.lo.x), float(shape_.box.lo.y), float(shape_.box.lo.z)};
         box_hi_ = {float(shape_.box.hi.x), float(shape_.box.hi.y), float(shape_.box.hi.z)};
         if (options_.lights.size() > max_lights)
@@ -166,11 +168,12 @@ public:
         return out;
     }
 
-    // Whether a memo was made by this marcher's new_shade_memo() (its voxel count and lights).
-    // (And whose entries a gather can index: fewer than 2^31 floats.)
+    // Whether a memo was made by this marcher's new_shade_memo() (its voxel count and lights),
+    // and rays may gather from it: it has an entry (lanes with no voxel read entry 0) and fewer
+    // than 2^31 floats.
     bool fits(const shade_memo& memo) const
     {
-        return memo.slots() == bricks_.voxel_count() && memo.stride() == 3 + light_dirs_.size() &&
+        return memo.slots() == bricks_.voxel_count() && memo.stride() == 3 + light_dirs_.size() && memo.slots() > 0 &&
                memo.slots() * memo.stride() < (std::size_t(1) << 31);
     }
 
