@@ -11,9 +11,10 @@
 // level (2 bytes per voxel); the grids keep only the density, which favors them.
 //
 // Memory: the store's memory_bytes() against Grid::memUsage() (the tree's nodes and buffers), plus
-// what each raymarcher adds on top to skip empty space: the marcher's two occupancy bit levels
-// (bricks of 4^3 and 16^3 voxels, counted from the grid size) and the bool tree that OpenVDB's
-// VolumeRayIntersector copies from the grid's topology.
+// what each raymarcher adds on top to skip empty space: the marcher's brick copy of the store
+// (volume_marcher::memory_bytes(): the voxels regrouped in 4^3 bricks with their directory,
+// voxel_bricks.hpp, which the library's rays read instead of the store) and the bool tree that
+// OpenVDB's VolumeRayIntersector copies from the grid's topology.
 //
 // Access: Q random voxels (default 2^20), once drawn among the non-empty voxels and once uniformly
 // over the whole grid; ns per lookup on one thread, best of 3: store.at(index) against a
@@ -35,7 +36,7 @@
 // float rounding moves a sample across a voxel face. The presets' voxels are not cubic (a fitted
 // box, R cells per axis) and the intersector refuses non-uniform voxels, so the grid keeps the
 // identity transform and the bench maps each world ray into index space itself (setIndexRay).
-// Timings are the best of 4 renders and include only the rendering (the marcher's occupancy bits
+// Timings are the best of 4 renders and include only the rendering (the marcher's brick copy
 // and the intersector's bool tree are built once, timed apart as "setup").
 
 #include "support/timing.hpp"
@@ -271,7 +272,6 @@ int main(int argc, char** argv)
         std::mt19937_64 random(7);
         std::vector<voxel_index> hit_index(queries), any_index(queries);
         std::vector<openvdb::Coord> hit_coord(queries), any_coord(queries);
-        const auto grid = volume.grid();
         for (std::size_t q = 0; q < queries; ++q) {
             hit_index[q] = voxels[std::uniform_int_distribution<std::size_t>(0, voxels.size() - 1)(random)].index;
             any_index[q] = voxel_index(std::uniform_int_distribution<std::uint64_t>(0, volume.voxel_count() - 1)(random));
@@ -299,14 +299,11 @@ int main(int argc, char** argv)
             bench::run_parallel(threads, count, body);
         };
         std::vector<float> reference; // the dense store's scalar image
-        const std::size_t bricks4 = std::size_t((grid.x + 3) / 4) * std::size_t((grid.y + 3) / 4) * std::size_t((grid.z + 3) / 4);
-        const std::size_t bricks16 = std::size_t((grid.x + 15) / 16) * std::size_t((grid.y + 15) / 16) * std::size_t((grid.z + 15) / 16);
-        const std::size_t occupancy_bytes = (bricks4 + 63) / 64 * 8 + (bricks16 + 63) / 64 * 8;
 
         const auto library = [&]<class S>(const char* name, const S& store) {
             row r;
             r.tree = tree.name, r.structure = name, r.resolution = res, r.nonempty = store.nonempty_count();
-            r.memory = store.memory_bytes(), r.accelerator = occupancy_bytes;
+            r.memory = store.memory_bytes();
             r.access_nonempty_ns = ns_per([&] {
                 unsigned s = 0;
                 for (voxel_index i : hit_index) s += store.at(i).density;
@@ -319,6 +316,7 @@ int main(int argc, char** argv)
             });
             std::optional<volume_marcher<S>> marcher;
             r.setup_ms = bench::best_seconds(1, [&] { marcher.emplace(store, shape, white, options); }) * 1e3;
+            r.accelerator = marcher->memory_bytes();
             image scalar, packet;
             r.scalar_ms = bench::best_seconds(4, [&] { scalar = render<float>(*marcher, camera, settings); }) * 1e3;
             r.packet_ms = bench::best_seconds(4, [&] { packet = render<krs::packet_f>(*marcher, camera, settings); }) * 1e3;

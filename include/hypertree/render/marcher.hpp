@@ -144,6 +144,8 @@ public:
     shade_memo new_shade_memo() const { return shade_memo(bricks_.voxel_count(), 3 + light_dirs_.size()); }
     // The marcher's copy of the store's voxels (voxel_bricks.hpp), which every ray reads.
     const voxel_bricks& bricks() const { return bricks_; }
+    // What the marcher holds besides the store: its brick copy and the bricks' opacities.
+    std::size_t memory_bytes() const { return bricks_.memory_bytes() + alpha_at_.capacity() * sizeof(float); }
     const tree_shape& shape() const { return shape_; }
     float step() const { return step_; }
 
@@ -247,9 +249,8 @@ public:
             if (cache && cache->index.size() < max_samples()) cache->index.resize(max_samples(), ~voxel_index(0)), cache->value.resize(max_samples());
         }
         const auto dx = krs::lanes_of(ray.direction.x), dy = krs::lanes_of(ray.direction.y), dz = krs::lanes_of(ray.direction.z);
-        const grid_probe grid = probe_view();
-        std::array<cell_slopes, lanes<T>> inverse;
-        for (std::size_t i = 0; i < lanes<T>; ++i) inverse[i] = slopes({dx[i], dy[i], dz[i]});
+        float slope[lanes<T>][3];
+        for (std::size_t i = 0; i < lanes<T>; ++i) slopes_of(krs::vec3f{dx[i], dy[i], dz[i]}, slope[i]);
         while (any(active)) {
             const T t = t0 + (k + half) * ds;
             const krs::vec3<T> p = ray.origin + ray.direction * t;
@@ -264,22 +265,24 @@ public:
                 if (!((running >> i) & 1u)) continue;
                 const krs::vec3f pi{px[i], py[i], pz[i]};
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
-                const probe_result found = grid(pi, inverse[i]);
-                if (!found.occupied()) {
-                    advance[i] = float(found.skip);
+                const lane_probe<float> found = probe_lanes<float>(pi, slope[i], true);
+                if (!found.looks) {
+                    advance[i] = found.advance;
                     continue;
                 }
-                const voxel_index index = found.index;
+                const std::size_t place = std::size_t(found.place);
+                const voxel_index index = voxel_index(found.cell[0]) +
+                                          voxel_index(grid_[0]) * (voxel_index(found.cell[1]) + voxel_index(grid_[1]) * voxel_index(found.cell[2]));
                 voxel v;
                 if constexpr (std::floating_point<T>) {
-                    v = cache ? fetch_cached(index, found.place, std::size_t(ks[i]), *cache, cache_valid, lookups[i])
-                              : (++lookups[i], bricks_.at_place(found.place));
+                    v = cache ? fetch_cached(index, place, std::size_t(ks[i]), *cache, cache_valid, lookups[i])
+                              : (++lookups[i], bricks_.at_place(place));
                 } else {
-                    v = (++lookups[i], bricks_.at_place(found.place));
+                    v = (++lookups[i], bricks_.at_place(place));
                 }
                 if (v.density == 0) continue;
                 alpha[i] = alpha_[v.density];
-                const rgb c = shade(pi, index, found.place, v.level, -di, context.shading, lookups[i]);
+                const rgb c = shade(pi, index, place, v.level, -di, context.shading, lookups[i]);
                 r[i] = c.r, g[i] = c.g, b[i] = c.b;
             }
             const T a = load<T>(alpha);
@@ -350,17 +353,19 @@ public:
         return shadow_transmittance<float>(p, l, lookups, true);
     }
 
-    // What a sample finds, lane by lane: its place in the bricks (negative in an empty brick),
-    // whether it reads a voxel (`looks`: a running lane in a non-empty brick and, with
-    // use_spheres, in a part's sphere), and how many samples to advance: 1, or in an empty brick
-    // the steps to the exit of the largest empty brick or block, rounded so that a sample on the
-    // exit face is never skipped (the 1e-3 covers the rounding of exit / step, a few float ulps
-    // of a number < 64). The per-lane grid_probe computes the same.
+    // What a sample finds, lane by lane: its cell and its place in the bricks (negative in an
+    // empty brick), whether it reads a voxel (`looks`: a running lane in a non-empty brick and,
+    // with use_spheres, in a part's sphere), and how many samples to advance: 1, or in an empty
+    // brick the steps to the exit of the largest empty brick or block, rounded so that a sample
+    // on the exit face is never skipped (the 1e-3 covers the rounding of exit / step, a few float
+    // ulps of a number < 64). The slopes are the t it takes to cross one cell along each axis (0
+    // for an axis the ray does not move along), so an empty brick costs multiplications.
     template <class T>
     struct lane_probe {
         krs::index_lanes<T> place;
         krs::mask_t<T> looks;
         T advance;
+        krs::index_lanes<T> cell[3]; // cell 0 outside the grid
     };
     template <class T>
     [[gnu::always_inline]] lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running) const
@@ -389,96 +394,15 @@ public:
         }
         const T steps = ceil(exit / T(step_) - T(1e-3f));
         const T skip = select(steps > one, min(steps, T(1.0e6f)), one);
-        return {place, looks, select(inside & (found < zero), skip, one)};
+        return {place, looks, select(inside & (found < zero), skip, one), {c[0], c[1], c[2]}};
     }
-    // slopes() for the lanes of a direction.
+    // The slopes of the lanes of a direction: 1 / (d * cells per unit) per axis, or 0.
     template <class T>
     void slopes_of(const krs::vec3<T>& d, T (&slope)[3]) const
     {
         using krs::select;
         const T zero(0.0f), dir[3] = {d.x * T(cells_per_unit_.x), d.y * T(cells_per_unit_.y), d.z * T(cells_per_unit_.z)};
         for (int a = 0; a < 3; ++a) slope[a] = select(dir[a] != zero, T(1.0f) / dir[a], zero);
-    }
-
-    // A ray direction d as the t it takes to cross one cell along each axis, 1 / (d * cells per
-    // unit), with 0 for an axis the ray does not move along: computed once per ray, so probing
-    // an empty brick multiplies instead of dividing.
-    struct cell_slopes {
-        float inverse[3];
-    };
-    cell_slopes slopes(const krs::vec3f& d) const
-    {
-        const float dir[3] = {d.x * cells_per_unit_.x, d.y * cells_per_unit_.y, d.z * cells_per_unit_.z};
-        cell_slopes s;
-        for (int a = 0; a < 3; ++a) s.inverse[a] = dir[a] != 0 ? 1.0f / dir[a] : 0.0f;
-        return s;
-    }
-
-    // What a sample at p finds: its voxel index when its 4^3 brick holds voxels (and, with
-    // use_spheres, p lies in a part's sphere); otherwise the number of samples along the ray
-    // (direction given by its slopes) that certainly lie in empty space (at least 1): the step
-    // count to the exit of the largest empty brick holding p, rounded so that a sample on the
-    // exit face is never skipped.
-    // (A sentinel index, not std::optional: the optional's flag and index were stored as two
-    // narrow writes and read back as one wide load, a store-forwarding stall on every sample
-    // that was a fifth of the shadow rays' time.)
-    struct probe_result {
-        static constexpr voxel_index none = ~voxel_index(0); // no voxel: indices stop at max_voxel_count - 1 (volume.hpp)
-        voxel_index index = none;
-        std::size_t place = 0; // where the bricks keep the voxel (when there is one)
-        int skip = 1;
-        bool occupied() const { return index != none; }
-    };
-    // What probing reads, copied by value into a march's local variable: the loops around it
-    // write floats through references (lookup counts, the lanes' arrays), which the compiler must
-    // assume may alias the marcher's own float members, so probing through `this` reloaded the
-    // grid from memory for every sample. A local copy whose address is never taken stays in
-    // registers.
-    struct grid_probe {
-        krs::vec3f origin, cells_per_unit;
-        float size[3];
-        int last[3];
-        voxel_index stride_y, stride_z;
-        voxel_bricks::view bricks;
-        float step;
-        const volume_marcher* spheres; // set when use_spheres: the rare path through the marcher
-
-        probe_result operator()(const krs::vec3f& p, const cell_slopes& slope) const
-        {
-            const float f[3] = {(p.x - origin.x) * cells_per_unit.x, (p.y - origin.y) * cells_per_unit.y, (p.z - origin.z) * cells_per_unit.z};
-            if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < size[0] && f[1] < size[1] && f[2] < size[2])) return {};
-            int c[3];
-            for (int a = 0; a < 3; ++a) c[a] = std::min(int(f[a]), last[a]);
-            const std::int32_t place = bricks.place(c[0], c[1], c[2]);
-            if (place >= 0) {
-                if (spheres && !spheres->inside_a_sphere(p)) return {};
-                return {voxel_index(c[0]) + stride_y * voxel_index(c[1]) + stride_z * voxel_index(c[2]), std::size_t(place), 1};
-            }
-            // The largest empty brick (4^3 or 16^3).
-            const int shift = place < -64 ? voxel_bricks::coarse_shift : voxel_bricks::fine_shift;
-            float exit = 3.0e38f;
-            for (int a = 0; a < 3; ++a) {
-                const float lo = float((c[a] >> shift) << shift), hi = lo + float(1 << shift);
-                const float inv = slope.inverse[a];
-                if (inv > 0) exit = std::min(exit, (hi - f[a]) * inv);
-                else if (inv < 0) exit = std::min(exit, (lo - f[a]) * inv);
-            }
-            // The 1e-3 margin covers the rounding of exit / step (a few float ulps of a number < 64).
-            const float steps = std::ceil(exit / step - 1e-3f);
-            return {probe_result::none, 0, steps > 1.0f ? int(std::min(steps, 1.0e6f)) : 1};
-        }
-    };
-    grid_probe probe_view() const
-    {
-        return {origin_,
-                cells_per_unit_,
-                {float(grid_[0]), float(grid_[1]), float(grid_[2])},
-                {grid_[0] - 1, grid_[1] - 1, grid_[2] - 1},
-                voxel_index(grid_[0]),
-                voxel_index(grid_[0]) * voxel_index(grid_[1]),
-                bricks_.view_of(),
-                step_,
-                options_.use_spheres ? this : nullptr};
     }
 
     bool inside_a_sphere(const krs::vec3f& p) const

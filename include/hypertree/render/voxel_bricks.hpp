@@ -118,7 +118,8 @@ public:
         voxel_count_ = std::size_t(slots);
     }
 
-    // What the hot loops read, by value (a local copy stays in registers; see volume_marcher).
+    // What the hot loops read, copied by value into them (a local copy whose address is never
+    // taken stays in registers, where loads through the marcher would be reloaded per sample).
     struct view {
         const std::int32_t* brick_rank;
         const std::int32_t* block_code; // per block: 0 when it holds a voxel, else -64
