@@ -78,40 +78,33 @@ public:
         const std::size_t grid_bricks = brick_count_[0] * brick_count_[1] * brick_count_[2];
         if (grid_bricks >= (std::size_t(1) << 31))
             throw krs::invalid_parameter("voxel_bricks.volume", "must have fewer than 2^31 bricks of 4^3 voxels", std::to_string(grid_bricks));
-        // One pass over the store (a dense store's pass reads the whole grid), kept as cells.
-        struct cell {
-            std::array<int, 3> c;
-            voxel value;
-        };
-        std::vector<cell> cells;
-        cells.reserve(store.nonempty_count());
+        // One pass over the store (a dense store's pass reads the whole grid); a brick is added
+        // when its first voxel comes.
         brick_rank_.assign(grid_bricks, empty_brick);
         block_code_.assign(block_count_[0] * block_count_[1] * block_count_[2], -std::int32_t(brick_voxels));
+        detail::coordinate_walker coordinates(v); // stores visit in increasing index order
         store.for_each([&](voxel_index i, const voxel& value) {
             if (value.density == 0) return;
-            const std::array<int, 3> c = v.coordinates(i);
-            cells.push_back({c, value});
+            const std::array<int, 3> c = coordinates(i);
             block_code_[block_of(c[0], c[1], c[2])] = 0;
             std::int32_t& rank = brick_rank_[brick_of(c[0], c[1], c[2])];
             if (rank == empty_brick) {
-                if (brick_origin_.size() == max_bricks)
+                if (mask_.size() == max_bricks)
                     throw krs::invalid_parameter("voxel_bricks.store", "must have at most 2^25 non-empty bricks of 4^3 voxels");
-                rank = std::int32_t(brick_origin_.size());
+                rank = std::int32_t(mask_.size());
+                mask_.push_back(0);
                 brick_origin_.push_back({c[0] & ~3, c[1] & ~3, c[2] & ~3});
+                density_.resize(density_.size() + brick_voxels, 0);
+                level_.resize(level_.size() + brick_voxels, 0);
             }
+            const std::size_t offset = std::size_t((c[0] & 3) | (c[1] & 3) << 2 | (c[2] & 3) << 4);
+            const std::size_t place = std::size_t(rank) * brick_voxels + offset;
+            density_[place] = value.density;
+            level_[place] = value.level;
+            mask_[std::size_t(rank)] |= std::uint64_t(1) << offset;
         });
-        const std::size_t bricks = brick_origin_.size();
-        density_.assign(bricks * brick_voxels, 0);
-        level_.assign(bricks * brick_voxels, 0);
-        mask_.assign(bricks, 0);
+        const std::size_t bricks = mask_.size();
         slot_.assign(bricks * brick_voxels, 0);
-        const view bricks_view = view_of();
-        for (const cell& c : cells) {
-            const std::size_t place = std::size_t(bricks_view.place(c.c[0], c.c[1], c.c[2]));
-            density_[place] = c.value.density;
-            level_[place] = c.value.level;
-            mask_[place / brick_voxels] |= std::uint64_t(1) << (place % brick_voxels);
-        }
         std::int32_t slots = 0;
         for (std::size_t b = 0; b < bricks; ++b)
             for (std::uint64_t m = mask_[b]; m != 0; m &= m - 1) slot_[b * brick_voxels + std::size_t(std::countr_zero(m))] = slots++;
