@@ -30,8 +30,13 @@ index_list_store slab(std::uint8_t density, int thickness)
 
 double max_difference(const image& a, const image& b)
 {
+    REQUIRE(a.rgb.size() == b.rgb.size());
     double worst = 0;
-    for (std::size_t i = 0; i < a.rgb.size(); ++i) worst = std::max(worst, double(std::abs(a.rgb[i] - b.rgb[i])));
+    for (std::size_t i = 0; i < a.rgb.size(); ++i) {
+        REQUIRE(std::isfinite(a.rgb[i])); // a NaN would pass any comparison of differences
+        REQUIRE(std::isfinite(b.rgb[i]));
+        worst = std::max(worst, double(std::abs(a.rgb[i] - b.rgb[i])));
+    }
     return worst;
 }
 
@@ -90,17 +95,138 @@ TEST_CASE("hypertree render of an empty tree is the background")
 {
     const hypervolume v({0, 0, 0}, {1, 1, 1}, resolution::cube(8));
     const index_list_store empty = index_list_store::build(v, {});
-    const volume_marcher<index_list_store> m(empty, tree_shape::of(empty), depth_colors{});
-    float lookups = 0;
-    CHECK(m.shadow_transmittance({0.5f, 0.5f, 0.5f}, {0, 1, 0}, lookups) == 1.0f);
-    const krs::pinhole_camera camera({0.5f, 0.5f, -2.0f}, {0.5f, 0.5f, 0.5f}, {0, 1, 0}, 40, 16, 12);
-    render_settings s;
-    for (const image& i : {render<float>(m, camera, s), render<krs::packet_f>(m, camera, s)}) {
-        CHECK(i.lookups == 0);
-        for (std::size_t p = 0; p < i.rgb.size(); p += 3) {
-            REQUIRE(i.rgb[p] == s.background.r);
-            REQUIRE(i.rgb[p + 2] == s.background.b);
+    // With the empty box of an empty tree no ray enters; with a box given, rays and shadow rays
+    // cross the grid and find nothing.
+    tree_shape boxed = tree_shape::of(empty);
+    boxed.box = world_box{{0, 0, 0}, {1, 1, 1}};
+    for (const tree_shape& shape : {tree_shape::of(empty), boxed}) {
+        const volume_marcher<index_list_store> m(empty, shape, depth_colors{});
+        float lookups = 0;
+        CHECK(m.shadow_transmittance({0.5f, 0.5f, 0.5f}, {0, 1, 0}, lookups) == 1.0f);
+        CHECK(m.march(krs::ray<float>{{0.5f, 0.5f, -2.0f}, {0, 0, 1}}).transmittance == 1.0f);
+        const krs::pinhole_camera camera({0.5f, 0.5f, -2.0f}, {0.5f, 0.5f, 0.5f}, {0, 1, 0}, 40, 16, 12);
+        render_settings s;
+        for (bool ahead : {true, false}) {
+            s.shade_ahead = ahead;
+            for (const image& i : {render<float>(m, camera, s), render<krs::packet_f>(m, camera, s)}) {
+                CHECK(i.lookups == 0);
+                for (std::size_t p = 0; p < i.rgb.size(); p += 3) {
+                    REQUIRE(i.rgb[p] == s.background.r);
+                    REQUIRE(i.rgb[p + 1] == s.background.g);
+                    REQUIRE(i.rgb[p + 2] == s.background.b);
+                }
+            }
         }
+    }
+}
+
+TEST_CASE("hypertree render: skipping empty bricks never skips a voxel, from a camera far away and with fine steps")
+{
+    // A checkerboard of full and empty 4^3 bricks of faint voxels (every empty brick's exit face
+    // borders voxels, so a skip one sample too long misses one) seen from far away, each ray
+    // marched against a reference that takes every sample with the same float formulas and no
+    // skipping: the transmittances must be equal, bit for bit.
+    const hypervolume v({-1, -1, -1}, {2, 2, 2}, resolution::cube(48));
+    std::vector<stored_voxel> voxels;
+    std::uint32_t state = 5;
+    for (voxel_index i = 0; i < v.voxel_count(); ++i) {
+        state = state * 1664525u + 1013904223u;
+        const auto c = v.coordinates(i);
+        if (((c[0] >> 2) + (c[1] >> 2) + (c[2] >> 2)) % 2) voxels.push_back({i, {std::uint8_t(1 + (state >> 8) % 6), 4}, 0});
+    }
+    const index_list_store store = index_list_store::build(v, voxels);
+    const tree_shape shape = tree_shape::of(store);
+    std::size_t rays = 0, partly_opaque = 0;
+    for (float step_factor : {1.0f, 0.3f}) {
+        march_options o;
+        o.step_factor = step_factor;
+        o.shadows = false;
+        o.lights.clear();
+        o.min_transmittance = 0;
+        const volume_marcher<index_list_store> m(store, shape, depth_colors{}, o);
+        // The reference: samples at t0 + (k + 1/2) ds from the box's slab entry, each looked up.
+        const float ds = m.step();
+        const double exponent = double(step_factor);
+        const auto reference = [&](const krs::ray<float>& r) {
+            const krs::vec3f lo(shape.box.lo), hi(shape.box.hi);
+            float t0 = 0, t1 = 3.0e38f;
+            const float o3[3] = {r.origin.x, r.origin.y, r.origin.z}, d3[3] = {r.direction.x, r.direction.y, r.direction.z};
+            const float l3[3] = {lo.x, lo.y, lo.z}, h3[3] = {hi.x, hi.y, hi.z};
+            for (int a = 0; a < 3; ++a) {
+                const float safe = std::abs(d3[a]) < 1e-30f ? 1e-30f : d3[a], inv = 1.0f / safe;
+                const float ta = (l3[a] - o3[a]) * inv, tb = (h3[a] - o3[a]) * inv;
+                t0 = std::max(t0, std::min(ta, tb)), t1 = std::min(t1, std::max(ta, tb));
+            }
+            float transmittance = 1;
+            const krs::vec3f origin(v.origin()), per_unit(v.cells_per_unit());
+            for (float k = 0;; k += 1) {
+                const float t = t0 + (k + 0.5f) * ds;
+                if (!(t < t1)) break;
+                const krs::vec3f p = r.origin + r.direction * t;
+                const float f[3] = {(p.x - origin.x) * per_unit.x, (p.y - origin.y) * per_unit.y, (p.z - origin.z) * per_unit.z};
+                if (!(f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < 48 && f[1] < 48 && f[2] < 48)) continue;
+                const int c[3] = {std::min(int(f[0]), 47), std::min(int(f[1]), 47), std::min(int(f[2]), 47)};
+                const int d = store.at(v.index(c[0], c[1], c[2])).density;
+                const float alpha = d == 255 ? 1.0f : float(1.0 - std::pow(1.0 - d / 255.0, exponent));
+                transmittance *= 1.0f - alpha;
+            }
+            return transmittance;
+        };
+        for (float distance : {3.0f, 300.0f, 3000.0f}) {
+            for (int n = 0; n < 400; ++n) {
+                state = state * 1664525u + 1013904223u;
+                const float a = float(state >> 8) * 0x1.0p-24f * 6.2831853f;
+                state = state * 1664525u + 1013904223u;
+                const float b = float(state >> 8) * 0x1.0p-24f * 2 - 1;
+                const krs::vec3f eye = krs::vec3f{std::cos(a) * std::sqrt(1 - b * b), b, std::sin(a) * std::sqrt(1 - b * b)} * distance;
+                // Aimed at a random voxel, so the ray meets at least one.
+                const krs::vec3f target(v.voxel_center(voxels[(state >> 4) % voxels.size()].index));
+                const krs::ray<float> r{eye, krs::normalize(target - eye)};
+                const float expect = reference(r);
+                REQUIRE(m.march(r).transmittance == expect);
+                ++rays, partly_opaque += expect < 1.0f;
+            }
+        }
+    }
+    CHECK(partly_opaque > rays / 2);
+}
+
+TEST_CASE("hypertree render refuses bad options, naming them")
+{
+    const auto store = slab(100, 2);
+    const tree_shape shape = tree_shape::of(store);
+    const auto refuses = [&](march_options o, const char* parameter) {
+        CHECK_THROWS_WITH_AS(volume_marcher<index_list_store>(store, shape, depth_colors{}, o), doctest::Contains(parameter),
+                             krs::invalid_parameter);
+    };
+    for (float bad : {0.0f, -1.0f, std::nanf("")}) {
+        march_options o;
+        o.step_factor = bad;
+        refuses(o, "march_options.step_factor");
+        o = {};
+        o.density_scale = bad;
+        refuses(o, "march_options.density_scale");
+    }
+    march_options o;
+    o.min_transmittance = -0.5f;
+    refuses(o, "march_options.min_transmittance");
+    // Steps so fine that a ray would count more samples than a float counts exactly.
+    o = {};
+    o.step_factor = 1e-6f;
+    refuses(o, "march_options.step_factor");
+    o.step_factor = 1e-4f; // 450 000 samples across the slab's box (diagonal 45): fine
+    CHECK_NOTHROW(volume_marcher<index_list_store>(store, shape, depth_colors{}, o));
+    o = {};
+    o.lights.assign(9, directional_light{});
+    refuses(o, "march_options.lights");
+    o.lights = {directional_light{{0, 0, 0}, {1, 1, 1}}};
+    refuses(o, "march_options.lights.direction");
+    const volume_marcher<index_list_store> m(store, shape, depth_colors{});
+    const krs::pinhole_camera camera({16, 16, -40}, {16, 16, 16}, {0, 1, 0}, 40, 8, 8);
+    for (int s : {0, 17}) {
+        render_settings rs;
+        rs.supersampling = s;
+        CHECK_THROWS_WITH_AS(render<float>(m, camera, rs), doctest::Contains("render_settings.supersampling"), krs::invalid_parameter);
     }
 }
 

@@ -30,7 +30,9 @@
 // (march_shaded); otherwise what each lane looks up and shades runs per lane in scalar code
 // (march_shading). Either way a packet's lanes compute exactly what the scalar marcher computes
 // for the same ray: packet and scalar images, and images shaded ahead or as met, are equal pixel
-// for pixel (tested).
+// for pixel (tested). Equal to the bit where the compiler does not fuse multiplies and adds
+// (-ffp-contract=off, as the tests build, or no FMA in the target): a fusion made in one path and
+// not in the other moves the last bits, and clang and gcc fuse by default where FMA exists.
 //
 // The ray cache of 8.2 is an option of the scalar marcher: entry k remembers the voxel index and
 // voxel of sample k of the previous ray; a ray reads it until its first mismatch and then
@@ -116,6 +118,8 @@ public:
         grid_ = {v.grid().x, v.grid().y, v.grid().z};
         side_ = float(v.smallest_voxel_side());
         step_ = options_.step_factor * side_;
+        rounding_per_step_ = float(0x1.0p-21 / double(step_));
+        grid_reach_ = std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)});
         // alpha per density byte for one step: (1 - mu)^(k ds / side).
         const double exponent = double(options_.density_scale) * double(options_.step_factor);
         for (int d = 0; d < 256; ++d) alpha_[d] = d == 255 ? 1.0f : float(1.0 - std::pow(1.0 - d / 255.0, exponent));
@@ -126,6 +130,14 @@ public:
             alpha_at_[place] = alpha_[bricks_.at_place(place).density];
         box_lo_ = {float(shape_.box.lo.x), float(shape_.box.lo.y), float(shape_.box.lo.z)};
         box_hi_ = {float(shape_.box.hi.x), float(shape_.box.hi.y), float(shape_.box.hi.z)};
+        // Rays count their samples in floats, exact to 2^24, and a skip adds up to 10^6 at once:
+        // a ray may take at most 2^23 samples across the box, or its count would stop growing.
+        const double samples = krs::length(krs::vec3d(box_hi_ - box_lo_)) / double(step_);
+        if (!(samples < double(1 << 23)))
+            throw krs::invalid_parameter("march_options.step_factor",
+                                         "must leave at most 2^23 samples across the tree's box (its diagonal / (step_factor x the smallest "
+                                         "voxel side) is " + std::to_string(samples) + ")",
+                                         std::to_string(options_.step_factor));
         if (options_.lights.size() > max_lights)
             throw krs::invalid_parameter("march_options.lights", "may hold at most " + std::to_string(max_lights) + " lights",
                                          std::to_string(options_.lights.size()));
@@ -179,9 +191,11 @@ public:
                memo.slots() * memo.stride() < (std::size_t(1) << 31);
     }
 
-    // The march of rays through voxels all shaded ahead: per sample, each lane's place in the
-    // bricks, its opacity and its voxel's lit color are gathered, in the accumulation of
-    // march_shading, the same operations in the same order. K packets march in turn within one
+private:
+    // The march of rays through voxels all shaded ahead (march_packets checks that the table is
+    // complete and fits): per sample, each lane's place in the bricks, its opacity and its
+    // voxel's lit color are gathered, in the accumulation of march_shading, the same operations
+    // in the same order. K packets march in turn within one
     // loop: a sample's place comes from gathers that depend on the previous sample's, so one
     // packet alone waits on memory at every step, and K independent ones give the core other work.
     template <class T, std::size_t K>
@@ -212,7 +226,7 @@ public:
                 march_result<T>& o = out[r];
                 const T t = t0[r] + (k[r] + half) * ds;
                 const krs::vec3<T> p = rays[r].origin + rays[r].direction * t;
-                const lane_probe<T> found = probe_lanes(p, slope[r], active[r]);
+                const lane_probe<T> found = probe_lanes(p, slope[r], active[r], skip_margin(rays[r].origin, t));
                 const I place = krs::index_max(found.place, I(0));
                 const T a = select(found.looks, krs::gather(alpha_at, place), zero);
                 const I entry = krs::gather(slot_at, place) * stride;
@@ -259,13 +273,14 @@ public:
             std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{}, advance{};
             // The lanes' inputs, spilled once per sample rather than once per lane.
             const auto px = krs::lanes_of(p.x), py = krs::lanes_of(p.y), pz = krs::lanes_of(p.z), ks = krs::lanes_of(k);
+            const auto margin = krs::lanes_of(skip_margin(ray.origin, t));
             const std::uint64_t running = krs::mask_bits<T>(active);
             for (std::size_t i = 0; i < lanes<T>; ++i) {
                 advance[i] = 1.0f;
                 if (!((running >> i) & 1u)) continue;
                 const krs::vec3f pi{px[i], py[i], pz[i]};
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
-                const lane_probe<float> found = probe_lanes<float>(pi, slope[i], true);
+                const lane_probe<float> found = probe_lanes<float>(pi, slope[i], true, margin[i]);
                 if (!found.looks) {
                     advance[i] = found.advance;
                     continue;
@@ -297,6 +312,7 @@ public:
         return out;
     }
 
+public:
     // Transmittance from p toward the light along direction l (unit), within the tree's box:
     // samples at base + j ds from j = 1 (one step out, so a sample does not shadow itself), with
     // the primary rays' empty-space skipping and early exit. One template for one point (T =
@@ -339,7 +355,7 @@ public:
                 running[k] = running[k] & (t < t1[k]) & (transmittance[k] >= least);
                 if (!any(running[k])) continue;
                 marching = true;
-                const lane_probe<T> found = probe_lanes(p[k] + direction * t, slope, running[k]);
+                const lane_probe<T> found = probe_lanes(p[k] + direction * t, slope, running[k], skip_margin(p[k], t));
                 const T alpha = krs::gather(alpha_at, krs::index_max(found.place, krs::index_lanes<T>(0)));
                 transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
                 lookups[k] = lookups[k] + select(found.looks, one, zero);
@@ -356,10 +372,10 @@ public:
     // What a sample finds, lane by lane: its cell and its place in the bricks (negative in an
     // empty brick), whether it reads a voxel (`looks`: a running lane in a non-empty brick and,
     // with use_spheres, in a part's sphere), and how many samples to advance: 1, or in an empty
-    // brick the steps to the exit of the largest empty brick or block, rounded so that a sample
-    // on the exit face is never skipped (the 1e-3 covers the rounding of exit / step, a few float
-    // ulps of a number < 64). The slopes are the t it takes to cross one cell along each axis (0
-    // for an axis the ray does not move along), so an empty brick costs multiplications.
+    // brick the steps to the exit of the largest empty brick or block, less `margin` steps
+    // (skip_margin) and rounded up, so that no sample that would land in a non-empty brick is
+    // skipped. The slopes are the t it takes to cross one cell along each axis (0 for an axis the
+    // ray does not move along), so an empty brick costs multiplications.
     template <class T>
     struct lane_probe {
         krs::index_lanes<T> place;
@@ -368,7 +384,8 @@ public:
         krs::index_lanes<T> cell[3]; // cell 0 outside the grid
     };
     template <class T>
-    [[gnu::always_inline]] lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running) const
+    [[gnu::always_inline]] lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running,
+                                                     const T& margin) const
     {
         using I = krs::index_lanes<T>;
         using krs::select, krs::min, krs::ceil, krs::index_to_float, krs::truncate_to_index;
@@ -392,10 +409,24 @@ public:
             const T hi = lo + select(in_block, T(16.0f), T(4.0f));
             exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
         }
-        const T steps = ceil(exit / T(step_) - T(1e-3f));
-        const T skip = select(steps > one, min(steps, T(1.0e6f)), one);
-        return {place, looks, select(inside & (found < zero), skip, one), {c[0], c[1], c[2]}};
+        const T steps = ceil(exit / T(step_) - margin);
+        const T advance = select(inside & (found < zero), select(steps > one, min(steps, T(1.0e6f)), one), one);
+        return {place, looks, advance, {c[0], c[1], c[2]}};
     }
+    // How many steps short of an empty brick's exit a skip must stop, for a ray from `from` at t.
+    // The exit is predicted from this sample's position, but each sample's position is computed
+    // anew in floats, p = o + d t then (p - origin) x cells per unit, with an error of a few ulps
+    // of |o| + t + |origin|: 2^-21 of that in all, both samples' errors counted, in steps. Close to
+    // the tree it is the 1e-3 of the exit's own rounding; from a camera 1000 units away it grows
+    // to several steps, and skips stop short rather than jump over a voxel.
+    template <class T>
+    T skip_margin(const krs::vec3<T>& from, const T& t) const
+    {
+        using krs::abs, krs::max;
+        const T reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + T(grid_reach_);
+        return T(1e-3f) + (reach + t) * T(rounding_per_step_);
+    }
+
     // The slopes of the lanes of a direction: 1 / (d * cells per unit) per axis, or 0.
     template <class T>
     void slopes_of(const krs::vec3<T>& d, T (&slope)[3]) const
@@ -661,6 +692,7 @@ private:
     krs::vec3f origin_{}, cells_per_unit_{}, box_lo_{}, box_hi_{};
     std::array<int, 3> grid_{};
     float side_ = 1, step_ = 1;
+    float rounding_per_step_ = 0, grid_reach_ = 0; // skip_margin's: 2^-21 / step, and max |origin|
     static constexpr std::size_t max_lights = 8;
     std::array<float, 256> alpha_{};
     std::vector<float> alpha_at_; // per place of the bricks: its voxel's opacity for one step

@@ -70,10 +70,11 @@ public:
     explicit voxel_bricks(const S& store)
     {
         const hypervolume& v = store.volume();
-        const std::array<int, 3> grid{v.grid().x, v.grid().y, v.grid().z};
+        // (In size_t: a side near INT_MAX must not overflow.)
+        const std::array<std::size_t, 3> grid{std::size_t(v.grid().x), std::size_t(v.grid().y), std::size_t(v.grid().z)};
         for (std::size_t a = 0; a < 3; ++a) {
-            brick_count_[a] = std::size_t((grid[a] + 3) >> fine_shift);
-            block_count_[a] = std::size_t((grid[a] + 15) >> coarse_shift);
+            brick_count_[a] = (grid[a] + 3) >> fine_shift;
+            block_count_[a] = (grid[a] + 15) >> coarse_shift;
         }
         const std::size_t grid_bricks = brick_count_[0] * brick_count_[1] * brick_count_[2];
         if (grid_bricks >= (std::size_t(1) << 31))
@@ -105,10 +106,11 @@ public:
         });
         const std::size_t bricks = mask_.size();
         slot_.assign(bricks * brick_voxels, 0);
-        std::int32_t slots = 0;
+        // Slots fit int32: fewer than 2^25 bricks of 64 voxels.
+        std::size_t slots = 0;
         for (std::size_t b = 0; b < bricks; ++b)
-            for (std::uint64_t m = mask_[b]; m != 0; m &= m - 1) slot_[b * brick_voxels + std::size_t(std::countr_zero(m))] = slots++;
-        voxel_count_ = std::size_t(slots);
+            for (std::uint64_t m = mask_[b]; m != 0; m &= m - 1) slot_[b * brick_voxels + std::size_t(std::countr_zero(m))] = std::int32_t(slots++);
+        voxel_count_ = slots;
     }
 
     // What the hot loops read, copied by value into them (a local copy whose address is never
