@@ -84,20 +84,15 @@ public:
         brick_rank_.assign(grid_bricks, empty_brick);
         block_code_.assign(block_count_[0] * block_count_[1] * block_count_[2], -std::int32_t(brick_voxels));
         detail::coordinate_walker coordinates(v); // stores visit in increasing index order
+        // The visit is kept small, so the compiler inlines it into the store's loop: a new brick,
+        // the rare case, is added out of line (inline, it made the visit a call per voxel, which
+        // was most of the copy's time: A at 100 from a dense store 0.52 -> 0.43 ms).
         store.for_each([&](voxel_index i, const voxel& value) {
             if (value.density == 0) return;
             const std::array<int, 3> c = coordinates(i);
             block_code_[block_of(c[0], c[1], c[2])] = 0;
             std::int32_t& rank = brick_rank_[brick_of(c[0], c[1], c[2])];
-            if (rank == empty_brick) {
-                if (mask_.size() == max_bricks)
-                    throw krs::invalid_parameter("voxel_bricks.store", "must have at most 2^25 non-empty bricks of 4^3 voxels");
-                rank = std::int32_t(mask_.size());
-                mask_.push_back(0);
-                brick_origin_.push_back({c[0] & ~3, c[1] & ~3, c[2] & ~3});
-                density_.resize(density_.size() + brick_voxels, 0);
-                level_.resize(level_.size() + brick_voxels, 0);
-            }
+            if (rank == empty_brick) rank = add_brick(c);
             const std::size_t offset = std::size_t((c[0] & 3) | (c[1] & 3) << 2 | (c[2] & 3) << 4);
             const std::size_t place = std::size_t(rank) * brick_voxels + offset;
             density_[place] = value.density;
@@ -170,6 +165,18 @@ public:
     }
 
 private:
+    // Adds the empty brick holding cell c and returns its rank.
+    [[gnu::noinline]] std::int32_t add_brick(const std::array<int, 3>& c)
+    {
+        if (mask_.size() == max_bricks)
+            throw krs::invalid_parameter("voxel_bricks.store", "must have at most 2^25 non-empty bricks of 4^3 voxels");
+        mask_.push_back(0);
+        brick_origin_.push_back({c[0] & ~3, c[1] & ~3, c[2] & ~3});
+        density_.resize(density_.size() + brick_voxels, 0);
+        level_.resize(level_.size() + brick_voxels, 0);
+        return std::int32_t(mask_.size() - 1);
+    }
+
     std::size_t brick_of(int x, int y, int z) const
     {
         return std::size_t(x >> fine_shift) + brick_count_[0] * (std::size_t(y >> fine_shift) + brick_count_[1] * std::size_t(z >> fine_shift));
