@@ -212,7 +212,9 @@ private:
         std::array<T, K> t0, t1, k;
         std::array<krs::mask_t<T>, K> active;
         T slope[K][3];
+        std::array<T, K> margin0;
         for (std::size_t r = 0; r < K; ++r) {
+            margin0[r] = margin_at_origin(rays[r].origin);
             enter_box(rays[r], t0[r], t1[r]);
             k[r] = zero;
             active[r] = t0[r] + half * ds < t1[r];
@@ -226,7 +228,7 @@ private:
                 march_result<T>& o = out[r];
                 const T t = t0[r] + (k[r] + half) * ds;
                 const krs::vec3<T> p = rays[r].origin + rays[r].direction * t;
-                const lane_probe<T> found = probe_lanes(p, slope[r], active[r], skip_margin(rays[r].origin, t));
+                const lane_probe<T> found = probe_lanes(p, slope[r], active[r], skip_margin(margin0[r], t));
                 const I place = krs::index_max(found.place, I(0));
                 const T a = select(found.looks, krs::gather(alpha_at, place), zero);
                 const I entry = krs::gather(slot_at, place) * stride;
@@ -264,6 +266,7 @@ private:
         }
         const auto dx = krs::lanes_of(ray.direction.x), dy = krs::lanes_of(ray.direction.y), dz = krs::lanes_of(ray.direction.z);
         float slope[lanes<T>][3];
+        const T margin0 = margin_at_origin(ray.origin);
         for (std::size_t i = 0; i < lanes<T>; ++i) slopes_of(krs::vec3f{dx[i], dy[i], dz[i]}, slope[i]);
         while (any(active)) {
             const T t = t0 + (k + half) * ds;
@@ -273,7 +276,7 @@ private:
             std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{}, advance{};
             // The lanes' inputs, spilled once per sample rather than once per lane.
             const auto px = krs::lanes_of(p.x), py = krs::lanes_of(p.y), pz = krs::lanes_of(p.z), ks = krs::lanes_of(k);
-            const auto margin = krs::lanes_of(skip_margin(ray.origin, t));
+            const auto margin = krs::lanes_of(skip_margin(margin0, t));
             const std::uint64_t running = krs::mask_bits<T>(active);
             for (std::size_t i = 0; i < lanes<T>; ++i) {
                 advance[i] = 1.0f;
@@ -339,11 +342,14 @@ public:
         const krs::vec3<T> direction{T(l.x), T(l.y), T(l.z)};
         T slope[3];
         slopes_of(direction, slope);
+        float shared_slope[3];
+        slopes_of(krs::vec3f(l), shared_slope);
         const float* alpha_at = alpha_at_.data();
         const T step(step_), least(options_.min_transmittance), zero(0.0f), one(1.0f);
-        std::array<T, K> base, t1, transmittance, j;
+        std::array<T, K> base, t1, transmittance, j, margin0;
         for (std::size_t k = 0; k < K; ++k) {
             T t0;
+            margin0[k] = margin_at_origin(p[k]);
             enter_box(krs::ray<T>{p[k], direction}, t0, t1[k]);
             base[k] = max(t0, zero);
             transmittance[k] = one, j[k] = one;
@@ -355,7 +361,7 @@ public:
                 running[k] = running[k] & (t < t1[k]) & (transmittance[k] >= least);
                 if (!any(running[k])) continue;
                 marching = true;
-                const lane_probe<T> found = probe_lanes(p[k] + direction * t, slope, running[k], skip_margin(p[k], t));
+                const lane_probe<T> found = probe_lanes(p[k] + direction * t, slope, running[k], skip_margin(margin0[k], t), shared_slope);
                 const T alpha = krs::gather(alpha_at, krs::index_max(found.place, krs::index_lanes<T>(0)));
                 transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
                 lookups[k] = lookups[k] + select(found.looks, one, zero);
@@ -385,7 +391,7 @@ public:
     };
     template <class T>
     [[gnu::always_inline]] lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running,
-                                                     const T& margin) const
+                                                     const T& margin, const float* shared_slope = nullptr) const
     {
         using I = krs::index_lanes<T>;
         using krs::select, krs::min, krs::ceil, krs::index_to_float, krs::truncate_to_index;
@@ -407,24 +413,35 @@ public:
         for (int a = 0; a < 3; ++a) {
             const T lo = select(in_block, index_to_float(c[a] & I(~15)), index_to_float(c[a] & I(~3)));
             const T hi = lo + select(in_block, T(16.0f), T(4.0f));
-            exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
+            if (shared_slope) { // every lane's ray goes the same way: the face it leaves by is known
+                if (shared_slope[a] > 0) exit = min(exit, (hi - f[a]) * slope[a]);
+                else if (shared_slope[a] < 0) exit = min(exit, (lo - f[a]) * slope[a]);
+            } else {
+                exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
+            }
         }
         const T steps = ceil(exit / T(step_) - margin);
         const T advance = select(inside & (found < zero), select(steps > one, min(steps, T(1.0e6f)), one), one);
         return {place, looks, advance, {c[0], c[1], c[2]}};
     }
-    // How many steps short of an empty brick's exit a skip must stop, for a ray from `from` at t.
-    // The exit is predicted from this sample's position, but each sample's position is computed
-    // anew in floats, p = o + d t then (p - origin) x cells per unit, with an error of a few ulps
-    // of |o| + t + |origin|: 2^-21 of that in all, both samples' errors counted, in steps. Close to
-    // the tree it is the 1e-3 of the exit's own rounding; from a camera 1000 units away it grows
-    // to several steps, and skips stop short rather than jump over a voxel.
+    // How many steps short of an empty brick's exit a skip must stop, for a ray from `from` at t:
+    // skip_margin(margin_at_origin(from), t). The exit is predicted from this sample's position,
+    // but each sample's position is computed anew in floats, p = o + d t then (p - origin) x cells
+    // per unit, with an error of a few ulps of |o| + t + |origin|: 2^-21 of that in all, both
+    // samples' errors counted, in steps. Close to the tree it is the 1e-3 of the exit's own
+    // rounding; from a camera 1000 units away it grows to several steps, and skips stop short
+    // rather than jump over a voxel. (The part that does not depend on t is computed once per ray.)
     template <class T>
-    T skip_margin(const krs::vec3<T>& from, const T& t) const
+    T margin_at_origin(const krs::vec3<T>& from) const
     {
         using krs::abs, krs::max;
         const T reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + T(grid_reach_);
-        return T(1e-3f) + (reach + t) * T(rounding_per_step_);
+        return T(1e-3f) + reach * T(rounding_per_step_);
+    }
+    template <class T>
+    T skip_margin(const T& at_origin, const T& t) const
+    {
+        return at_origin + t * T(rounding_per_step_);
     }
 
     // The slopes of the lanes of a direction: 1 / (d * cells per unit) per axis, or 0.
