@@ -489,6 +489,49 @@ TEST_CASE("hypertree shadow rays: a packet of points gives each lane the scalar 
     }
 }
 
+TEST_CASE("hypertree probe: a packet whose rays leave bricks by the same faces skips exactly as lanes that choose their own")
+{
+    const small_scene scene(small_tree());
+    const volume_marcher<index_list_store> m(scene.list, tree_shape::of(scene.list), depth_colors::tree(3, 6));
+    using P = krs::packet_f;
+    using marcher = volume_marcher<index_list_store>;
+    constexpr std::size_t n = krs::lane_count<P>;
+    const krs::vec3f lo(scene.list.volume().origin()), size(scene.list.volume().extent());
+    std::uint32_t state = 9;
+    const auto uniform = [&] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) * 0x1.0p-24f;
+    };
+    std::size_t skipping = 0, agreed = 0;
+    for (int round = 0; round < 3000; ++round) {
+        // Directions near one direction (same signs per axis, but for axes where it is near 0),
+        // sometimes exactly along an axis.
+        krs::vec3f base{uniform() * 2 - 1, uniform() * 2 - 1, uniform() * 2 - 1};
+        if (round % 7 == 0) base.y = 0;
+        std::array<float, n> px, py, pz, dx, dy, dz;
+        for (std::size_t k = 0; k < n; ++k) {
+            px[k] = lo.x + uniform() * size.x, py[k] = lo.y + uniform() * size.y, pz[k] = lo.z + uniform() * size.z;
+            const krs::vec3f d = krs::normalize(base + krs::vec3f{uniform(), uniform(), uniform()} * 0.05f);
+            dx[k] = d.x, dy[k] = round % 7 == 0 ? 0.0f : d.y, dz[k] = d.z;
+        }
+        const krs::vec3<P> p{P::load_unaligned(px.data()), P::load_unaligned(py.data()), P::load_unaligned(pz.data())};
+        const krs::vec3<P> d{P::load_unaligned(dx.data()), P::load_unaligned(dy.data()), P::load_unaligned(dz.data())};
+        P slope[3];
+        m.slopes_of(d, slope);
+        const marcher::exit_faces faces = marcher::faces_of(slope);
+        agreed += faces.along[0] != marcher::exit_faces::per_lane && faces.along[2] != marcher::exit_faces::per_lane;
+        const P margin(1e-3f);
+        const auto a = krs::lanes_of(m.probe_lanes(p, slope, krs::mask_t<P>(true), margin, faces).advance);
+        const auto b = krs::lanes_of(m.probe_lanes(p, slope, krs::mask_t<P>(true), margin, marcher::exit_faces{}).advance);
+        for (std::size_t k = 0; k < n; ++k) {
+            REQUIRE(a[k] == b[k]);
+            skipping += a[k] > 1;
+        }
+    }
+    CHECK(skipping > 1000); // the skips were compared
+    CHECK(agreed > 1000);   // and the packets' faces were known
+}
+
 TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of voxels shaded as rays meet them")
 {
     const small_scene scene(small_tree());

@@ -213,12 +213,14 @@ private:
         std::array<krs::mask_t<T>, K> active;
         T slope[K][3];
         std::array<T, K> margin0;
+        std::array<exit_faces, K> faces;
         for (std::size_t r = 0; r < K; ++r) {
             margin0[r] = margin_at_origin(rays[r].origin);
             enter_box(rays[r], t0[r], t1[r]);
             k[r] = zero;
             active[r] = t0[r] + half * ds < t1[r];
             slopes_of(rays[r].direction, slope[r]);
+            faces[r] = faces_of(slope[r]);
         }
         for (bool marching = true; marching;) {
             marching = false;
@@ -228,7 +230,7 @@ private:
                 march_result<T>& o = out[r];
                 const T t = t0[r] + (k[r] + half) * ds;
                 const krs::vec3<T> p = rays[r].origin + rays[r].direction * t;
-                const lane_probe<T> found = probe_lanes(p, slope[r], active[r], skip_margin(margin0[r], t));
+                const lane_probe<T> found = probe_lanes(p, slope[r], active[r], skip_margin(margin0[r], t), faces[r]);
                 const I place = krs::index_max(found.place, I(0));
                 const T a = select(found.looks, krs::gather(alpha_at, place), zero);
                 const I entry = krs::gather(slot_at, place) * stride;
@@ -266,8 +268,9 @@ private:
         }
         const auto dx = krs::lanes_of(ray.direction.x), dy = krs::lanes_of(ray.direction.y), dz = krs::lanes_of(ray.direction.z);
         float slope[lanes<T>][3];
+        std::array<exit_faces, lanes<T>> faces;
         const T margin0 = margin_at_origin(ray.origin);
-        for (std::size_t i = 0; i < lanes<T>; ++i) slopes_of(krs::vec3f{dx[i], dy[i], dz[i]}, slope[i]);
+        for (std::size_t i = 0; i < lanes<T>; ++i) slopes_of(krs::vec3f{dx[i], dy[i], dz[i]}, slope[i]), faces[i] = faces_of(slope[i]);
         while (any(active)) {
             const T t = t0 + (k + half) * ds;
             const krs::vec3<T> p = ray.origin + ray.direction * t;
@@ -283,7 +286,7 @@ private:
                 if (!((running >> i) & 1u)) continue;
                 const krs::vec3f pi{px[i], py[i], pz[i]};
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
-                const lane_probe<float> found = probe_lanes<float>(pi, slope[i], true, margin[i]);
+                const lane_probe<float> found = probe_lanes<float>(pi, slope[i], true, margin[i], faces[i]);
                 if (!found.looks) {
                     advance[i] = found.advance;
                     continue;
@@ -342,8 +345,7 @@ public:
         const krs::vec3<T> direction{T(l.x), T(l.y), T(l.z)};
         T slope[3];
         slopes_of(direction, slope);
-        float shared_slope[3];
-        slopes_of(krs::vec3f(l), shared_slope);
+        const exit_faces faces = faces_of(slope);
         const float* alpha_at = alpha_at_.data();
         const T step(step_), least(options_.min_transmittance), zero(0.0f), one(1.0f);
         std::array<T, K> base, t1, transmittance, j, margin0;
@@ -361,7 +363,7 @@ public:
                 running[k] = running[k] & (t < t1[k]) & (transmittance[k] >= least);
                 if (!any(running[k])) continue;
                 marching = true;
-                const lane_probe<T> found = probe_lanes(p[k] + direction * t, slope, running[k], skip_margin(margin0[k], t), shared_slope);
+                const lane_probe<T> found = probe_lanes(p[k] + direction * t, slope, running[k], skip_margin(margin0[k], t), faces);
                 const T alpha = krs::gather(alpha_at, krs::index_max(found.place, krs::index_lanes<T>(0)));
                 transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
                 lookups[k] = lookups[k] + select(found.looks, one, zero);
@@ -373,6 +375,27 @@ public:
     float shadow_transmittance(const krs::vec3f& p, const krs::vec3f& l, float& lookups) const
     {
         return shadow_transmittance<float>(p, l, lookups, true);
+    }
+
+    // Which face of a brick the rays of a packet leave by, per axis, when all lanes agree (rays of
+    // neighbouring pixels nearly always do, shadow rays toward one light always): then the exit
+    // is one product per axis instead of two and a choice per lane. The same exit either way.
+    struct exit_faces {
+        enum face : int { low, high, none, per_lane };
+        face along[3] = {per_lane, per_lane, per_lane};
+    };
+    template <class T>
+    static exit_faces faces_of(const T (&slope)[3])
+    {
+        using krs::all; // (unqualified below: packets take xsimd's, found by argument)
+        exit_faces faces;
+        const T zero(0.0f);
+        for (int a = 0; a < 3; ++a) {
+            if (all(slope[a] > zero)) faces.along[a] = exit_faces::high;
+            else if (all(slope[a] < zero)) faces.along[a] = exit_faces::low;
+            else if (all(slope[a] == zero)) faces.along[a] = exit_faces::none;
+        }
+        return faces;
     }
 
     // What a sample finds, lane by lane: its cell and its place in the bricks (negative in an
@@ -391,7 +414,7 @@ public:
     };
     template <class T>
     [[gnu::always_inline]] lane_probe<T> probe_lanes(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running,
-                                                     const T& margin, const float* shared_slope = nullptr) const
+                                                     const T& margin, const exit_faces& faces) const
     {
         using I = krs::index_lanes<T>;
         using krs::select, krs::min, krs::ceil, krs::index_to_float, krs::truncate_to_index;
@@ -413,10 +436,11 @@ public:
         for (int a = 0; a < 3; ++a) {
             const T lo = select(in_block, index_to_float(c[a] & I(~15)), index_to_float(c[a] & I(~3)));
             const T hi = lo + select(in_block, T(16.0f), T(4.0f));
-            if (shared_slope) { // every lane's ray goes the same way: the face it leaves by is known
-                if (shared_slope[a] > 0) exit = min(exit, (hi - f[a]) * slope[a]);
-                else if (shared_slope[a] < 0) exit = min(exit, (lo - f[a]) * slope[a]);
-            } else {
+            switch (faces.along[a]) {
+            case exit_faces::high: exit = min(exit, (hi - f[a]) * slope[a]); break;
+            case exit_faces::low: exit = min(exit, (lo - f[a]) * slope[a]); break;
+            case exit_faces::none: break;
+            default: // lanes going different ways
                 exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
             }
         }
