@@ -182,13 +182,17 @@ public:
         return out;
     }
 
-    // Whether a memo was made by this marcher's new_shade_memo() (its voxel count and lights),
-    // and rays may gather from it: it has an entry (lanes with no voxel read entry 0) and fewer
-    // than 2^31 floats.
+    // Whether a memo was made for this marcher, as new_shade_memo() makes it (its voxel count
+    // and lights): only such a memo is read or written.
+    bool made_for(const shade_memo& memo) const
+    {
+        return memo.slots() == bricks_.voxel_count() && memo.stride() == 3 + light_dirs_.size();
+    }
+    // ... and rays may gather from it: it has an entry (lanes with no voxel read entry 0) and
+    // fewer than 2^31 floats.
     bool fits(const shade_memo& memo) const
     {
-        return memo.slots() == bricks_.voxel_count() && memo.stride() == 3 + light_dirs_.size() && memo.slots() > 0 &&
-               memo.slots() * memo.stride() < (std::size_t(1) << 31);
+        return made_for(memo) && memo.slots() > 0 && memo.slots() * memo.stride() < (std::size_t(1) << 31);
     }
 
 private:
@@ -372,10 +376,6 @@ public:
         }
         return transmittance;
     }
-    float shadow_transmittance(const krs::vec3f& p, const krs::vec3f& l, float& lookups) const
-    {
-        return shadow_transmittance<float>(p, l, lookups, true);
-    }
 
     // Which face of a brick the rays of a packet leave by, per axis, when all lanes agree (rays of
     // neighbouring pixels nearly always do, shadow rays toward one light always): then the exit
@@ -509,9 +509,8 @@ public:
     std::uint64_t shade_bricks(shade_memo& memo, std::size_t first, std::size_t last) const
     {
         constexpr std::size_t packets = std::floating_point<T> ? 1 : 4, w = lanes<T>, n = packets * w;
-        const std::size_t lights = light_dirs_.size(), stride = 3 + lights;
-        if (memo.slots() != bricks_.voxel_count() || memo.stride() != stride)
-            throw krs::invalid_parameter("shade_bricks.memo", "must come from this marcher's new_shade_memo()");
+        const std::size_t lights = light_dirs_.size();
+        if (!made_for(memo)) throw krs::invalid_parameter("shade_bricks.memo", "must come from this marcher's new_shade_memo()");
         std::array<float, n> x{}, y{}, z{};
         std::array<std::uint32_t, n> slots{};
         std::array<std::uint8_t, n> levels{};
@@ -660,9 +659,8 @@ private:
         const auto point = [&] { return options_.shade_per_voxel ? center_of(index) : p; };
         std::array<float, 3 + max_lights> entry{}; // lit rgb, then one shadow per light
         const float* shadows = entry.data() + 3;
-        // A memo made for another marcher (its voxel count or lights) is not used.
-        const std::size_t stride = 3 + light_dirs_.size();
-        if (options_.shade_per_voxel && memo && memo->slots() == bricks_.voxel_count() && memo->stride() == stride) {
+        // A memo made for another marcher is not used.
+        if (options_.shade_per_voxel && memo && made_for(*memo)) {
             const std::uint32_t slot = bricks_.slot(place);
             if (!memo->find(slot, entry.data())) {
                 const rgb lit = light_at(point(), level, entry.data() + 3, lookups);
