@@ -601,6 +601,73 @@ TEST_CASE("hypertree all four stores agree on every voxel of a generated tree")
     CHECK(branch_full == branch);
 }
 
+TEST_CASE("hypertree build_tree with scratch memory: the tree of the separate steps, and no new block the second time")
+{
+    // build_tree validates the generator's chunks in place and draws every temporary from the
+    // scratch; the reference runs the public steps one by one (generate's concatenated hits,
+    // compact, classify) without it. Point (D) and line (C) generators, on one thread and three.
+    const parallel_for_hook pool = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::vector<std::thread> workers;
+        for (unsigned w = 0; w < 3; ++w)
+            workers.emplace_back([&, w] {
+                for (std::size_t i = w; i < count; i += 3) body(i);
+            });
+        for (auto& t : workers) t.join();
+    };
+    for (auto t : {presets::tree_d(40), presets::tree_c(40)}) {
+        INFO(t.name);
+        t.iterations = 30000;
+        generation_options steps;
+        steps.chunk_cycles = 500; // the chunks' random streams shape the tree: the same as below
+        const auto generated = generate(t, 9, steps);
+        const auto entries = compact(generated.hits);
+        const auto voxels = classify(entries, density_classes(entries, 8), t.branch_depth);
+        const dense_store reference = dense_store::build(t.volume, voxels);
+        REQUIRE(reference.nonempty_count() > 500);
+        for (const bool threaded : {false, true}) {
+            scratch_memory scratch;
+            build_options options;
+            options.density_class_count = 8;
+            options.generation.chunk_cycles = 500;
+            options.generation.scratch = &scratch;
+            if (threaded) options.generation.parallel_for = pool;
+            for (int build = 0; build < 2; ++build) {
+                const std::size_t blocks_before = scratch.system_allocations();
+                const auto tree = build_tree<index_list_store>(t, 9, options);
+                std::size_t mismatches = 0;
+                for (voxel_index i = 0; i < voxel_index(t.volume.voxel_count()); ++i) mismatches += !(tree.at(i) == reference.at(i));
+                CHECK(mismatches == 0);
+                CHECK(tree.nonempty_count() == reference.nonempty_count());
+                // Threads may take blocks in another order the second time; one thread takes the same.
+                if (build == 1 && !threaded) CHECK(scratch.system_allocations() == blocks_before);
+            }
+            CHECK(scratch.kept_bytes() > 0);
+        }
+    }
+}
+
+TEST_CASE("hypertree generator chunks never outgrow the room they start with")
+{
+    // Each chunk makes room for the most hits it can record before it starts, so it never copies
+    // itself into a larger buffer: with scratch memory, generation takes exactly one block per
+    // chunk. Points and lines (long ones too), lanes in step and one by one.
+    for (auto t : {presets::tree_a(30), presets::tree_c(60), presets::tree_c(200)}) {
+        t.iterations = 20000;
+        for (const bool lanes : {true, false}) {
+            INFO(t.name << " at " << t.volume.grid().x << (lanes ? ", lanes in step" : ", lanes one by one"));
+            scratch_memory scratch;
+            generation_options options;
+            options.chunk_cycles = 300;
+            options.vector_lanes = lanes;
+            options.scratch = &scratch;
+            const auto generated = generate(t, 4, options);
+            const std::uint64_t cycles = (t.iterations + std::uint64_t(t.tree_depth) - 1) / std::uint64_t(t.tree_depth);
+            CHECK(scratch.system_allocations() == (cycles + options.chunk_cycles - 1) / options.chunk_cycles);
+            CHECK(generated.hits.size() > 1000);
+        }
+    }
+}
+
 TEST_CASE("hypertree hard cases: resolution 1 and a dense store over the budget")
 {
     auto t = presets::tree_a(1);

@@ -6,6 +6,7 @@
 #include "hypertree/compact.hpp"
 #include "hypertree/density.hpp"
 #include "hypertree/ops.hpp"
+#include "hypertree/scratch.hpp"
 #include "hypertree/store/bit_array_store.hpp"
 #include "hypertree/store/dense_store.hpp"
 #include "hypertree/store/index_list_store.hpp"
@@ -23,8 +24,10 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <memory_resource>
 #include <optional>
 #include <random>
+#include <span>
 #include <string>
 #include <thread>
 #include <utility>
@@ -307,6 +310,109 @@ TEST_CASE("compact on threads gives the entries of one thread")
         check_same_entries(entries, compact_with_map(hits));
         check_same_entries(entries, hypertree::compact(hits));
     }
+}
+
+TEST_CASE("compact over pieces (the generator's chunks) gives the entries of the whole list")
+{
+    // build_tree validates the chunks as the generator left them: any split, with empty pieces
+    // and pieces shorter than a task's share, on threads or not, into a std::pmr::vector drawn
+    // from scratch memory, must give the map's entries.
+    const hypertree::parallel_for_hook pool = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::vector<std::thread> threads;
+        for (unsigned t = 0; t < 2; ++t)
+            threads.emplace_back([&, t] {
+                for (std::size_t i = t; i < count; i += 2) body(i);
+            });
+        for (std::thread& t : threads) t.join();
+    };
+    std::mt19937_64 g(31);
+    hypertree::scratch_memory scratch;
+    for (const voxel_index highest : {voxel_index(3000), voxel_index(300 * 300 * 300 - 1), voxel_index(1) << 30}) {
+        INFO("voxels up to " << highest);
+        const auto hits = random_hits(g, 300000, 0, highest, 9, 6);
+        const auto reference = compact_with_map(hits);
+        std::vector<std::span<const hit>> pieces;
+        for (std::size_t at = 0; at < hits.size();) {
+            const std::size_t length = std::min<std::size_t>(hits.size() - at, integer(g, 0, 3) == 0 ? 0 : integer(g, 1, 90000));
+            pieces.emplace_back(hits.data() + at, length);
+            at += length;
+        }
+        pieces.emplace_back(); // an empty piece last
+        REQUIRE(pieces.size() > 3);
+        for (const bool threaded : {false, true}) {
+            std::pmr::vector<voxel_entry> entries(&scratch);
+            hypertree::detail::compact_into(pieces, threaded ? pool : hypertree::parallel_for_hook{}, std::uint64_t(highest) + 1,
+                                            &scratch, entries);
+            check_same_entries(std::vector<voxel_entry>(entries.begin(), entries.end()), reference);
+            std::vector<voxel_entry> plain;
+            hypertree::detail::compact_into(pieces, threaded ? pool : hypertree::parallel_for_hook{}, 0, &scratch, plain);
+            check_same_entries(plain, reference);
+        }
+    }
+}
+
+// ---- scratch memory ----------------------------------------------------------------------------------
+
+TEST_CASE("scratch memory keeps released blocks and lends them again")
+{
+    hypertree::scratch_memory scratch;
+    std::pmr::memory_resource& r = scratch;
+    void* a = r.allocate(1 << 20, 64);
+    CHECK(reinterpret_cast<std::uintptr_t>(a) % 64 == 0);
+    CHECK(scratch.system_allocations() == 1);
+    CHECK(scratch.kept_bytes() == 0);
+    r.deallocate(a, 1 << 20, 64);
+    CHECK(scratch.kept_bytes() == std::size_t(1) << 20);
+    // The same size, and a request a little smaller, take the kept block back.
+    void* b = r.allocate((1 << 20) - 1000, 8);
+    CHECK(b == a);
+    CHECK(scratch.system_allocations() == 1);
+    // A request under half the kept block does not pin it: a new block.
+    r.deallocate(b, (1 << 20) - 1000, 8);
+    void* c = r.allocate(100000, 4);
+    CHECK(c != a);
+    CHECK(scratch.system_allocations() == 2);
+    CHECK(scratch.kept_bytes() == std::size_t(1) << 20);
+    // A larger request than any kept block: a new block.
+    void* d = r.allocate(2 << 20, 16);
+    CHECK(scratch.system_allocations() == 3);
+    // release() frees the kept blocks; blocks lent out stay valid and are kept when returned.
+    scratch.release();
+    CHECK(scratch.kept_bytes() == 0);
+    std::fill_n(static_cast<char*>(d), 2 << 20, 'x');
+    r.deallocate(d, 2 << 20, 16);
+    r.deallocate(c, 100000, 4);
+    CHECK(scratch.kept_bytes() >= std::size_t(2 << 20) + 100000);
+    // More than cache-line alignment is not offered.
+    CHECK_THROWS_AS((void)r.allocate(4096, 128), std::bad_alloc);
+    // std::pmr containers draw from it.
+    std::pmr::vector<int> v(&scratch);
+    v.assign(300000, 7);
+    CHECK(std::count(v.begin(), v.end(), 7) == 300000);
+}
+
+TEST_CASE("scratch memory lends each block to one user at a time across threads")
+{
+    // Two threads take and return blocks of varied sizes; each fills its block with its own mark
+    // and checks it before returning it, so a block lent twice at once would show the other's.
+    hypertree::scratch_memory scratch;
+    std::atomic<int> corrupted{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 2; ++t)
+        threads.emplace_back([&, t] {
+            std::mt19937_64 g(std::uint64_t(100 + t));
+            for (int round = 0; round < 400; ++round) {
+                const std::size_t bytes = integer(g, 1, 200000);
+                auto* p = static_cast<unsigned char*>(static_cast<std::pmr::memory_resource&>(scratch).allocate(bytes, 8));
+                std::fill_n(p, bytes, static_cast<unsigned char>(t + 1));
+                std::this_thread::yield();
+                if (std::count(p, p + bytes, static_cast<unsigned char>(t + 1)) != std::ptrdiff_t(bytes)) ++corrupted;
+                static_cast<std::pmr::memory_resource&>(scratch).deallocate(p, bytes, 8);
+            }
+        });
+    for (std::thread& t : threads) t.join();
+    CHECK(corrupted == 0);
+    CHECK(scratch.system_allocations() < 800); // blocks were reused
 }
 
 // ---- density classes -------------------------------------------------------------------------------

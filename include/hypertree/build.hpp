@@ -19,13 +19,35 @@ struct build_options {
     generation_options generation{};
 };
 
+namespace detail {
+
+// Generation, validation and density classes: the stored voxels of one tree, in a list drawn
+// from the scratch memory (every temporary of the way too). Each list goes back to the scratch
+// as soon as the next is made, so the next step can reuse its pages.
+template <transform_pipeline P>
+std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::uint64_t seed, int density_class_count,
+                                                const generation_options& options)
+{
+    std::pmr::memory_resource* scratch = scratch_or_default(options.scratch);
+    std::pmr::vector<voxel_entry> entries(scratch);
+    {
+        no_observer observer;
+        const generated_chunks generated = generate_chunks(definition, seed, options, observer);
+        compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
+    }
+    const density_classes classes(entries, density_class_count);
+    return classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch));
+}
+
+} // namespace detail
+
+// Validation reads the generator's hits chunk by chunk as they were made, without first copying
+// them into one list as generate() returns them.
 template <class Store, transform_pipeline P>
 Store build_tree(const ifs<P>& definition, std::uint64_t seed, const build_options& options = {})
 {
-    const generated_hits generated = generate(definition, seed, options.generation);
-    const std::vector<voxel_entry> entries = compact(generated.hits, options.generation.parallel_for, generated.volume.voxel_count());
-    const density_classes classes(entries, options.density_class_count);
-    const std::vector<stored_voxel> voxels = classify(entries, classes, definition.branch_depth);
+    const std::pmr::vector<stored_voxel> voxels =
+        detail::stored_voxels_of(definition, seed, options.density_class_count, options.generation);
     return Store::build(definition.volume, voxels, options.generation.budget);
 }
 

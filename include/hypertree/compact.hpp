@@ -19,6 +19,7 @@
 // level and part are reduced by a minimum over each run, which gives the same result as sorting on
 // (voxel, level, part) with fewer passes.
 
+#include "hypertree/scratch.hpp"
 #include "hypertree/voxel.hpp"
 
 #include <algorithm>
@@ -28,6 +29,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <memory_resource>
 #include <span>
 #include <string>
 #include <type_traits>
@@ -88,7 +90,8 @@ inline std::uint64_t* radix_sort_bits(std::uint64_t* keys, std::uint64_t* scratc
 }
 
 // Appends one entry per run of equal voxels in sorted[0, n).
-inline void append_runs(const std::uint64_t* sorted, std::size_t n, std::vector<voxel_entry>& entries)
+template <class Entries>
+void append_runs(const std::uint64_t* sorted, std::size_t n, Entries& entries)
 {
     constexpr std::uint64_t level_and_part = (std::uint64_t(1) << packed_voxel_shift) - 1;
     std::size_t begin = 0;
@@ -134,8 +137,8 @@ public:
     // Appends the entries of one bucket's keys (fewer than 2^32 of them), whose voxels start at
     // `base`, and leaves the table empty again. A key holds the voxel from bit `shift` up and
     // level << 8 | part below it.
-    template <class Key>
-    void merge(const Key* keys, std::size_t n, unsigned shift, voxel_index base, std::vector<voxel_entry>& entries)
+    template <class Key, class Entries>
+    void merge(const Key* keys, std::size_t n, unsigned shift, voxel_index base, Entries& entries)
     {
         const Key mask = Key(size_ - 1), below = Key((Key(1) << shift) - 1);
         for (std::size_t i = 0; i < n; ++i) {
@@ -161,64 +164,97 @@ private:
 
 } // namespace detail
 
-// One entry per distinct voxel of `hits`, in increasing voxel order; see the header comment for
-// which level and part an entry keeps. Hit counts saturate at 2^32 - 1.
-//
-// `voxel_count`, when the caller knows it (the hypervolume's: build_tree passes it), bounds
-// the voxel indices and spares a pass over the hits to find the largest; a hit at or past it is
-// refused. 0 = unknown.
-//
-// With `parallel_for`, each pass is split into tasks on the caller's threads: the hits into
-// parts that count and scatter their own share (part p's hits of a bucket go after parts < p's,
-// so a bucket holds the same keys in the same order as one pass would), then the buckets into
-// groups of about equal hit counts, each sorted and merged into its own entries, concatenated in
-// bucket order. The entries are the same whatever the threads.
-inline std::vector<voxel_entry> compact(std::span<const hit> hits, const parallel_for_hook& parallel_for = {},
-                                        std::uint64_t voxel_count = 0)
+namespace detail {
+
+// The pieces' shares of hits [first, last) of `pieces` taken end to end.
+inline std::vector<std::span<const hit>> pieces_in(std::span<const std::span<const hit>> pieces, std::size_t first, std::size_t last)
 {
-    std::vector<voxel_entry> entries;
-    const std::size_t n = hits.size();
-    if (n == 0) return entries;
+    std::vector<std::span<const hit>> shares;
+    std::size_t offset = 0;
+    for (const std::span<const hit>& piece : pieces) {
+        const std::size_t from = std::max(first, offset), to = std::min(last, offset + piece.size());
+        if (from < to) shares.push_back(piece.subspan(from - offset, to - from));
+        offset += piece.size();
+        if (offset >= last) break;
+    }
+    return shares;
+}
+
+// Counts hits per bucket (the voxel's bits from `low_bits` up; past the last bucket counts in
+// the last), and says whether a hit lies past voxel `largest` and which level bits the hits use.
+// Bits or'ed together rather than maxima: GCC moved the maxima to vector registers through the
+// stack, which made this loop, half of compaction, twice as slow.
+inline void count_buckets(std::span<const hit> hits, unsigned low_bits, std::size_t buckets, voxel_index largest,
+                          std::size_t* count, bool& beyond, unsigned& level_bits)
+{
+    bool past = beyond;
+    unsigned levels = level_bits;
+    for (const hit& h : hits) {
+        ++count[std::min(std::size_t(h.voxel >> low_bits), buckets - 1)];
+        past |= h.voxel > largest;
+        levels |= h.level;
+    }
+    beyond = past, level_bits = levels;
+}
+
+// compact() over hits given as pieces taken end to end (the generator's chunks), with its
+// temporary buffers from `scratch`, into `entries` (a std::vector or a std::pmr::vector, which
+// then draws from `scratch` too).
+template <class Entries>
+void compact_into(std::span<const std::span<const hit>> pieces, const parallel_for_hook& parallel_for, std::uint64_t voxel_count,
+                  std::pmr::memory_resource* scratch, Entries& entries)
+{
+    const auto make_entries = [&] {
+        if constexpr (std::is_same_v<Entries, std::pmr::vector<voxel_entry>>) return Entries(scratch);
+        else return Entries();
+    };
+    entries = make_entries();
+    std::size_t n = 0;
+    for (const std::span<const hit>& piece : pieces) n += piece.size();
+    if (n == 0) return;
     // 4 tasks per pass balance two to four threads; below 2^16 hits a pass takes microseconds.
     const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
-    const auto part = [&](std::size_t p) { return hits.subspan(n * p / tasks, n * (p + 1) / tasks - n * p / tasks); };
+    // Task p's part of the hits, as pieces.
+    const auto part = [&](std::size_t p) { return pieces_in(pieces, n * p / tasks, n * (p + 1) / tasks); };
 
     voxel_index largest = voxel_index(std::min<std::uint64_t>(voxel_count, std::uint64_t(1) << 32) - 1);
     if (voxel_count == 0) {
         std::vector<voxel_index> part_largest(tasks, 0);
         run_tasks(parallel_for, tasks, [&](std::size_t p) {
-            for (const hit& h : part(p)) part_largest[p] = std::max(part_largest[p], h.voxel);
+            for (const std::span<const hit> hits : part(p))
+                for (const hit& h : hits) part_largest[p] = std::max(part_largest[p], h.voxel);
         });
         largest = *std::max_element(part_largest.begin(), part_largest.end());
     }
     const unsigned voxel_bits = unsigned(std::bit_width(largest));
     // Grids whose buckets can all be merged directly split finer (see direct_bucket_bits).
-    const bool direct = voxel_bits <= detail::max_bucket_bits + detail::max_direct_bits;
-    const unsigned bucket_bits = std::min(voxel_bits, direct ? detail::direct_bucket_bits : detail::max_bucket_bits);
+    const bool direct = voxel_bits <= max_bucket_bits + max_direct_bits;
+    const unsigned bucket_bits = std::min(voxel_bits, direct ? direct_bucket_bits : max_bucket_bits);
     const unsigned low_bits = voxel_bits - bucket_bits; // sorted inside each bucket
     const std::size_t buckets = std::size_t(1) << bucket_bits;
-    const auto bucket_of = [low_bits](voxel_index v) { return std::size_t(v >> low_bits); };
 
     // counts[p * buckets + b]: part p's hits in bucket b; then where part p writes them. The same
-    // pass finds the largest index (a hit past voxel_count is counted in the last bucket, then
-    // refused) and the deepest level (whether 32-bit keys hold the hits).
+    // pass finds whether a hit lies past voxel_count (counted in the last bucket, then refused)
+    // and whether every level is below 64 (then 32-bit keys hold the hits).
     std::vector<std::size_t> counts(tasks * buckets, 0);
-    std::vector<voxel_index> part_largest(tasks, 0);
-    std::vector<unsigned> part_deepest(tasks, 0);
+    std::vector<char> part_beyond(tasks, 0);
+    std::vector<unsigned> part_levels(tasks, 0);
     run_tasks(parallel_for, tasks, [&](std::size_t p) {
-        std::size_t* c = counts.data() + p * buckets;
-        voxel_index most = 0;
-        unsigned deepest = 0;
-        for (const hit& h : part(p)) {
-            ++c[std::min(bucket_of(h.voxel), buckets - 1)];
-            most = std::max(most, h.voxel), deepest = std::max(deepest, unsigned(h.level));
-        }
-        part_largest[p] = most, part_deepest[p] = deepest;
+        bool beyond = false;
+        for (const std::span<const hit> hits : part(p))
+            count_buckets(hits, low_bits, buckets, largest, counts.data() + p * buckets, beyond, part_levels[p]);
+        part_beyond[p] = beyond;
     });
-    if (const voxel_index most = *std::max_element(part_largest.begin(), part_largest.end()); most > largest)
+    if (std::find(part_beyond.begin(), part_beyond.end(), 1) != part_beyond.end()) {
+        voxel_index most = 0;
+        for (const std::span<const hit>& piece : pieces)
+            for (const hit& h : piece) most = std::max(most, h.voxel);
         throw invalid_parameter("compact.voxel_count", "must be above every hit's voxel index (it is the hypervolume's voxel count)",
                                 std::to_string(voxel_count) + " with a hit in voxel " + std::to_string(most));
-    const bool short_keys = direct && *std::max_element(part_deepest.begin(), part_deepest.end()) < 64;
+    }
+    unsigned level_bits = 0;
+    for (const unsigned l : part_levels) level_bits |= l;
+    const bool short_keys = direct && level_bits < 64; // every level below 64
     std::vector<std::size_t> start(buckets + 1, 0);
     for (std::size_t b = 0, offset = 0; b < buckets; ++b) {
         start[b] = offset;
@@ -232,16 +268,20 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
         if (start[b] >= n * group_begin.size() / tasks) group_begin.push_back(b);
     const std::size_t groups = group_begin.size();
     group_begin.push_back(buckets);
-    std::vector<std::vector<voxel_entry>> group_entries(groups);
+    std::vector<Entries> group_entries;
+    for (std::size_t g = 0; g < groups; ++g) group_entries.push_back(make_entries());
 
     // Scatters the hits into their buckets as keys (the voxel from bit `shift` up, level << 8 |
     // part below), then merges each group of buckets into its entries.
     const auto scatter_and_merge = [&]<class Key>(unsigned shift, const auto& key_of) {
-        // Default-initialized: every element is written by the scatter, so zeroing would only cost.
-        const std::unique_ptr<Key[]> scattered(new Key[n]);
+        // Not zeroed: every element is written by the scatter, so zeroing would only cost.
+        const scratch_array<Key> scattered(n, scratch);
         run_tasks(parallel_for, tasks, [&](std::size_t p) {
-            std::size_t* next = counts.data() + p * buckets;
-            for (const hit& h : part(p)) scattered[next[bucket_of(h.voxel)]++] = key_of(h);
+            std::size_t* const next = counts.data() + p * buckets;
+            Key* const to = scattered.get();
+            const unsigned bucket_shift = low_bits;
+            for (const std::span<const hit> hits : part(p))
+                for (const hit& h : hits) to[next[h.voxel >> bucket_shift]++] = key_of(h);
         });
         run_tasks(parallel_for, groups, [&](std::size_t g) {
             const std::size_t first = group_begin[g], last = group_begin[g + 1];
@@ -249,43 +289,67 @@ inline std::vector<voxel_entry> compact(std::span<const hit> hits, const paralle
             for (std::size_t b = first; b < last; ++b) largest_bucket = std::max(largest_bucket, start[b + 1] - start[b]);
             // At most one entry per hit. Reserving that much only reserves address space: pages
             // that are never written are never touched.
-            std::vector<voxel_entry>& out = group_entries[g];
+            Entries& out = group_entries[g];
             out.reserve(start[last] - start[first]);
             if (direct && largest_bucket < (std::size_t(1) << 32)) {
-                detail::direct_merge table(low_bits);
+                direct_merge table(low_bits);
                 for (std::size_t b = first; b < last; ++b)
                     table.merge(scattered.get() + start[b], start[b + 1] - start[b], shift, voxel_index(b << low_bits), out);
                 return;
             }
             if constexpr (std::is_same_v<Key, std::uint64_t>) {
-                const std::unique_ptr<std::uint64_t[]> scratch(new std::uint64_t[std::max<std::size_t>(largest_bucket, 1)]);
+                const scratch_array<std::uint64_t> sort_scratch(std::max<std::size_t>(largest_bucket, 1), scratch);
                 for (std::size_t b = first; b < last; ++b) {
                     const std::size_t size = start[b + 1] - start[b];
                     if (size == 0) continue;
-                    const std::uint64_t* sorted = detail::radix_sort_bits(scattered.get() + start[b], scratch.get(), size,
-                                                                          detail::packed_voxel_shift, low_bits);
-                    detail::append_runs(sorted, size, out);
+                    const std::uint64_t* sorted =
+                        radix_sort_bits(scattered.get() + start[b], sort_scratch.get(), size, packed_voxel_shift, low_bits);
+                    append_runs(sorted, size, out);
                 }
             }
         });
     };
     if (short_keys) {
         const voxel_index low_mask = voxel_index((std::uint64_t(1) << low_bits) - 1);
-        scatter_and_merge.template operator()<std::uint32_t>(detail::short_key_shift, [low_mask](const hit& h) {
-            return std::uint32_t((h.voxel & low_mask) << detail::short_key_shift) | std::uint32_t(h.level) << 8 | std::uint32_t(h.part);
+        scatter_and_merge.template operator()<std::uint32_t>(short_key_shift, [low_mask](const hit& h) {
+            return std::uint32_t((h.voxel & low_mask) << short_key_shift) | std::uint32_t(h.level) << 8 | std::uint32_t(h.part);
         });
     } else {
-        scatter_and_merge.template operator()<std::uint64_t>(detail::packed_voxel_shift, detail::pack_hit);
+        scatter_and_merge.template operator()<std::uint64_t>(packed_voxel_shift, pack_hit);
     }
     if (groups == 1) {
         entries = std::move(group_entries[0]);
         entries.shrink_to_fit();
-        return entries;
+        return;
     }
     std::size_t total = 0;
     for (const auto& e : group_entries) total += e.size();
     entries.reserve(total);
     for (const auto& e : group_entries) entries.insert(entries.end(), e.begin(), e.end());
+}
+
+} // namespace detail
+
+// One entry per distinct voxel of `hits`, in increasing voxel order; see the header comment for
+// which level and part an entry keeps. Hit counts saturate at 2^32 - 1.
+//
+// `voxel_count`, when the caller knows it (the hypervolume's: build_tree passes it), bounds
+// the voxel indices and spares a pass over the hits to find the largest; a hit at or past it is
+// refused. 0 = unknown.
+//
+// With `parallel_for`, each pass is split into tasks on the caller's threads: the hits into
+// parts that count and scatter their own share (part p's hits of a bucket go after parts < p's,
+// so a bucket holds the same keys in the same order as one pass would), then the buckets into
+// groups of about equal hit counts, each sorted and merged into its own entries, concatenated in
+// bucket order. The entries are the same whatever the threads.
+//
+// `scratch` (scratch.hpp) serves the temporary buffers; null: new and delete.
+inline std::vector<voxel_entry> compact(std::span<const hit> hits, const parallel_for_hook& parallel_for = {},
+                                        std::uint64_t voxel_count = 0, std::pmr::memory_resource* scratch = nullptr)
+{
+    std::vector<voxel_entry> entries;
+    const std::span<const hit> pieces[1] = {hits};
+    detail::compact_into(pieces, parallel_for, voxel_count, scratch_or_default(scratch), entries);
     return entries;
 }
 

@@ -175,8 +175,11 @@ inline constexpr int no_branch_structure = -1;
 // each hit voxel with its class's density, or full density when its level <= branch_depth, its
 // level and part. Entries with no hit are left out, so the result is sorted, unique and has no
 // empty voxel, as stores require.
-inline std::vector<stored_voxel> classify(std::span<const voxel_entry> entries, const density_classes& classes,
-                                          int branch_depth)
+//
+// `Voxels` is the list type to return: a std::pmr::vector<stored_voxel> passed in as `voxels`
+// (empty, with its resource) draws from that resource.
+template <class Voxels = std::vector<stored_voxel>>
+Voxels classify(std::span<const voxel_entry> entries, const density_classes& classes, int branch_depth, Voxels voxels = {})
 {
     if (branch_depth < no_branch_structure || branch_depth > 255)
         throw invalid_parameter("classify.branch_depth",
@@ -205,7 +208,7 @@ inline std::vector<stored_voxel> classify(std::span<const voxel_entry> entries, 
     // Written through a local count into a sized vector: push_back's end pointer lives in the
     // vector, and the byte-sized fields written in between may alias it, so it was reloaded and
     // stored for every voxel.
-    std::vector<stored_voxel> voxels(entries.size());
+    voxels.resize(entries.size());
     std::size_t kept = 0;
     for (const voxel_entry& e : entries) {
         const std::uint8_t density = int(e.level) <= branch_depth ? std::uint8_t(255) : density_of(e.hits);

@@ -31,13 +31,11 @@ inline generated_forest build_forest(const loaded_forest& forest, std::uint64_t 
     for (std::size_t i = 0; i < forest.trees.size(); ++i) {
         ifs<> tree = forest.trees[i].ifs;
         tree.volume = hypervolume(out.volume.origin() - forest.listing.trees[i].offset, out.volume.extent(), out.volume.grid());
-        const generated_hits hits = generate(tree, seed + i, options.generation);
-        const std::vector<voxel_entry> entries = compact(hits.hits, options.generation.parallel_for, hits.volume.voxel_count());
-        const density_classes classes(entries, forest.trees[i].density_class_count.value_or(options.density_class_count));
-        std::vector<stored_voxel> voxels = classify(entries, classes, tree.branch_depth);
+        std::pmr::vector<stored_voxel> voxels = detail::stored_voxels_of(
+            tree, seed + i, forest.trees[i].density_class_count.value_or(options.density_class_count), options.generation);
         for (stored_voxel& v : voxels) v.part = std::uint8_t(std::min<std::size_t>(i, 255));
         if (out.voxels.empty()) {
-            out.voxels = std::move(voxels);
+            out.voxels.assign(voxels.begin(), voxels.end());
             continue;
         }
         const partitioned_store so_far = partitioned_store::build(out.volume, out.voxels, options.generation.budget);

@@ -22,6 +22,7 @@
 
 #include "hypertree/ifs.hpp"
 #include "hypertree/generator_lanes.hpp"
+#include "hypertree/scratch.hpp"
 #include "hypertree/voxel.hpp"
 #include "krs/core/noise.hpp"
 
@@ -49,6 +50,9 @@ struct generation_options {
     // Run a chunk's lanes in step in SIMD registers where the build and the tree allow it
     // (generator_lanes.hpp). The generated tree does not depend on it, only the order of its hits.
     bool vector_lanes = true;
+    // Where the generator's and validation's temporary buffers come from (scratch.hpp): keep one
+    // scratch_memory across builds and they reuse its pages. Null: plain new and delete.
+    std::pmr::memory_resource* scratch = nullptr;
 };
 
 struct generation_stats {
@@ -186,20 +190,19 @@ struct segment {
 // make room for the most voxels one segment can visit before walking it, so the walk writes
 // without a check.
 struct chunk_output {
-    std::unique_ptr<hit[]> hits;
-    std::size_t count = 0, capacity = 0;
+    scratch_array<hit> hits; // its size is the capacity
+    std::size_t count = 0;
+    std::pmr::memory_resource* from = std::pmr::new_delete_resource();
     std::size_t size() const { return count; }
+    std::size_t capacity() const { return hits.size(); }
     const hit* data() const { return hits.get(); }
     // Room for at least `more` hits past `count`, keeping those written (grows geometrically).
     void make_room(std::size_t more)
     {
-        if (capacity - count >= more) return;
-        const std::size_t grown = std::max(count + more, capacity + capacity / 2);
-        // Default-initialized: only the hits written are read, so zeroing would only cost.
-        std::unique_ptr<hit[]> bigger(new hit[grown]);
+        if (capacity() - count >= more) return;
+        scratch_array<hit> bigger(std::max(count + more, capacity() + capacity() / 2), from);
         std::copy_n(hits.get(), count, bigger.get());
         hits = std::move(bigger);
-        capacity = grown;
     }
 };
 
@@ -270,7 +273,7 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, random_stream 
                 voxel_index ia, ib;
                 const bool a_in = cell_of(a, ia), b_in = cell_of(b, ib);
                 escaped += !(a_in && b_in);
-                if (out.capacity - std::size_t(end - out.hits.get()) < segment_voxels) {
+                if (out.capacity() - std::size_t(end - out.hits.get()) < segment_voxels) {
                     out.count = std::size_t(end - out.hits.get());
                     out.make_room(segment_voxels);
                     end = out.hits.get() + out.count;
@@ -382,11 +385,29 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
 
 } // namespace detail
 
-// Runs the IFS: N = ifs.iterations iterations in cycles of tree_depth, deterministic for `seed`.
-// Refuses, before allocating, a run whose hit list would exceed the memory budget.
-template <transform_pipeline P, class Observer = detail::no_observer>
-generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const generation_options& options = {},
-                        Observer observer = {})
+namespace detail {
+
+// The hits as the chunks made them, in chunk order: what generate() concatenates, and what
+// build_tree validates without copying them first (at 300^3 the copy alone wrote 14 MB).
+struct generated_chunks {
+    std::vector<chunk_output> chunks;
+    generation_stats stats;
+    std::size_t hit_count() const
+    {
+        std::size_t n = 0;
+        for (const chunk_output& c : chunks) n += c.size();
+        return n;
+    }
+    std::vector<std::span<const hit>> pieces() const
+    {
+        std::vector<std::span<const hit>> p;
+        for (const chunk_output& c : chunks) p.emplace_back(c.data(), c.size());
+        return p;
+    }
+};
+
+template <transform_pipeline P, class Observer>
+generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_options& options, Observer& observer)
 {
     const drawn_ifs<P> tree(definition, seed);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
@@ -405,35 +426,51 @@ generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const gene
 
     const std::uint64_t chunks = (cycles + options.chunk_cycles - 1) / options.chunk_cycles;
     // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
-    const std::optional<detail::lane_tables> lanes_in_step =
-        options.vector_lanes && std::is_same_v<Observer, detail::no_observer> ? detail::lane_tables::of(tree) : std::nullopt;
-    std::vector<detail::chunk_output> chunk_hits(chunks);
+    const std::optional<lane_tables> lanes_in_step =
+        options.vector_lanes && std::is_same_v<Observer, no_observer> ? lane_tables::of(tree) : std::nullopt;
+    generated_chunks out;
+    out.chunks.resize(chunks);
     std::vector<generation_stats> chunk_stats(chunks);
     const auto run = [&](std::size_t c) {
         const std::uint64_t first = c * options.chunk_cycles;
         const std::uint64_t count = std::min(options.chunk_cycles, cycles - first);
         chunk_stats[c].recorded_per_depth.assign(depth, 0);
-        // Points: one hit per generator at most (and a register's more for the lanes' whole-register
-        // stores). Lines: a third of the worst case to start with.
-        chunk_hits[c].make_room(definition.generator.is_point()
-                                    ? std::size_t(count * depth) + detail::cycle_lanes
-                                    : std::size_t(double(count) * double(depth) * voxels_per_generator / 3.0));
-        detail::generate_chunk(tree, seed, c, count, lanes_in_step ? &*lanes_in_step : nullptr, chunk_hits[c], chunk_stats[c], observer);
+        // Room for the most hits the chunk can make, so it never grows (a copy that touches fresh
+        // pages): points make one per generator at most, lines the walk's bound per generator;
+        // and a row's room more, which the lanes ask for before each row. Pages never written are
+        // never touched, so the worst case costs address space only.
+        out.chunks[c].from = scratch_or_default(options.scratch);
+        out.chunks[c].make_room(definition.generator.is_point()
+                                    ? std::size_t(count * depth) + cycle_lanes
+                                    : std::size_t(double(count) * double(depth) * voxels_per_generator) +
+                                          cycle_lanes * (max_voxels_on_segment(definition.volume, definition.generator.length()) + 1));
+        generate_chunk(tree, seed, c, count, lanes_in_step ? &*lanes_in_step : nullptr, out.chunks[c], chunk_stats[c], observer);
     };
     run_tasks(options.parallel_for, std::size_t(chunks), run);
 
-    generated_hits result{definition.volume, {}, {}};
-    std::size_t total = 0;
-    for (const auto& h : chunk_hits) total += h.size();
-    result.hits.reserve(total);
-    result.stats.recorded_per_depth.assign(depth, 0);
-    for (std::size_t c = 0; c < chunks; ++c) {
-        result.hits.insert(result.hits.end(), chunk_hits[c].data(), chunk_hits[c].data() + chunk_hits[c].size());
-        chunk_hits[c] = {};
-        const auto& s = chunk_stats[c];
-        result.stats.cycles += s.cycles, result.stats.generators += s.generators;
-        result.stats.recorded += s.recorded, result.stats.escaped += s.escaped;
-        for (std::size_t d = 0; d < depth; ++d) result.stats.recorded_per_depth[d] += s.recorded_per_depth[d];
+    out.stats.recorded_per_depth.assign(depth, 0);
+    for (const generation_stats& s : chunk_stats) {
+        out.stats.cycles += s.cycles, out.stats.generators += s.generators;
+        out.stats.recorded += s.recorded, out.stats.escaped += s.escaped;
+        for (std::size_t d = 0; d < depth; ++d) out.stats.recorded_per_depth[d] += s.recorded_per_depth[d];
+    }
+    return out;
+}
+
+} // namespace detail
+
+// Runs the IFS: N = ifs.iterations iterations in cycles of tree_depth, deterministic for `seed`.
+// Refuses, before allocating, a run whose hit list would exceed the memory budget.
+template <transform_pipeline P, class Observer = detail::no_observer>
+generated_hits generate(const ifs<P>& definition, std::uint64_t seed, const generation_options& options = {},
+                        Observer observer = {})
+{
+    detail::generated_chunks generated = detail::generate_chunks(definition, seed, options, observer);
+    generated_hits result{definition.volume, {}, std::move(generated.stats)};
+    result.hits.reserve(generated.hit_count());
+    for (detail::chunk_output& c : generated.chunks) {
+        result.hits.insert(result.hits.end(), c.data(), c.data() + c.size());
+        c = {};
     }
     return result;
 }

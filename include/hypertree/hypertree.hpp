@@ -19,6 +19,7 @@
 #include "hypertree/lod.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/random.hpp"
+#include "hypertree/scratch.hpp"
 #include "hypertree/render/glsl.hpp"
 #include "hypertree/render/marcher.hpp"
 #include "hypertree/render/render.hpp"
