@@ -640,6 +640,43 @@ TEST_CASE("hypertree pipeline: hits through compact and classify give a store of
     CHECK(store.nonempty_count() == reference.size());
 }
 
+TEST_CASE("index divider: the quotient of every index it is asked, against integer division")
+{
+    // Store bounds divide each index by the row and slice sizes through a double reciprocal and a
+    // correction; it must be exact for every 32-bit index: multiples of the divisor and their
+    // neighbours (where truncation errs), the largest index, random ones.
+    std::mt19937_64 g(32);
+    std::vector<std::uint64_t> divisors = {1, 2, 3, 7, 300, 1000, 65535, 65536, 90000, 1000000, 0x7fffffffu, 0xffffffffu};
+    for (int k = 0; k < 40; ++k) divisors.push_back(integer(g, 1, 0xffffffffu));
+    std::size_t wrong = 0;
+    for (const std::uint64_t d : divisors) {
+        const hypertree::detail::index_divider divide(d);
+        const auto check = [&](std::uint64_t i) {
+            if (i > 0xffffffffu) return;
+            wrong += divide.quotient(voxel_index(i)) != voxel_index(i / d);
+        };
+        check(0), check(0xffffffffu), check(0xfffffffeu);
+        for (int k = 0; k < 20000; ++k) {
+            const std::uint64_t multiple = (std::uint64_t(integer(g, 0, 0xffffffffu)) / d) * d;
+            check(multiple), check(multiple + 1), check(multiple - (multiple > 0)), check(multiple + d - 1);
+            check(integer(g, 0, 0xffffffffu));
+        }
+    }
+    CHECK(wrong == 0);
+}
+
+TEST_CASE("stores: bounds on a large grid, from its first and last voxels and the extreme rows")
+{
+    // A grid near the 32-bit index limit, with voxels at the corners of their box and inside it.
+    const hypervolume volume({0, 0, 0}, {1, 1, 1}, hypertree::resolution{1621, 1619, 1601});
+    std::vector<stored_voxel> voxels;
+    const auto add = [&](int x, int y, int z) { voxels.push_back({volume.index(x, y, z), voxel{9, 1}, 0}); };
+    add(1620, 5, 3), add(2, 1618, 700), add(0, 700, 1600), add(800, 0, 900), add(1619, 1617, 1599);
+    std::sort(voxels.begin(), voxels.end(), [](const stored_voxel& a, const stored_voxel& b) { return a.index < b.index; });
+    const auto box = hypertree::detail::bounds_of(volume, voxels);
+    CHECK(box == hypertree::index_box{{0, 0, 3}, {1620, 1618, 1600}});
+}
+
 // ---- stores ------------------------------------------------------------------------------------------
 
 TEST_CASE("stores: all four kinds return the reference voxel for every voxel of a small grid")
