@@ -600,6 +600,44 @@ TEST_CASE("classify: the branching structure gets full density")
     }
 }
 
+TEST_CASE("classify on threads gives the voxels of one thread, drops entries without hits and finds disorder anywhere")
+{
+    // Tasks split the entries in four; every entry maps to its voxel by the classes (the
+    // reference here is density_of, entry by entry), entries without hits go, and a voxel out of
+    // order is refused wherever it lies: at a task's first entry (the check against the task
+    // before) or inside one.
+    const hypertree::parallel_for_hook pool = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::vector<std::thread> threads;
+        for (std::size_t t = 0; t < count; ++t) threads.emplace_back([&, t] { body(count - 1 - t); });
+        for (std::thread& t : threads) t.join();
+    };
+    std::mt19937_64 g(65);
+    std::vector<voxel_entry> entries;
+    for (voxel_index i = 0; i < 100000; ++i)
+        entries.push_back({i * 3 + 2, i % 97 == 5 ? 0u : geometric_hits(g, 0.1), std::uint8_t(i % 9), std::uint8_t(i % 5)});
+    const hypertree::density_classes classes(entries, 12);
+    const auto serial = hypertree::classify(entries, classes, 2);
+    const auto threaded = hypertree::classify(entries, classes, 2, std::vector<stored_voxel>{}, pool);
+    std::vector<stored_voxel> expected;
+    for (const voxel_entry& e : entries)
+        if (e.hits != 0) expected.push_back({e.voxel, voxel{e.level <= 2 ? std::uint8_t(255) : classes.density_of(e.hits), e.level}, e.part});
+    REQUIRE(threaded.size() == expected.size());
+    REQUIRE(serial.size() == expected.size());
+    std::size_t wrong = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i)
+        wrong += threaded[i].index != expected[i].index || !(threaded[i].value == expected[i].value) || threaded[i].part != expected[i].part ||
+                 serial[i].index != expected[i].index || !(serial[i].value == expected[i].value) || serial[i].part != expected[i].part;
+    CHECK(wrong == 0);
+    for (const std::size_t at : {std::size_t(25000), std::size_t(50000), std::size_t(61234), entries.size() - 1}) {
+        INFO("disorder at entry " << at);
+        auto swapped = entries;
+        std::swap(swapped[at - 1].voxel, swapped[at].voxel);
+        CHECK_THROWS_WITH_AS(hypertree::classify(swapped, classes, 2, std::vector<stored_voxel>{}, pool),
+                             doctest::Contains("classify.entries"), krs::invalid_parameter);
+        CHECK_THROWS_AS(hypertree::classify(swapped, classes, 2), krs::invalid_parameter);
+    }
+}
+
 TEST_CASE("density classes and classify refuse impossible parameters")
 {
     const std::vector<voxel_entry> entries = {{1, 3, 0, 0}, {4, 1, 1, 0}};

@@ -36,7 +36,7 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
         compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
     }
     const density_classes classes(entries, density_class_count);
-    return classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch));
+    return classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
 }
 
 } // namespace detail

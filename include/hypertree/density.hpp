@@ -177,19 +177,16 @@ inline constexpr int no_branch_structure = -1;
 // empty voxel, as stores require.
 //
 // `Voxels` is the list type to return: a std::pmr::vector<stored_voxel> passed in as `voxels`
-// (empty, with its resource) draws from that resource.
+// (empty, with its resource) draws from that resource. With `parallel_for`, the entries are
+// split into tasks on the caller's threads; the result is the same.
 template <class Voxels = std::vector<stored_voxel>>
-Voxels classify(std::span<const voxel_entry> entries, const density_classes& classes, int branch_depth, Voxels voxels = {})
+Voxels classify(std::span<const voxel_entry> entries, const density_classes& classes, int branch_depth, Voxels voxels = {},
+                const parallel_for_hook& parallel_for = {})
 {
     if (branch_depth < no_branch_structure || branch_depth > 255)
         throw invalid_parameter("classify.branch_depth",
                                 "must be -1 (no branching structure) or a level between 0 and 255",
                                 std::to_string(branch_depth));
-    for (std::size_t i = 1; i < entries.size(); ++i)
-        if (!(entries[i - 1].voxel < entries[i].voxel))
-            throw invalid_parameter(
-                "classify.entries", "must be sorted by voxel without duplicates (as compact returns them)",
-                "voxel " + std::to_string(entries[i].voxel) + " after " + std::to_string(entries[i - 1].voxel));
 
     // Hit count -> density as a table over the counts the classes span, so classifying a million
     // voxels costs a load each instead of a bisection; counts above it take the last class.
@@ -205,17 +202,38 @@ Voxels classify(std::span<const voxel_entry> entries, const density_classes& cla
         return hits < density_by_hits.size() ? density_by_hits[hits] : classes.density_of(hits);
     };
 
-    // Written through a local count into a sized vector: push_back's end pointer lives in the
-    // vector, and the byte-sized fields written in between may alias it, so it was reloaded and
-    // stored for every voxel.
-    voxels.resize(entries.size());
-    std::size_t kept = 0;
-    for (const voxel_entry& e : entries) {
-        const std::uint8_t density = int(e.level) <= branch_depth ? std::uint8_t(255) : density_of(e.hits);
-        voxels[kept] = {e.voxel, voxel{density, e.level}, e.part};
-        kept += e.hits != 0;
+    // Voxel i comes from entry i; each task checks its entries' order (against the one before
+    // too) and counts those without hits, which a serial pass then removes (compact makes none).
+    // Written through indices into a sized list: push_back's end pointer lives in the vector, and
+    // the byte-sized fields written in between may alias it, so it was reloaded and stored for
+    // every voxel.
+    const std::size_t n = entries.size();
+    voxels.resize(n);
+    const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
+    std::vector<std::size_t> first_unsorted(tasks, n), without_hits(tasks, 0);
+    run_tasks(parallel_for, tasks, [&](std::size_t p) {
+        const std::size_t begin = n * p / tasks, end = n * (p + 1) / tasks;
+        std::size_t unsorted = n, empty = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+            const voxel_entry& e = entries[i];
+            if (i > 0 && !(entries[i - 1].voxel < e.voxel) && unsorted == n) unsorted = i;
+            const std::uint8_t density = int(e.level) <= branch_depth ? std::uint8_t(255) : density_of(e.hits);
+            voxels[i] = {e.voxel, voxel{density, e.level}, e.part};
+            empty += e.hits == 0;
+        }
+        first_unsorted[p] = unsorted, without_hits[p] = empty;
+    });
+    if (const std::size_t i = *std::min_element(first_unsorted.begin(), first_unsorted.end()); i < n)
+        throw invalid_parameter("classify.entries", "must be sorted by voxel without duplicates (as compact returns them)",
+                                "voxel " + std::to_string(entries[i].voxel) + " after " + std::to_string(entries[i - 1].voxel));
+    if (std::find_if(without_hits.begin(), without_hits.end(), [](std::size_t c) { return c != 0; }) != without_hits.end()) {
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            voxels[kept] = voxels[i];
+            kept += entries[i].hits != 0;
+        }
+        voxels.resize(kept);
     }
-    voxels.resize(kept);
     return voxels;
 }
 
