@@ -646,6 +646,30 @@ TEST_CASE("hypertree build_tree with scratch memory: the tree of the separate st
     }
 }
 
+TEST_CASE("hypertree build_tree's voxels equal the separate steps' on grids above and below 2^25 voxels")
+{
+    // At most 2^25 voxels each chunk is bucketed as it is made; above, the chunks are validated
+    // as pieces. Both must give the voxel list of generate, compact and classify run one by one.
+    for (const int resolution : {40, 330}) {
+        auto t = presets::tree_c(resolution);
+        t.iterations = 20000;
+        INFO("resolution " << resolution << ": " << t.volume.voxel_count() << " voxels");
+        generation_options steps;
+        steps.chunk_cycles = 300;
+        const auto generated = generate(t, 12, steps);
+        const auto entries = compact(generated.hits);
+        const auto expected = classify(entries, density_classes(entries, 16), t.branch_depth);
+        scratch_memory scratch;
+        const auto voxels = detail::stored_voxels_of(t, 12, 16, steps, &scratch);
+        REQUIRE(voxels.size() == expected.size());
+        REQUIRE(expected.size() > 1000);
+        std::size_t differ = 0;
+        for (std::size_t i = 0; i < expected.size(); ++i)
+            differ += voxels[i].index != expected[i].index || !(voxels[i].value == expected[i].value) || voxels[i].part != expected[i].part;
+        CHECK(differ == 0);
+    }
+}
+
 TEST_CASE("hypertree generator chunks never outgrow the room they start with")
 {
     // Each chunk makes room for the most hits it can record before it starts, so it never copies

@@ -351,6 +351,47 @@ TEST_CASE("compact over pieces (the generator's chunks) gives the entries of the
     }
 }
 
+TEST_CASE("compact chunk by chunk (build_tree's way) gives the entries of the whole list")
+{
+    // Each chunk bucketed on its own, then every bucket merged across the chunks: random chunks,
+    // empty ones among them, on threads or not, must give the map's entries; hits past the grid
+    // or at level 64 are refused with the parameter named.
+    const hypertree::parallel_for_hook pool = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::vector<std::thread> threads;
+        for (unsigned t = 0; t < 2; ++t)
+            threads.emplace_back([&, t] {
+                for (std::size_t i = t; i < count; i += 2) body(i);
+            });
+        for (std::thread& t : threads) t.join();
+    };
+    std::mt19937_64 g(33);
+    hypertree::scratch_memory scratch;
+    for (const std::uint64_t voxels : {std::uint64_t(1), std::uint64_t(3000), std::uint64_t(300) * 300 * 300, std::uint64_t(1) << 25}) {
+        INFO("grid of " << voxels << " voxels");
+        const auto plan = hypertree::detail::direct_buckets::for_grid(voxels);
+        REQUIRE(plan);
+        const auto hits = random_hits(g, 250000, 0, voxel_index(voxels - 1), 64, 256);
+        const auto reference = compact_with_map(hits);
+        std::vector<hypertree::detail::bucketed_chunk> chunks;
+        for (std::size_t at = 0; at < hits.size();) {
+            const std::size_t length = std::min<std::size_t>(hits.size() - at, integer(g, 0, 3) == 0 ? 0 : integer(g, 1, 70000));
+            chunks.push_back(hypertree::detail::bucket_chunk(std::span<const hit>(hits.data() + at, length), *plan, &scratch));
+            at += length;
+        }
+        for (const bool threaded : {false, true}) {
+            std::pmr::vector<voxel_entry> entries(&scratch);
+            hypertree::detail::merge_bucketed(chunks, *plan, threaded ? pool : hypertree::parallel_for_hook{}, &scratch, entries);
+            check_same_entries(std::vector<voxel_entry>(entries.begin(), entries.end()), reference);
+        }
+    }
+    CHECK_FALSE(hypertree::detail::direct_buckets::for_grid((std::uint64_t(1) << 25) + 1));
+    CHECK_FALSE(hypertree::detail::direct_buckets::for_grid(0));
+    const auto plan = hypertree::detail::direct_buckets::for_grid(1000);
+    const std::vector<hit> past = {{5, 1, 0}, {1000, 1, 0}}, deep = {{5, 64, 0}};
+    CHECK_THROWS_WITH_AS(hypertree::detail::bucket_chunk(past, *plan, &scratch), doctest::Contains("bucket_chunk.hits"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(hypertree::detail::bucket_chunk(deep, *plan, &scratch), doctest::Contains("bucket_chunk.hits"), krs::invalid_parameter);
+}
+
 // ---- scratch memory ----------------------------------------------------------------------------------
 
 TEST_CASE("scratch memory keeps released blocks and lends them again")

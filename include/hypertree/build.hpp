@@ -10,7 +10,10 @@
 #include "hypertree/compact.hpp"
 #include "hypertree/density.hpp"
 #include "hypertree/generate.hpp"
+#include "hypertree/scratch.hpp"
 #include "hypertree/store/store.hpp"
+
+#include <optional>
 
 namespace hypertree {
 
@@ -22,17 +25,27 @@ struct build_options {
 namespace detail {
 
 // Generation, validation and density classes: the stored voxels of one tree, in a list drawn
-// from the scratch memory (every temporary of the way too). Each list goes back to the scratch
-// as soon as the next is made, so the next step can reuse its pages.
+// from `scratch` (every temporary of the way too). Each list goes back to the scratch as soon as
+// the next is made, so the next step can reuse its pages. Where the grid allows (compact.hpp's
+// direct_buckets), each chunk's hits are bucketed on the chunk's task and its buffer reused by
+// the next chunk; else validation reads the chunks as pieces.
 template <transform_pipeline P>
 std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::uint64_t seed, int density_class_count,
-                                                const generation_options& options)
+                                                const generation_options& options, std::pmr::memory_resource* scratch)
 {
-    std::pmr::memory_resource* scratch = scratch_or_default(options.scratch);
+    generation_options drawing = options;
+    drawing.scratch = scratch;
     std::pmr::vector<voxel_entry> entries(scratch);
-    {
-        no_observer observer;
-        const generated_chunks generated = generate_chunks(definition, seed, options, observer);
+    no_observer observer;
+    if (const auto plan = direct_buckets::for_grid(definition.volume.voxel_count())) {
+        std::vector<bucketed_chunk> keyed(chunk_count(definition, drawing));
+        generate_chunks(definition, seed, drawing, observer, [&](std::size_t c, chunk_output& chunk) {
+            keyed[c] = bucket_chunk({chunk.data(), chunk.size()}, *plan, scratch);
+            chunk = {}; // its buffer back to the scratch, for the next chunk
+        });
+        merge_bucketed(keyed, *plan, options.parallel_for, scratch, entries);
+    } else {
+        const generated_chunks generated = generate_chunks(definition, seed, drawing, observer);
         compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
     }
     const density_classes classes(entries, density_class_count);
@@ -41,13 +54,16 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
 
 } // namespace detail
 
-// Validation reads the generator's hits chunk by chunk as they were made, without first copying
-// them into one list as generate() returns them.
+// Validation takes the generator's chunks as they are made, without first copying them into one
+// list as generate() returns them. Temporaries come from options.generation.scratch, or from a
+// scratch memory of this call's own, which still lets the steps reuse each other's pages.
 template <class Store, transform_pipeline P>
 Store build_tree(const ifs<P>& definition, std::uint64_t seed, const build_options& options = {})
 {
-    const std::pmr::vector<stored_voxel> voxels =
-        detail::stored_voxels_of(definition, seed, options.density_class_count, options.generation);
+    std::optional<scratch_memory> own;
+    if (!options.generation.scratch) own.emplace();
+    const std::pmr::vector<stored_voxel> voxels = detail::stored_voxels_of(
+        definition, seed, options.density_class_count, options.generation, options.generation.scratch ? options.generation.scratch : &*own);
     return Store::build(definition.volume, voxels, options.generation.budget);
 }
 

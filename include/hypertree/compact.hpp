@@ -30,6 +30,7 @@
 #include <limits>
 #include <memory>
 #include <memory_resource>
+#include <optional>
 #include <span>
 #include <string>
 #include <type_traits>
@@ -140,6 +141,14 @@ public:
     template <class Key, class Entries>
     void merge(const Key* keys, std::size_t n, unsigned shift, voxel_index base, Entries& entries)
     {
+        add(keys, n, shift);
+        flush(base, entries);
+    }
+    // The two halves of merge: add keys (of one bucket, perhaps in several calls, fewer than 2^32
+    // in all), then append the bucket's entries and empty the table.
+    template <class Key>
+    void add(const Key* keys, std::size_t n, unsigned shift)
+    {
         const Key mask = Key(size_ - 1), below = Key((Key(1) << shift) - 1);
         for (std::size_t i = 0; i < n; ++i) {
             const std::size_t slot = std::size_t((keys[i] >> shift) & mask);
@@ -147,6 +156,10 @@ public:
             best_[slot] = std::min(best_[slot], std::uint16_t(keys[i] & below));
             used_[slot >> 6] |= std::uint64_t(1) << (slot & 63);
         }
+    }
+    template <class Entries>
+    void flush(voxel_index base, Entries& entries)
+    {
         for (std::size_t w = 0; w < (size_ + 63) / 64; ++w)
             for (std::uint64_t bits = std::exchange(used_[w], 0); bits != 0; bits &= bits - 1) {
                 const std::size_t slot = w * 64 + std::size_t(std::countr_zero(bits));
@@ -197,6 +210,48 @@ inline void count_buckets(std::span<const hit> hits, unsigned low_bits, std::siz
     beyond = past, level_bits = levels;
 }
 
+// An empty entry list of type Entries: a std::pmr::vector draws from `scratch`.
+template <class Entries>
+Entries entries_from(std::pmr::memory_resource* scratch)
+{
+    if constexpr (std::is_same_v<Entries, std::pmr::vector<voxel_entry>>) return Entries(scratch);
+    else return Entries();
+}
+
+// The merge's last stage, shared by both ways of bucketing: splits the buckets into up to `tasks`
+// groups of consecutive buckets holding about equal numbers of keys (start[b]: the keys before
+// bucket b, start[buckets] all of them), runs merge_group(first, last, out) for each on the
+// caller's threads, and concatenates their entries in bucket order into `entries`.
+template <class Entries, class MergeGroup>
+void merge_in_groups(std::span<const std::size_t> start, std::size_t tasks, const parallel_for_hook& parallel_for,
+                     std::pmr::memory_resource* scratch, const MergeGroup& merge_group, Entries& entries)
+{
+    const std::size_t buckets = start.size() - 1, n = start[buckets];
+    std::vector<std::size_t> group_begin{0};
+    for (std::size_t b = 1; b < buckets && group_begin.size() < tasks; ++b)
+        if (start[b] >= n * group_begin.size() / tasks) group_begin.push_back(b);
+    const std::size_t groups = group_begin.size();
+    group_begin.push_back(buckets);
+    std::vector<Entries> group_entries;
+    for (std::size_t g = 0; g < groups; ++g) group_entries.push_back(entries_from<Entries>(scratch));
+    run_tasks(parallel_for, groups, [&](std::size_t g) {
+        const std::size_t first = group_begin[g], last = group_begin[g + 1];
+        // At most one entry per key. Reserving that much only reserves address space: pages
+        // that are never written are never touched.
+        group_entries[g].reserve(start[last] - start[first]);
+        merge_group(first, last, group_entries[g]);
+    });
+    if (groups == 1) {
+        entries = std::move(group_entries[0]);
+        entries.shrink_to_fit();
+        return;
+    }
+    std::size_t total = 0;
+    for (const auto& e : group_entries) total += e.size();
+    entries.reserve(total);
+    for (const auto& e : group_entries) entries.insert(entries.end(), e.begin(), e.end());
+}
+
 // compact() over hits given as pieces taken end to end (the generator's chunks), with its
 // temporary buffers from `scratch`, into `entries` (a std::vector or a std::pmr::vector, which
 // then draws from `scratch` too).
@@ -204,11 +259,7 @@ template <class Entries>
 void compact_into(std::span<const std::span<const hit>> pieces, const parallel_for_hook& parallel_for, std::uint64_t voxel_count,
                   std::pmr::memory_resource* scratch, Entries& entries)
 {
-    const auto make_entries = [&] {
-        if constexpr (std::is_same_v<Entries, std::pmr::vector<voxel_entry>>) return Entries(scratch);
-        else return Entries();
-    };
-    entries = make_entries();
+    entries = entries_from<Entries>(scratch);
     std::size_t n = 0;
     for (const std::span<const hit>& piece : pieces) n += piece.size();
     if (n == 0) return;
@@ -262,15 +313,6 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
     }
     start[buckets] = n;
 
-    // Groups of consecutive buckets holding about n / tasks hits each.
-    std::vector<std::size_t> group_begin{0};
-    for (std::size_t b = 1; b < buckets && group_begin.size() < tasks; ++b)
-        if (start[b] >= n * group_begin.size() / tasks) group_begin.push_back(b);
-    const std::size_t groups = group_begin.size();
-    group_begin.push_back(buckets);
-    std::vector<Entries> group_entries;
-    for (std::size_t g = 0; g < groups; ++g) group_entries.push_back(make_entries());
-
     // Scatters the hits into their buckets as keys (the voxel from bit `shift` up, level << 8 |
     // part below), then merges each group of buckets into its entries.
     const auto scatter_and_merge = [&]<class Key>(unsigned shift, const auto& key_of) {
@@ -283,14 +325,9 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
             for (const std::span<const hit> hits : part(p))
                 for (const hit& h : hits) to[next[h.voxel >> bucket_shift]++] = key_of(h);
         });
-        run_tasks(parallel_for, groups, [&](std::size_t g) {
-            const std::size_t first = group_begin[g], last = group_begin[g + 1];
+        merge_in_groups(std::span<const std::size_t>(start), tasks, parallel_for, scratch, [&](std::size_t first, std::size_t last, Entries& out) {
             std::size_t largest_bucket = 0;
             for (std::size_t b = first; b < last; ++b) largest_bucket = std::max(largest_bucket, start[b + 1] - start[b]);
-            // At most one entry per hit. Reserving that much only reserves address space: pages
-            // that are never written are never touched.
-            Entries& out = group_entries[g];
-            out.reserve(start[last] - start[first]);
             if (direct && largest_bucket < (std::size_t(1) << 32)) {
                 direct_merge table(low_bits);
                 for (std::size_t b = first; b < last; ++b)
@@ -307,7 +344,7 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
                     append_runs(sorted, size, out);
                 }
             }
-        });
+        }, entries);
     };
     if (short_keys) {
         const voxel_index low_mask = voxel_index((std::uint64_t(1) << low_bits) - 1);
@@ -317,15 +354,81 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
     } else {
         scatter_and_merge.template operator()<std::uint64_t>(packed_voxel_shift, pack_hit);
     }
-    if (groups == 1) {
-        entries = std::move(group_entries[0]);
-        entries.shrink_to_fit();
-        return;
+}
+
+// Validation chunk by chunk (build_tree's way, on grids whose buckets all merge directly: up to
+// 2^25 voxels). Each chunk's hits become short keys grouped by bucket on the chunk's own task,
+// while they are hot in cache, and the chunk's hit buffer goes back to the scratch memory for the
+// next chunk; then each bucket merges its keys from every chunk. The generator's hits always fit
+// short keys (levels below max_tree_depth = 64, voxels inside the grid). The entries equal
+// compact()'s: a voxel's entry reduces its keys by count and minimum, whatever their order.
+struct direct_buckets {
+    unsigned low_bits = 0;
+    std::size_t buckets = 0;
+    voxel_index largest = 0; // the grid's last voxel
+
+    static std::optional<direct_buckets> for_grid(std::uint64_t voxel_count)
+    {
+        if (voxel_count == 0 || voxel_count > (std::uint64_t(1) << (max_bucket_bits + max_direct_bits))) return std::nullopt;
+        direct_buckets plan;
+        plan.largest = voxel_index(voxel_count - 1);
+        const unsigned voxel_bits = unsigned(std::bit_width(plan.largest));
+        const unsigned bucket_bits = std::min(voxel_bits, direct_bucket_bits);
+        plan.low_bits = voxel_bits - bucket_bits;
+        plan.buckets = std::size_t(1) << bucket_bits;
+        return plan;
     }
-    std::size_t total = 0;
-    for (const auto& e : group_entries) total += e.size();
-    entries.reserve(total);
-    for (const auto& e : group_entries) entries.insert(entries.end(), e.begin(), e.end());
+};
+
+struct bucketed_chunk {
+    scratch_array<std::uint32_t> keys; // grouped by bucket
+    std::vector<std::size_t> start;    // start[b]: bucket b's first key; start[buckets]: the key count
+};
+
+inline bucketed_chunk bucket_chunk(std::span<const hit> hits, const direct_buckets& plan, std::pmr::memory_resource* scratch)
+{
+    bucketed_chunk out{scratch_array<std::uint32_t>(hits.size(), scratch), std::vector<std::size_t>(plan.buckets + 1, 0)};
+    bool beyond = false;
+    unsigned level_bits = 0;
+    count_buckets(hits, plan.low_bits, plan.buckets, plan.largest, out.start.data(), beyond, level_bits);
+    if (beyond || level_bits >= 64)
+        throw invalid_parameter("bucket_chunk.hits", "must lie in the grid, at levels below 64 (as the generator makes them)",
+                                beyond ? "a hit past voxel " + std::to_string(plan.largest) : "a hit at level 64 or deeper");
+    for (std::size_t b = 0, offset = 0; b <= plan.buckets; ++b) offset += std::exchange(out.start[b], offset);
+    std::vector<std::size_t> next(out.start.begin(), out.start.end() - 1);
+    std::uint32_t* const to = out.keys.get();
+    const unsigned bucket_shift = plan.low_bits;
+    const voxel_index low_mask = voxel_index((std::uint64_t(1) << plan.low_bits) - 1);
+    for (const hit& h : hits)
+        to[next[h.voxel >> bucket_shift]++] =
+            std::uint32_t((h.voxel & low_mask) << short_key_shift) | std::uint32_t(h.level) << 8 | std::uint32_t(h.part);
+    return out;
+}
+
+template <class Entries>
+void merge_bucketed(std::span<const bucketed_chunk> chunks, const direct_buckets& plan, const parallel_for_hook& parallel_for,
+                    std::pmr::memory_resource* scratch, Entries& entries)
+{
+    entries = entries_from<Entries>(scratch);
+    std::vector<std::size_t> start(plan.buckets + 1, 0);
+    for (std::size_t b = 0, offset = 0; b <= plan.buckets; ++b) {
+        start[b] = offset;
+        if (b < plan.buckets)
+            for (const bucketed_chunk& c : chunks) offset += c.start[b + 1] - c.start[b];
+    }
+    const std::size_t n = start[plan.buckets];
+    if (n == 0) return;
+    for (std::size_t b = 0; b < plan.buckets; ++b)
+        if (start[b + 1] - start[b] >= (std::size_t(1) << 32))
+            throw invalid_parameter("merge_bucketed.chunks", "must hold fewer than 2^32 hits per bucket of voxels", std::to_string(start[b + 1] - start[b]));
+    const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
+    merge_in_groups(std::span<const std::size_t>(start), tasks, parallel_for, scratch, [&](std::size_t first, std::size_t last, Entries& out) {
+        direct_merge table(plan.low_bits);
+        for (std::size_t b = first; b < last; ++b) {
+            for (const bucketed_chunk& c : chunks) table.add(c.keys.get() + c.start[b], c.start[b + 1] - c.start[b], short_key_shift);
+            table.flush(voxel_index(b << plan.low_bits), out);
+        }
+    }, entries);
 }
 
 } // namespace detail

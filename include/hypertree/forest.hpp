@@ -28,11 +28,14 @@ struct generated_forest {
 inline generated_forest build_forest(const loaded_forest& forest, std::uint64_t seed, const build_options& options = {})
 {
     generated_forest out{forest.volume(), {}};
+    // One scratch memory for every tree when the caller gives none: each tree reuses the pages of the last.
+    scratch_memory own;
+    std::pmr::memory_resource* const scratch = options.generation.scratch ? options.generation.scratch : &own;
     for (std::size_t i = 0; i < forest.trees.size(); ++i) {
         ifs<> tree = forest.trees[i].ifs;
         tree.volume = hypervolume(out.volume.origin() - forest.listing.trees[i].offset, out.volume.extent(), out.volume.grid());
         std::pmr::vector<stored_voxel> voxels = detail::stored_voxels_of(
-            tree, seed + i, forest.trees[i].density_class_count.value_or(options.density_class_count), options.generation);
+            tree, seed + i, forest.trees[i].density_class_count.value_or(options.density_class_count), options.generation, scratch);
         for (stored_voxel& v : voxels) v.part = std::uint8_t(std::min<std::size_t>(i, 255));
         if (out.voxels.empty()) {
             out.voxels.assign(voxels.begin(), voxels.end());

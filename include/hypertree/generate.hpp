@@ -406,8 +406,25 @@ struct generated_chunks {
     }
 };
 
-template <transform_pipeline P, class Observer>
-generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_options& options, Observer& observer)
+// How many chunks generate_chunks cuts the definition's cycles into (0 when chunk_cycles is 0,
+// which it refuses).
+template <transform_pipeline P>
+std::uint64_t chunk_count(const ifs<P>& definition, const generation_options& options)
+{
+    const std::uint64_t depth = std::uint64_t(std::max(definition.tree_depth, 1));
+    const std::uint64_t cycles = (definition.iterations + depth - 1) / depth;
+    return options.chunk_cycles ? (cycles + options.chunk_cycles - 1) / options.chunk_cycles : 0;
+}
+
+struct no_after_chunk {
+    void operator()(std::size_t, chunk_output&) const {}
+};
+
+// after_chunk(c, chunk) runs on chunk c's task as soon as the chunk is made, while its hits are
+// hot in cache; it may take them and empty the chunk.
+template <transform_pipeline P, class Observer, class AfterChunk = no_after_chunk>
+generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_options& options, Observer& observer,
+                                 const AfterChunk& after_chunk = {})
 {
     const drawn_ifs<P> tree(definition, seed);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
@@ -424,7 +441,7 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
                                      std::to_string(definition.iterations));
     if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
 
-    const std::uint64_t chunks = (cycles + options.chunk_cycles - 1) / options.chunk_cycles;
+    const std::uint64_t chunks = chunk_count(definition, options);
     // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
     const std::optional<lane_tables> lanes_in_step =
         options.vector_lanes && std::is_same_v<Observer, no_observer> ? lane_tables::of(tree) : std::nullopt;
@@ -445,6 +462,7 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
                                     : std::size_t(double(count) * double(depth) * voxels_per_generator) +
                                           cycle_lanes * (max_voxels_on_segment(definition.volume, definition.generator.length()) + 1));
         generate_chunk(tree, seed, c, count, lanes_in_step ? &*lanes_in_step : nullptr, out.chunks[c], chunk_stats[c], observer);
+        after_chunk(c, out.chunks[c]);
     };
     run_tasks(options.parallel_for, std::size_t(chunks), run);
 
