@@ -7,9 +7,9 @@
 // Creation is one build_tree call, generate + validate (compact), both on T threads (default all
 // cores), + density classes + building the store, best of R calls (default 5; 2 at resolution
 // 1000), with a scratch_memory kept across the calls as an application creating trees would keep
-// it (hypertree/scratch.hpp): its temporaries then reuse mapped pages. The same call without
-// scratch memory, where the C library hands the temporaries' pages back to the system and every
-// call faults them in again, is printed beside it ("no scratch"). Each step is also timed alone
+// it (hypertree/scratch.hpp): its temporaries then reuse mapped pages. The same call without the
+// caller's scratch memory is printed beside it ("no scratch"): build_tree then keeps one for the
+// call, so its steps reuse each other's pages, but each call maps them afresh. Each step is also timed alone
 // (steps repeated on their own reuse their pages without scratch memory too), to show where the
 // time goes. Memory is the store's own report. The paper's figures (an Athlon at 1.4 GHz) stand next
 // to ours: its "3D array + bit array" column against our dense store (which needs no bit array),
@@ -200,7 +200,7 @@ int main(int argc, char** argv)
         }
     }
     std::printf("target: creation >= 100x the paper's: worst %.0fx -> %s\n", worst_speedup, worst_speedup >= 100 ? "met" : "NOT met");
-    std::printf("        (without scratch memory, every build faulting its temporaries in again: worst %.0fx)\n", worst_no_scratch);
+    std::printf("        (without the caller's scratch memory, each build mapping its temporaries afresh: worst %.0fx)\n", worst_no_scratch);
     // The paper's "less than 5% of a three-dimensional array" is its index list; the bit array is
     // its compromise (4-6% of its array in Table 1), printed for comparison.
     std::printf("target: index list <= 5%% of the dense array at resolution 300: worst %.2f%% -> %s\n", worst_share * 100,

@@ -51,7 +51,8 @@ struct generation_options {
     // (generator_lanes.hpp). The generated tree does not depend on it, only the order of its hits.
     bool vector_lanes = true;
     // Where the generator's and validation's temporary buffers come from (scratch.hpp): keep one
-    // scratch_memory across builds and they reuse its pages. Null: plain new and delete.
+    // scratch_memory across builds and they reuse its pages. Null: generate() and compact() use
+    // new and delete; build_tree and build_forest keep a scratch memory for the call.
     std::pmr::memory_resource* scratch = nullptr;
 };
 
