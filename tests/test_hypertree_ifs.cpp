@@ -547,6 +547,15 @@ TEST_CASE("hypertree refuses impossible definitions with named parameters")
         t.iterations = std::uint64_t(1) << 40;
         generate(t, 1);
     }, "ifs.iterations");
+    // build_tree sizes a list per chunk: it must refuse before that, whatever the iteration count
+    // (2^52 iterations would be 2^41 chunks).
+    for (const int bits : {40, 52, 63}) {
+        refuses([bits] {
+            auto t = presets::tree_c(64);
+            t.iterations = std::uint64_t(1) << bits;
+            (void)build_tree<index_list_store>(t, 1);
+        }, "ifs.iterations");
+    }
 }
 
 TEST_CASE("hypertree non-contractive transforms run when allowed and count escapes")

@@ -8,11 +8,13 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <exception>
 #include <cstddef>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace bench {
@@ -46,7 +48,10 @@ inline void run_parallel(unsigned threads, std::size_t count, const std::functio
 // Threads kept for the calls of one parallel_for hook, as an application's pool would be: a
 // creation makes about six calls a few hundred microseconds apart, and starting threads for each
 // (run_parallel) cost 20-50 us a call plus cold caches. Workers spin 100 us after a call (the
-// next one usually follows sooner), then sleep. A call made from inside a body runs serially.
+// next one usually follows sooner), then sleep. A call made from inside a body runs serially;
+// calls from two outside threads at once are not supported (the hooks here have one caller).
+// A body that throws stops the call from taking more items; run() waits for the bodies under way
+// on other threads, then rethrows the first exception on the caller's thread.
 class thread_pool {
 public:
     explicit thread_pool(unsigned threads)
@@ -83,6 +88,7 @@ public:
         std::unique_lock lock(mutex_);
         done_.wait(lock, [this] { return busy_ == 0; });
         body_ = nullptr;
+        if (failure_) std::rethrow_exception(std::exchange(failure_, nullptr));
     }
 
 private:
@@ -94,7 +100,13 @@ private:
     void work()
     {
         inside_body() = true;
-        for (std::size_t i; (i = next_++) < count_;) (*body_)(i);
+        try {
+            for (std::size_t i; (i = next_++) < count_;) (*body_)(i);
+        } catch (...) {
+            next_ = count_; // no more items for anyone
+            const std::lock_guard lock(mutex_);
+            if (!failure_) failure_ = std::current_exception();
+        }
         inside_body() = false;
     }
     void serve()
@@ -125,6 +137,7 @@ private:
     std::atomic<std::size_t> next_{0};
     unsigned busy_ = 0;
     bool stop_ = false;
+    std::exception_ptr failure_; // the first exception of the current call
     std::vector<std::thread> workers_;
 };
 

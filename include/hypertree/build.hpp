@@ -38,7 +38,7 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
     std::pmr::vector<voxel_entry> entries(scratch);
     no_observer observer;
     if (const auto plan = direct_buckets::for_grid(definition.volume.voxel_count())) {
-        std::vector<bucketed_chunk> keyed(chunk_count(definition, drawing));
+        std::vector<bucketed_chunk> keyed(planned_chunk_count(definition, drawing)); // refuses before allocating
         generate_chunks(definition, seed, drawing, observer, [&](std::size_t c, chunk_output& chunk) {
             keyed[c] = bucket_chunk({chunk.data(), chunk.size()}, *plan, scratch);
             chunk = {}; // its buffer back to the scratch, for the next chunk

@@ -407,14 +407,31 @@ struct generated_chunks {
     }
 };
 
-// How many chunks generate_chunks cuts the definition's cycles into (0 when chunk_cycles is 0,
-// which it refuses).
+// Most voxels one generator can record: 1 for a point, the walk's bound for a line.
 template <transform_pipeline P>
-std::uint64_t chunk_count(const ifs<P>& definition, const generation_options& options)
+double voxels_per_generator(const ifs<P>& definition)
 {
-    const std::uint64_t depth = std::uint64_t(std::max(definition.tree_depth, 1));
+    return definition.generator.is_point() ? 1.0
+                                           : 3.0 * std::ceil(definition.generator.length() / definition.volume.smallest_voxel_side()) + 3.0;
+}
+
+// What generate_chunks checks before it allocates anything, and how many chunks it makes: the
+// definition itself, the chunk size, and the memory budget against the most hits the run can
+// record. Callers that size their own per-chunk lists (build_tree) call it first too.
+template <transform_pipeline P>
+std::uint64_t planned_chunk_count(const ifs<P>& definition, const generation_options& options)
+{
+    definition.validate();
+    const std::uint64_t depth = std::uint64_t(definition.tree_depth);
     const std::uint64_t cycles = (definition.iterations + depth - 1) / depth;
-    return options.chunk_cycles ? (cycles + options.chunk_cycles - 1) / options.chunk_cycles : 0;
+    const double worst_bytes = double(cycles) * double(depth) * voxels_per_generator(definition) * double(sizeof(hit));
+    if (worst_bytes > double(options.budget.bytes))
+        throw krs::invalid_parameter("ifs.iterations",
+                                     "would record up to " + std::to_string(std::uint64_t(worst_bytes)) + " bytes of hits, over the memory budget of " +
+                                         std::to_string(options.budget.bytes) + " bytes",
+                                     std::to_string(definition.iterations));
+    if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
+    return (cycles + options.chunk_cycles - 1) / options.chunk_cycles;
 }
 
 struct no_after_chunk {
@@ -427,22 +444,11 @@ template <transform_pipeline P, class Observer, class AfterChunk = no_after_chun
 generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_options& options, Observer& observer,
                                  const AfterChunk& after_chunk = {})
 {
+    const std::uint64_t chunks = planned_chunk_count(definition, options);
     const drawn_ifs<P> tree(definition, seed);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
     const std::uint64_t cycles = (definition.iterations + depth - 1) / depth;
-    const double voxels_per_generator =
-        definition.generator.is_point()
-            ? 1.0
-            : 3.0 * std::ceil(definition.generator.length() / definition.volume.smallest_voxel_side()) + 3.0;
-    const double worst_bytes = double(cycles) * double(depth) * voxels_per_generator * double(sizeof(hit));
-    if (worst_bytes > double(options.budget.bytes))
-        throw krs::invalid_parameter("ifs.iterations",
-                                     "would record up to " + std::to_string(std::uint64_t(worst_bytes)) + " bytes of hits, over the memory budget of " +
-                                         std::to_string(options.budget.bytes) + " bytes",
-                                     std::to_string(definition.iterations));
-    if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
-
-    const std::uint64_t chunks = chunk_count(definition, options);
+    const double voxels_per_line = voxels_per_generator(definition);
     // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
     const std::optional<lane_tables> lanes_in_step =
         options.vector_lanes && std::is_same_v<Observer, no_observer> ? lane_tables::of(tree) : std::nullopt;
@@ -456,11 +462,12 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
         // Room for the most hits the chunk can make, so it never grows (a copy that touches fresh
         // pages): points make one per generator at most, lines the walk's bound per generator;
         // and a row's room more, which the lanes ask for before each row. Pages never written are
-        // never touched, so the worst case costs address space only.
+        // never touched, so where the system overcommits (Linux's default) the worst case costs
+        // address space only; all chunks together stay within the budget checked above.
         out.chunks[c].from = scratch_or_default(options.scratch);
         out.chunks[c].make_room(definition.generator.is_point()
                                     ? std::size_t(count * depth) + cycle_lanes
-                                    : std::size_t(double(count) * double(depth) * voxels_per_generator) +
+                                    : std::size_t(double(count) * double(depth) * voxels_per_line) +
                                           cycle_lanes * (max_voxels_on_segment(definition.volume, definition.generator.length()) + 1));
         generate_chunk(tree, seed, c, count, lanes_in_step ? &*lanes_in_step : nullptr, out.chunks[c], chunk_stats[c], observer);
         after_chunk(c, out.chunks[c]);

@@ -14,11 +14,12 @@
 // A request takes the smallest kept block that fits it, unless that block is more than twice as
 // large (a small request should not pin a large block), else a new block from the system.
 // Blocks go back to the system only when the scratch_memory is destroyed or released. Requests
-// are few (a few dozen per build) and come from the caller's worker threads: a mutex guards the
-// lists.
+// are few (two per generator chunk and a few more: 50 to 200 per build) and come from the
+// caller's worker threads: a mutex guards the lists.
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
 #include <memory_resource>
 #include <mutex>
 #include <new>
@@ -70,8 +71,10 @@ private:
     void* do_allocate(std::size_t bytes, std::size_t alignment) override
     {
         if (alignment > block_alignment) throw std::bad_alloc(); // no scratch user asks for more
+        if (bytes > std::numeric_limits<std::size_t>::max() - page) throw std::bad_array_new_length();
         bytes = std::max<std::size_t>((bytes + page - 1) / page * page, page);
         const std::lock_guard lock(mutex_);
+        lent_.reserve(lent_.size() + 1); // so recording the block below cannot throw and lose it
         auto best = kept_.end();
         for (auto b = kept_.begin(); b != kept_.end(); ++b)
             if (b->bytes >= bytes && b->bytes / 2 <= bytes && (best == kept_.end() || b->bytes < best->bytes)) best = b;
@@ -112,7 +115,7 @@ class scratch_array {
 public:
     scratch_array() = default;
     scratch_array(std::size_t n, std::pmr::memory_resource* from)
-        : data_(n ? static_cast<T*>(from->allocate(n * sizeof(T), alignof(T))) : nullptr), size_(n), from_(from)
+        : data_(n ? static_cast<T*>(from->allocate(bytes_of(n), alignof(T))) : nullptr), size_(n), from_(from)
     {
     }
     scratch_array(scratch_array&& other) noexcept
@@ -134,6 +137,11 @@ public:
     T& operator[](std::size_t i) const { return data_[i]; }
 
 private:
+    static std::size_t bytes_of(std::size_t n)
+    {
+        if (n > std::numeric_limits<std::size_t>::max() / sizeof(T)) throw std::bad_array_new_length();
+        return n * sizeof(T);
+    }
     void free()
     {
         if (data_) from_->deallocate(data_, size_ * sizeof(T), alignof(T));
