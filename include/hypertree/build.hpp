@@ -4,6 +4,9 @@
 //
 //     auto tree = hypertree::build_tree<hypertree::bit_array_store>(presets::tree_a(300), seed);
 //
+// An application that builds many trees keeps one scratch_memory (scratch.hpp) in
+// options.generation.scratch: each build then reuses the pages of the last one's temporaries.
+//
 // Each step stays public for callers that want to keep the hit list (to build several stores, or
 // to unite trees before classifying).
 
