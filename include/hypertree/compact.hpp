@@ -127,6 +127,31 @@ inline constexpr unsigned direct_bucket_bits = 11;
 // generator's are: max_tree_depth = 64): slot << 14 | level << 8 | part, the slot below 2^14.
 inline constexpr unsigned short_key_shift = 14;
 
+// How the hits split into buckets: by the voxel's bits from low_bits up.
+struct bucket_layout {
+    unsigned low_bits = 0;
+    std::size_t buckets = 1;
+    bool direct = false; // every bucket merges directly (max_direct_bits)
+
+    static bucket_layout for_largest(voxel_index largest)
+    {
+        const unsigned voxel_bits = unsigned(std::bit_width(largest));
+        bucket_layout layout;
+        layout.direct = voxel_bits <= max_bucket_bits + max_direct_bits;
+        const unsigned bucket_bits = std::min(voxel_bits, layout.direct ? direct_bucket_bits : max_bucket_bits);
+        layout.low_bits = voxel_bits - bucket_bits; // sorted inside each bucket
+        layout.buckets = std::size_t(1) << bucket_bits;
+        return layout;
+    }
+};
+
+// A hit as a 32-bit key within its bucket (levels below 64, direct layouts only).
+inline std::uint32_t short_key(const hit& h, unsigned low_bits)
+{
+    const voxel_index low_mask = voxel_index((std::uint64_t(1) << low_bits) - 1);
+    return std::uint32_t((h.voxel & low_mask) << short_key_shift) | std::uint32_t(h.level) << 8 | std::uint32_t(h.part);
+}
+
 class direct_merge {
 public:
     explicit direct_merge(unsigned low_bits)
@@ -277,12 +302,10 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
         });
         largest = *std::max_element(part_largest.begin(), part_largest.end());
     }
-    const unsigned voxel_bits = unsigned(std::bit_width(largest));
-    // Grids whose buckets can all be merged directly split finer (see direct_bucket_bits).
-    const bool direct = voxel_bits <= max_bucket_bits + max_direct_bits;
-    const unsigned bucket_bits = std::min(voxel_bits, direct ? direct_bucket_bits : max_bucket_bits);
-    const unsigned low_bits = voxel_bits - bucket_bits; // sorted inside each bucket
-    const std::size_t buckets = std::size_t(1) << bucket_bits;
+    const bucket_layout layout = bucket_layout::for_largest(largest);
+    const bool direct = layout.direct;
+    const unsigned low_bits = layout.low_bits;
+    const std::size_t buckets = layout.buckets;
 
     // counts[p * buckets + b]: part p's hits in bucket b; then where part p writes them. The same
     // pass finds whether a hit lies past voxel_count (counted in the last bucket, then refused)
@@ -305,7 +328,9 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
     }
     unsigned level_bits = 0;
     for (const unsigned l : part_levels) level_bits |= l;
-    const bool short_keys = direct && level_bits < 64; // every level below 64
+    // Every level below 64, and (as direct_merge counts in 32 bits) fewer than 2^32 hits, where
+    // a bucket of short keys could otherwise be too large to merge directly.
+    const bool short_keys = direct && level_bits < 64 && n < (std::size_t(1) << 32);
     std::vector<std::size_t> start(buckets + 1, 0);
     for (std::size_t b = 0, offset = 0; b < buckets; ++b) {
         start[b] = offset;
@@ -347,10 +372,7 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
         }, entries);
     };
     if (short_keys) {
-        const voxel_index low_mask = voxel_index((std::uint64_t(1) << low_bits) - 1);
-        scatter_and_merge.template operator()<std::uint32_t>(short_key_shift, [low_mask](const hit& h) {
-            return std::uint32_t((h.voxel & low_mask) << short_key_shift) | std::uint32_t(h.level) << 8 | std::uint32_t(h.part);
-        });
+        scatter_and_merge.template operator()<std::uint32_t>(short_key_shift, [low_bits](const hit& h) { return short_key(h, low_bits); });
     } else {
         scatter_and_merge.template operator()<std::uint64_t>(packed_voxel_shift, pack_hit);
     }
@@ -370,13 +392,9 @@ struct direct_buckets {
     static std::optional<direct_buckets> for_grid(std::uint64_t voxel_count)
     {
         if (voxel_count == 0 || voxel_count > (std::uint64_t(1) << (max_bucket_bits + max_direct_bits))) return std::nullopt;
-        direct_buckets plan;
-        plan.largest = voxel_index(voxel_count - 1);
-        const unsigned voxel_bits = unsigned(std::bit_width(plan.largest));
-        const unsigned bucket_bits = std::min(voxel_bits, direct_bucket_bits);
-        plan.low_bits = voxel_bits - bucket_bits;
-        plan.buckets = std::size_t(1) << bucket_bits;
-        return plan;
+        const voxel_index largest = voxel_index(voxel_count - 1);
+        const bucket_layout layout = bucket_layout::for_largest(largest);
+        return direct_buckets{layout.low_bits, layout.buckets, largest};
     }
 };
 
@@ -397,11 +415,8 @@ inline bucketed_chunk bucket_chunk(std::span<const hit> hits, const direct_bucke
     for (std::size_t b = 0, offset = 0; b <= plan.buckets; ++b) offset += std::exchange(out.start[b], offset);
     std::vector<std::size_t> next(out.start.begin(), out.start.end() - 1);
     std::uint32_t* const to = out.keys.get();
-    const unsigned bucket_shift = plan.low_bits;
-    const voxel_index low_mask = voxel_index((std::uint64_t(1) << plan.low_bits) - 1);
-    for (const hit& h : hits)
-        to[next[h.voxel >> bucket_shift]++] =
-            std::uint32_t((h.voxel & low_mask) << short_key_shift) | std::uint32_t(h.level) << 8 | std::uint32_t(h.part);
+    const unsigned low_bits = plan.low_bits;
+    for (const hit& h : hits) to[next[h.voxel >> low_bits]++] = short_key(h, low_bits);
     return out;
 }
 

@@ -300,7 +300,7 @@ struct index_divider {
 };
 
 // The box of the voxels' coordinates. Voxels are sorted, so the first and last give the z range;
-// x and y come from each index by two divisions by the fixed row and slice sizes (index_divider),
+// x and y come from each index by two divisions, by the row length nx and the height ny (index_divider),
 // a loop the compiler vectorizes (the coordinate walker stepped row by row: 0.2 ms at 300^3).
 inline index_box bounds_of(const hypervolume& volume, std::span<const stored_voxel> voxels)
 {
