@@ -238,16 +238,24 @@ private:
                 const I place = krs::index_max(found.place, I(0));
                 const T a = select(found.looks, krs::gather(alpha_at, place), zero);
                 const I entry = krs::gather(slot_at, place) * stride;
-                o.r = o.r + o.transmittance * a * krs::gather(lit, entry);
-                o.g = o.g + o.transmittance * a * krs::gather(lit, entry + I(1));
-                o.b = o.b + o.transmittance * a * krs::gather(lit, entry + I(2));
-                o.transmittance = o.transmittance * (one - a);
+                composite(o, a, krs::gather(lit, entry), krs::gather(lit, entry + I(1)), krs::gather(lit, entry + I(2)));
                 o.lookups = o.lookups + select(found.looks, one, zero);
                 k[r] = k[r] + found.advance;
                 active[r] = active[r] & (t0[r] + (k[r] + half) * ds < t1[r]) & (o.transmittance >= least);
             }
         }
         return out;
+    }
+
+    // One sample composited front to back: its color weighted by its opacity and the light still
+    // passing, then that light dimmed. Both marches step through this, so their pixels agree.
+    template <class T>
+    static void composite(march_result<T>& o, const T& alpha, const T& r, const T& g, const T& b)
+    {
+        o.r = o.r + o.transmittance * alpha * r;
+        o.g = o.g + o.transmittance * alpha * g;
+        o.b = o.b + o.transmittance * alpha * b;
+        o.transmittance = o.transmittance * (T(1.0f) - alpha);
     }
 
     // The march of rays that shade as they go: lane by lane, each sample is looked up (through
@@ -310,11 +318,7 @@ private:
                 const rgb c = shade(pi, index, place, v.level, -di, context.shading, lookups[i]);
                 r[i] = c.r, g[i] = c.g, b[i] = c.b;
             }
-            const T a = load<T>(alpha);
-            out.r = out.r + out.transmittance * a * load<T>(r);
-            out.g = out.g + out.transmittance * a * load<T>(g);
-            out.b = out.b + out.transmittance * a * load<T>(b);
-            out.transmittance = out.transmittance * (T(1.0f) - a);
+            composite(out, load<T>(alpha), load<T>(r), load<T>(g), load<T>(b));
             out.lookups = out.lookups + load<T>(lookups);
             k = k + load<T>(advance);
             active = active & (t0 + (k + half) * ds < t1) & (out.transmittance >= T(options_.min_transmittance));
