@@ -265,8 +265,12 @@ def packet_trace_section(path, images, md):
                           r.get("terrain_axis_packet_us", "-")] for r in levels]))
     slopes = s.get("levels_slope", [])
     if slopes:
-        md.append("\nSlope of time per ray against n, and time(32) / time(16):\n")
-        md.append(table(["path", "us per level", "time(32)/time(16)"], [[r.get("c1"), r.get("c2"), r.get("c3")] for r in slopes]))
+        md.append("\nLeast-squares line time per ray = fixed + slope n, its R^2, the fixed cost in levels (fixed / slope), and "
+                  "time(32) / time(16), which is at most 1.5 exactly when the fixed cost is at least 16 levels:\n")
+        md.append(table(["path", "us per level", "fixed us", "R^2", "fixed cost in levels", "time(32)/time(16)"],
+                        [[r.get("path"), r.get("us_per_level"), r.get("fixed_us"), r.get("r2"), r.get("fixed_in_levels"),
+                          r.get("time_32_over_16")]
+                         for r in slopes]))
     error = s.get("error", [])
     if error:
         series = {}
