@@ -369,3 +369,20 @@ TEST_CASE("closest_point matches the sphere closed form and lands on the zero se
     CHECK_THROWS_WITH_AS(krs::closest_point(ball, vec3d{0, 0, 0}, o), doctest::Contains("closest_point_options.max_iterations"),
                          krs::invalid_parameter);
 }
+
+TEST_CASE("gradient normals and closest points stay accurate far from the origin")
+{
+    // A union has no normal of its own, so contact_at and closest_point difference it. At x = 1000
+    // the default step 1e-4 is below float's spacing (6e-5 there, 2.4e-4 at 3000): unraised, the
+    // normal came out (0.675, 0.738, 0) at 1000 and (0, 1, 0) at 3000.
+    for (float x : {1.0f, 1000.0f, 3000.0f}) {
+        CAPTURE(x);
+        const krs::union_of<krs::sphere, krs::sphere> pair(krs::sphere({x, 0, 0}, 1.0f), krs::sphere({x, 10, 0}, 1.0f));
+        const vec3d expected_normal{0.6, 0.8, 0.0};
+        const krs::contact c = krs::contact_at(pair, vec3f{x + 0.6f, 0.8f, 0.0f});
+        CHECK(krs::length(vec3d(c.normal) - expected_normal) < 0.02);
+        const auto r = krs::closest_point(pair, vec3f{x + 1.2f, 1.6f, 0.0f});
+        CHECK(r.converged);
+        CHECK(krs::length(vec3d(r.point) - vec3d{x + 0.6, 0.8, 0.0}) < 0.01);
+    }
+}
