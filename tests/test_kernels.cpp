@@ -833,6 +833,30 @@ TEST_CASE("torus_capsule: uv of packet lanes matches the scalar path")
     }
 }
 
+TEST_CASE("torus and torus_capsule: uv at points of no direction is finite and the same on packets")
+{
+    // The centre, points on the axis and on the generating circle have no angle around it: atan2
+    // sees (0, 0) there. xsimd's atan2 made those lanes NaN where the scalar path gave 0.5.
+    const krs::torus ring({0, 0, 0}, {0, 0, 1}, 1.0f, 0.25f);
+    const krs::torus_capsule arc({-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.1f);
+    const krs::torus_capsule straight({-1, 0, 0}, {1, 0, 0}, {0, 0, 0}, 0.1f);
+    const auto agree = [](const auto& kernel, const vec3f& p) {
+        INFO(p.x, " ", p.y, " ", p.z);
+        const auto s = kernel.uv(p);
+        const auto q = kernel.uv(krs::vec3fP{krs::packet_f(p.x), krs::packet_f(p.y), krs::packet_f(p.z)});
+        REQUIRE(std::isfinite(s.u));
+        REQUIRE(std::isfinite(s.v));
+        for (std::size_t i = 0; i < krs::lane_count<krs::packet_f>; ++i) {
+            CHECK(krs::lane_at(q.u, i) == doctest::Approx(s.u).epsilon(1e-5));
+            CHECK(krs::lane_at(q.v, i) == doctest::Approx(s.v).epsilon(1e-5));
+        }
+    };
+    for (const vec3f& p : {vec3f{0, 0, 0}, vec3f{1, 0, 0}, vec3f{0, 0, 5}, vec3f{-1, 0, 0}, vec3f{0, -1, 0}}) agree(ring, p);
+    // The arc's circle is centred at (0, 0, 0) through (+-1, 0, 0) and (0, 1, 0).
+    for (const vec3f& p : {vec3f{0, 0, 0}, vec3f{0, 1, 0}, vec3f{-1, 0, 0}, vec3f{1, 0, 0}, vec3f{0, 0, 3}}) agree(arc, p);
+    for (const vec3f& p : {vec3f{0, 0, 0}, vec3f{-1, 0, 0}, vec3f{0.5f, 0, 0}}) agree(straight, p);
+}
+
 TEST_CASE("torus_capsule: invalid parameters are named")
 {
     const vec3f s{0, 0, 0}, e{2, 0, 0}, c{1, 1, 0};

@@ -101,6 +101,15 @@ inline T ceil(T a) noexcept
 {
     return std::ceil(a);
 }
+// atan2(y, x) on any lane type, 0 where y = x = 0 in every lane: xsimd's atan2 is NaN there,
+// which made a packet's texture coordinates NaN where the scalar's were finite, and std's is 0
+// or +-pi by the zeros' signs (both are angles of no direction).
+template <class T>
+inline T lane_atan2(const T& y, const T& x) noexcept
+{
+    if constexpr (std::floating_point<T>) return y == T(0) && x == T(0) ? T(0) : std::atan2(y, x);
+    else return xsimd::select(y == T(0) && x == T(0), T(0), xsimd::atan2(y, x));
+}
 inline bool any(bool m) noexcept { return m; }
 inline bool all(bool m) noexcept { return m; }
 inline bool none(bool m) noexcept { return !m; }

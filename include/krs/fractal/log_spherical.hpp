@@ -79,12 +79,6 @@ inline T lane_floor(const T& x)
     if constexpr (std::floating_point<T>) return std::floor(x);
     else return xsimd::floor(x);
 }
-template <class T>
-inline T lane_atan2(const T& y, const T& x)
-{
-    if constexpr (std::floating_point<T>) return std::atan2(y, x);
-    else return xsimd::atan2(y, x);
-}
 
 // The smallest radius the warps take a logarithm of: keeps r = 0 (the singularity) finite; every
 // distance there is multiplied by r or a shell scale of this size, so the result is ~0.
@@ -147,7 +141,7 @@ public:
         const T s(scale_);
         const T r = sqrt(p.x * p.x + p.z * p.z);
         const T rs = max(r, T(detail::smallest_radius));
-        const T theta = detail::lane_atan2(p.z, select(r > T(0), p.x, T(1)));
+        const T theta = lane_atan2(p.z, select(r > T(0), p.x, T(1)));
         const T cu = s * detail::lane_log(rs), cv = s * (theta + T(std::numbers::pi_v<float>));
         const T h(height_);
         const vec3<T> u{cu - detail::lane_floor(cu) - T(0.5f), clamp(p.y * s / rs, -h, h),
@@ -228,8 +222,8 @@ public:
         const T planar = sqrt(p.x * p.x + p.y * p.y);
         const T r = sqrt(planar * planar + p.z * p.z);
         const T rs = max(r, T(detail::smallest_radius));
-        const T theta = detail::lane_atan2(planar, select(r > T(0), p.z, T(1)));
-        const T phi = detail::lane_atan2(p.y, select(planar > T(0), p.x, T(1)));
+        const T theta = lane_atan2(planar, select(r > T(0), p.z, T(1)));
+        const T phi = lane_atan2(p.y, select(planar > T(0), p.x, T(1)));
         const T cu = s * detail::lane_log(rs), cv = s * theta, cw = s * (phi + T(std::numbers::pi_v<float>));
         const T row = detail::lane_floor(cv);
         const vec3<T> u{cu - detail::lane_floor(cu) - T(0.5f), cv - row - T(0.5f), cw - detail::lane_floor(cw) - T(0.5f)};

@@ -19,7 +19,7 @@
 
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
-#include "krs/kernels/torus_capsule.hpp" // surface_uv, detail::atan2_lane
+#include "krs/kernels/torus_capsule.hpp" // surface_uv
 
 #include <cmath>
 #include <numbers>
@@ -86,8 +86,8 @@ public:
         const T h = dot(q, vec3<T>(axis_));
         const T radial = length(q - vec3<T>(axis_) * h) - T(major_);
         const T two_pi(2 * std::numbers::pi_v<float>);
-        const T u = detail::atan2_lane(dot(q, vec3<T>(in_plane_2_)), dot(q, vec3<T>(in_plane_))) / two_pi + T(0.5f);
-        const T v = detail::atan2_lane(h, radial) / two_pi + T(0.5f);
+        const T u = lane_atan2(dot(q, vec3<T>(in_plane_2_)), dot(q, vec3<T>(in_plane_))) / two_pi + T(0.5f);
+        const T v = lane_atan2(h, radial) / two_pi + T(0.5f);
         return {u, v};
     }
 

@@ -40,17 +40,6 @@ struct surface_uv {
     T u, v;
 };
 
-namespace detail {
-template <class T>
-inline T atan2_lane(const T& y, const T& x)
-{
-    if constexpr (std::floating_point<T>)
-        return std::atan2(y, x);
-    else
-        return xsimd::atan2(y, x); // xsimd's argument order is std's: atan(y / x)
-}
-} // namespace detail
-
 class torus_capsule {
 public:
     torus_capsule() : torus_capsule(vec3f{0, 0, 0}, vec3f{0, 0, 1}, vec3f{0, 0, 0.5f}, 0.0f) {}
@@ -210,10 +199,10 @@ public:
         // midpoint: the arc length from it, accurate as kappa -> 0 because atan2 keeps relative
         // precision for small angles.
         if (curvature_ > 0)
-            from_mid = detail::atan2_lane(k * along_chord, T(cos_half_angle_) + k * dot(up, vec3<T>(toward_control_))) /
+            from_mid = lane_atan2(k * along_chord, T(cos_half_angle_) + k * dot(up, vec3<T>(toward_control_))) /
                        k;
         const T u = clamp(T(0.5f) + from_mid / T(2 * half_arc_length_), T(0), T(1));
-        const T v = detail::atan2_lane(e.height, e.radial) / T(2 * std::numbers::pi_v<float>) + T(0.5f);
+        const T v = lane_atan2(e.height, e.radial) / T(2 * std::numbers::pi_v<float>) + T(0.5f);
         return {u, v};
     }
 
