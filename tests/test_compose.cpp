@@ -262,6 +262,22 @@ TEST_CASE("lipschitz_warp stays 1-Lipschitz and never overestimates")
                          krs::invalid_parameter);
     CHECK_THROWS_WITH_AS(krs::twist_warp(1.0f, 0.0f), doctest::Contains("twist_warp.radius"), krs::invalid_parameter);
     CHECK_THROWS_WITH_AS(krs::noise_warp(-1.0f, 1.0f), doctest::Contains("noise_warp.amplitude"), krs::invalid_parameter);
+    // Beyond the magnitude policy: an amplitude of 3e19 made the field inf, a frequency of 1e38
+    // NaN (p f overflows), a radius of 1e30 passed unchecked, and a twist of rate 1e38 over 1e9
+    // had 1/L round to 0 (a field of 0, all surface).
+    CHECK_THROWS_WITH_AS(krs::noise_warp(3e19f, 1.0f), doctest::Contains("noise_warp.amplitude"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::noise_warp(1.0f, 1e38f), doctest::Contains("noise_warp.frequency"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::twist_warp(1.0f, 1e30f), doctest::Contains("twist_warp.radius"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::bend_warp(1.0f, 1e30f), doctest::Contains("bend_warp.radius"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::lipschitz_warp(slab, krs::twist_warp(1e38f, 1e9f)), doctest::Contains("lipschitz_warp.lipschitz"),
+                         krs::invalid_parameter);
+    // The largest accepted values give finite fields.
+    const krs::lipschitz_warp wide(krs::sphere({0, 0, 0}, 1.0f), krs::noise_warp(1e9f, 1e9f));
+    const krs::lipschitz_warp steep(krs::sphere({0, 0, 0}, 1.0f), krs::twist_warp(1e20f, 1e9f));
+    for (const vec3f& p : {vec3f{0, 0, 0}, vec3f{5, -3, 2}, vec3f{1e9f, 0, 0}, vec3f{0, 1e9f, 1e9f}}) {
+        CHECK(std::isfinite(wide.distance(p)));
+        CHECK(std::isfinite(steep.distance(p)));
+    }
 }
 
 TEST_CASE("bounded never overestimates and skips the field far away")

@@ -373,6 +373,11 @@ TEST_CASE("fractal noise and triplanar projection")
     }
     CHECK(hi - lo > 0.8); // it varies
     CHECK_THROWS_WITH_AS(krs::fractal_noise(0, 1.0f), doctest::Contains("fractal_noise.octaves"), krs::invalid_parameter);
+    // A first frequency of 1e30 times lacunarity 8^15 overflowed to NaN; up to 1e9 stays finite.
+    CHECK_THROWS_WITH_AS(krs::fractal_noise(16, 1e30f, 8.0f), doctest::Contains("fractal_noise.frequency"),
+                         krs::invalid_parameter);
+    const krs::fractal_noise finest(16, 1e9f, 8.0f);
+    for (const vec3f& p : {vec3f{1, 1, 1}, vec3f{1e9f, -1e9f, 3}}) CHECK(std::isfinite(finest(p)));
     // Triplanar: along an axis normal only that axis's projection is seen.
     auto pattern = [](double u, double v) { return u + 10 * v; };
     const vec3d p{1, 2, 3};

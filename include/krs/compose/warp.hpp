@@ -63,7 +63,7 @@ struct twist_warp {
 
     twist_warp() = default;
     twist_warp(float rate_, float radius_)
-        : rate(require_finite("twist_warp.rate", rate_)), radius(require_positive("twist_warp.radius", radius_))
+        : rate(require_finite("twist_warp.rate", rate_)), radius(require_positive_length("twist_warp.radius", radius_))
     {
     }
     template <class T>
@@ -106,7 +106,7 @@ struct bend_warp {
 
     bend_warp() = default;
     bend_warp(float rate_, float radius_)
-        : rate(require_finite("bend_warp.rate", rate_)), radius(require_positive("bend_warp.radius", radius_))
+        : rate(require_finite("bend_warp.rate", rate_)), radius(require_positive_length("bend_warp.radius", radius_))
     {
     }
     template <class T>
@@ -140,13 +140,13 @@ struct bend_warp {
 // ||J|| <= 1 + a f ||J_N|| and ||J_N|| <= its Frobenius norm <= sqrt(3) * |grad N|max
 // = sqrt(3) * 3.75 sqrt(3) = 11.25 (texture.hpp). Holds everywhere: unbounded domain.
 struct noise_warp {
-    float amplitude = 0.0f; // displacement scale, >= 0 (the surface moves by up to amplitude)
-    float frequency = 1.0f; // > 0
+    float amplitude = 0.0f; // displacement scale in [0, 1e9] (the surface moves by up to amplitude)
+    float frequency = 1.0f; // in (0, 1e9]: frequency times any coordinate within the policy stays finite
 
     noise_warp() = default;
     noise_warp(float amplitude_, float frequency_)
-        : amplitude(require_non_negative("noise_warp.amplitude", amplitude_)),
-          frequency(require_positive("noise_warp.frequency", frequency_))
+        : amplitude(require_length("noise_warp.amplitude", amplitude_)),
+          frequency(require_positive_length("noise_warp.frequency", frequency_))
     {
     }
     template <class T>
@@ -170,9 +170,12 @@ class lipschitz_warp {
 public:
     lipschitz_warp(F f, W w) : field_(std::move(f)), warp_(std::move(w))
     {
+        // Up to 1e30: the field is the warped distance times 1/L, and 1/L must stay a normal float
+        // (a twist of rate 1e38 over a radius 1e9 had L = 1e47, 1/L rounded to 0, and the field
+        // was 0, all surface, everywhere). Long before that the steps are too short to trace.
         const double l = warp_.lipschitz();
-        if (!std::isfinite(l) || !(l >= 1.0))
-            throw invalid_parameter("lipschitz_warp.lipschitz", "the warp's Lipschitz bound must be finite and >= 1",
+        if (!std::isfinite(l) || !(l >= 1.0 && l <= 1e30))
+            throw invalid_parameter("lipschitz_warp.lipschitz", "the warp's Lipschitz bound must be in [1, 1e30]",
                                     detail::to_text(l));
         inverse_bound_ = float(1.0 / l);
         // Rounding 1/L to float must not make it larger than 1/L (that would overestimate).

@@ -22,7 +22,8 @@ namespace krs {
 // [-1, 1].
 struct fractal_noise {
     int octaves = 4;         // in [1, 16]
-    float frequency = 1.0f;  // of the first octave, > 0
+    float frequency = 1.0f;  // of the first octave, in (0, 1e9]: with lacunarity^15 <= 8^15 the last
+                             // octave's frequency times a coordinate within the policy stays finite
     float lacunarity = 2.0f; // in [1, 8]
     float gain = 0.5f;       // in (0, 1]
 
@@ -36,7 +37,7 @@ struct fractal_noise {
     {
         if (octaves < 1 || octaves > 16)
             throw invalid_parameter("fractal_noise.octaves", "must be in [1, 16]", std::to_string(octaves));
-        require_positive("fractal_noise.frequency", frequency);
+        require_positive_length("fractal_noise.frequency", frequency);
         if (!(lacunarity >= 1.0f && lacunarity <= 8.0f))
             throw invalid_parameter("fractal_noise.lacunarity", "must be in [1, 8]", detail::to_text(lacunarity));
         if (!(gain > 0.0f && gain <= 1.0f))
