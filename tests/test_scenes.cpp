@@ -119,6 +119,8 @@ TEST_CASE("forest: trees are reflected copies and never clipped by the forest mi
                     "tree_style.spread_degrees");
     require_rejects([&] { auto p = f; p.tree.levels = 50; p.doublings = 20; krs::model::build_forest(p); },
                     "forest.doublings");
+    // Beyond the magnitude policy the error named the ground plane's offset, not this parameter.
+    require_rejects([&] { auto p = f; p.ground_height = 1e10f; krs::model::build_forest(p); }, "forest.ground_height");
 }
 
 TEST_CASE("grass: counts and validation and determinism")
@@ -181,6 +183,14 @@ TEST_CASE("terrain: a height field with one crossing per vertical line")
     require_rejects([&] { auto b = t; b.levels = 0; krs::model::build_terrain(b); }, "terrain.levels");
     require_rejects([&] { auto b = t; b.size = 0; krs::model::build_terrain(b); }, "terrain.size");
     require_rejects([&] { auto b = t; b.detail_ratio = 1.5f; krs::model::build_terrain(b); }, "terrain.detail_ratio");
+    // The documented bounds written as floats are inside (0.99f is 0.99000001); the next float out is not.
+    for (float ratio : {0.5f, 0.99f}) {
+        auto b = t;
+        b.detail_ratio = ratio;
+        CHECK_NOTHROW(krs::model::build_terrain(b));
+    }
+    require_rejects([&] { auto b = t; b.detail_ratio = std::nextafter(0.99f, 1.0f); krs::model::build_terrain(b); },
+                    "terrain.detail_ratio");
     require_rejects([&] { auto b = t; b.slope = -1; krs::model::build_terrain(b); }, "terrain.slope");
 }
 
@@ -326,6 +336,19 @@ TEST_CASE("forest on terrain: every trunk base lies on the ground surface")
                              return g;
                          }()), t),
                          doctest::Contains("forest_ground.doublings"), krs::invalid_parameter);
+    // A forest of 64 mirrors: doublings = 64 passed the mirror count test and was shifted by
+    // (undefined; the sanitized suite reports it) before the range test.
+    auto deep = f;
+    deep.tree.levels = 45;
+    deep.doublings = 20;
+    const krs::model::forest deep_forest = krs::model::build_forest(deep);
+    REQUIRE(deep_forest.sequence.mirror_count() == 64);
+    for (int doublings : {21, 64}) {
+        auto g = deep;
+        g.doublings = doublings;
+        CHECK_THROWS_WITH_AS(krs::model::build_forest_ground(g, deep_forest, t), doctest::Contains("forest_ground.doublings"),
+                             krs::invalid_parameter);
+    }
 }
 
 #define KRS_REJECTS(builder, params, field, value, name)                                                          \

@@ -44,7 +44,7 @@ inline forest build_forest(const forest_parameters& f)
         throw invalid_parameter("forest.doublings", "must be in [0, 20]", std::to_string(f.doublings));
     detail::require_range("forest.spacing", f.spacing, 0.0, 4.0);
     detail::require_range("forest.angle_jitter_degrees", f.angle_jitter_degrees, 0.0, 90.0);
-    if (f.ground_height) require_finite("forest.ground_height", *f.ground_height);
+    if (f.ground_height) require_magnitude("forest.ground_height", *f.ground_height);
     // (levels - 1 would overflow for INT_MIN, found by fuzzing; grow_tree rejects such levels later.)
     const std::size_t tree_mirrors = f.tree.levels > 1 ? std::size_t(f.tree.levels) - 1 : 0;
     if (tree_mirrors + std::size_t(f.doublings) > tree_sequence::max_levels)

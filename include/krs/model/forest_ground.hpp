@@ -44,7 +44,9 @@ inline double terrain_height(const plane_sequence& terrain, double x, double z, 
 inline plane_sequence build_forest_ground(const forest_parameters& p, const forest& f, terrain_parameters terrain)
 {
     const std::size_t mirrors = f.sequence.mirror_count();
-    if (p.doublings < 0 || std::size_t(p.doublings) > mirrors || (std::size_t(1) << p.doublings) != f.tree_count)
+    // (Range first: shifting by 64 or more, a forest's whole mirror count, is undefined.)
+    if (p.doublings < 0 || p.doublings > 20 || std::size_t(p.doublings) > mirrors ||
+        (std::size_t(1) << p.doublings) != f.tree_count)
         throw invalid_parameter("forest_ground.doublings", "does not match the forest (build it from the same parameters)",
                                 std::to_string(p.doublings));
     terrain.height = 0.0f;

@@ -162,9 +162,13 @@ inline vec3d rotate(const vec3d& v, const vec3d& k, double a)
     return v * std::cos(a) + cross(k, v) * std::sin(a) + k * (dot(k, v) * (1.0 - std::cos(a)));
 }
 inline vec3f to_float(const vec3d& v) { return {float(v.x), float(v.y), float(v.z)}; }
-inline void require_range(const char* name, double v, double lo, double hi)
+// v in [lo, hi], with a float parameter compared against the bounds rounded to float: its
+// documented bound written as a float (0.99f is 0.99000001) is inside, as the user expects.
+template <class V>
+inline void require_range(const char* name, V v, double lo, double hi)
 {
-    if (!(v >= lo && v <= hi))
+    using C = std::conditional_t<std::is_same_v<V, float>, float, double>;
+    if (!(C(v) >= C(lo) && C(v) <= C(hi)))
         throw invalid_parameter(name, "must be in [" + krs::detail::to_text(lo) + ", " + krs::detail::to_text(hi) + "]", krs::detail::to_text(v));
 }
 } // namespace detail
