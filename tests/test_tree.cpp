@@ -109,9 +109,21 @@ TEST_CASE("grow_tree: the default tree has at least 2^16 instances and is determ
         const vec3d parent = krs::normalize(vec3d(a.forks[j]) - vec3d(a.forks[j - 1]));
         CHECK(std::abs(krs::dot(vec3d(a.fork_normals[j - 1]), parent)) < 1e-5);
     }
-    // The leaves stay clear of the last fork's mirror (nothing of them is clipped).
-    const krs::mirror& last = s.mirrors().front();
-    for (const krs::sphere& leaf : a.leaves) CHECK(last.signed_distance(leaf.center) < -leaf.radius);
+    // The leaves stay clear of the last fork's mirror (nothing of them is clipped), also when they
+    // are large or many (radius 0.2 and 8 leaves fanned across the fork plane before).
+    for (float leaf_radius : {0.02f, 0.06f, 0.1f, 0.2f, 0.4f})
+        for (int leaves : {1, 4, 8, 24})
+            for (std::uint32_t seed : {1u, 2u, 3u}) {
+                auto big = style;
+                big.leaf_radius = leaf_radius, big.leaves_per_twig = leaves, big.seed = seed;
+                const auto grown = krs::model::grow_tree(big);
+                const krs::model::tree_sequence sequence = krs::model::build_tree(grown);
+                const krs::mirror& last = sequence.mirrors().front();
+                for (const krs::sphere& leaf : grown.leaves) {
+                    INFO("leaf radius ", leaf_radius, ", ", leaves, " leaves, seed ", seed);
+                    CHECK(last.signed_distance(vec3d(leaf.center)) < -double(leaf.radius));
+                }
+            }
 }
 
 TEST_CASE("tree: bad parameters are rejected with the parameter's name")

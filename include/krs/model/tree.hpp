@@ -240,15 +240,26 @@ inline tree_parameters grow_tree(const tree_style& s)
         point = end;
     }
     // Leaves along the twig's second half, around it, kept on the negative side of the last fork's
-    // mirror so that mirror does not clip them.
+    // mirror so that mirror does not clip them: the fan around the twig reaches across the fork
+    // plane when leaves are large or many (radius 0.2: 2 of 4 crossed it by up to 0.057), so a
+    // leaf that would is moved back along the plane's normal, as the float plane build_tree makes
+    // (normal fork_axis through the twig's start; the twig lies on its negative side).
     const vec3d twig_start(t.forks[t.forks.size() - 2]);
     const vec3d side0 = s.levels > 1 ? -fork_axis : normalize(cross(direction, vec3d{0, 0, 1}));
     const vec3d side1 = cross(direction, side0);
+    const vec3d plane_normal = normalize(vec3d(detail::to_float(fork_axis)));
     for (int k = 0; k < s.leaves_per_twig; ++k) {
         const double along = 0.5 + 0.5 * (k + 1.0) / s.leaves_per_twig;
         const double angle = (k - 0.5 * (s.leaves_per_twig - 1)) * (std::numbers::pi * 0.8 / std::max(1, s.leaves_per_twig));
         const vec3d out = side0 * std::cos(angle) + side1 * std::sin(angle);
-        const vec3d c = twig_start + direction * (along * branch_length) + out * (radius + s.leaf_radius);
+        vec3d c = twig_start + direction * (along * branch_length) + out * (radius + s.leaf_radius);
+        if (s.levels > 1) {
+            // Clear by a relative 1e-5 of the leaf and 16 float ulps of the position (rounding of
+            // the stored centre and of the plane's float offset).
+            const double clearance = 1e-5 * double(s.leaf_radius) + 16 * 1.2e-7 * length(c);
+            const double reach = dot(plane_normal, c - twig_start) + double(s.leaf_radius) + clearance;
+            if (reach > 0) c = c - plane_normal * reach;
+        }
         const vec3f leaf_center = detail::to_float(c);
         if (!(length(vec3d(leaf_center)) <= double(max_magnitude)))
             throw invalid_parameter("tree_style.leaf_radius", "puts a leaf past 1e9 from the origin",
