@@ -6,6 +6,8 @@
 #include "krs/kernels/torus_capsule.hpp"
 #include "krs/shade/lambert.hpp"
 #include "krs/trace/camera.hpp"
+#include "krs/trace/packet_trace.hpp"
+#include "krs/trace/tile_prepass.hpp"
 
 #include "support/random.hpp"
 
@@ -203,6 +205,44 @@ TEST_CASE("degenerate rays and options give defined results")
     bad = {};
     bad.threshold_floor = 0;
     CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("threshold_floor"), krs::invalid_parameter);
+
+    // The tracers validate their options themselves: each of these marched on to a silent miss.
+    const krs::ray<float> ahead{{0, 0, -5}, {0, 0, 1}};
+    const krs::pinhole_camera camera({0, 0, -5}, {0, 0, 0}, {0, 1, 0}, 40.0f, 16, 16);
+    krs::trace_options options[4];
+    options[0].pixel_footprint = -0.5f;
+    options[1].threshold_floor = NAN;
+    options[2].omega = NAN;
+    options[3].omega = -1.0f;
+    const char* names[4] = {"pixel_footprint", "threshold_floor", "omega", "omega"};
+    for (int i = 0; i < 4; ++i) {
+        INFO(names[i]);
+        CHECK_THROWS_WITH_AS(krs::sphere_trace(s, ahead, options[i]), doctest::Contains(names[i]), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::sphere_trace(s, ahead, 0.0f, 10.0f, options[i]), doctest::Contains(names[i]),
+                             krs::invalid_parameter);
+        auto none = [](krs::ray_job&) { return false; };
+        auto ignore = [](std::uint32_t, const krs::hit<float>&) {};
+        CHECK_THROWS_WITH_AS(krs::trace_stream(s, none, ignore, options[i]), doctest::Contains(names[i]), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::prepass_tile(s, camera, 0, 0, 8, 8, options[i]), doctest::Contains(names[i]),
+                             krs::invalid_parameter);
+    }
+
+    // A stream reports an unusable ray as invalid also when its range is empty (it is pulled and
+    // reported without entering a packet), as sphere_trace does.
+    bool pulled = false;
+    krs::hit<float> reported;
+    auto one = [&](krs::ray_job& job) {
+        if (pulled) return false;
+        pulled = true;
+        job.r = {{NAN, 0, 0}, {0, 0, 1}};
+        job.t_start = 5.0f;
+        job.t_max = 1.0f;
+        return true;
+    };
+    krs::trace_stream(s, one, [&](std::uint32_t, const krs::hit<float>& h) { reported = h; }, krs::trace_options{});
+    CHECK(reported.invalid);
+    CHECK(!reported.found);
+    CHECK(krs::sphere_trace(s, krs::ray<float>{{NAN, 0, 0}, {0, 0, 1}}, 5.0f, 1.0f, krs::trace_options{}).invalid);
 }
 
 TEST_CASE("normals: tetrahedral gradient and KRS kernel normals agree with the closed form")

@@ -148,16 +148,19 @@ template <class P = packet_f, int Interleave = 2, field F, class Next, class Don
 stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_options& options, int refill_at = 0)
 {
     static_assert(Interleave >= 1, "trace_stream needs at least one packet");
+    options.validate();
     constexpr std::size_t W = lane_count<P>;
     if (refill_at <= 0) refill_at = detail::default_refill(f, int(W));
     stream_stats stats;
     std::array<detail::packet_lanes<P>, Interleave> lanes;
     std::array<march_state<P>, Interleave> state;
     bool queue_open = true;
-    // A job with an empty range is a miss without a step, reported as it is pulled.
+    // A job with an empty range is a miss without a step, reported as it is pulled (invalid as
+    // sphere_trace reports it when the ray itself is unusable).
     auto empty = [&](const ray_job& job) {
         hit<float> h;
         h.t = std::numeric_limits<float>::infinity();
+        h.invalid = unusable_ray(job.r, job.t_start);
         ++stats.rays;
         done(job.id, h);
     };

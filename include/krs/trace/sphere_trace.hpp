@@ -95,6 +95,14 @@ struct march_state {
     hit<T> result{};
 };
 
+// Whether a ray cannot be marched (per lane): a non-finite origin, a zero or non-finite direction
+// or a non-finite start. Such a ray is a miss with `invalid` set.
+template <class T>
+mask_t<T> unusable_ray(const ray<T>& r, const T& t_start)
+{
+    return !(is_finite(r.origin) && is_finite(r.direction) && length_squared(r.direction) > T(0) && is_finite(t_start));
+}
+
 // Starts a march along r from t_start (per lane) to t_max.
 template <class T>
 march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options)
@@ -102,8 +110,7 @@ march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, co
     using S = scalar_t<T>;
     march_state<T> m;
     m.r = r;
-    const T dir_len2 = length_squared(r.direction);
-    m.result.invalid = !(is_finite(r.origin) && is_finite(r.direction) && dir_len2 > T(0) && is_finite(t_start));
+    m.result.invalid = unusable_ray(r, t_start);
     // A lane whose start is already past its end (a ray clipped away, krs/trace/box_clip.hpp)
     // misses without a step.
     m.active = !m.result.invalid && t_start <= t_max;
@@ -151,7 +158,14 @@ void march_advance(march_state<T>& m, const T& d, const trace_options& options)
     const mask_t<T> advance = accept && !close && is_finite(d);
     m.accepted_t = select(advance, m.t, m.accepted_t);
     m.accepted_d = select(advance, d, m.accepted_d);
-    m.t = select(advance, m.t + m.omega * d, m.t);
+    T next = m.t + m.omega * d;
+    if (options.omega > 1.0f) {
+        // A relaxed step past t_max must not end the lane where the plain step would not: it
+        // lands on t_max instead, whose sample the overlap test then checks (a surface between
+        // t + d and t_max, the far side of a clipping box, was missed that way).
+        next = select(next > m.t_max, max(m.t + d, m.t_max), next);
+    }
+    m.t = select(advance, next, m.t);
     // A lane ends on a hit, a NaN field value, passing t_max, or its step budget.
     m.active = (advance || fail) && (m.t <= m.t_max);
     if constexpr (std::floating_point<T>)
@@ -166,9 +180,12 @@ void march_step(const F& f, march_state<T>& m, const trace_options& options)
     march_advance(m, f.distance(point_at(m.r, m.t)), options);
 }
 
+// Both validate the options (trace_options::validate names what is wrong): a negative footprint, a
+// NaN floor or omega marched on to a silent miss.
 template <field F, class T>
 hit<T> sphere_trace(const F& f, const ray<T>& r, const trace_options& options)
 {
+    options.validate();
     march_state<T> m = start_march(r, T(options.min_distance), T(options.max_distance), options);
     while (any(m.active)) march_step(f, m, options);
     return m.result;
@@ -178,6 +195,7 @@ hit<T> sphere_trace(const F& f, const ray<T>& r, const trace_options& options)
 template <field F, class T>
 hit<T> sphere_trace(const F& f, const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options)
 {
+    options.validate();
     march_state<T> m = start_march(r, t_start, t_max, options);
     while (any(m.active)) march_step(f, m, options);
     return m.result;

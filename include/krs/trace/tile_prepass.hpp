@@ -56,13 +56,17 @@ struct tile_prepass {
         for (int k = 0; k < extra_count && any(inside); ++k) {
             const vec3<T> c(extra[k].center);
             const T r2(extra[k].radius * extra[k].radius);
-            const vec3<T> oc = r.origin - c;
-            const vec3<T> p = oc + r.direction * t;
-            inside = inside && (length_squared(p) < r2);
-            // Exit of the ray from the sphere: the larger root of |oc + u d|^2 = r^2.
-            const T b = dot(oc, r.direction);
-            const T disc = b * b - (length_squared(oc) - r2);
-            const T exit = -b + sqrt(max(disc, T(0)));
+            const vec3<T> p = (r.origin - c) + r.direction * t; // the current point, from the centre
+            const T p2 = length_squared(p);
+            inside = inside && (p2 < r2);
+            // Exit of the ray from the sphere: t + u for the larger root u of |p + u d|^2 = r^2.
+            // Solved from the current point (|p| < r) rather than from the origin: there b^2 and
+            // |origin - c|^2 are both about t^2 and cancel, and their float error (about eps t^2)
+            // pushed exits past the sphere, so rays started inside the solid (4.6 million of a 4K
+            // frame at a 5 degree field of view).
+            const T b = dot(p, r.direction);
+            const T disc = b * b + (r2 - p2);
+            const T exit = t + (sqrt(max(disc, T(0))) - b);
             t = select(inside, max(t, exit), t);
         }
         return t;
@@ -75,11 +79,16 @@ template <field F>
 tile_prepass prepass_tile(const F& f, const pinhole_camera& camera, int x0, int y0, int x1, int y1,
                           const trace_options& options, int extra_spheres = 4)
 {
+    options.validate();
     const pinhole_camera::beam_cone beam = camera.beam(x0, y0, x1, y1);
     const float ca = beam.cos_half_angle, sa = beam.sin_half_angle;
     tile_prepass result;
     float s = options.min_distance;
-    for (int step = 0; step < options.max_steps && s < options.max_distance; ++step) {
+    // The cone march needs a half-angle below 90 degrees (its sphere centres c = s cos a lie ahead
+    // of the eye); a wider tile of a wide-angle camera starts at min_distance, and only the extra
+    // spheres below, which each ray checks itself, move its rays on.
+    const int cone_steps = ca > 0.0f ? options.max_steps : 0;
+    for (int step = 0; step < cone_steps && s < options.max_distance; ++step) {
         const float c = s * ca;
         const float d = f.distance(point_at(beam.axis, c));
         ++result.evaluations;
