@@ -308,6 +308,14 @@ TEST_CASE("hypertree binary header errors name what is wrong")
         b = bytes;
         put(b, 60, 100000, 4), put(b, 64, 100000, 4);
         CHECK(mentions(refusal(resealed(b)), "names more than 2^32 - 1 voxels"));
+        // Finite and positive, but no box float can place: refused at load, by the field's name (such
+        // files loaded, and the marcher then blamed its own step factor).
+        b = bytes;
+        put(b, 36, 1, 8); // extent.x = 5e-324
+        CHECK(mentions(refusal(resealed(b)), "byte 12: invalid hypervolume: krs: hypervolume.extent.x: gives voxels of side 0"));
+        b = bytes;
+        put(b, 12, 0x7FE0000000000000ull, 8); // origin.x = 2^1023
+        CHECK(mentions(refusal(resealed(b)), "byte 12: invalid hypervolume: krs: hypervolume.origin"));
     }
     SUBCASE("voxels out of order, empty or outside, with a valid checksum")
     {

@@ -515,6 +515,16 @@ TEST_CASE("hypertree refuses impossible definitions with named parameters")
     refuses([] { hypervolume({0, 0, 0}, {1, 1, 1}, {0, 10, 10}); }, "hypervolume.resolution.x");
     refuses([] { hypervolume({0, 0, 0}, {1, 1, 1}, {2000, 2000, 2000}); }, "hypervolume.resolution");
     refuses([] { hypervolume({0, 0, 0}, {1, -1, 1}, {10, 10, 10}); }, "hypervolume.extent.y");
+    // Boxes float cannot place (each loaded from a file once, and failed later under another name).
+    refuses([] { hypervolume({0, 0, 0}, {5e-324, 1, 1}, {1, 1, 1}); }, "hypervolume.extent.x");
+    refuses([] { hypervolume({0, 0, 0}, {1, 1e-300, 1}, {1, 4, 1}); }, "hypervolume.extent.y");
+    refuses([] { hypervolume({1e300, 0, 0}, {1, 1, 1}, {1, 1, 1}); }, "hypervolume.origin");
+    refuses([] { hypervolume({5e8, 0, 0}, {1e-9, 1, 1}, {1, 1, 1}); }, "hypervolume.extent.x");
+    refuses([] { hypervolume({0, 0, 0}, {1, 1, 1e300}, {1, 1, 1}); }, "hypervolume.extent.z");
+    // The smallest accepted sides: 1e-9 near the origin, 1e-6 of the coordinate far from it.
+    CHECK_NOTHROW(hypervolume({0, 0, 0}, {1e-9, 1e-9, 1e-9}, {1, 1, 1}));
+    CHECK_NOTHROW(hypervolume({1e6, 0, 0}, {8, 1, 1}, {4, 1, 1}));
+    refuses([] { hypervolume({1e6, 0, 0}, {8, 1, 1}, {16, 1, 1}); }, "hypervolume.extent.x");
     refuses([] { scale(std::nan("")); }, "scale.x");
     refuses([] { (cone{1, 1.0, 0.5, 0.1, 0.1}).validate(); }, "cone.top");
     refuses([] {

@@ -305,6 +305,9 @@ TEST_CASE("hypertree io definition range errors")
         {"TRANSFORM 1 0 DUMMY 0\n", "t.tree:1:21:", "expected an integer in [1, 64] after DUMMY"},
         {"TRANSFORM -1 0\n", "t.tree:1:11:", "expected a number >= 0 after TRANSFORM"},
         {"HYPERVOLUME 1 0 1\n", "t.tree:1:15:", "expected a number > 0 after HYPERVOLUME"},
+        // Accepted and built with no voxel before: a box float cannot place, at its keyword.
+        {"HYPERVOLUME 1e-300 1e-300 1e-300\nTRANSFORM 1 0\n SCALE 0.5\n", "t.tree:1:1:", "invalid tree: hypervolume.extent.x: gives voxels of side"},
+        {"HYPERVOLUME 1e-9 1e-9 1e-9\nDISPLACEMENT 1e9 1e9 1e9\nTRANSFORM 1 0\n SCALE 0.5\n", "t.tree:2:1:", "invalid tree: hypervolume.origin"},
         {"TRANSFORM 1 0\n SCALE 1e12\n", "t.tree:2:8:", "expected a number of magnitude at most 1e9"},
         {"TRANSFORM 1 0\n TRANSLATE 0 nan 0\n", "t.tree:2:14:", "expected a number after TRANSLATE, got 'nan'"},
         {"DEPTHCOLOR 0 1 0 0 0 1 1 1.5\n", "t.tree:1:26:", "expected a number in [0, 1] after DEPTHCOLOR"},
@@ -433,6 +436,16 @@ TEST_CASE("hypertree io forest errors")
               .starts_with((dir / "missing.forest").string() + ":4:1: cannot read the tree file"));
     CHECK(thrown_by([&] { load_forest(dir / "broken.forest"); })
               .starts_with((dir / "broken.tree").string() + ":3:9: expected a number after SCALE, got 'big'"));
+    // A valid tree moved where float cannot place its voxels: reported at its TREE line (it loaded,
+    // and the forest's volume() failed unnamed).
+    {
+        std::ofstream(dir / "far.forest") << "RESOLUTION 8\nSTORAGETYPE dense\nTREE near.tree\nTREE small.tree 9e8 0 0\n";
+        std::ofstream(dir / "near.tree") << "RESOLUTION 8\nTRANSFORM 1 0\n  SCALE 0.5\n";
+        std::ofstream(dir / "small.tree") << "RESOLUTION 8\nHYPERVOLUME 1 1 1\nTRANSFORM 1 0\n  SCALE 0.5\n";
+    }
+    const std::string far = thrown_by([&] { load_forest(dir / "far.forest"); });
+    CHECK(far.starts_with((dir / "far.forest").string() + ":4:1: the tree's hypervolume moved by this offset is invalid"));
+    CHECK(far.find("hypervolume.extent.x") != std::string::npos);
     std::filesystem::remove_all(dir);
 }
 

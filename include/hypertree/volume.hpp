@@ -34,18 +34,37 @@ struct resolution {
 // The largest voxel count a 32-bit index can name (one value is kept free as "no voxel").
 inline constexpr std::uint64_t max_voxel_count = std::numeric_limits<voxel_index>::max();
 
+// The smallest voxel side a hypervolume takes (the magnitude policy's 1e9, inverted).
+inline constexpr double min_voxel_side = 1e-9;
+
 class hypervolume {
 public:
     hypervolume() = default;
     hypervolume(const vec3d& origin, const vec3d& extent, resolution res)
     {
-        krs::require_finite("hypervolume.origin", origin);
-        krs::require_positive("hypervolume.extent.x", extent.x);
-        krs::require_positive("hypervolume.extent.y", extent.y);
-        krs::require_positive("hypervolume.extent.z", extent.z);
+        // The magnitude policy (krs/core/validate.hpp), and voxels float can place: renderers
+        // work in float, where a box at 1e9 with sides of 1e-9, or a side of 5e-324, collapsed
+        // to zero width and failed later under another parameter's name.
+        krs::require_magnitude("hypervolume.origin", origin);
+        krs::require_positive_length("hypervolume.extent.x", extent.x);
+        krs::require_positive_length("hypervolume.extent.y", extent.y);
+        krs::require_positive_length("hypervolume.extent.z", extent.z);
         for (auto [name, n] : {std::pair{"hypervolume.resolution.x", res.x}, std::pair{"hypervolume.resolution.y", res.y},
                                std::pair{"hypervolume.resolution.z", res.z}})
             if (n < 1) throw invalid_parameter(name, "must be >= 1", std::to_string(n));
+        const double sides[3] = {extent.x / res.x, extent.y / res.y, extent.z / res.z};
+        const double lows[3] = {origin.x, origin.y, origin.z}, spans[3] = {extent.x, extent.y, extent.z};
+        const char* names[3] = {"hypervolume.extent.x", "hypervolume.extent.y", "hypervolume.extent.z"};
+        for (int a = 0; a < 3; ++a) {
+            // At least 8 float ulps of the box's farthest coordinate on that axis, and 1e-9.
+            const double farthest = std::max(std::abs(lows[a]), std::abs(lows[a] + spans[a]));
+            if (!(sides[a] >= std::max(min_voxel_side, 1e-6 * farthest)))
+                throw invalid_parameter(names[a],
+                                        "gives voxels of side " + krs::detail::to_text(sides[a]) +
+                                            " (extent / resolution): a side must be at least 1e-9 and 1e-6 of the "
+                                            "box's farthest coordinate, so float can place the voxels",
+                                        krs::detail::to_text(spans[a]));
+        }
         const std::uint64_t count = std::uint64_t(res.x) * std::uint64_t(res.y) * std::uint64_t(res.z);
         if (count > max_voxel_count)
             throw invalid_parameter("hypervolume.resolution", "must name at most 2^32 - 1 voxels (32-bit voxel indices)",

@@ -144,6 +144,22 @@ inline loaded_forest load_forest(const std::filesystem::path& path)
         if (!tree_text)
             throw definition_error(forest.listing.file_name, tree.at, "cannot read the tree file '" + tree.file.string() + "'");
         forest.trees.push_back(parse_definition(*tree_text, tree.file.string()));
+        // The tree's box where the forest puts it must still be a volume float can place (an
+        // offset of 1e9 under a box of side 1e-9 loaded, then failed in volume() unnamed).
+        const hypervolume& v = forest.trees.back().ifs.volume;
+        try {
+            (void)hypervolume(v.origin() + tree.offset, v.extent(), v.grid());
+        } catch (const invalid_parameter& e) {
+            throw definition_error(forest.listing.file_name, tree.at,
+                                   "the tree's hypervolume moved by this offset is invalid: " + std::string(e.what()));
+        }
+    }
+    try {
+        (void)forest.volume();
+    } catch (const invalid_parameter& e) {
+        throw definition_error(forest.listing.file_name, forest.listing.trees.front().at,
+                               "the forest's shared volume (every tree's box, at the forest's RESOLUTION) is invalid: " +
+                                   std::string(e.what()));
     }
     return forest;
 }
