@@ -413,10 +413,27 @@ TEST_CASE_TEMPLATE("axis-aligned mirrors give the distances of the same general 
         a.kernel(stem), b.kernel(stem);
         const int n = 3 + trial % 10;
         for (int i = 0; i < n; ++i) {
-            const krs::axis_mirror m(int(g() % 3), float(uniform(g, -3, 3)), (g() & 1) != 0);
-            // Independent check of the stored plane: points on it have zero signed distance, and
-            // the general fold keeps the side the axis fold keeps.
-            REQUIRE(krs::length(m.normal) == doctest::Approx(1.0));
+            const int axis = int(g() % 3);
+            const float position = float(uniform(g, -3, 3));
+            const bool above = (g() & 1) != 0;
+            const krs::axis_mirror m(axis, position, above);
+            // Independent check of the stored plane against its definition x_axis = position: a
+            // point there has zero signed distance, and a point off it keeps its side when its side
+            // is the kept one (x_axis below the position for `above`) and is mirrored to it
+            // otherwise, as the general fold does.
+            for (int q = 0; q < 8; ++q) {
+                double c[3] = {uniform(g, -5, 5), uniform(g, -5, 5), uniform(g, -5, 5)};
+                c[axis] = position;
+                REQUIRE(m.signed_distance(vec3d{c[0], c[1], c[2]}) == 0.0);
+                const double offset = uniform(g, 0.01, 4) * (q % 2 ? 1 : -1);
+                c[axis] = double(position) + offset;
+                const vec3d p{c[0], c[1], c[2]};
+                const vec3d folded = m.fold(p), general = m.general().fold(p);
+                const double kept[3] = {folded.x, folded.y, folded.z};
+                const bool on_kept_side = above ? offset < 0 : offset > 0;
+                REQUIRE(kept[axis] == doctest::Approx(on_kept_side ? c[axis] : 2.0 * position - c[axis]));
+                REQUIRE(krs::length(folded - general) < 1e-5);
+            }
             a.mirror(m);
             b.mirror(m.general());
             if (i == n / 2) {
