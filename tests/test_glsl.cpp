@@ -137,10 +137,9 @@ TEST_CASE("glsl emits each kernel kind once and only the kinds a scene uses")
 TEST_CASE("glsl data layout: pack equals the emitter data and the documented vec4 order")
 {
     const auto s = ex::sponge();
-    krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, "d", 0});
+    krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, "data", 0});
     e.add(s.field, "sponge");
     const std::vector<float> packed = krs::glsl::pack(s.field, "sponge");
-    CHECK(packed == e.data());
     // Mirrors first (vec4 normal, offset), then the kernels.
     REQUIRE(packed.size() == 4 * (s.field.mirror_count() + 5));
     for (std::size_t i = 0; i < s.field.mirror_count(); ++i) {
@@ -151,12 +150,38 @@ TEST_CASE("glsl data layout: pack equals the emitter data and the documented vec
         CHECK(packed[4 * i + 3] == m.offset);
     }
     const std::string text = e.source();
-    CHECK(text.find("layout(std140) uniform d_block {\n    vec4 d[26];\n};") != std::string::npos);
-    krs::glsl::emitter ssbo({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "d", 3});
+    CHECK(text.find("layout(std140) uniform data_block {\n    vec4 data[26];\n};") != std::string::npos);
+    krs::glsl::emitter ssbo({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "data", 3});
     ssbo.add(s.field, "sponge");
-    CHECK(ssbo.source().find("layout(std430, binding = 3) readonly buffer d_block {") != std::string::npos);
+    CHECK(ssbo.source().find("layout(std430, binding = 3) readonly buffer data_block {") != std::string::npos);
     CHECK_THROWS_AS(krs::glsl::emitter({krs::glsl::target::shadertoy, krs::glsl::data_mode::buffer}),
                     krs::invalid_parameter);
+}
+
+TEST_CASE("glsl data name: an identifier that nothing in the emitted code hides")
+{
+    // Names the sponge's code also declares (locals of the distance, locate and shade functions,
+    // library parameters): each hid the array, and the shader failed to compile ("d": 'left of [
+    // is not of type array'; "p", "light", "q": 'vector index out of range').
+    const auto s = ex::sponge();
+    for (const char* clash : {"d", "p", "w", "s", "e", "q", "light", "view", "weight", "inverse", "sponge"}) {
+        INFO(std::string(clash));
+        krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, clash, 0});
+        CHECK_THROWS_WITH_AS(e.add(s.field, "sponge"), doctest::Contains("glsl.options.data_name"), krs::invalid_parameter);
+    }
+    for (const char* fine : {"data", "scene", "krs_data", "D", "p2", "m"}) {
+        INFO(std::string(fine));
+        krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, fine, 0});
+        CHECK_NOTHROW(e.add(s.field, "sponge"));
+        const std::string text = e.source();
+        CHECK(text.find(std::string("vec4 ") + fine + "[") != std::string::npos);
+    }
+    // Not identifiers, GLSL's gl_ names, or the library's own krs_ names.
+    for (const char* bad : {"", "1x", "gl_data", "a-b", "my data", "krs_mirror_fold", "krs_location"}) {
+        INFO(std::string(bad));
+        CHECK_THROWS_WITH_AS(krs::glsl::emitter({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, bad, 0}),
+                             doctest::Contains("glsl.options.data_name"), krs::invalid_parameter);
+    }
 }
 
 TEST_CASE("glsl es300 snippets declare precision and the version line is optional")
