@@ -269,7 +269,8 @@ krs_kernel_shading forest_shade(vec3 p, vec3 toLight, vec3 toEye, float threshol
     s.view = toEye;
     vec3 light = toLight;
     vec3 view = toEye;
-    float inverse = threshold > 0.0 ? 1.0 / threshold : 0.0;
+    bool ramp = threshold >= 1.17549435e-38;
+    float inverse = ramp ? 1.0 / threshold : 0.0;
     float d;
     float e;
     float weight;
@@ -277,83 +278,83 @@ krs_kernel_shading forest_shade(vec3 p, vec3 toLight, vec3 toEye, float threshol
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 12u; s.where.level = 13u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[12]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[12]); s.where.reflections.x |= 0x1000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[12]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[12]) - view) * weight;
     e = krs_mirror_signed_distance(p, forest_data[11]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[11]); s.where.reflections.x |= 0x800u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[11]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[11]) - view) * weight;
     e = krs_mirror_signed_distance(p, forest_data[10]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[10]); s.where.reflections.x |= 0x400u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[10]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[10]) - view) * weight;
     e = krs_mirror_signed_distance(p, forest_data[9]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[9]); s.where.reflections.x |= 0x200u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[9]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[9]) - view) * weight;
     e = krs_mirror_signed_distance(p, forest_data[8]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[8]); s.where.reflections.x |= 0x100u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[8]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[8]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[72], forest_data[73], forest_data[74], forest_data[75], forest_data[76], forest_data[77], forest_data[78]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 11u; s.where.level = 8u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[7]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[7]); s.where.reflections.x |= 0x80u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[7]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[7]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[65], forest_data[66], forest_data[67], forest_data[68], forest_data[69], forest_data[70], forest_data[71]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 10u; s.where.level = 7u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[6]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[6]); s.where.reflections.x |= 0x40u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[6]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[6]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[58], forest_data[59], forest_data[60], forest_data[61], forest_data[62], forest_data[63], forest_data[64]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 9u; s.where.level = 6u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[5]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[5]); s.where.reflections.x |= 0x20u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[5]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[5]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[51], forest_data[52], forest_data[53], forest_data[54], forest_data[55], forest_data[56], forest_data[57]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 8u; s.where.level = 5u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[4]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[4]); s.where.reflections.x |= 0x10u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[4]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[4]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[44], forest_data[45], forest_data[46], forest_data[47], forest_data[48], forest_data[49], forest_data[50]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 7u; s.where.level = 4u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[3]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[3]); s.where.reflections.x |= 0x8u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[3]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[3]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[37], forest_data[38], forest_data[39], forest_data[40], forest_data[41], forest_data[42], forest_data[43]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 6u; s.where.level = 3u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[2]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[2]); s.where.reflections.x |= 0x4u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[2]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[2]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[30], forest_data[31], forest_data[32], forest_data[33], forest_data[34], forest_data[35], forest_data[36]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 5u; s.where.level = 2u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[1]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[1]); s.where.reflections.x |= 0x2u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[1]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[1]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[23], forest_data[24], forest_data[25], forest_data[26], forest_data[27], forest_data[28], forest_data[29]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 4u; s.where.level = 1u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, forest_data[0]);
     if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[0]); s.where.reflections.x |= 0x1u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, forest_data[0]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, forest_data[0]) - view) * weight;
     d = krs_torus_capsule_distance(p, forest_data[13], forest_data[14], forest_data[15], forest_data[16], forest_data[17], forest_data[18], forest_data[19]);

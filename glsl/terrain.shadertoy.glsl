@@ -181,154 +181,155 @@ krs_kernel_shading terrain_shade(vec3 p, vec3 toLight, vec3 toEye, float thresho
     s.view = toEye;
     vec3 light = toLight;
     vec3 view = toEye;
-    float inverse = threshold > 0.0 ? 1.0 / threshold : 0.0;
+    bool ramp = threshold >= 1.17549435e-38;
+    float inverse = ramp ? 1.0 / threshold : 0.0;
     float d;
     float e;
     float weight;
     e = krs_mirror_signed_distance(p, terrain_data[27]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[27]); s.where.reflections.x |= 0x8000000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[27]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[27]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[26]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[26]); s.where.reflections.x |= 0x4000000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[26]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[26]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[25]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[25]); s.where.reflections.x |= 0x2000000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[25]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[25]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[24]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[24]); s.where.reflections.x |= 0x1000000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[24]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[24]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[23]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[23]); s.where.reflections.x |= 0x800000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[23]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[23]) - view) * weight;
     d = krs_plane_distance(p, terrain_data[31]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 3u; s.where.level = 23u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, terrain_data[22]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[22]); s.where.reflections.x |= 0x400000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[22]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[22]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[21]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[21]); s.where.reflections.x |= 0x200000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[21]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[21]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[20]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[20]); s.where.reflections.x |= 0x100000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[20]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[20]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[19]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[19]); s.where.reflections.x |= 0x80000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[19]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[19]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[18]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[18]); s.where.reflections.x |= 0x40000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[18]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[18]) - view) * weight;
     d = krs_plane_distance(p, terrain_data[30]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 2u; s.where.level = 18u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, terrain_data[17]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[17]); s.where.reflections.x |= 0x20000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[17]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[17]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[16]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[16]); s.where.reflections.x |= 0x10000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[16]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[16]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[15]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[15]); s.where.reflections.x |= 0x8000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[15]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[15]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[14]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[14]); s.where.reflections.x |= 0x4000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[14]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[14]) - view) * weight;
     d = krs_plane_distance(p, terrain_data[29]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 1u; s.where.level = 14u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, terrain_data[13]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[13]); s.where.reflections.x |= 0x2000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[13]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[13]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[12]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[12]); s.where.reflections.x |= 0x1000u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[12]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[12]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[11]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[11]); s.where.reflections.x |= 0x800u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[11]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[11]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[10]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[10]); s.where.reflections.x |= 0x400u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[10]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[10]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[9]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[9]); s.where.reflections.x |= 0x200u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[9]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[9]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[8]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[8]); s.where.reflections.x |= 0x100u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[8]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[8]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[7]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[7]); s.where.reflections.x |= 0x80u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[7]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[7]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[6]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[6]); s.where.reflections.x |= 0x40u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[6]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[6]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[5]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[5]); s.where.reflections.x |= 0x20u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[5]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[5]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[4]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[4]); s.where.reflections.x |= 0x10u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[4]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[4]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[3]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[3]); s.where.reflections.x |= 0x8u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[3]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[3]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[2]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[2]); s.where.reflections.x |= 0x4u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[2]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[2]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[1]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[1]); s.where.reflections.x |= 0x2u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[1]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[1]) - view) * weight;
     e = krs_mirror_signed_distance(p, terrain_data[0]);
     if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[0]); s.where.reflections.x |= 0x1u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, terrain_data[0]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, terrain_data[0]) - view) * weight;
     d = krs_plane_distance(p, terrain_data[28]);

@@ -298,7 +298,8 @@ krs_kernel_shading tree_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold)
     s.view = toEye;
     vec3 light = toLight;
     vec3 view = toEye;
-    float inverse = threshold > 0.0 ? 1.0 / threshold : 0.0;
+    bool ramp = threshold >= 1.17549435e-38;
+    float inverse = ramp ? 1.0 / threshold : 0.0;
     float d;
     float e;
     float weight;
@@ -308,77 +309,77 @@ krs_kernel_shading tree_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold)
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 16u; s.where.level = 11u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[10]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[10]); s.where.reflections.x |= 0x400u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[10]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[10]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[85], tree_data[86], tree_data[87], tree_data[88], tree_data[89], tree_data[90], tree_data[91]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 14u; s.where.level = 10u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[9]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[9]); s.where.reflections.x |= 0x200u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[9]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[9]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[78], tree_data[79], tree_data[80], tree_data[81], tree_data[82], tree_data[83], tree_data[84]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 13u; s.where.level = 9u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[8]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[8]); s.where.reflections.x |= 0x100u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[8]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[8]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[71], tree_data[72], tree_data[73], tree_data[74], tree_data[75], tree_data[76], tree_data[77]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 12u; s.where.level = 8u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[7]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[7]); s.where.reflections.x |= 0x80u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[7]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[7]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[64], tree_data[65], tree_data[66], tree_data[67], tree_data[68], tree_data[69], tree_data[70]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 11u; s.where.level = 7u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[6]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[6]); s.where.reflections.x |= 0x40u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[6]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[6]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[57], tree_data[58], tree_data[59], tree_data[60], tree_data[61], tree_data[62], tree_data[63]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 10u; s.where.level = 6u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[5]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[5]); s.where.reflections.x |= 0x20u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[5]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[5]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[50], tree_data[51], tree_data[52], tree_data[53], tree_data[54], tree_data[55], tree_data[56]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 9u; s.where.level = 5u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[4]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[4]); s.where.reflections.x |= 0x10u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[4]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[4]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[43], tree_data[44], tree_data[45], tree_data[46], tree_data[47], tree_data[48], tree_data[49]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 8u; s.where.level = 4u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[3]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[3]); s.where.reflections.x |= 0x8u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[3]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[3]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[36], tree_data[37], tree_data[38], tree_data[39], tree_data[40], tree_data[41], tree_data[42]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 7u; s.where.level = 3u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[2]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[2]); s.where.reflections.x |= 0x4u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[2]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[2]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[29], tree_data[30], tree_data[31], tree_data[32], tree_data[33], tree_data[34], tree_data[35]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 6u; s.where.level = 2u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[1]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[1]); s.where.reflections.x |= 0x2u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[1]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[1]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[22], tree_data[23], tree_data[24], tree_data[25], tree_data[26], tree_data[27], tree_data[28]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 5u; s.where.level = 1u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, tree_data[0]);
     if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[0]); s.where.reflections.x |= 0x1u; }
-    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, tree_data[0]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, tree_data[0]) - view) * weight;
     d = krs_torus_capsule_distance(p, tree_data[11], tree_data[12], tree_data[13], tree_data[14], tree_data[15], tree_data[16], tree_data[17]);

@@ -3,6 +3,7 @@
 // bound of its own zero set found by sampling.
 
 #include "krs/expansion.hpp"
+#include "krs/kernels/capsule.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
@@ -488,6 +489,57 @@ TEST_CASE("sequence validation names the parameter")
     const test_sequence deep = b.build();
     CHECK(deep.instance_count() == std::ldexp(1.0, 64));
     CHECK_THROWS_WITH_AS(krs::expand(deep), doctest::Contains("max_instances"), krs::invalid_parameter);
+}
+
+TEST_CASE("the builder rechecks mirrors and kernels whose public fields were set directly")
+{
+    // Set after construction, these went into the walk unchecked: an axis of 7 indexed past the
+    // fold prefix's three lists, a normal of length 2 doubled every fold, a NaN position made every
+    // distance NaN, a plane normal of length 2 overestimated, and a capsule kept its old axis.
+    krs::axis_sequence<krs::sphere>::builder axis_builder;
+    axis_builder.kernel(krs::sphere({0, 0, 0}, 0.5f));
+    krs::axis_mirror wild(0, 1.5f);
+    wild.axis = 7;
+    CHECK_THROWS_WITH_AS(axis_builder.mirror(wild), doctest::Contains("axis_mirror.axis"), krs::invalid_parameter);
+    krs::axis_mirror unplaced(0, 1.5f);
+    unplaced.twice_position = NAN;
+    CHECK_THROWS_WITH_AS(axis_builder.mirror(unplaced), doctest::Contains("axis_mirror.position"), krs::invalid_parameter);
+    krs::axis_mirror far(0, 1.5f);
+    far.twice_position = 6e9f;
+    CHECK_THROWS_WITH_AS(axis_builder.mirror(far), doctest::Contains("axis_mirror.position"), krs::invalid_parameter);
+    krs::axis_mirror turned(0, 1.5f);
+    turned.axis = 2; // normal and offset still say x
+    CHECK_THROWS_WITH_AS(axis_builder.mirror(turned), doctest::Contains("axis_mirror.normal"), krs::invalid_parameter);
+
+    // A general mirror's normal is normalized, as its constructor does: the walk then equals the
+    // expansion of the same plane built properly.
+    using plane_sequence = krs::sequence<krs::sphere, krs::plane, krs::capsule>;
+    krs::mirror stretched({0, 0, 1}, 0.5f);
+    stretched.normal = {0, 0, 2};
+    krs::plane steep({0, 1, 0}, -3.0f);
+    steep.normal_direction = {0, 2, 0};
+    krs::capsule moved({1, 0, 0}, {1, 1, 0}, 0.1f);
+    moved.b = {1, 0, 1}; // the cached axis still points along y
+    plane_sequence::builder direct, proper;
+    direct.kernel(krs::sphere({0.2f, 0, 0}, 0.2f)).kernel(moved).mirror(stretched).kernel(steep);
+    proper.kernel(krs::sphere({0.2f, 0, 0}, 0.2f))
+        .kernel(krs::capsule({1, 0, 0}, {1, 0, 1}, 0.1f))
+        .mirror(krs::mirror({0, 0, 1}, 0.5f))
+        .kernel(krs::plane({0, 1, 0}, -3.0f));
+    const plane_sequence a = direct.build(), b = proper.build();
+    random_source g(23);
+    for (int k = 0; k < 2000; ++k) {
+        const vec3f p{float(g.uniform(-3, 3)), float(g.uniform(-3, 3)), float(g.uniform(-3, 3))};
+        REQUIRE(a.distance(p) == b.distance(p));
+    }
+    krs::sphere lost({0, 0, 0}, 1.0f);
+    lost.center.x = NAN;
+    CHECK_THROWS_WITH_AS(plane_sequence::builder().kernel(lost), doctest::Contains("sphere.center"), krs::invalid_parameter);
+    // Objects that came through their constructors are kept bit for bit.
+    const krs::mirror turned_plane({0.3f, 0.1f, 0.9f}, 0.7f);
+    CHECK(turned_plane.checked().normal.x == turned_plane.normal.x);
+    CHECK(turned_plane.checked().normal.y == turned_plane.normal.y);
+    CHECK(turned_plane.checked().normal.z == turned_plane.normal.z);
 }
 
 TEST_CASE("sequence memory grows with n and the kernels: not with the 2^n instances")

@@ -16,6 +16,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace {
@@ -207,6 +208,35 @@ TEST_CASE("Algorithm 2: the Lambert shaded value is continuous across a mirror t
     CHECK(largest_ratio > 0.05);     // and the shading does turn there
     // Without interpolation the shaded value jumps at the plane far beyond what the bound allows.
     CHECK(largest_step_jump > 10 * C * h / threshold);
+}
+
+TEST_CASE("Algorithm 2 on a mirror plane with a subnormal threshold, and with bad input")
+{
+    // 1 / threshold overflowed to infinity for a subnormal threshold, and a point on a mirror
+    // (e = 0) weighed 0 * inf = NaN: light NaN. Below float's smallest normal the step is kept.
+    krs::sequence<krs::sphere>::builder b;
+    b.kernel(krs::sphere({0, 0.5f, 0}, 0.3f)).mirror(krs::mirror({1, 0, 0}, 0.0f));
+    const auto s = b.build();
+    const vec3d on_mirror{0, 0.5, 0}, l = krs::normalize(vec3d{0.3, 1, 0.2});
+    for (double threshold : {0.0, 1e-320, 1e-310, 1e-40, 1e-3}) {
+        INFO(threshold);
+        const auto k = krs::shade_in_kernel_space(s, on_mirror, l, l, threshold);
+        REQUIRE(std::isfinite(k.light.x));
+        REQUIRE(std::isfinite(k.light.y));
+        REQUIRE(std::isfinite(k.light.z));
+        // Below double's smallest normal the step keeps the light unit; above it, on the plane,
+        // the ramp's weight is 1/2 (the mean of the light and its reflection).
+        if (threshold < std::numeric_limits<double>::min()) CHECK(std::abs(krs::length(k.light) - 1.0) < 1e-9);
+        else CHECK(krs::length(k.light - (l + krs::mirror({1, 0, 0}, 0.0f).reflect_direction(l)) * 0.5) < 1e-7);
+    }
+    const auto kf = krs::shade_in_kernel_space(s, vec3f{0, 0.5f, 0}, vec3f(l), vec3f(l), 1e-40f);
+    CHECK(std::isfinite(kf.light.x + kf.light.y + kf.light.z));
+    CHECK_THROWS_WITH_AS(krs::shade_in_kernel_space(s, vec3d{NAN, 0, 0}, l, l, 0.1), doctest::Contains("shade_in_kernel_space.x"),
+                         krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::shade_in_kernel_space(s, on_mirror, vec3d{NAN, 0, 0}, l, 0.1),
+                         doctest::Contains("shade_in_kernel_space.to_light"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::shade_in_kernel_space(s, on_mirror, l, vec3d{0, INFINITY, 0}, 0.1),
+                         doctest::Contains("shade_in_kernel_space.to_eye"), krs::invalid_parameter);
 }
 
 TEST_CASE("Algorithm 2 gives axis-aligned mirrors the light of the equivalent general mirrors")
@@ -428,4 +458,19 @@ TEST_CASE("a depth buffer value limits each ray")
     const krs::hit<double> seen = krs::trace_against_depth(s, r, o, proj, forward, proj.buffer_depth(4.5));
     REQUIRE(seen.found);
     CHECK(seen.t == doctest::Approx(4.0).epsilon(1e-5));
+    // Bad input is refused on every path (the early miss used to skip the checks): a NaN buffer
+    // value or min_distance, an invalid floor, a zero or NaN forward axis.
+    CHECK_THROWS_WITH_AS(krs::trace_against_depth(s, r, o, proj, forward, double(NAN)),
+                         doctest::Contains("trace_against_depth.buffer_value"), krs::invalid_parameter);
+    krs::trace_options bad = o;
+    bad.min_distance = NAN;
+    CHECK_THROWS_WITH_AS(krs::trace_against_depth(s, r, bad, proj, forward, proj.buffer_depth(3.0)),
+                         doctest::Contains("trace_options.min_distance"), krs::invalid_parameter);
+    bad = o;
+    bad.threshold_floor = -1;
+    CHECK_THROWS_WITH_AS(krs::trace_against_depth(s, r, bad, proj, forward, proj.buffer_depth(0.01)),
+                         doctest::Contains("trace_options.threshold_floor"), krs::invalid_parameter);
+    for (const vec3d& axis : {vec3d{0, 0, 0}, vec3d{NAN, 0, 1}})
+        CHECK_THROWS_WITH_AS(krs::trace_against_depth(s, r, o, proj, axis, proj.buffer_depth(3.0)),
+                             doctest::Contains("trace_against_depth.forward"), krs::invalid_parameter);
 }

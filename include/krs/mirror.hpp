@@ -65,6 +65,16 @@ struct mirror {
         return mirror(n, float(offset));
     }
 
+    // The same plane through the constructor's checks: the fields are public, and a sequence
+    // builder must not trust them (a normal of length 2 doubled every fold).
+    mirror checked() const
+    {
+        mirror m;
+        m.normal = require_direction_kept_if_unit("mirror.normal", normal);
+        m.offset = require_magnitude("mirror.offset", offset);
+        return m;
+    }
+
     template <class T>
     T signed_distance(const vec3<T>& p) const
     {
@@ -143,6 +153,19 @@ struct axis_mirror {
         twice_position = 2.0f * position;
     }
     float position() const { return 0.5f * twice_position; }
+    // The same mirror rebuilt from axis, position and side through the constructor's checks, with
+    // the public normal and offset required to agree (an axis of 7 indexed past the fold prefix's
+    // three lists; a NaN position made every distance NaN).
+    axis_mirror checked() const
+    {
+        if (axis > 2) throw invalid_parameter("axis_mirror.axis", "must be 0, 1 or 2 (x, y, z)", std::to_string(int(axis)));
+        const axis_mirror rebuilt(axis, require_finite("axis_mirror.position", 0.5f * twice_position), above);
+        if (!(rebuilt.normal.x == normal.x && rebuilt.normal.y == normal.y && rebuilt.normal.z == normal.z &&
+              rebuilt.offset == offset))
+            throw invalid_parameter("axis_mirror.normal", "must be +-e_axis with offset +-position, as axis, position and above say",
+                                    detail::to_text(normal));
+        return rebuilt;
+    }
     // The same plane as a general mirror (for code that needs one, and for tests).
     mirror general() const { return mirror(normal, offset); }
 
@@ -232,6 +255,7 @@ concept mirror_kind = requires(const M& m, const vec3f& pf, const vec3d& pd) {
     { m.reflect(pf) } -> std::same_as<vec3f>;
     { m.signed_distance(pd) } -> std::same_as<double>;
     { m.reflect_direction(pf) } -> std::same_as<vec3f>;
+    { m.checked() } -> std::same_as<M>;
 };
 
 } // namespace krs

@@ -290,7 +290,11 @@ public:
         requires(std::same_as<std::remove_cvref_t<K>, Kinds> || ...)
     builder& kernel(K&& k)
     {
-        levels_.back().push_back(kernel_variant(std::forward<K>(k)));
+        // A kind with public fields is rebuilt through its constructor's checks (checked()).
+        if constexpr (requires { { k.checked() } -> std::same_as<std::remove_cvref_t<K>>; })
+            levels_.back().push_back(kernel_variant(k.checked()));
+        else
+            levels_.back().push_back(kernel_variant(std::forward<K>(k)));
         return *this;
     }
     // Closes the current level with its mirror R_i; later kernels belong to level i + 1.
@@ -300,9 +304,11 @@ public:
             throw invalid_parameter("sequence.mirror", "at most " + std::to_string(max_levels) + " mirrors are allowed",
                                     std::to_string(mirrors_.size() + 1));
         require_direction("sequence.mirror.normal", m.normal);
-        // The fields are public, so a mirror may not have been through its constructor's checks.
+        // The fields are public, so a mirror may not have been through its constructor's checks:
+        // it is rebuilt through them (a general mirror's normal normalized, an axis mirror's
+        // axis, position and side checked against its normal and offset).
         require_magnitude("sequence.mirror.offset", m.offset);
-        mirrors_.push_back(m);
+        mirrors_.push_back(m.checked());
         levels_.emplace_back();
         return *this;
     }

@@ -73,7 +73,14 @@ template <field F, std::floating_point S>
 hit<S> trace_against_depth(const F& f, const ray<S>& r, trace_options options, const depth_projection& projection,
                            const vec3<S>& forward, S buffer_value)
 {
+    // Validated up front: the early miss below returned without a look at them (a NaN buffer value
+    // or min_distance was a silent miss, a zero forward axis dropped the depth limit).
     projection.validate();
+    options.validate();
+    require_finite("trace_against_depth.buffer_value", buffer_value);
+    require_finite("trace_against_depth.forward", forward);
+    if (!(length_squared(forward) > S(0)))
+        throw invalid_parameter("trace_against_depth.forward", "must be a non-zero direction", detail::to_text(forward));
     const S limit = t_of_view_depth(projection.view_depth(buffer_value), r.direction, forward);
     options.max_distance = float(std::min<S>(limit, S(options.max_distance)));
     if (!(options.max_distance > options.min_distance)) {
@@ -81,7 +88,7 @@ hit<S> trace_against_depth(const F& f, const ray<S>& r, trace_options options, c
         h.t = std::numeric_limits<S>::infinity();
         return h; // the raster is in front of where marching would start
     }
-    return sphere_trace(f, r, options.validate());
+    return sphere_trace(f, r, options);
 }
 
 } // namespace krs

@@ -5,6 +5,7 @@
 
 #include "krs/core/vec3.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -158,6 +159,28 @@ inline vec3f require_direction(std::string_view name, const vec3f& v)
     if (!(len > 1e-30)) throw invalid_parameter(name, "must be a non-zero direction", detail::to_text(v));
     const vec3d u = d / len;
     return vec3f{float(u.x), float(u.y), float(u.z)};
+}
+
+// A double direction: finite and not zero, returned unit. Scaled by its largest component first,
+// so no square overflows or underflows (a normal of (0, 1e160, 0) had a length of infinity and
+// became (0, 0, 0); one of (1e-170, 0, 0) a length of 0, refused as zero).
+inline vec3d require_direction(std::string_view name, const vec3d& v)
+{
+    require_finite(name, v);
+    const double scale = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+    if (!(scale > 0)) throw invalid_parameter(name, "must be a non-zero direction", detail::to_text(v));
+    const vec3d u = v / scale;
+    return u / length(u);
+}
+
+// The same check for a direction that may already be unit (one a constructor normalized): kept
+// as it is when its length is 1 to within a few float ulps, so rechecking a built object leaves
+// it bit for bit the same; normalized as above otherwise.
+inline vec3f require_direction_kept_if_unit(std::string_view name, const vec3f& v)
+{
+    require_finite(name, v);
+    if (std::abs(length(vec3d(v)) - 1.0) <= 4e-7) return v;
+    return require_direction(name, v);
 }
 
 } // namespace krs

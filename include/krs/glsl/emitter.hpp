@@ -581,7 +581,8 @@ private:
                "    s.where = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));\n"
                "    s.light = toLight;\n    s.view = toEye;\n"
                "    vec3 light = toLight;\n    vec3 view = toEye;\n"
-               "    float inverse = threshold > 0.0 ? 1.0 / threshold : 0.0;\n"
+               "    bool ramp = threshold >= 1.17549435e-38;\n"  // as the C++: below float's smallest normal, the step
+               "    float inverse = ramp ? 1.0 / threshold : 0.0;\n"
                "    float d;\n    float e;\n    float weight;\n";
         for (std::size_t i = n + 1; i-- > 0;) {
             if (i < n) {
@@ -589,7 +590,7 @@ private:
                 body += "    e = " + mirror_fn + "signed_distance(p, " + m + ");\n"
                         "    if (e > 0.0) { p = " + mirror_fn + "reflect(p, " + m + "); s.where.reflections" + bit(i) +
                         " }\n"
-                        "    weight = threshold > 0.0 ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);\n"
+                        "    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);\n"
                         "    light = light + (" + mirror_fn + "reflect_direction(light, " + m + ") - light) * weight;\n"
                         "    view = view + (" + mirror_fn + "reflect_direction(view, " + m + ") - view) * weight;\n";
             }

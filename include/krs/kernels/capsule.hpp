@@ -51,6 +51,10 @@ struct capsule {
         return ap - ab * t;
     }
 
+    // The same capsule rebuilt through the constructor (the ends and radius are public; the axis
+    // and its inverse length kept below would be stale after a change to them).
+    capsule checked() const { return capsule(a, b, radius); }
+
     template <class T>
     T distance(const vec3<T>& p) const
     {

@@ -40,6 +40,16 @@ struct plane {
         return result;
     }
 
+    // The same half-space through the constructor's checks (the fields are public: a normal of
+    // length 2 doubled the distance, which then overestimated).
+    plane checked() const
+    {
+        plane p;
+        p.normal_direction = require_direction_kept_if_unit("plane.normal", normal_direction);
+        p.offset = require_magnitude("plane.offset", offset);
+        return p;
+    }
+
     template <class T>
     T distance(const vec3<T>& p) const
     {

@@ -22,6 +22,9 @@ struct sphere {
     {
     }
 
+    // The same sphere through the constructor's checks (the fields are public).
+    sphere checked() const { return sphere(center, radius); }
+
     template <class T>
     T distance(const vec3<T>& p) const
     {

@@ -29,6 +29,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <variant>
 
 namespace krs {
@@ -63,11 +64,17 @@ kernel_space_shading<S> shade_in_kernel_space(const basic_sequence<Mirror, Kinds
                                               const vec3<S>& to_light, const vec3<S>& to_eye, S threshold)
 {
     require_non_negative("shade_in_kernel_space.threshold", threshold);
+    require_finite("shade_in_kernel_space.x", x);
+    require_finite("shade_in_kernel_space.to_light", to_light);
+    require_finite("shade_in_kernel_space.to_eye", to_eye);
     const std::size_t n = s.mirror_count();
     kernel_space_shading<S> out;
     location<S>& where = out.where;
     vec3<S> p = x, light = to_light, view = to_eye;
-    const S inverse = threshold > S(0) ? S(1) / threshold : S(0);
+    // A threshold below the smallest normal number keeps the step: its inverse would overflow to
+    // infinity, and a point on a mirror (e = 0) would weigh 0 * inf = NaN.
+    const bool ramp = threshold >= std::numeric_limits<S>::min();
+    const S inverse = ramp ? S(1) / threshold : S(0);
     for (std::size_t i = n + 1; i-- > 0;) {
         if (i < n) {
             const Mirror& m = s.mirrors()[i];
@@ -78,7 +85,7 @@ kernel_space_shading<S> shade_in_kernel_space(const basic_sequence<Mirror, Kinds
             }
             // Weight of the reflected light: the step function b_i widened into a ramp of width
             // threshold centered on the plane (threshold 0 keeps the step).
-            const S weight = threshold > S(0) ? std::clamp(e * inverse + S(0.5), S(0), S(1)) : (e > S(0) ? S(1) : S(0));
+            const S weight = ramp ? std::clamp(e * inverse + S(0.5), S(0), S(1)) : (e > S(0) ? S(1) : S(0));
             light = light + (m.reflect_direction(light) - light) * weight;
             view = view + (m.reflect_direction(view) - view) * weight;
         }
