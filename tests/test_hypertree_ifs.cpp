@@ -566,6 +566,54 @@ TEST_CASE("hypertree refuses impossible definitions with named parameters")
             (void)build_tree<index_list_store>(t, 1);
         }, "ifs.iterations");
     }
+    // Near 2^64 the cycle count wrapped to 0: an empty tree instead of a refusal.
+    for (const std::uint64_t iterations : {~std::uint64_t(0), ~std::uint64_t(0) - 3}) {
+        refuses([iterations] {
+            auto t = presets::tree_c(64);
+            t.iterations = iterations;
+            (void)build_tree<index_list_store>(t, 1);
+        }, "ifs.iterations");
+    }
+    // Stem radii beyond the magnitude policy (their squares overflowed; see the cone test below).
+    refuses([] { (cone{1, 0.0, 1.0, 1e200, 1e200}).validate(); }, "cone.bottom_radius");
+    refuses([] { (cone{1, 0.0, 1.0, 0.1, 2e9}).validate(); }, "cone.top_radius");
+    refuses([] { (cone{1, -2e9, 1.0, 0.1, 0.1}).validate(); }, "cone.bottom");
+}
+
+TEST_CASE("hypertree generation edge cases: one chunk of 2^64 - 1 cycles, tiny stems, huge and tiny directions")
+{
+    // A chunk size of 2^64 - 1 (asking for one chunk) wrapped the chunk count to 0: no hits.
+    auto t = presets::tree_a(40);
+    t.iterations = 3000;
+    generation_options one_chunk;
+    one_chunk.chunk_cycles = ~std::uint64_t(0);
+    const generated_hits all = generate(t, 5, one_chunk), usual = generate(t, 5);
+    CHECK(all.hits.size() > 1000);
+    CHECK(all.stats.cycles == usual.stats.cycles);
+    // Stems of radius 1e-200: u r_max^2 >= r^2 underflowed to 0 >= 0 and the sampler never
+    // accepted a height (build_tree hung). The stem is then a line of voxels along the axis.
+    auto thin = presets::tree_a(40);
+    thin.iterations = 60;
+    thin.condensations[0].stem.bottom_radius = 1e-200;
+    thin.condensations[0].stem.top_radius = 0;
+    CHECK(build_tree<index_list_store>(thin, 1).nonempty_count() > 0);
+    const cone needle{1, 0.0, 1.0, 1e-170, 1e-300};
+    random_stream r(9);
+    for (int i = 0; i < 1000; ++i) {
+        const vec3d p = needle.sample(r);
+        REQUIRE(p.y >= 0.0);
+        REQUIRE(p.y <= 1.0);
+        REQUIRE(std::hypot(p.x, p.z) <= 1e-170);
+    }
+    // Directions are normalized without squaring their size: a rotation about (0, 0, 1e200) had
+    // a length of infinity, its axis became (0, 0, 0) and the rotation a collapse to cos(a) I.
+    const rotate huge({0, 0, 1e200}, 0.7), unit({0, 0, 1}, 0.7), tiny({0, 0, 1e-200}, 0.7);
+    for (const rotate* r2 : {&huge, &tiny}) {
+        REQUIRE(r2->axis.z == doctest::Approx(1.0));
+        const affine_map a = r2->map_at(1), b = unit.map_at(1);
+        const vec3d p{1, 2, 3};
+        CHECK(krs::length(a(p) - b(p)) < 1e-12);
+    }
 }
 
 TEST_CASE("hypertree non-contractive transforms run when allowed and count escapes")

@@ -1277,6 +1277,14 @@ TEST_CASE("regions refuse impossible parameters and set refuses a result over bu
     CHECK_THROWS_AS(hypertree::sphere_region({0, 0, 0}, -1.0), krs::invalid_parameter);
     CHECK_THROWS_AS(hypertree::sphere_region(nan, 1.0), krs::invalid_parameter);
     CHECK_THROWS_AS(hypertree::half_space_region({0, 0, 0}, {0, 0, 0}), krs::invalid_parameter);
+    // Huge and tiny normals are directions like any other: (0, 1e160, 0) overflowed its length to
+    // infinity and became (0, 0, 0), which contains every point (a clear wiped the store), and
+    // (1e-170, 0, 0) underflowed to 0 and was refused.
+    const hypertree::half_space_region huge({0, 100, 0}, {0, 1e160, 0}), tiny({0, 0, 0}, {1e-170, 0, 0});
+    CHECK(huge.normal.y == 1.0);
+    CHECK_FALSE(huge.contains({0, 0, 0}));
+    CHECK(huge.contains({0, 101, 0}));
+    CHECK(tiny.normal.x == 1.0);
     CHECK_THROWS_AS(hypertree::half_space_region({0, 0, 0}, nan), krs::invalid_parameter);
 
     const auto store = hypertree::index_list_store::build(small_volume, {});

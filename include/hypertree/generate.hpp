@@ -415,6 +415,20 @@ double voxels_per_generator(const ifs<P>& definition)
                                            : 3.0 * std::ceil(definition.generator.length() / definition.volume.smallest_voxel_side()) + 3.0;
 }
 
+namespace detail {
+// ceil(a / b) without the overflow of (a + b - 1) / b: near 2^64 that sum wrapped, so an
+// iteration count of 2^64 - 1 made 0 cycles (an empty tree instead of a refusal) and a chunk
+// size of 2^64 - 1, a natural way to ask for one chunk, made 0 chunks.
+inline std::uint64_t divide_up(std::uint64_t a, std::uint64_t b) { return a / b + (a % b != 0 ? 1 : 0); }
+} // namespace detail
+
+// Generation cycles: each runs tree_depth iterations, so iterations / tree_depth rounded up.
+template <transform_pipeline P>
+std::uint64_t cycle_count(const ifs<P>& definition)
+{
+    return detail::divide_up(definition.iterations, std::uint64_t(definition.tree_depth));
+}
+
 // What generate_chunks checks before it allocates anything, and how many chunks it makes: the
 // definition itself, the chunk size, and the memory budget against the most hits the run can
 // record. Callers that size their own per-chunk lists (build_tree) call it first too.
@@ -422,8 +436,8 @@ template <transform_pipeline P>
 std::uint64_t planned_chunk_count(const ifs<P>& definition, const generation_options& options)
 {
     definition.validate();
+    const std::uint64_t cycles = cycle_count(definition);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
-    const std::uint64_t cycles = (definition.iterations + depth - 1) / depth;
     const double worst_bytes = double(cycles) * double(depth) * voxels_per_generator(definition) * double(sizeof(hit));
     if (worst_bytes > double(options.budget.bytes))
         throw krs::invalid_parameter("ifs.iterations",
@@ -431,7 +445,7 @@ std::uint64_t planned_chunk_count(const ifs<P>& definition, const generation_opt
                                          std::to_string(options.budget.bytes) + " bytes",
                                      std::to_string(definition.iterations));
     if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
-    return (cycles + options.chunk_cycles - 1) / options.chunk_cycles;
+    return detail::divide_up(cycles, options.chunk_cycles);
 }
 
 struct no_after_chunk {
@@ -447,7 +461,7 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
     const std::uint64_t chunks = planned_chunk_count(definition, options);
     const drawn_ifs<P> tree(definition, seed);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
-    const std::uint64_t cycles = (definition.iterations + depth - 1) / depth;
+    const std::uint64_t cycles = cycle_count(definition);
     const double voxels_per_line = voxels_per_generator(definition);
     // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
     const std::optional<lane_tables> lanes_in_step =

@@ -372,8 +372,9 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
         for (__mmask8 pending = alive; pending;) {
             const __m512d tt = uniform(pending), rr = _mm512_add_pd(r0, _mm512_mul_pd(_mm512_sub_pd(r1, r0), tt));
             t = _mm512_mask_mov_pd(t, pending, tt), radius = _mm512_mask_mov_pd(radius, pending, rr);
-            const __m512d v = _mm512_mul_pd(_mm512_mul_pd(uniform(pending), r_max), r_max);
-            pending &= _mm512_cmp_pd_mask(v, _mm512_mul_pd(rr, rr), _CMP_GE_OQ);
+            // uniform >= (r / r_max)^2, the scalar sampler's test operation for operation.
+            const __m512d v = uniform(pending), share = _mm512_div_pd(rr, r_max);
+            pending &= _mm512_cmp_pd_mask(v, _mm512_mul_pd(share, share), _CMP_GE_OQ);
         }
         __m512d a = _mm512_setzero_pd(), b = a;
         const __m512d two = _mm512_set1_pd(2.0);

@@ -163,12 +163,7 @@ struct half_space_region {
     half_space_region(const vec3d& point_, const vec3d& normal_) : point(point_), normal(normal_)
     {
         krs::require_finite("half_space_region.point", point_);
-        krs::require_finite("half_space_region.normal", normal_);
-        const double len = krs::length(normal_);
-        if (!(len > 1e-300))
-            throw invalid_parameter("half_space_region.normal", "must be a non-zero direction",
-                                    krs::detail::to_text(normal_));
-        normal = normal_ / len;
+        normal = krs::require_direction("half_space_region.normal", normal_);
     }
     bool contains(const vec3d& p) const { return krs::dot(p - point, normal) >= 0; }
     // The box of the hypervolume's part inside the half-space: of the box's corners inside and

@@ -28,11 +28,11 @@ struct cone {
     void validate() const
     {
         if (axis < 0 || axis > 2) throw krs::invalid_parameter("cone.axis", "must be 0 (x), 1 (y) or 2 (z)", std::to_string(axis));
-        krs::require_finite("cone.bottom", bottom);
-        krs::require_finite("cone.top", top);
+        krs::require_magnitude("cone.bottom", bottom);
+        krs::require_magnitude("cone.top", top);
         if (!(top > bottom)) throw krs::invalid_parameter("cone.top", "must be above cone.bottom", krs::detail::to_text(top));
-        krs::require_non_negative("cone.bottom_radius", bottom_radius);
-        krs::require_non_negative("cone.top_radius", top_radius);
+        krs::require_length("cone.bottom_radius", bottom_radius);
+        krs::require_length("cone.top_radius", top_radius);
         if (!(bottom_radius > 0 || top_radius > 0))
             throw krs::invalid_parameter("cone.bottom_radius", "and cone.top_radius must not both be 0 (the stem would have no volume)", "0");
     }
@@ -47,12 +47,15 @@ struct cone {
         // (r(t) / r_max)^2, the cross-section's share, and a disc point comes from the square
         // around it. Exactly uniform in volume, and cheaper than the inverse-CDF form (a cube root,
         // a sine and a cosine per sample): the generator draws one sample per cycle.
+        // The share is taken as (r(t) / r_max)^2, in [0, 1]: as u r_max^2 >= r(t)^2 both sides
+        // underflowed to 0 for radii of 1e-200 (0 >= 0 rejected every height: the generator hung).
         const double r0 = bottom_radius, r1 = top_radius, r_max = std::max(r0, r1);
-        double t, radius;
+        double t, radius, share;
         do {
             t = random.uniform();
             radius = r0 + (r1 - r0) * t;
-        } while (random.uniform() * r_max * r_max >= radius * radius);
+            share = radius / r_max;
+        } while (random.uniform() >= share * share);
         double a, b;
         do {
             a = random.symmetric(), b = random.symmetric();

@@ -20,10 +20,7 @@ struct rotate {
     rotate() = default;
     rotate(const vec3d& axis_, parameter angle_) : axis(axis_), angle(angle_)
     {
-        krs::require_finite("rotate.axis", axis);
-        const double len = krs::length(axis);
-        if (!(len > 1e-12)) throw krs::invalid_parameter("rotate.axis", "must be a non-zero direction", krs::detail::to_text(axis));
-        axis = axis / len;
+        axis = krs::require_direction("rotate.axis", axis_);
         validate();
     }
 
