@@ -63,6 +63,26 @@ krs::trace_options primary_options(const krs::pinhole_camera& c)
     return o;
 }
 
+// Runs the prepass of every 8 x 8 tile of the camera's image (partial tiles at its edges), then
+// per_ray(r, x, y, start) for each pixel ray of the tile and per_tile(prepass, x0, y0, x1, y1).
+template <class PerRay, class PerTile>
+void for_each_prepassed_ray(const scene& s, const krs::pinhole_camera& camera, const krs::trace_options& o, PerRay&& per_ray,
+                            PerTile&& per_tile)
+{
+    const int width = camera.width(), height = camera.height(), tile = 8;
+    for (int y0 = 0; y0 < height; y0 += tile)
+        for (int x0 = 0; x0 < width; x0 += tile) {
+            const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
+            const krs::tile_prepass pre = krs::prepass_tile(s, camera, x0, y0, x1, y1, o);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+                    per_ray(r, x, y, pre.start_for(r));
+                }
+            per_tile(pre, x0, y0, x1, y1);
+        }
+}
+
 } // namespace
 
 TEST_CASE("refilling packet stream equals the scalar tracer per ray")
@@ -162,57 +182,51 @@ TEST_CASE("plain packets with partial lanes at the image edge equal the scalar t
 TEST_CASE("tile prepass never starts a ray past its first hit")
 {
     const scene s = grove();
-    const int width = 61, height = 45, tile = 8;
+    const int width = 61, height = 45;
     long long rays = 0, advanced = 0, hits = 0, near_misses = 0;
     double skipped = 0;
     for (int k = 0; k < 4; ++k) {
         const krs::pinhole_camera camera = view(k + 3, width, height);
         const krs::trace_options o = primary_options(camera);
-        for (int y0 = 0; y0 < height; y0 += tile)
-            for (int x0 = 0; x0 < width; x0 += tile) {
-                const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
-                const krs::tile_prepass pre = krs::prepass_tile(s, camera, x0, y0, x1, y1, o);
-                for (int y = y0; y < y1; ++y)
-                    for (int x = x0; x < x1; ++x) {
-                        const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
-                        const float start = pre.start_for(r);
-                        const krs::hit<float> h = krs::sphere_trace(s, r, o);
-                        // Independent check: march the segment [0, start] in tiny steps; the
-                        // field stays above the hit threshold everywhere on it.
-                        for (float t = 0; t < start; t += 0.02f)
-                            REQUIRE(s.distance(krs::point_at(r, t)) >= o.threshold(t));
-                        REQUIRE(s.distance(krs::point_at(r, start)) >= o.threshold(start));
-                        if (h.found) {
-                            REQUIRE(start <= h.t);
-                            ++hits;
-                        }
-                        // The prepass-started ray may step over a near miss where plain tracing
-                        // stopped (their samples differ), but never through the surface: the
-                        // field stays positive on everything it skipped.
-                        const krs::hit<float> hp = krs::sphere_trace(s, r, start, o.max_distance, o);
-                        if (h.found && (!hp.found || hp.t > h.t + 2 * o.threshold(h.t))) {
-                            ++near_misses;
-                            // Steps of half the distance (at least 1e-4, thinner than any kernel)
-                            // would land inside a surface the ray crossed.
-                            const float end = hp.found ? hp.t : o.max_distance;
-                            for (float t = h.t; t < end;) {
-                                const float d = s.distance(krs::point_at(r, t));
-                                REQUIRE(d > 0.0f);
-                                t += std::max(0.5f * d, 1e-4f);
-                            }
-                        }
-                        advanced += start > o.min_distance ? 1 : 0;
-                        skipped += start;
-                        ++rays;
-                    }
-                // The packet walk of the stored spheres equals the scalar one.
-                alignas(64) float xs[lanes];
-                for (std::size_t i = 0; i < lanes; ++i) xs[i] = float(x0 + int(i) % (x1 - x0)) + 0.5f;
-                const float yc = float(y0) + 0.5f;
-                const P sp = pre.start_for(camera.primary_ray(P::load_aligned(xs), P(yc)));
-                for (std::size_t i = 0; i < lanes; ++i)
-                    REQUIRE(krs::lane_at(sp, i) == doctest::Approx(pre.start_for(camera.primary_ray(xs[i], yc))).epsilon(1e-5));
+        const auto per_ray = [&](const krs::ray<float>& r, int, int, float start) {
+            const krs::hit<float> h = krs::sphere_trace(s, r, o);
+            // Independent check: march the segment [0, start] in tiny steps; the field stays
+            // above the hit threshold everywhere on it.
+            for (float t = 0; t < start; t += 0.02f) REQUIRE(s.distance(krs::point_at(r, t)) >= o.threshold(t));
+            REQUIRE(s.distance(krs::point_at(r, start)) >= o.threshold(start));
+            if (h.found) {
+                REQUIRE(start <= h.t);
+                ++hits;
             }
+            // The prepass-started ray may step over a near miss where plain tracing stopped
+            // (their samples differ), but never through the surface: the field stays positive on
+            // everything it skipped.
+            const krs::hit<float> hp = krs::sphere_trace(s, r, start, o.max_distance, o);
+            if (h.found && (!hp.found || hp.t > h.t + 2 * o.threshold(h.t))) {
+                ++near_misses;
+                // Steps of half the distance (at least 1e-4, thinner than any kernel) would land
+                // inside a surface the ray crossed.
+                const float end = hp.found ? hp.t : o.max_distance;
+                for (float t = h.t; t < end;) {
+                    const float d = s.distance(krs::point_at(r, t));
+                    REQUIRE(d > 0.0f);
+                    t += std::max(0.5f * d, 1e-4f);
+                }
+            }
+            advanced += start > o.min_distance ? 1 : 0;
+            skipped += start;
+            ++rays;
+        };
+        // The packet walk of the stored spheres equals the scalar one.
+        const auto per_tile = [&](const krs::tile_prepass& pre, int x0, int y0, int x1, int) {
+            alignas(64) float xs[lanes];
+            for (std::size_t i = 0; i < lanes; ++i) xs[i] = float(x0 + int(i) % (x1 - x0)) + 0.5f;
+            const float yc = float(y0) + 0.5f;
+            const P sp = pre.start_for(camera.primary_ray(P::load_aligned(xs), P(yc)));
+            for (std::size_t i = 0; i < lanes; ++i)
+                REQUIRE(krs::lane_at(sp, i) == doctest::Approx(pre.start_for(camera.primary_ray(xs[i], yc))).epsilon(1e-5));
+        };
+        for_each_prepassed_ray(s, camera, o, per_ray, per_tile);
     }
     CHECK(rays >= 10000);
     CHECK(hits > 2000);
@@ -235,27 +249,20 @@ TEST_CASE("tile prepass at high resolution and at wide angles")
         const vec3f eye{6.0f * std::sin(a) + 1.5f, 1.0f + 0.4f * float(k % 3), -6.0f * std::cos(a) + 1.5f};
         const krs::pinhole_camera camera(eye, {1.5f, 0.3f, 1.5f}, {0, 1, 0}, 10.0f, width, height);
         const krs::trace_options o = primary_options(camera);
-        for (int y0 = 0; y0 < height; y0 += tile)
-            for (int x0 = 0; x0 < width; x0 += tile) {
-                const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
-                const krs::tile_prepass pre = krs::prepass_tile(s, camera, x0, y0, x1, y1, o);
-                for (int y = y0; y < y1; ++y)
-                    for (int x = x0; x < x1; ++x) {
-                        const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
-                        const float start = pre.start_for(r);
-                        const float d = s.distance(krs::point_at(r, start)), threshold = o.threshold(start);
-                        ++rays;
-                        // A start at the threshold to within float rounding is fine; below by
-                        // more means the prepass moved the ray into a near miss or the solid.
-                        if (d < threshold * (1.0f - 1e-3f)) ++below;
-                        if (d >= threshold && (x + y) % 16 != 0) continue; // trace a sample, and every doubtful ray
-                        ++traced;
-                        const krs::hit<float> h = krs::sphere_trace(s, r, o);
-                        const krs::hit<float> hp = krs::sphere_trace(s, r, start, o.max_distance, o);
-                        if (h.found && !hp.found) ++lost;
-                        if (h.found && hp.found && hp.t > h.t + 2 * o.threshold(h.t)) ++late;
-                    }
-            }
+        const auto per_ray = [&](const krs::ray<float>& r, int x, int y, float start) {
+            const float d = s.distance(krs::point_at(r, start)), threshold = o.threshold(start);
+            ++rays;
+            // A start at the threshold to within float rounding is fine; below by more means
+            // the prepass moved the ray into a near miss or the solid.
+            if (d < threshold * (1.0f - 1e-3f)) ++below;
+            if (d >= threshold && (x + y) % 16 != 0) return; // trace a sample, and every doubtful ray
+            ++traced;
+            const krs::hit<float> h = krs::sphere_trace(s, r, o);
+            const krs::hit<float> hp = krs::sphere_trace(s, r, start, o.max_distance, o);
+            if (h.found && !hp.found) ++lost;
+            if (h.found && hp.found && hp.t > h.t + 2 * o.threshold(h.t)) ++late;
+        };
+        for_each_prepassed_ray(s, camera, o, per_ray, [](const krs::tile_prepass&, int, int, int, int) {});
     }
     CHECK(rays == 3LL * width * height);
     CHECK(traced > rays / 20);
