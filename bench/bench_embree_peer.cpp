@@ -644,12 +644,7 @@ int main(int argc, char** argv)
             return 2;
         }
     }
-    if (opt.csv_path.empty()) {
-        const std::string self = argv[0];
-        const std::size_t slash = self.find_last_of('/');
-        opt.csv_path =
-            (slash == std::string::npos ? std::string(".") : self.substr(0, slash)) + "/bench_embree_peer.csv";
-    }
+    if (opt.csv_path.empty()) opt.csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(opt.csv_path);
     if (!csv) {
         std::fprintf(stderr, "bench_embree_peer: cannot write %s\n", opt.csv_path.c_str());

@@ -3,6 +3,7 @@
 // counts and depths section 11 gives), at resolutions 100, 300 and 1000.
 //
 //     bench_hypertree_create [--csv FILE] [--repeat R] [--threads T] [--budget-mib M]
+//     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
 // Creation is one build_tree call, generate + validate (compact), both on T threads (default all
 // cores), + density classes + building the store, best of R calls (default 5; 2 at resolution
@@ -26,6 +27,7 @@
 #include "hypertree/store/dense_store.hpp"
 #include "hypertree/store/index_list_store.hpp"
 #include "hypertree/store/partitioned_store.hpp"
+#include "support/text.hpp"
 #include "support/timing.hpp"
 
 #include <algorithm>
@@ -82,7 +84,7 @@ struct row {
 
 int main(int argc, char** argv)
 {
-    std::string csv_path = "bench_hypertree_create.csv";
+    std::string csv_path;
     int repeat = 5;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     std::size_t budget_mib = 1024;
@@ -207,6 +209,7 @@ int main(int argc, char** argv)
                 worst_share <= 0.05 ? "met" : "NOT met");
     std::printf("        (index list + bit array: worst %.2f%% of the dense array)\n", worst_bit_share * 100);
 
+    if (csv_path.empty()) csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(csv_path);
     csv << "tree,resolution,store,generate_s,compact_s,classify_s,build_s,creation_s,no_scratch_s,hits,voxels,memory_bytes,paper_creation_s,"
            "paper_memory_bytes\n";

@@ -2,6 +2,7 @@
 // against error for the raymarcher's settings (DESIGN rule 5).
 //
 //     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error]
+//     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
 // Table: trees A-D (hypertree/presets.hpp) in a 300 x 300 image, at resolution 100 without
 // supersampling and at 300 with factor 2 (the paper's two settings), for each store kind, on T
@@ -20,6 +21,7 @@
 
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
+#include "support/text.hpp"
 #include "support/timing.hpp"
 
 #include <algorithm>
@@ -69,7 +71,7 @@ std::vector<stored_voxel> classified(const ifs<>& tree, std::uint64_t seed)
 
 int main(int argc, char** argv)
 {
-    std::string csv_path = "bench_hypertree_render.csv", only;
+    std::string csv_path, only;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     int size = 200;
     for (int i = 1; i < argc; ++i) {
@@ -88,6 +90,7 @@ int main(int argc, char** argv)
             return 2;
         }
     }
+    if (csv_path.empty()) csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(csv_path);
     csv << "table,tree,resolution,supersampling,store,marcher,setting,seconds,lookups,rmse,paper_seconds\n";
 

@@ -2,6 +2,7 @@
 // OpenVDB grid holding the same voxels (issue 9, part 3). Built only with -DKRS_BENCH_OPENVDB=ON.
 //
 //     bench_openvdb_peer [--csv FILE] [--threads T] [--size N] [--resolution R] [--trees ABCD]
+//     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //                        [--queries Q] [--step S] [--shade per-sample|per-voxel]
 //
 // For each tree (hypertree/presets.hpp, resolution R, default 300) the classified voxel list is
@@ -39,6 +40,7 @@
 // Timings are the best of 4 renders and include only the rendering (the marcher's brick copy
 // and the intersector's bool tree are built once, timed apart as "setup").
 
+#include "support/text.hpp"
 #include "support/timing.hpp"
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
@@ -216,7 +218,7 @@ std::string number(double v, const char* format = "%.6g")
 
 int main(int argc, char** argv)
 {
-    std::string csv_path = "bench_openvdb_peer.csv", trees = "ABCD";
+    std::string csv_path, trees = "ABCD";
     unsigned threads = 2;
     int size = 300, res = 300;
     std::size_t queries = std::size_t(1) << 20;
@@ -415,6 +417,7 @@ int main(int argc, char** argv)
                 "OpenVDB's -> %s\n",
                 memory_met ? "met" : "NOT met", speed_met ? "met" : "NOT met");
 
+    if (csv_path.empty()) csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(csv_path);
     csv << "tree,resolution,structure,nonempty,memory_bytes,skipping_bytes,access_nonempty_ns,access_any_ns,setup_ms,render_scalar_ms,"
            "render_packet_ms,image_rmse,image_max_difference,image_differing_share,threads,image_size,step_factor,library_shading\n";

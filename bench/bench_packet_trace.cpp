@@ -508,12 +508,8 @@ int main(int argc, char** argv)
             return 2;
         }
     }
-    if (csv_path.empty()) {
-        const std::string self = argv[0];
-        const std::size_t slash = self.find_last_of('/');
-        // Named after the executable, so the 8-lane build (bench_packet_trace_avx2) keeps its own.
-        csv_path = (slash == std::string::npos ? std::string(".") + "/" + self : self) + ".csv";
-    }
+    // Named after the executable, so the 8-lane build (bench_packet_trace_avx2) keeps its own.
+    if (csv_path.empty()) csv_path = bench::csv_next_to_executable(argv[0]);
     csv_writer csv;
     csv.file.open(csv_path);
     if (!csv.file) {

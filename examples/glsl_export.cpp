@@ -52,14 +52,16 @@ int main(int argc, char** argv)
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "-h" || a == "--help") return usage(nullptr), 0;
+        std::string* value = a == "--scene" ? &scene
+                             : a == "--target" ? &target
+                             : a == "--mode"   ? &mode
+                             : a == "--output" ? &output
+                             : a == "--all"    ? &all
+                                               : nullptr;
+        // The name first: an unknown option is reported as one, not as missing its value.
+        if (!value) return usage(("unknown option " + a).c_str());
         if (i + 1 >= argc) return usage(("missing value after " + a).c_str());
-        const std::string v = argv[++i];
-        if (a == "--scene") scene = v;
-        else if (a == "--target") target = v;
-        else if (a == "--mode") mode = v;
-        else if (a == "--output") output = v;
-        else if (a == "--all") all = v;
-        else return usage(("unknown option " + a).c_str());
+        *value = argv[++i];
     }
     try {
         if (!all.empty()) {
@@ -67,8 +69,9 @@ int main(int argc, char** argv)
             int count = 0;
             ex::for_each_scene([&](const auto& s) {
                 for (const ex::file_kind& kind : ex::files) {
-                    ok = write(all + "/" + s.name + std::string(kind.suffix), ex::file_text(s, kind)) && ok;
-                    ++count;
+                    const bool written = write(all + "/" + s.name + std::string(kind.suffix), ex::file_text(s, kind));
+                    ok = written && ok;
+                    count += written ? 1 : 0; // only what reached the disk
                 }
             });
             std::fprintf(stderr, "glsl_export: wrote %d files to %s\n", count, all.c_str());

@@ -104,7 +104,9 @@ int main(int argc, char** argv)
                             "[--supersampling S|auto] [--density-scale K] [--threads N] [--seed N] [--output FILE.png] "
                             "[--save-volume FILE]");
     bool store_given = false;
+    int sources = 0; // --tree, --forest and --preset given: one at most (a second was ignored without a word)
     for (std::string a; args.next(a);) {
+        if (a == "--tree" || a == "--forest" || a == "--preset") ++sources;
         if (a == "--tree") o.tree_file = args.text("--tree");
         else if (a == "--forest") o.forest_file = args.text("--forest");
         else if (a == "--preset") {
@@ -134,6 +136,7 @@ int main(int argc, char** argv)
         }
         else args.unknown(a);
     }
+    if (sources > 1) args.fail("give one of --tree, --forest and --preset, once");
 
     try {
         build_options options;

@@ -21,11 +21,16 @@ class arguments {
 public:
     arguments(int argc, char** argv, std::string usage) : argc_(argc), argv_(argv), usage_(std::move(usage)) {}
 
-    // The next option name, or false when argv is exhausted.
+    // The next option name, or false when argv is exhausted. -h and --help print the usage and
+    // exit with status 0 (they were refused as unknown options).
     bool next(std::string& option)
     {
         if (++i_ >= argc_) return false;
         option = argv_[i_];
+        if (option == "-h" || option == "--help") {
+            std::printf("usage: %s\n", usage_.c_str());
+            std::exit(0);
+        }
         return true;
     }
     std::string text(const char* option)

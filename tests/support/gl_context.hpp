@@ -10,6 +10,7 @@
 
 #include <doctest/doctest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <initializer_list>
@@ -22,6 +23,14 @@ namespace krs_test {
 
 // One context per process, made once and never terminated (eglTerminate under ASan reports the
 // driver's unloading as a leak). A context that cannot be made throws: the test fails, never skips.
+// An EGL error code as the headers spell it (0x3001 EGL_NOT_INITIALIZED ...): hexadecimal.
+inline std::string egl_error_text(EGLint code)
+{
+    char text[16];
+    std::snprintf(text, sizeof text, "0x%04X", unsigned(code));
+    return text;
+}
+
 inline void require_context()
 {
     static bool ready = false;
@@ -30,7 +39,7 @@ inline void require_context()
     if (display == EGL_NO_DISPLAY) throw std::runtime_error("eglGetPlatformDisplay(surfaceless) failed");
     EGLint major = 0, minor = 0;
     if (!eglInitialize(display, &major, &minor))
-        throw std::runtime_error("eglInitialize failed: 0x" + std::to_string(eglGetError()) +
+        throw std::runtime_error("eglInitialize failed: " + egl_error_text(eglGetError()) +
                                  " (is libgl1-mesa-dri installed? configure with -DKRS_GLSL_TESTS=OFF to skip)");
     if (!eglBindAPI(EGL_OPENGL_API)) throw std::runtime_error("eglBindAPI(EGL_OPENGL_API) failed");
     const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 3,
