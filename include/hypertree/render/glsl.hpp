@@ -279,8 +279,9 @@ int $_density_at(vec3 p) {
     return $_cell(p, cell) ? int($_voxel(cell).x) : 0;
 }
 
-// shadow_transmittance: from p toward the light l, starting one step out so the sample does
-// not shadow itself, with the primary ray's step and early exit.
+// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
+// out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's step and
+// early exit.
 float $_shadow_transmittance(vec3 p, vec3 l) {
     float t0, t1;
     $_enter_box(p, l, t0, t1);

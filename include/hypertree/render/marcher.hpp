@@ -112,6 +112,22 @@ public:
         krs::require_positive("march_options.step_factor", options_.step_factor);
         krs::require_positive("march_options.density_scale", options_.density_scale);
         krs::require_non_negative("march_options.min_transmittance", options_.min_transmittance);
+        // Every shading term finite and non-negative: a NaN or infinite one made covered pixels
+        // NaN, a negative ambient made them negative; a transmittance floor above 1 stopped every
+        // ray after its first sample.
+        if (!(options_.min_transmittance <= 1.0f))
+            throw krs::invalid_parameter("march_options.min_transmittance", "must be in [0, 1]",
+                                         krs::detail::to_text(options_.min_transmittance));
+        krs::require_non_negative("march_options.ambient", options_.ambient);
+        krs::require_non_negative("march_options.ambient_falloff", options_.ambient_falloff);
+        krs::require_non_negative("march_options.diffuse", options_.diffuse);
+        krs::require_non_negative("march_options.specular", options_.specular);
+        krs::require_non_negative("march_options.shininess", options_.shininess);
+        for (const auto& light : options_.lights) require_color("march_options.lights.color", light.color);
+        for (std::size_t i = 0; i < colors_.spans().size(); ++i) {
+            require_color("depth_colors.first", colors_.spans()[i].first);
+            require_color("depth_colors.last", colors_.spans()[i].last);
+        }
         const hypervolume& v = store.volume();
         origin_ = {float(v.origin().x), float(v.origin().y), float(v.origin().z)};
         cells_per_unit_ = {float(v.cells_per_unit().x), float(v.cells_per_unit().y), float(v.cells_per_unit().z)};
@@ -141,13 +157,17 @@ public:
         if (options_.lights.size() > max_lights)
             throw krs::invalid_parameter("march_options.lights", "may hold at most " + std::to_string(max_lights) + " lights",
                                          std::to_string(options_.lights.size()));
-        for (const auto& light : options_.lights) {
-            const krs::vec3d d(light.direction);
-            const double len = krs::length(d);
-            if (!(len > 0)) throw krs::invalid_parameter("march_options.lights.direction", "must be non-zero");
-            const krs::vec3d u = d / len;
-            light_dirs_.push_back({float(u.x), float(u.y), float(u.z)});
-        }
+        // Finite and non-zero: an infinite component normalized to NaN, and every shadow ray then
+        // took a span of 1e31 that its float sample count never crossed (render hung).
+        for (const auto& light : options_.lights)
+            light_dirs_.push_back(krs::require_direction("march_options.lights.direction", light.direction));
+    }
+
+    static void require_color(const char* name, const rgb& c)
+    {
+        krs::require_non_negative(name, c.r);
+        krs::require_non_negative(name, c.g);
+        krs::require_non_negative(name, c.b);
     }
 
     const march_options& options() const { return options_; }
@@ -328,8 +348,13 @@ private:
 
 public:
     // Transmittance from p toward the light along direction l (unit), within the tree's box:
-    // samples at base + j ds from j = 1 (one step out, so a sample does not shadow itself), with
-    // the primary rays' empty-space skipping and early exit. One template for one point (T =
+    // samples at base + j ds from j = 1, one step out. At step factor 1 on cubic voxels that
+    // sample has left the shading voxel whatever the light's direction (the voxel's far face is
+    // at most sqrt(3)/2 of a side from its centre), so a voxel does not shadow itself. Below step
+    // factor 0.87, or on elongated voxels, the first samples can fall in the voxel itself, which
+    // then dims its own light: shading depends on the step factor there (a lone voxel of density
+    // 200: shadow 1.0 at step 1, 0.46 at 0.5). The GLSL marcher keeps the same convention. The
+    // march has the primary rays' empty-space skipping and early exit. One template for one point (T =
     // float) and for a packet of points, one per lane, toward the same light: the shading pass
     // marches the shadow rays of voxels a packet at a time (shade_bricks), each lane computing
     // exactly what the scalar march computes for its point. `lookups` counts each lane's voxel
@@ -626,6 +651,15 @@ private:
             t0 = max(t0, min(ta, tb));
             t1 = min(t1, max(ta, tb));
         }
+        // Rays march in steps of ds along t, so a direction must be unit (krs::make_ray makes it
+        // so): a zero one had a span of 1e30 that a float sample count never crossed (march hung),
+        // and a short one would take more samples than the 2^23 the constructor allows. Such a
+        // ray, or one from a non-finite origin, misses the box.
+        const T length_squared = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        const auto usable = (abs(length_squared - T(1.0f)) <= T(1e-3f)) && krs::is_finite(o[0]) && krs::is_finite(o[1]) &&
+                            krs::is_finite(o[2]);
+        t0 = select(usable, t0, T(0.0f)); // (a NaN slab bound could leave t0 at -1e31, not NaN)
+        t1 = select(usable, t1, T(-1.0f));
     }
 
     voxel fetch_cached(voxel_index index, std::size_t place, std::size_t k, ray_cache& cache, bool& valid, float& lookups) const

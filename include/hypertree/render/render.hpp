@@ -50,7 +50,9 @@ inline int supersampling_for(const krs::pinhole_camera& camera, const tree_shape
     const double distance = krs::length(krs::vec3d(shape.crown.center) - krs::vec3d(camera.eye()));
     const double pixel_side = double(camera.pixel_footprint()) * distance; // world size of one pixel there
     const double voxel_side = volume.smallest_voxel_side();
-    return std::max(1, int(std::ceil(pixel_side / voxel_side - 1e-9)));
+    // Clamped in double to render()'s range before the conversion (far away the quotient passed
+    // INT_MAX, which is undefined as an int).
+    return int(std::clamp(std::ceil(pixel_side / voxel_side - 1e-9), 1.0, 16.0));
 }
 
 // A camera that frames a tree: it looks at the center of the box (the tree's non-empty cells,
@@ -64,6 +66,12 @@ inline int supersampling_for(const krs::pinhole_camera& camera, const tree_shape
 // |x.r| / t_h - x.f and |x.u| / t_v - x.f over the corners.
 inline krs::pinhole_camera framing_camera(const world_box& box, int width, int height, float vertical_fov_degrees = 40)
 {
+    // First, so a field of view of 0 is named as such (its distance came out infinite and the
+    // camera's eye was blamed).
+    krs::require_finite("framing_camera.vertical_fov_degrees", vertical_fov_degrees);
+    if (!(vertical_fov_degrees > 0.0f && vertical_fov_degrees < 180.0f))
+        throw krs::invalid_parameter("framing_camera.vertical_fov_degrees", "must be in (0, 180)",
+                                     krs::detail::to_text(vertical_fov_degrees));
     const vec3d center = (box.lo + box.hi) * 0.5, extent = box.hi - box.lo;
     if (!(extent.x > 0 && extent.y > 0 && extent.z > 0))
         throw krs::invalid_parameter("framing_camera.box", "must hold at least one voxel (the tree is empty)");
@@ -101,6 +109,7 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
 {
     if (settings.supersampling < 1 || settings.supersampling > 16)
         throw krs::invalid_parameter("render_settings.supersampling", "must be in [1, 16]", std::to_string(settings.supersampling));
+    volume_marcher<S>::require_color("render_settings.background", settings.background);
     constexpr std::size_t lanes = krs::lane_count<T>;
     const int w = camera.width(), h = camera.height(), s = settings.supersampling;
     image out;
