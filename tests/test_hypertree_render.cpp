@@ -226,22 +226,16 @@ TEST_CASE("hypertree render refuses bad options, naming them")
     refuses(o, "march_options.lights.direction");
     // Shading terms: NaN or infinite ones made covered pixels NaN, a negative ambient negative,
     // and a transmittance floor above 1 stopped every ray at its first sample.
+    const std::pair<float march_options::*, const char*> terms[] = {
+        {&march_options::ambient, "march_options.ambient"},   {&march_options::ambient_falloff, "march_options.ambient_falloff"},
+        {&march_options::diffuse, "march_options.diffuse"},   {&march_options::specular, "march_options.specular"},
+        {&march_options::shininess, "march_options.shininess"}};
     for (float bad : {std::nanf(""), INFINITY, -5.0f}) {
-        o = {};
-        o.ambient = bad;
-        refuses(o, "march_options.ambient");
-        o = {};
-        o.ambient_falloff = bad;
-        refuses(o, "march_options.ambient_falloff");
-        o = {};
-        o.diffuse = bad;
-        refuses(o, "march_options.diffuse");
-        o = {};
-        o.specular = bad;
-        refuses(o, "march_options.specular");
-        o = {};
-        o.shininess = bad;
-        refuses(o, "march_options.shininess");
+        for (const auto& [term, name] : terms) {
+            o = {};
+            o.*term = bad;
+            refuses(o, name);
+        }
         o = {};
         o.lights = {directional_light{{0, 1, 0}, {bad, 1, 1}}};
         refuses(o, "march_options.lights.color");
