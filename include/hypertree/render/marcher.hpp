@@ -124,10 +124,6 @@ public:
         krs::require_non_negative("march_options.specular", options_.specular);
         krs::require_non_negative("march_options.shininess", options_.shininess);
         for (const auto& light : options_.lights) require_color("march_options.lights.color", light.color);
-        for (std::size_t i = 0; i < colors_.spans().size(); ++i) {
-            require_color("depth_colors.first", colors_.spans()[i].first);
-            require_color("depth_colors.last", colors_.spans()[i].last);
-        }
         const hypervolume& v = store.volume();
         origin_ = {float(v.origin().x), float(v.origin().y), float(v.origin().z)};
         cells_per_unit_ = {float(v.cells_per_unit().x), float(v.cells_per_unit().y), float(v.cells_per_unit().z)};
@@ -163,12 +159,6 @@ public:
             light_dirs_.push_back(krs::require_direction("march_options.lights.direction", light.direction));
     }
 
-    static void require_color(const char* name, const rgb& c)
-    {
-        krs::require_non_negative(name, c.r);
-        krs::require_non_negative(name, c.g);
-        krs::require_non_negative(name, c.b);
-    }
 
     const march_options& options() const { return options_; }
     // An empty shading memo sized for this marcher (its voxel count and lights), for one render:

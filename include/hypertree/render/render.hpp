@@ -109,7 +109,7 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
 {
     if (settings.supersampling < 1 || settings.supersampling > 16)
         throw krs::invalid_parameter("render_settings.supersampling", "must be in [1, 16]", std::to_string(settings.supersampling));
-    volume_marcher<S>::require_color("render_settings.background", settings.background);
+    require_color("render_settings.background", settings.background);
     constexpr std::size_t lanes = krs::lane_count<T>;
     const int w = camera.width(), h = camera.height(), s = settings.supersampling;
     image out;

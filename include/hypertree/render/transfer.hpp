@@ -14,6 +14,14 @@ struct rgb {
     float r = 0, g = 0, b = 0;
 };
 
+// A color's channels finite and non-negative (a NaN or negative one reaches the pixels as it is).
+inline void require_color(const char* name, const rgb& c)
+{
+    krs::require_non_negative(name, c.r);
+    krs::require_non_negative(name, c.g);
+    krs::require_non_negative(name, c.b);
+}
+
 struct depth_color_span {
     int from = 0, to = 0; // depths, inclusive
     rgb first, last;      // colors at `from` and `to`, interpolated between
@@ -24,10 +32,13 @@ public:
     depth_colors() = default;
     explicit depth_colors(std::vector<depth_color_span> spans) : spans_(std::move(spans))
     {
-        for (std::size_t i = 0; i < spans_.size(); ++i)
+        for (std::size_t i = 0; i < spans_.size(); ++i) {
             if (spans_[i].from > spans_[i].to || spans_[i].from < 0)
                 throw krs::invalid_parameter("depth_colors[" + std::to_string(i) + "]", "needs 0 <= from <= to",
                                              std::to_string(spans_[i].from) + ".." + std::to_string(spans_[i].to));
+            require_color("depth_colors.first", spans_[i].first);
+            require_color("depth_colors.last", spans_[i].last);
+        }
     }
     // Branches (depth <= branch_depth) bark brown; leaves from dark to light green.
     static depth_colors tree(int branch_depth, int tree_depth)
