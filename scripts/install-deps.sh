@@ -13,7 +13,7 @@ mode="${1:---all}"
 
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
 tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools)
-examples=(libopenimageio-dev)
+examples=(libopenimageio-dev openimageio-tools libcli11-dev)
 benchmarks=(libbenchmark-dev)
 peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost
 
