@@ -1,4 +1,5 @@
 #include <hypertree/hypertree.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <numbers>
 

@@ -1,4 +1,5 @@
 #include <krs/krs.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
