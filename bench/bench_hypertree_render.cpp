@@ -1,5 +1,5 @@
 // bench_hypertree_render: the rendering columns of the hypertree paper's Table 1, and speed
-// against error for the raymarcher's settings (DESIGN rule 5).
+// against error for the raymarcher's settings (docs/design.md#rule-5).
 //
 //     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)

@@ -1,5 +1,5 @@
 // The emitted GLSL, compiled by glslangValidator and executed on Mesa llvmpipe through headless
-// EGL (GLSL_ON_CPU.md), against the C++ fields: distances and locate (compute shaders), and whole
+// EGL (docs/design.md#glsl-on-the-cpu), against the C++ fields: distances and locate (compute shaders), and whole
 // frames of the Shadertoy programs (fragment path) against the CPU render of the same math.
 //
 // Built as its own executable (krs_glsl_tests) because it links EGL and OpenGL; CMake option

@@ -1,5 +1,5 @@
 // The hypertree raymarcher emitted as GLSL (hypertree/render/glsl.hpp), run on Mesa llvmpipe
-// through headless EGL (GLSL_ON_CPU.md) and compared with the CPU marcher: the packed texture
+// through headless EGL (docs/design.md#glsl-on-the-cpu) and compared with the CPU marcher: the packed texture
 // against the store voxel by voxel, and whole frames against hypertree::render.
 //
 // Built as its own executable (hypertree_glsl_tests) because it links EGL and OpenGL; CMake option

@@ -17,7 +17,7 @@
 // is the same bit for bit whether the chunks run on one thread or many. A chunk's lanes run one
 // after the other through the scalar loop, or, in a build with AVX-512 and for most trees, in
 // step in SIMD registers (generator_lanes.hpp): the same hits either way, interleaved differently. The
-// library starts no thread itself (DESIGN rule 6): pass `generation_options::parallel_for` to run
+// library starts no thread itself (docs/design.md#rule-6): pass `generation_options::parallel_for` to run
 // chunks on yours.
 
 #include "hypertree/ifs.hpp"

@@ -43,9 +43,10 @@ struct stored_voxel {
     std::uint8_t part;
 };
 
-// How the library runs independent work on the caller's threads (it starts none itself, DESIGN
-// rule 6): parallel_for(count, body) calls body(0) ... body(count - 1) in any order, on any
-// threads, and returns when all are done. Empty: the work runs serially on the calling thread.
+// How the library runs independent work on the caller's threads (it starts none itself,
+// docs/design.md#rule-6): parallel_for(count, body) calls body(0) ... body(count - 1) in any
+// order, on any threads, and returns when all are done. Empty: the work runs serially on the
+// calling thread.
 // A body may throw (std::bad_alloc, or a refusal found inside a task): the hook should let the
 // bodies under way end and pass the exception on to its caller, as a task group does.
 using parallel_for_hook = std::function<void(std::size_t count, const std::function<void(std::size_t)>& body)>;

@@ -1,5 +1,5 @@
 #pragma once
-// What the GLSL tests share: one headless EGL context on Mesa's llvmpipe (GLSL_ON_CPU.md),
+// What the GLSL tests share: one headless EGL context on Mesa's llvmpipe (docs/design.md#glsl-on-the-cpu),
 // shader compilation and linking with their logs as errors, buffers, and glslangValidator runs.
 // Included by the GPU test executables only (they link EGL and OpenGL).
 

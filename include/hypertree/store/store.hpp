@@ -17,7 +17,7 @@
 // (density 0 when empty), visits its non-empty voxels in increasing index order, reports its
 // memory from its containers' actual capacities, and knows the index-space bounding box of its
 // non-empty voxels (the box the paper marks during generation, section 8.2). Stores are immutable
-// values once built (DESIGN rule 6) and are all built the same way, from the sorted list of
+// values once built (docs/design.md#rule-6) and are all built the same way, from the sorted list of
 // `stored_voxel` that `classify` or an operation (ops.hpp) produces:
 //
 //     S::build(volume, voxels, budget)

@@ -1,6 +1,6 @@
 #pragma once
 // Parameter validation: bad input is rejected at construction with a message that names the
-// parameter and says what was allowed (DESIGN rule 7). Nothing is half-built: constructors
+// parameter and says what was allowed (docs/design.md#rule-7). Nothing is half-built: constructors
 // validate everything before they store anything, and throw krs::invalid_parameter.
 
 #include "krs/core/vec3.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// GLSL emission of fields (DESIGN rule 4: GLSL is generated from the C++ types).
+// GLSL emission of fields (docs/design.md#rule-4: GLSL is generated from the C++ types).
 //
 // Every kernel, mirror and warp type carries its GLSL next to its C++ (a `glsl_name`, the text of
 // its functions `glsl_source`, its parameter count `glsl_vec4_count` and `glsl_constants(float*)`

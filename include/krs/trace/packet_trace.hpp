@@ -8,7 +8,7 @@
 // several points in lockstep (a sequence's `distances`) overlaps one packet's chain of dependent
 // operations with another's (about 1.5x on general mirrors, bench_embree_peer). The step itself
 // is `march_advance`, the template the scalar tracer's `march_step` runs: scheduling is the only
-// thing this header adds (DESIGN.md rule 1).
+// thing this header adds (docs/design.md#rule-1).
 //
 // Rays come from `next(ray_job&) -> bool` (false: the queue is empty) and leave through
 // `done(std::uint32_t id, const hit<float>&)`, in completion order, on the calling thread. The
