@@ -110,7 +110,7 @@ step() {
     if [ "$rc" -ne 0 ]; then
         echo "fresh-root.sh: '$cmd' failed on a fresh $suite root; its errors:" >&2
         # CMake's and apt's own words name what is missing; the log's end shows where it stopped.
-        grep -E -A 6 '^CMake Error|^E: |Could NOT find|does not exist|not found' "$logs/$name.log" | head -n 60 >&2 || true
+        grep -E -A 10 '^CMake Error|^E: |^fatal error|: error: ' "$logs/$name.log" | head -n 60 >&2 || true
         echo "--- last lines of $logs/$name.log:" >&2
         tail -n 15 "$logs/$name.log" >&2
     fi
