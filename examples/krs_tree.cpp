@@ -17,6 +17,7 @@
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_rays.hpp"
 
+#include "support/command_line.hpp"
 #include "support/example_io.hpp"
 
 #include <algorithm>
@@ -43,16 +44,14 @@ struct options {
 options parse(int argc, char** argv)
 {
     options o;
-    example::arguments args(argc, argv, "krs_tree [--width W] [--height H] [--threads N] [--levels L] [--seed S] [--output FILE]");
-    for (std::string a; args.next(a);) {
-        if (a == "--width") o.width = args.integer("--width", 1, 16384);
-        else if (a == "--height") o.height = args.integer("--height", 1, 16384);
-        else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
-        else if (a == "--levels") o.levels = args.integer("--levels", 1, 30);
-        else if (a == "--seed") o.seed = unsigned(args.integer("--seed", 0, 1 << 30));
-        else if (a == "--output") o.output = args.text("--output");
-        else args.unknown(a);
-    }
+    example::command_line args("krs_tree", "Renders a KRS tree to a PNG and prints the time per frame and per ray.");
+    args.integer("--width", o.width, 1, 16384, "image width in pixels");
+    args.integer("--height", o.height, 1, 16384, "image height in pixels");
+    args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
+    args.integer("--levels", o.levels, 1, 30, "branching levels of the tree");
+    args.integer("--seed", o.seed, 0, 1 << 30, "seed of the tree's random growth");
+    args.text("--output", o.output, "the PNG to write", "FILE");
+    args.parse(argc, argv);
     o.threads = example::thread_count(o.threads);
     return o;
 }
