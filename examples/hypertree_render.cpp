@@ -13,6 +13,7 @@
 #include "hypertree/render/render.hpp"
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/progress.hpp"
 
 #include <atomic>
 #include <chrono>
@@ -37,27 +38,23 @@ struct settings {
     std::uint64_t seed = 1;
 };
 
-// Runs body(0 .. count-1) on `threads` threads, drawing indices from a shared counter, and draws a
-// progress bar on stderr as they finish.
+// Runs body(0 .. count-1) on `threads` threads, drawing indices from a shared counter, and reports
+// progress on stderr as they finish (support/progress.hpp: a bar on a terminal, tenths in a log).
 auto parallel_with_progress(int threads, const char* what)
 {
     return [threads, what](std::size_t count, const std::function<void(std::size_t)>& body) {
+        example::progress shown(stderr, what);
         std::atomic<std::size_t> next{0}, done{0};
         std::vector<std::thread> workers;
         for (int w = 0; w < threads; ++w)
-            workers.emplace_back([&, w] { // w by value: the loop moves on while the thread runs
+            workers.emplace_back([&] {
                 for (std::size_t i; (i = next++) < count;) {
                     body(i);
-                    const std::size_t d = ++done;
-                    if (w == 0 || d == count) {
-                        const int filled = int(40 * d / count);
-                        std::fprintf(stderr, "\r%s [%s%s] %3d%%", what, std::string(std::size_t(filled), '#').c_str(),
-                                     std::string(std::size_t(40 - filled), '.').c_str(), int(100 * d / count));
-                    }
+                    shown.update(++done, count);
                 }
             });
         for (auto& t : workers) t.join();
-        std::fprintf(stderr, "\n");
+        shown.finish();
     };
 }
 

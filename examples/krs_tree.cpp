@@ -19,6 +19,7 @@
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/progress.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -203,20 +204,17 @@ int main(int argc, char** argv)
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::thread> pool;
     for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
-    const bool interactive = std::getenv("CI") == nullptr;
-    for (int shown = -1; done.load() < 2 * tiles;) {
-        const int percent = 100 * done.load() / (2 * tiles);
-        if (percent != shown && (interactive || percent % 25 == 0)) {
-            std::printf("\r[%-40s] %3d%%", std::string(std::size_t(percent * 40 / 100), '#').c_str(), percent);
-            std::fflush(stdout);
-            shown = percent;
-        }
+    // Progress goes to stderr (stdout carries the results): a bar on a terminal, tenths in a log.
+    example::progress shown(stderr, "render");
+    while (done.load() < 2 * tiles) {
+        shown.update(std::size_t(done.load()), std::size_t(2 * tiles));
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     for (std::thread& t : pool) t.join();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double rays = double(opt.width) * opt.height;
-    std::printf("\r[%s] 100%%\n", std::string(40, '#').c_str());
+    shown.update(std::size_t(2 * tiles), std::size_t(2 * tiles));
+    shown.finish();
     std::printf("frame: %.3f s on %d threads; %.2f core-us per primary ray (shading and shadow ray included); "
                 "%.1f steps per primary ray (%zu-lane packets); %.1f%% of pixels hit\n",
                 seconds, opt.threads, 1e6 * seconds * opt.threads / rays, double(steps.load()) / rays, W,
