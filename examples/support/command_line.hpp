@@ -22,8 +22,6 @@
 #include <concepts>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <system_error>
