@@ -9,24 +9,14 @@
 
 #include "krs/glsl/example_scenes.hpp"
 
+#include "support/command_line.hpp"
+
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <iostream>
-#include <optional>
 #include <string>
 
 namespace {
-
-int usage(const char* problem)
-{
-    if (problem) std::fprintf(stderr, "glsl_export: %s\n", problem);
-    std::fprintf(stderr,
-                 "usage: glsl_export --scene tree|forest|terrain|sponge --target 330|450|es300|shadertoy\n"
-                 "                   --mode constants|buffer [--output FILE]\n"
-                 "       glsl_export --all DIR\n");
-    return 2;
-}
 
 bool write(const std::string& path, const std::string& text)
 {
@@ -49,20 +39,14 @@ int main(int argc, char** argv)
 {
     namespace ex = krs::glsl::examples;
     std::string scene = "tree", target = "450", mode = "constants", output, all;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "-h" || a == "--help") return usage(nullptr), 0;
-        std::string* value = a == "--scene" ? &scene
-                             : a == "--target" ? &target
-                             : a == "--mode"   ? &mode
-                             : a == "--output" ? &output
-                             : a == "--all"    ? &all
-                                               : nullptr;
-        // The name first: an unknown option is reported as one, not as missing its value.
-        if (!value) return usage(("unknown option " + a).c_str());
-        if (i + 1 >= argc) return usage(("missing value after " + a).c_str());
-        *value = argv[++i];
-    }
+    example::command_line args("glsl_export", "Writes an example scene's GLSL to a file or stdout; --all DIR "
+                                              "regenerates every file of the repository's glsl/ folder.");
+    args.choice("--scene", scene, {"tree", "forest", "terrain", "sponge"}, "the scene");
+    args.choice("--target", target, {"330", "450", "es300", "shadertoy"}, "the GLSL dialect");
+    args.choice("--mode", mode, {"constants", "buffer"}, "the scene's data as constants or in a buffer");
+    args.text("--output", output, "the file to write (default and -: stdout)", "FILE");
+    args.text("--all", all, "write every scene in every target and mode into this folder", "DIR");
+    args.parse(argc, argv);
     try {
         if (!all.empty()) {
             bool ok = true;
@@ -81,13 +65,9 @@ int main(int argc, char** argv)
         if (target == "330") kind.target = krs::glsl::target::glsl330;
         else if (target == "450") kind.target = krs::glsl::target::glsl450;
         else if (target == "es300") kind.target = krs::glsl::target::es300;
-        else if (target == "shadertoy") kind.target = krs::glsl::target::shadertoy;
-        else return usage(("unknown target " + target).c_str());
+        else kind.target = krs::glsl::target::shadertoy; // the only word left: --target checked it
         if (mode == "constants") kind.mode = krs::glsl::data_mode::constants;
-        else if (mode == "buffer") kind.mode = krs::glsl::data_mode::buffer;
-        else return usage(("unknown mode " + mode).c_str());
-        if (scene != "tree" && scene != "forest" && scene != "terrain" && scene != "sponge")
-            return usage(("unknown scene " + scene).c_str());
+        else kind.mode = krs::glsl::data_mode::buffer;
         bool ok = false;
         ex::for_each_scene([&](const auto& s) {
             if (s.name == scene) ok = write(output, ex::file_text(s, kind));

@@ -11,7 +11,9 @@
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/render/render.hpp"
+#include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/progress.hpp"
 
 #include <atomic>
 #include <chrono>
@@ -36,27 +38,23 @@ struct settings {
     std::uint64_t seed = 1;
 };
 
-// Runs body(0 .. count-1) on `threads` threads, drawing indices from a shared counter, and draws a
-// progress bar on stderr as they finish.
+// Runs body(0 .. count-1) on `threads` threads, drawing indices from a shared counter, and reports
+// progress on stderr as they finish (support/progress.hpp: a bar on a terminal, tenths in a log).
 auto parallel_with_progress(int threads, const char* what)
 {
     return [threads, what](std::size_t count, const std::function<void(std::size_t)>& body) {
+        example::progress shown(stderr, what);
         std::atomic<std::size_t> next{0}, done{0};
         std::vector<std::thread> workers;
         for (int w = 0; w < threads; ++w)
-            workers.emplace_back([&, w] { // w by value: the loop moves on while the thread runs
+            workers.emplace_back([&] {
                 for (std::size_t i; (i = next++) < count;) {
                     body(i);
-                    const std::size_t d = ++done;
-                    if (w == 0 || d == count) {
-                        const int filled = int(40 * d / count);
-                        std::fprintf(stderr, "\r%s [%s%s] %3d%%", what, std::string(std::size_t(filled), '#').c_str(),
-                                     std::string(std::size_t(40 - filled), '.').c_str(), int(100 * d / count));
-                    }
+                    shown.update(++done, count);
                 }
             });
         for (auto& t : workers) t.join();
-        std::fprintf(stderr, "\n");
+        shown.finish();
     };
 }
 
@@ -98,45 +96,33 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
 int main(int argc, char** argv)
 {
     settings o;
-    example::arguments args(argc, argv,
-                            "hypertree_render [--tree FILE | --forest FILE | --preset A|B|C|D] [--resolution N] "
-                            "[--store dense|index_list|bit_array|partitioned] [--width W] [--height H] "
-                            "[--supersampling S|auto] [--density-scale K] [--threads N] [--seed N] [--output FILE.png] "
-                            "[--save-volume FILE]");
-    bool store_given = false;
-    int sources = 0; // --tree, --forest and --preset given: one at most (a second was ignored without a word)
-    for (std::string a; args.next(a);) {
-        if (a == "--tree" || a == "--forest" || a == "--preset") ++sources;
-        if (a == "--tree") o.tree_file = args.text("--tree");
-        else if (a == "--forest") o.forest_file = args.text("--forest");
-        else if (a == "--preset") {
-            o.preset = args.text("--preset");
-            if (o.preset != "A" && o.preset != "B" && o.preset != "C" && o.preset != "D") args.fail("--preset must be A, B, C or D");
-        } else if (a == "--resolution") o.resolution = args.integer("--resolution", 1, 1600);
-        else if (a == "--store") {
-            const std::string s = args.text("--store");
-            const auto known = std::find(storage_type_names.begin(), storage_type_names.end(), s);
-            if (known == storage_type_names.end()) args.fail("--store must be dense, index_list, bit_array or partitioned (got '" + s + "')");
-            o.store = storage_type(known - storage_type_names.begin());
-            store_given = true;
-        } else if (a == "--width") o.width = args.integer("--width", 1, 8192);
-        else if (a == "--height") o.height = args.integer("--height", 1, 8192);
-        else if (a == "--supersampling") {
-            const std::string s = args.text("--supersampling");
-            if (s == "auto") o.supersampling = 0;
-            else o.supersampling = std::atoi(s.c_str());
-            if (s != "auto" && (o.supersampling < 1 || o.supersampling > 16)) args.fail("--supersampling must be auto or in [1, 16]");
-        } else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
-        else if (a == "--seed") o.seed = std::uint64_t(args.integer("--seed", 0, 1 << 30));
-        else if (a == "--output") o.output = args.text("--output");
-        else if (a == "--save-volume") o.save_volume = args.text("--save-volume");
-        else if (a == "--density-scale") {
-            o.density_scale = float(std::atof(args.text("--density-scale").c_str()));
-            if (!(o.density_scale > 0 && o.density_scale <= 100)) args.fail("--density-scale must be in (0, 100]");
-        }
-        else args.unknown(a);
-    }
-    if (sources > 1) args.fail("give one of --tree, --forest and --preset, once");
+    example::command_line args("hypertree_render",
+                               "Generates a hypertree (a definition file, a hyperforest file or a built-in preset), "
+                               "renders it with self-shadowing and writes a PNG.");
+    CLI::Option* tree = args.text("--tree", o.tree_file, "a hypertree definition file", "FILE");
+    CLI::Option* forest = args.text("--forest", o.forest_file, "a hyperforest file", "FILE");
+    CLI::Option* preset = args.choice("--preset", o.preset, {"A", "B", "C", "D"}, "a built-in tree (the default)");
+    // One source: a second was ignored without a word.
+    tree->excludes(forest)->excludes(preset);
+    forest->excludes(preset);
+    int resolution = 0;
+    CLI::Option* resolution_option = args.integer("--resolution", resolution, 1, 1600, "voxels along each axis");
+    resolution_option->default_str("of the file, 300 for a preset");
+    std::string store = std::string(name_of(o.store));
+    std::vector<std::string> store_names(storage_type_names.begin(), storage_type_names.end());
+    CLI::Option* store_option = args.choice("--store", store, store_names, "voxel store (default: the forest file's, else bit_array)");
+    args.integer("--width", o.width, 1, 8192, "image width in pixels");
+    args.integer("--height", o.height, 1, 8192, "image height in pixels");
+    args.integer_or_word("--supersampling", o.supersampling, 1, 16, "auto", 0, "samples per pixel along each axis");
+    args.number("--density-scale", o.density_scale, 0, 100, true, "k of section 8.1");
+    args.integer("--threads", o.threads, 0, 1024, "threads (0: all cores)");
+    args.integer("--seed", o.seed, 0, 1 << 30, "seed of the generation");
+    args.text("--output", o.output, "the PNG to write", "FILE");
+    args.text("--save-volume", o.save_volume, "also save the voxel store (binary, with a checksum)", "FILE");
+    args.parse(argc, argv);
+    if (resolution_option->count() > 0) o.resolution = resolution;
+    const bool store_given = store_option->count() > 0;
+    o.store = storage_type(std::find(store_names.begin(), store_names.end(), store) - store_names.begin());
 
     try {
         build_options options;

@@ -19,6 +19,7 @@
 #include "krs/trace/camera.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/command_line.hpp"
 #include "support/example_io.hpp"
 
 #include <algorithm>
@@ -44,14 +45,12 @@ struct options {
 options parse(int argc, char** argv)
 {
     options o;
-    example::arguments args(argc, argv, "krs_fractals [--width W] [--height H] [--threads N] [--output-dir DIR]");
-    for (std::string a; args.next(a);) {
-        if (a == "--width") o.width = args.integer("--width", 1, 8192);
-        else if (a == "--height") o.height = args.integer("--height", 1, 8192);
-        else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
-        else if (a == "--output-dir") o.output_dir = args.text("--output-dir");
-        else args.unknown(a);
-    }
+    example::command_line args("krs_fractals", "Renders the KIFS gallery and a log-spherical zoom to PNG files.");
+    args.integer("--width", o.width, 1, 8192, "image width in pixels");
+    args.integer("--height", o.height, 1, 8192, "image height in pixels");
+    args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
+    args.text("--output-dir", o.output_dir, "the folder the PNG files go to", "DIR");
+    args.parse(argc, argv);
     o.threads = example::thread_count(o.threads);
     return o;
 }

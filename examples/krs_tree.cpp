@@ -17,7 +17,9 @@
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_rays.hpp"
 
+#include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/progress.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -43,16 +45,14 @@ struct options {
 options parse(int argc, char** argv)
 {
     options o;
-    example::arguments args(argc, argv, "krs_tree [--width W] [--height H] [--threads N] [--levels L] [--seed S] [--output FILE]");
-    for (std::string a; args.next(a);) {
-        if (a == "--width") o.width = args.integer("--width", 1, 16384);
-        else if (a == "--height") o.height = args.integer("--height", 1, 16384);
-        else if (a == "--threads") o.threads = args.integer("--threads", 0, 1024);
-        else if (a == "--levels") o.levels = args.integer("--levels", 1, 30);
-        else if (a == "--seed") o.seed = unsigned(args.integer("--seed", 0, 1 << 30));
-        else if (a == "--output") o.output = args.text("--output");
-        else args.unknown(a);
-    }
+    example::command_line args("krs_tree", "Renders a KRS tree to a PNG and prints the time per frame and per ray.");
+    args.integer("--width", o.width, 1, 16384, "image width in pixels");
+    args.integer("--height", o.height, 1, 16384, "image height in pixels");
+    args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
+    args.integer("--levels", o.levels, 1, 30, "branching levels of the tree");
+    args.integer("--seed", o.seed, 0, 1 << 30, "seed of the tree's random growth");
+    args.text("--output", o.output, "the PNG to write", "FILE");
+    args.parse(argc, argv);
     o.threads = example::thread_count(o.threads);
     return o;
 }
@@ -204,20 +204,17 @@ int main(int argc, char** argv)
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::thread> pool;
     for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
-    const bool interactive = std::getenv("CI") == nullptr;
-    for (int shown = -1; done.load() < 2 * tiles;) {
-        const int percent = 100 * done.load() / (2 * tiles);
-        if (percent != shown && (interactive || percent % 25 == 0)) {
-            std::printf("\r[%-40s] %3d%%", std::string(std::size_t(percent * 40 / 100), '#').c_str(), percent);
-            std::fflush(stdout);
-            shown = percent;
-        }
+    // Progress goes to stderr (stdout carries the results): a bar on a terminal, tenths in a log.
+    example::progress shown(stderr, "render");
+    while (done.load() < 2 * tiles) {
+        shown.update(std::size_t(done.load()), std::size_t(2 * tiles));
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     for (std::thread& t : pool) t.join();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double rays = double(opt.width) * opt.height;
-    std::printf("\r[%s] 100%%\n", std::string(40, '#').c_str());
+    shown.update(std::size_t(2 * tiles), std::size_t(2 * tiles));
+    shown.finish();
     std::printf("frame: %.3f s on %d threads; %.2f core-us per primary ray (shading and shadow ray included); "
                 "%.1f steps per primary ray (%zu-lane packets); %.1f%% of pixels hit\n",
                 seconds, opt.threads, 1e6 * seconds * opt.threads / rays, double(steps.load()) / rays, W,

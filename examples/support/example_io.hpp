@@ -1,67 +1,19 @@
 #pragma once
-// What every example shares and the library must not have: command-line parsing with clear
-// errors, and writing a linear RGB float image as a gamma-encoded PNG with OpenImageIO.
+// What every example shares and the library must not have: a thread count, and writing a linear
+// RGB float image as a gamma-encoded PNG with OpenImageIO. The command line is command_line.hpp,
+// progress reports progress.hpp.
 
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
 
 namespace example {
-
-// Walks argv; each accessor consumes the option's value and exits with status 2 and a message
-// naming the option when it is missing or out of range.
-class arguments {
-public:
-    arguments(int argc, char** argv, std::string usage) : argc_(argc), argv_(argv), usage_(std::move(usage)) {}
-
-    // The next option name, or false when argv is exhausted. -h and --help print the usage and
-    // exit with status 0 (they were refused as unknown options).
-    bool next(std::string& option)
-    {
-        if (++i_ >= argc_) return false;
-        option = argv_[i_];
-        if (option == "-h" || option == "--help") {
-            std::printf("usage: %s\n", usage_.c_str());
-            std::exit(0);
-        }
-        return true;
-    }
-    std::string text(const char* option)
-    {
-        if (i_ + 1 >= argc_) fail(std::string(option) + " needs a value");
-        return argv_[++i_];
-    }
-    int integer(const char* option, int lo, int hi)
-    {
-        const std::string v = text(option);
-        char* end = nullptr;
-        const long n = std::strtol(v.c_str(), &end, 10);
-        if (end == v.c_str() || *end != '\0' || n < lo || n > hi)
-            fail(std::string(option) + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                 "] (got '" + v + "')");
-        return int(n);
-    }
-    [[noreturn]] void unknown(const std::string& option) { fail("unknown option '" + option + "'"); }
-    [[noreturn]] void fail(const std::string& why) const
-    {
-        std::fprintf(stderr, "%s: %s\nusage: %s\n", program().c_str(), why.c_str(), usage_.c_str());
-        std::exit(2);
-    }
-    std::string program() const { return std::filesystem::path(argv_[0]).filename().string(); }
-
-private:
-    int argc_;
-    char** argv_;
-    std::string usage_;
-    int i_ = 0;
-};
 
 // 0 means "all cores".
 inline int thread_count(int requested)

@@ -1,0 +1,85 @@
+# The examples' command lines and how each must end, checked by cmake/check_command_lines.cmake
+# (tests example_command_lines_<program>). A refusal (status 2) must name, on stderr, the option,
+# the value given and what is allowed; rows of status 0 are cheap: --help, or a render of a few
+# pixels. Rows marked "old" were accepted by the parser before CLI11 (a number's prefix was taken,
+# or a float was not checked) or refused without naming the option.
+#
+#        program           status  must say                                          arguments
+
+# krs_tree
+krs_case(krs_tree          2 "--width;'3x';an integer in [1, 16384]"              --width 3x)
+krs_case(krs_tree          2 "--width;'2.5'"                                       --width 2.5)
+krs_case(krs_tree          2 "--height;'1e9'"                                      --height 1e9)
+krs_case(krs_tree          2 "--height;'0';[1, 16384]"                             --height 0)
+krs_case(krs_tree          2 "--levels;'31';[1, 30]"                               --levels 31)
+krs_case(krs_tree          2 "--threads;'-1';[0, 1024]"                            --threads -1)
+krs_case(krs_tree          2 "--seed;' 7'"                                         --seed " 7")
+krs_case(krs_tree          2 "--width;missing"                                     --width)
+krs_case(krs_tree          2 "--seed;missing"                                      --seed=)
+krs_case(krs_tree          2 "--output;'--width'"                                  --output --width 8)
+krs_case(krs_tree          2 "--fast"                                              --fast)
+krs_case(krs_tree          2 "--width;2"                                           --width 8 --width 9)
+krs_case(krs_tree          0 "--levels;--output"                                   --help)
+krs_case(krs_tree          0 "wrote"                                               --width 8 --height 8 --levels 2 --threads 1
+                                                                                   --output <out>/krs_tree.png)
+
+# hypertree_render
+krs_case(hypertree_render  2 "--supersampling;'3x';auto or an integer in [1, 16]"  --supersampling 3x)  # old: 3
+krs_case(hypertree_render  2 "--supersampling;'2.5'"                               --supersampling 2.5) # old: 2
+krs_case(hypertree_render  2 "--supersampling;'1e9'"                               --supersampling 1e9) # old: 1
+krs_case(hypertree_render  2 "--supersampling;'17';[1, 16]"                        --supersampling 17)  # old: no name
+krs_case(hypertree_render  2 "--supersampling;'0';[1, 16]"                         --supersampling 0)   # old: no name
+krs_case(hypertree_render  2 "--supersampling;'Auto'"                              --supersampling Auto)
+krs_case(hypertree_render  2 "--resolution;'-5';[1, 1600]"                         --resolution -5)
+krs_case(hypertree_render  2 "--resolution;'1601'"                                 --resolution 1601)
+krs_case(hypertree_render  2 "--density-scale;'nan';a finite number in (0, 100]"   --density-scale nan)
+krs_case(hypertree_render  2 "--density-scale;'inf'"                               --density-scale inf)
+krs_case(hypertree_render  2 "--density-scale;'1e400'"                             --density-scale 1e400)
+krs_case(hypertree_render  2 "--density-scale;'0';(0, 100]"                        --density-scale 0)
+krs_case(hypertree_render  2 "--density-scale;'4x'"                                --density-scale 4x)  # old: 4
+krs_case(hypertree_render  2 "--density-scale;missing"                             --density-scale)
+krs_case(hypertree_render  2 "--store;'sparse';one of dense|index_list|bit_array|partitioned" --store sparse)
+krs_case(hypertree_render  2 "--preset;'E';one of A|B|C|D"                         --preset E)
+krs_case(hypertree_render  2 "--tree;--forest"                                     --tree a.tree --forest b.forest)
+krs_case(hypertree_render  2 "--width;'8192x'"                                     --width 8192x)
+krs_case(hypertree_render  2 "--seed;missing"                                      --seed)
+krs_case(hypertree_render  2 "--samples"                                           --samples 4)
+krs_case(hypertree_render  0 "--supersampling;--density-scale"                     --help)
+krs_case(hypertree_render  0 "rendered 16x16"                                      --preset C --resolution 16 --width 16 --height 16
+                                                                                   --supersampling auto --threads 1 --output <out>/hypertree.png)
+# Decimal, whole: CLI11 alone reads integers in base 0, where 010 is 8.
+krs_case(hypertree_render  0 "rendered 16x16, supersampling 10"                    --preset C --resolution 16 --width 16 --height 16
+                                                                                   --supersampling 010 --threads 1 --output <out>/hypertree.png)
+krs_case(hypertree_render  0 "rendered 16x16, supersampling 1"                     --preset C --resolution 16 --width 16 --height 16
+                                                                                   --supersampling 1 --threads 1 --output <out>/hypertree.png)
+
+# krs_scenes
+krs_case(krs_scenes        2 "--width;'0';[1, 8192]"                               --width 0)
+krs_case(krs_scenes        2 "--height;'abc'"                                      --height abc)
+krs_case(krs_scenes        2 "--seed;'2.5'"                                        --seed 2.5)
+krs_case(krs_scenes        2 "--threads;'1025';[0, 1024]"                          --threads 1025)
+krs_case(krs_scenes        2 "--only;'sky';one of forest|terrain|rock|mirrors|coral|sponge|grass" --only sky)
+krs_case(krs_scenes        2 "--output-dir;missing"                                --output-dir)
+krs_case(krs_scenes        2 "--scene"                                             --scene rock)
+krs_case(krs_scenes        0 "--only;--output-dir"                                 -h)
+krs_case(krs_scenes        0 "total:;1 scene"                                      --only mirrors --width 8 --height 8 --threads 1
+                                                                                   --output-dir <out>)
+
+# krs_fractals
+krs_case(krs_fractals      2 "--width;'3x'"                                        --width 3x)
+krs_case(krs_fractals      2 "--height;'0';[1, 8192]"                              --height 0)
+krs_case(krs_fractals      2 "--threads;'nan'"                                     --threads nan)
+krs_case(krs_fractals      2 "--output-dir;missing"                                --output-dir=)
+krs_case(krs_fractals      2 "--zoom"                                              --zoom 3)
+krs_case(krs_fractals      0 "--width;--output-dir"                                --help)
+krs_case(krs_fractals      0 "total:;12 frames"                                    --width 4 --height 4 --threads 1 --output-dir <out>)
+
+# glsl_export
+krs_case(glsl_export       2 "--scene;'sky';one of tree|forest|terrain|sponge"     --scene sky)
+krs_case(glsl_export       2 "--target;'460';one of 330|450|es300|shadertoy"       --target 460)
+krs_case(glsl_export       2 "--mode;'texture';one of constants|buffer"            --mode texture)
+krs_case(glsl_export       2 "--output;missing"                                    --output)
+krs_case(glsl_export       2 "--all;'--scene'"                                     --all --scene tree)
+krs_case(glsl_export       2 "--version"                                           --version)
+krs_case(glsl_export       0 "--scene;--target;--mode"                             --help)
+krs_case(glsl_export       0 ""                                                    --scene sponge --target 330 --output <out>/sponge.glsl)
