@@ -96,6 +96,36 @@ inline constexpr To convert_float(From x) noexcept
     }
 }
 
+// x as rounded in its own type, never fused into the add or subtract that follows. With FMA hardware
+// g++ (default -ffp-contract=fast) and clang (default on) may compute a*b+c as one fma, and may do so
+// in the scalar path and not in the packet one: the results then differ in the last bit. Most code
+// tolerates that (docs/stability.md, "Packet and scalar results under FMA contraction"); code that
+// amplifies the last bit, such as a hash taking the fractional part of a product, wraps its products
+// in `unfused`. An empty asm that claims to change x keeps it a rounded value of its type; no
+// instruction is added, and a build without contraction computes exactly what it did before.
+template <class T>
+inline T unfused(T x) noexcept
+{
+#if defined(__GNUC__)
+    auto& value = [&]() -> auto& {
+        if constexpr (std::floating_point<T>)
+            return x;
+        else
+            return x.data; // an xsimd batch: its register
+    }();
+#if defined(__AVX512F__)
+    asm("" : "+v"(value));
+#elif defined(__SSE2__)
+    asm("" : "+x"(value));
+#elif defined(__aarch64__)
+    asm("" : "+w"(value));
+#else
+    asm("" : "+m"(value));
+#endif
+#endif
+    return x;
+}
+
 // Broadcast a scalar parameter into a lane. Parameters are stored as float (the precision a
 // shader would use); a double lane evaluates the same geometry in double arithmetic.
 template <lane T>
