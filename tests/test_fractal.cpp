@@ -8,6 +8,8 @@
 #include "krs/sequence.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/parity.hpp"
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -336,6 +338,7 @@ TEST_CASE("fractal packet lanes equal the scalar result")
     std::mt19937_64 g(21);
     auto compare = [&](const auto& f, const char* name, bool scaled) {
         int mismatches = 0;
+        krs_test::parity same{name, 2.0}; // the folds, over points in the cube of half-size 2
         for (int n = 0; n < 2000; ++n) {
             alignas(64) float xs[W], ys[W], zs[W];
             for (std::size_t i = 0; i < W; ++i) {
@@ -349,11 +352,13 @@ TEST_CASE("fractal packet lanes equal the scalar result")
                 const float s = f.distance(p);
                 // Bit-equal for the folds; the warps' packet log/exp/atan2 may differ from std's
                 // by an ulp, which moves a continuous field by about that much of |p|.
-                const float tolerance = scaled ? 1e-5f * std::max(1.0f, krs::length(p)) : 0.0f;
-                if (!(std::abs(krs::lane_at(d, i) - s) <= tolerance)) ++mismatches;
+                const bool agree = scaled ? std::abs(krs::lane_at(d, i) - s) <= 1e-5f * std::max(1.0f, krs::length(p))
+                                          : same.agree(krs::lane_at(d, i), s);
+                if (!agree) ++mismatches;
             }
         }
-        INFO(name);
+        same.report();
+        INFO(std::string(name));
         CHECK(mismatches == 0);
     };
     compare(krs::make_square_fractal(6), "square fractal", false);

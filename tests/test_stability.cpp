@@ -17,6 +17,7 @@
 #include "krs/sequence.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/figures.hpp"
 #include "support/random.hpp"
 
 #include <doctest/doctest.h>
@@ -38,6 +39,17 @@ using krs_test::uniform;
 
 } // namespace
 
+#if defined(KRS_TEST_COMPILER) && defined(KRS_TEST_FLAGS)
+TEST_CASE("stability figures: the build that measured them")
+{
+    // docs/stability.md states these next to its figures; scripts/stability_figures.py compares
+    // them before it compares the figures.
+    KRS_FIGURE("build.compiler", KRS_TEST_COMPILER);
+    KRS_FIGURE("build.flags", KRS_TEST_FLAGS);
+    CHECK(std::string(KRS_TEST_FLAGS).find("-ffp-contract=off") != std::string::npos);
+}
+#endif
+
 TEST_CASE("points on and one ulp off a mirror plane: the fold is continuous there")
 {
     // A kernel crossing the mirror x = 1 (non-separated), so both sides matter.
@@ -46,6 +58,8 @@ TEST_CASE("points on and one ulp off a mirror plane: the fold is continuous ther
     b.mirror(krs::mirror({1, 0, 0}, 1.0f));
     const scene s = b.build();
     std::mt19937_64 g(1);
+    int moved = 0;
+    double worst_step = 0;
     for (int k = 0; k < 10000; ++k) {
         const float y = float(uniform(g, -1, 1)), z = float(uniform(g, -1, 1));
         const vec3f on{1.0f, y, z};
@@ -55,10 +69,14 @@ TEST_CASE("points on and one ulp off a mirror plane: the fold is continuous ther
         // 1-Lipschitz across the plane, to within float rounding of the sphere's distance.
         REQUIRE(std::abs(s.distance(above) - d) <= 2 * 1.2e-7f + 4e-7f);
         REQUIRE(std::abs(s.distance(below) - d) <= 2 * 1.2e-7f + 4e-7f);
+        worst_step = std::max({worst_step, double(std::abs(s.distance(above) - d)), double(std::abs(s.distance(below) - d))});
         // On the plane, the point and its reflection are the same point.
         const krs::mirror& m = s.mirrors()[0];
-        REQUIRE(krs::length(m.fold(on) - on) == 0.0f);
+        if (krs::length(m.fold(on) - on) != 0.0f) ++moved;
     }
+    CHECK(moved == 0);
+    KRS_FIGURE("on_plane.moved", moved);
+    KRS_FIGURE("on_plane.worst_step", worst_step);
 }
 
 TEST_CASE("coplanar, parallel and kernel-centered mirrors keep the field a finite 1-Lipschitz bound")
@@ -75,13 +93,18 @@ TEST_CASE("coplanar, parallel and kernel-centered mirrors keep the field a finit
     const scene s = b.build();
     const auto e = krs::expand(s);
     std::mt19937_64 g(2);
+    double lipschitz = 0, excess = 0;
     for (int k = 0; k < 20000; ++k) {
         const vec3d a = in_ball(g, 5), c = a + in_ball(g, 1e-2);
         const double da = s.distance(a), dc = s.distance(c);
         REQUIRE(std::isfinite(da));
         REQUIRE(std::abs(da - dc) <= krs::length(a - c) * (1 + 1e-9) + 1e-12);
         REQUIRE(da >= e.distance(a) - 1e-6); // a subset of the expansion's terms
+        if (krs::length(a - c) > 0) lipschitz = std::max(lipschitz, std::abs(da - dc) / krs::length(a - c));
+        excess = std::max(excess, e.distance(a) - da);
     }
+    KRS_FIGURE("coplanar.lipschitz", krs_test::figure_digits(lipschitz, 5));
+    KRS_FIGURE("coplanar.expansion_excess", excess);
 }
 
 TEST_CASE("deep sequences: float distance against double as n grows to 64")
@@ -110,7 +133,7 @@ TEST_CASE("deep sequences: float distance against double as n grows to 64")
             worst = std::max(worst, std::abs(double(got) - reference) / extent);
         }
         worst_at[n] = worst;
-        MESSAGE("n = " << n << ": worst |float - double| / extent = " << worst);
+        KRS_FIGURE("deep.n" + std::to_string(n), worst);
         CHECK(worst < 1e-4);
     }
     // Growth is at most linear-ish in n (each fold adds about one rounding of the coordinates).
@@ -119,6 +142,8 @@ TEST_CASE("deep sequences: float distance against double as n grows to 64")
 
 TEST_CASE("far from the origin and at tiny scales: rays through a known solid hit it")
 {
+    int combinations = 0, all_hit = 0, most_steps = 0;
+    double worst_resolved = 0, worst_unresolved = 0;
     for (const double scale : {1e-4, 1.0, 1e3, 1e5, 1e6}) {
         for (const double offset : {0.0, 1e3, 1e6}) {
             // A row of 8 spheres (3 mirrors) of radius `scale`, centered `offset` from the origin.
@@ -136,7 +161,8 @@ TEST_CASE("far from the origin and at tiny scales: rays through a known solid hi
             o.threshold_floor = float(1e-5 * scale);
             o.max_distance = float(100 * scale + 1);
             o.max_steps = 2000;
-            int hit = 0;
+            int hit = 0, found = 0;
+            ++combinations;
             for (const auto& instance : e.instances) {
                 // Aim at the instance's center from 20 radii away: every such ray must hit, at a t
                 // no later than the exact entry distance (float geometry rounding allowed).
@@ -146,15 +172,28 @@ TEST_CASE("far from the origin and at tiny scales: rays through a known solid hi
                 const krs::hit<float> h = krs::sphere_trace(s, r, o);
                 INFO("scale " << scale << " offset " << offset);
                 REQUIRE(h.found);
+                ++found;
+                most_steps = std::max(most_steps, h.steps);
                 const double relative_precision = 4e-7 * (std::abs(offset) + 30 * scale) / scale;
+                const double miss = std::abs(double(h.t) - 19.0 * scale) / scale;
                 // When float cannot resolve the sphere at this offset, say so rather than pass.
-                if (relative_precision > 0.1) continue;
+                if (relative_precision > 0.1) {
+                    worst_unresolved = std::max(worst_unresolved, miss);
+                    continue;
+                }
+                worst_resolved = std::max(worst_resolved, miss);
                 CHECK(h.t == doctest::Approx(19.0 * scale).epsilon(std::max(1e-3, relative_precision)));
                 ++hit;
             }
             if (4e-7 * (std::abs(offset) + 30 * scale) / scale <= 0.1) CHECK(hit == 8);
+            if (found == 8) ++all_hit;
         }
     }
+    KRS_FIGURE("far.combinations", combinations);
+    KRS_FIGURE("far.all_hit", all_hit);
+    KRS_FIGURE("far.most_steps", most_steps);
+    KRS_FIGURE("far.worst_resolved", worst_resolved);
+    KRS_FIGURE("far.worst_unresolved", worst_unresolved);
 }
 
 TEST_CASE("rays starting on or inside a kernel and rays along a plane are defined")
@@ -409,7 +448,7 @@ TEST_CASE("magnitude policy: fold steps at the limit; KIFS iterations bounded by
             break;
         }
     }
-    MESSAGE("cube folds over a torus capsule of curvature 200: at most " << most << " iterations");
+    KRS_FIGURE("kifs.torus_capsule_iterations", most); // cube folds, torus capsule of curvature 200
     CHECK(most >= 10);
     CHECK(most < 20); // the box kernel allows 20
 }

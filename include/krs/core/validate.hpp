@@ -157,8 +157,7 @@ inline vec3f require_direction(std::string_view name, const vec3f& v)
     const vec3d d(v);
     const double len = length(d);
     if (!(len > 1e-30)) throw invalid_parameter(name, "must be a non-zero direction", detail::to_text(v));
-    const vec3d u = d / len;
-    return vec3f{float(u.x), float(u.y), float(u.z)};
+    return vec3f(d / len);
 }
 
 // A double direction: finite and not zero, returned unit. Scaled by its largest component first,

@@ -16,12 +16,13 @@ struct vec3 {
 
     constexpr vec3() = default;
     constexpr vec3(T x_, T y_, T z_) : x(x_), y(y_), z(z_) {}
-    // Broadcast a scalar vector into every lane (or convert float <-> double).
+    // Broadcast a scalar vector into every lane (or convert float <-> double, keeping the rounding:
+    // convert_float in lanes.hpp).
     template <class U>
         requires(!std::same_as<U, T> && std::floating_point<U>)
     explicit constexpr vec3(const vec3<U>& v)
-        : x(T(static_cast<scalar_t<T>>(v.x))), y(T(static_cast<scalar_t<T>>(v.y))),
-          z(T(static_cast<scalar_t<T>>(v.z)))
+        : x(T(convert_float<scalar_t<T>>(v.x))), y(T(convert_float<scalar_t<T>>(v.y))),
+          z(T(convert_float<scalar_t<T>>(v.z)))
     {
     }
 
