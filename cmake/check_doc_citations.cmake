@@ -3,12 +3,16 @@
 # Fails unless every document the repository's text files cite is in the repository: a reader who
 # follows a citation must find the page. It reads the sources, build files, scripts and documents
 # (include/ tests/ bench/ examples/ scripts/ cmake/ docs/ glsl/ fuzz/ except its corpus, and the
-# top-level README.md and CMakeLists.txt) and checks three kinds of citation:
+# top-level README.md and CMakeLists.txt) and checks four kinds of citation:
 #   - a name ending in .md (`docs/hypertree_format.md`, a bare `README.md`), with an optional
 #     `#section`: found relative to the citing file or to the root; a bare name may also be any
 #     document of that name in the tree (scripts name `benchmarks.md` beside a docs/ variable);
 #   - a relative link in markdown, `[text](path)` or `![alt](path)`, to any file;
-#   - a rule cited by a document's upper-case name, `<NAME> rule <n>`, which needs <NAME>.md.
+#   - a rule cited by a document's upper-case name, `<NAME> rule <n>`, which needs <NAME>.md;
+#   - in markdown, a source file named in code by a path with a folder (`include/krs/field.hpp`,
+#     or one under include/, include/krs/ or include/hypertree/, as prose about a library says
+#     `render/glsl.hpp`).
+# Code in markdown (fenced blocks and inline spans) is not read for links.
 # A `#section` must be a heading of the cited document (GitHub's anchor: lower case, punctuation
 # dropped, spaces as hyphens) or an `<a id="...">` in it. Names are compared case-sensitively, as
 # the file system and GitHub do.
@@ -131,13 +135,35 @@ foreach(file IN LISTS files)
         math(EXPR checked "${checked} + 1")
     endforeach()
     if(file MATCHES "\\.md$")
-        string(REGEX MATCHALL ">\\([^) \t\n]+\\)" links "${text}")
+        # Code is not a link: `convert_float<float>(x)` reads `>(x)` once brackets are angles.
+        # Fenced blocks and inline code spans go first.
+        string(REGEX REPLACE "```[^`]*```" "" prose "${text}")
+        string(REGEX REPLACE "`[^`\n]*`" "" prose "${prose}")
+        string(REGEX MATCHALL ">\\([^) \t\n]+\\)" links "${prose}")
         foreach(link IN LISTS links)
             string(REGEX REPLACE "^>\\((.*)\\)$" "\\1" target "${link}")
             if(target MATCHES "^[a-z]+:" OR target MATCHES "\\.md(#|$)") # URLs; .md handled above
                 continue()
             endif()
             check_citation("${file}" "${target}" FALSE)
+            math(EXPR checked "${checked} + 1")
+        endforeach()
+    endif()
+    if(file MATCHES "\\.md$")
+        # A source file named by its path in code (`include/krs/core/lanes.hpp`, `krs/trace/ray.hpp`,
+        # `tests/CMakeLists.txt`): a path with a folder, relative to the document, the root, or
+        # include/, include/krs/ or include/hypertree/. Templates (`store/<name>_store.hpp`) are not
+        # paths.
+        string(REGEX MATCHALL "`[A-Za-z0-9_.-]+(/[A-Za-z0-9_.-]+)+\\.(hpp|cpp|cmake|sh|py|txt|glsl)`" code_paths
+               "${text}")
+        foreach(code_path IN LISTS code_paths)
+            string(REPLACE "`" "" code_path "${code_path}")
+            foreach(prefix IN ITEMS include include/krs include/hypertree)
+                if(NOT EXISTS "${ROOT}/${code_path}" AND EXISTS "${ROOT}/${prefix}/${code_path}")
+                    set(code_path "${prefix}/${code_path}")
+                endif()
+            endforeach()
+            check_citation("${file}" "${code_path}" FALSE)
             math(EXPR checked "${checked} + 1")
         endforeach()
     endif()

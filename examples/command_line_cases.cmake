@@ -37,6 +37,8 @@ krs_case(hypertree_render  2 "--density-scale;'inf'"                            
 krs_case(hypertree_render  2 "--density-scale;'1e400'"                             --density-scale 1e400)
 krs_case(hypertree_render  2 "--density-scale;'0';(0, 100]"                        --density-scale 0)
 krs_case(hypertree_render  2 "--density-scale;'4x'"                                --density-scale 4x)  # old: 4
+krs_case(hypertree_render  2 "--density-scale;'1e-50';(0, 100]"                   --density-scale 1e-50) # 0 as a float
+krs_case(hypertree_render  2 "--resolution;'+-5'"                                  --resolution +-5)
 krs_case(hypertree_render  2 "--density-scale;missing"                             --density-scale)
 krs_case(hypertree_render  2 "--store;'sparse';one of dense|index_list|bit_array|partitioned" --store sparse)
 krs_case(hypertree_render  2 "--preset;'E';one of A|B|C|D"                         --preset E)

@@ -54,7 +54,7 @@ host_mirror() {
         { u = ""; ok = 0
           for (i = 1; i <= NF; i++) { if ($i == "URIs:") u = $(i + 1); if ($i == s) ok = 1 }
           if (ok && u != "" && $0 !~ /Enabled:[[:space:]]*no/) print u }' /etc/apt/sources.list.d/*.sources 2>/dev/null
-    } | head -n 1
+    } | head -n 1 || true # no *.list or *.sources file is no error: the caller says when none was found
 }
 
 # The pristine root is made once; .complete marks a debootstrap that finished (an interrupted one is

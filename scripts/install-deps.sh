@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Install the Debian packages krs needs.  Usage: scripts/install-deps.sh [--tests|--examples|--all|--peers]
-#   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa (GLSL tests), OpenImageIO
-#               (a test checks an example's image)
-#   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO
+#   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa and glslang (GLSL tests), Python 3
+#               (the check of docs/stability.md's figures), OpenImageIO and CLI11 (a test checks an
+#               example's image, others its command line)
+#   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO (and its tools, which its CMake
+#               config names), CLI11
 #   --all       all of the above plus Google Benchmark (the default)
 #   --peers     --all plus the peers the benchmarks compare with: Embree, OpenVDB
 # Only missing packages are installed; apt-get update runs only when something is missing, so a
@@ -12,7 +14,7 @@ set -euo pipefail
 mode="${1:---all}"
 
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
-tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools)
+tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools python3)
 examples=(libopenimageio-dev openimageio-tools libcli11-dev)
 benchmarks=(libbenchmark-dev)
 peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost
@@ -23,7 +25,7 @@ case "$mode" in
     --all) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}") ;;
     --peers) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}" "${peers[@]}") ;;
     -h | --help)
-        sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'
+        sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'
         exit 0
         ;;
     *)

@@ -46,7 +46,8 @@ inline std::string range_text(double lo, double hi, bool lo_open)
 // The whole text as a decimal integer, or false (a prefix, a fraction or an exponent is not one).
 inline bool whole_integer(std::string_view text, long long& value)
 {
-    if (text.size() > 1 && text.front() == '+') text.remove_prefix(1); // from_chars takes no '+'
+    // from_chars takes no '+': drop one, but never before another sign ("+-5" is not a number)
+    if (text.size() > 1 && text.front() == '+' && text[1] != '-' && text[1] != '+') text.remove_prefix(1);
     const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
     return error == std::errc() && end == text.data() + text.size() && !text.empty();
 }
@@ -65,17 +66,9 @@ public:
     template <std::integral I>
     CLI::Option* integer(const std::string& name, I& value, long long lo, long long hi, const std::string& help)
     {
-        const std::string allowed = "an integer in " + detail::range_text(double(lo), double(hi), false);
         return app_.add_option(name, value, help)
             ->type_name("INT" + detail::range_text(double(lo), double(hi), false))
-            ->transform(CLI::Validator(
-                [allowed, lo, hi](std::string& text) {
-                    long long n = 0;
-                    if (!detail::whole_integer(text, n) || n < lo || n > hi) return refusal(text, allowed);
-                    text = std::to_string(n);
-                    return std::string();
-                },
-                "", "integer"));
+            ->transform(integer_in(lo, hi, "", 0));
     }
 
     // An integer option in [lo, hi] that also takes one word standing for `word_value` (e.g.
@@ -84,20 +77,10 @@ public:
     CLI::Option* integer_or_word(const std::string& name, I& value, long long lo, long long hi, const std::string& word,
                                  I word_value, const std::string& help)
     {
-        const std::string allowed = word + " or an integer in " + detail::range_text(double(lo), double(hi), false);
         CLI::Option* option = app_.add_option(name, value, help);
         if (value == word_value) option->default_str(word); // --help shows "auto", not 0
-        return option
-            ->type_name(word + "|INT" + detail::range_text(double(lo), double(hi), false))
-            ->transform(CLI::Validator(
-                [allowed, lo, hi, word, word_value](std::string& text) {
-                    long long n = 0;
-                    if (text == word) n = (long long)word_value;
-                    else if (!detail::whole_integer(text, n) || n < lo || n > hi) return refusal(text, allowed);
-                    text = std::to_string(n);
-                    return std::string();
-                },
-                "", "integer_or_word"));
+        return option->type_name(word + "|INT" + detail::range_text(double(lo), double(hi), false))
+            ->transform(integer_in(lo, hi, word, (long long)word_value));
     }
 
     // A finite real option in [lo, hi], or (lo, hi] when `lo_open` (a scale that must be positive).
@@ -109,11 +92,15 @@ public:
             ->type_name("NUMBER" + detail::range_text(lo, hi, lo_open))
             ->check(CLI::Validator(
                 [allowed, lo, hi, lo_open](std::string& text) {
-                    double x = 0;
-                    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), x);
+                    double parsed = 0;
+                    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), parsed);
                     const bool whole = error == std::errc() && end == text.data() + text.size() && !text.empty();
+                    // The range is checked on the value the program gets, rounded to F: 1e-50 is
+                    // positive as a double and 0 as a float.
+                    const double x = double(static_cast<F>(parsed));
                     // !(x >= lo) and !(x <= hi) so that NaN, which compares false, is refused too
-                    if (!whole || !std::isfinite(x) || (lo_open ? !(x > lo) : !(x >= lo)) || !(x <= hi))
+                    if (!whole || !std::isfinite(parsed) || !std::isfinite(x) || (lo_open ? !(x > lo) : !(x >= lo)) ||
+                        !(x <= hi))
                         return refusal(text, allowed);
                     return std::string();
                 },
@@ -175,6 +162,22 @@ public:
     CLI::App& app() { return app_; }
 
 private:
+    // The check of integer(): the whole text a decimal integer in [lo, hi] (or `word`, when not
+    // empty, standing for word_value), rewritten in plain decimal for CLI11 to convert.
+    static CLI::Validator integer_in(long long lo, long long hi, const std::string& word, long long word_value)
+    {
+        const std::string allowed =
+            (word.empty() ? "" : word + " or ") + "an integer in " + detail::range_text(double(lo), double(hi), false);
+        return CLI::Validator(
+            [allowed, lo, hi, word, word_value](std::string& text) {
+                long long n = 0;
+                if (!word.empty() && text == word) n = word_value;
+                else if (!detail::whole_integer(text, n) || n < lo || n > hi) return refusal(text, allowed);
+                text = std::to_string(n);
+                return std::string();
+            },
+            "", "integer");
+    }
     // CLI11 puts the option's name in front ("--width: ...").
     static std::string refusal(const std::string& text, const std::string& allowed)
     {
