@@ -11,8 +11,9 @@
 // What it costs: it emits no instruction itself, but the value must be materialized in a
 // register at that point. On double lanes a widening convert_float<double>(float) from memory
 // becomes movss + cvtss2sd instead of one cvtss2sd with a memory operand, and the compiler may
-// no longer share equal computations on either side of the barrier. With contraction off and no
-// fold to prevent, the values are the same with and without the barrier.
+// no longer share equal computations on either side of the barrier (value_noise hashes 8 corners
+// and so computes each axis's scrambled coordinates once by hand: krs/core/noise.hpp). With
+// contraction off and no fold to prevent, the values are the same with and without the barrier.
 
 #include <concepts>
 #include <type_traits>
