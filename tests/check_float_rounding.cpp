@@ -10,9 +10,11 @@
 // plain -O2 and -O3, portable and -march=native) and inlines the constructors into such code.
 //
 // The reference: each kernel built by a [[gnu::noinline]] factory from floats that went through
-// a volatile float, which no optimizer may fold.
+// a volatile float, which no optimizer may fold (tests/support/float_rounding.hpp).
 
 #include "krs/kernels/kernels.hpp"
+
+#include "support/float_rounding.hpp"
 
 #include <bit>
 #include <cmath>
@@ -25,16 +27,12 @@ namespace {
 
 using krs::vec3d;
 using krs::vec3f;
+using krs_test::direction_of;
+using krs_test::through_memory;
 
 int failures = 0;
 long checked = 0;
 
-float through_memory(double d)
-{
-    volatile float f = static_cast<float>(d);
-    return f;
-}
-vec3f through_memory(const vec3d& v) { return {through_memory(v.x), through_memory(v.y), through_memory(v.z)}; }
 
 void expect_same(const std::string& what, float got, float expected)
 {
@@ -53,14 +51,6 @@ void expect_same(const std::string& what, const vec3f& got, const vec3f& expecte
     expect_same(what + ".x", got.x, expected.x);
     expect_same(what + ".y", got.y, expected.y);
     expect_same(what + ".z", got.z, expected.z);
-}
-
-// A direction as the constructors document it: the float input normalized in double, rounded once.
-[[gnu::noinline]] vec3f direction_of(vec3f v)
-{
-    const double x = v.x, y = v.y, z = v.z;
-    const double length = std::sqrt(x * x + y * y + z * z);
-    return {through_memory(x / length), through_memory(y / length), through_memory(z / length)};
 }
 
 [[gnu::noinline]] krs::sphere sphere_of(vec3f c, float r) { return {c, r}; }

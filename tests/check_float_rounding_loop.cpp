@@ -5,27 +5,16 @@
 
 #include "krs/kernels/kernels.hpp"
 
-#include <cmath>
+#include "support/float_rounding.hpp"
+
 #include <random>
 
 namespace {
 
 using krs::vec3d;
 using krs::vec3f;
-
-float through_memory(double d)
-{
-    volatile float f = static_cast<float>(d);
-    return f;
-}
-
-// The documented direction (krs/core/validate.hpp): the float input normalized in double, rounded once.
-[[gnu::noinline]] vec3f direction_of(vec3f v)
-{
-    const double x = v.x, y = v.y, z = v.z;
-    const double length = std::sqrt(x * x + y * y + z * z);
-    return {through_memory(x / length), through_memory(y / length), through_memory(z / length)};
-}
+using krs_test::direction_of;
+using krs_test::through_memory;
 
 int differing = 0;
 void count_unless_equal(const vec3f& got, const vec3d& input)

@@ -17,7 +17,9 @@
 
 #include <doctest/doctest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 
@@ -398,6 +400,88 @@ TEST_CASE_TEMPLATE("value noise is bounded and obeys its declared gradient bound
     }
     same.report();
     CHECK(disagreements == 0);
+}
+
+// value_noise as it was written before it shared the per-axis scrambles between corners: the
+// whole lattice hash per corner, from ix + d (the form the GLSL emitter also uses).
+template <class T>
+T value_noise_hashing_each_corner(const krs::vec3<T>& p)
+{
+    using krs::detail::fract;
+    auto hash = [](const T& x, const T& y, const T& z) {
+        T a = fract(krs::unfused(x * T(0.1031f))), b = fract(krs::unfused(y * T(0.11369f))),
+          c = fract(krs::unfused(z * T(0.13787f)));
+        const T m = krs::unfused(a * (b + T(19.19f))) + krs::unfused(b * (c + T(19.19f))) +
+                    krs::unfused(c * (a + T(19.19f)));
+        a = a + m, b = b + m, c = c + m;
+        return fract(krs::unfused((a + b) * c));
+    };
+    const T ix = krs::detail::floor_lane(p.x), iy = krs::detail::floor_lane(p.y), iz = krs::detail::floor_lane(p.z);
+    const T fx = krs::detail::fade(p.x - ix), fy = krs::detail::fade(p.y - iy), fz = krs::detail::fade(p.z - iz);
+    const T zero(0), one(1);
+    auto corner = [&](const T& dx, const T& dy, const T& dz) { return hash(ix + dx, iy + dy, iz + dz); };
+    const T x00 = krs::mix(corner(zero, zero, zero), corner(one, zero, zero), fx);
+    const T x10 = krs::mix(corner(zero, one, zero), corner(one, one, zero), fx);
+    const T x01 = krs::mix(corner(zero, zero, one), corner(one, zero, one), fx);
+    const T x11 = krs::mix(corner(zero, one, one), corner(one, one, one), fx);
+    const T v = krs::mix(krs::mix(x00, x10, fy), krs::mix(x01, x11, fy), fz);
+    return v * T(2) - one;
+}
+
+template <class S>
+auto bits_of(S x)
+{
+    if constexpr (sizeof(S) == 4)
+        return std::bit_cast<std::uint32_t>(x);
+    else
+        return std::bit_cast<std::uint64_t>(x);
+}
+
+TEST_CASE_TEMPLATE("value noise equals the lattice hash computed per corner, bit for bit", T, float, double, krs::packet_f,
+                   krs::packet_d)
+{
+    using S = krs::scalar_t<T>;
+    constexpr std::size_t lanes = krs::lane_count<T>;
+    std::mt19937_64 g(20261201);
+    // Random points near the origin and out to the hash's documented range (2^16), lattice points,
+    // their neighbours one ulp away, and -0 (where ix + 0 is +0 but ix is -0).
+    auto coordinate = [&](int k) -> S {
+        switch (k % 6) {
+        case 0: return S(uniform(g, -50, 50));
+        case 1: return S(uniform(g, -65536, 65536));
+        case 2: return S(std::floor(uniform(g, -100, 100)));
+        case 3: {
+            const S i = S(std::floor(uniform(g, -100, 100)));
+            return std::nextafter(i, g() % 2 ? S(-1000) : S(1000));
+        }
+        case 4: return g() % 2 ? S(-0.0) : S(0.0);
+        default: return S(uniform(g, -1, 1));
+        }
+    };
+    long compared = 0, differing = 0;
+    for (int n = 0; n < 20000; ++n) {
+        alignas(64) S xs[lanes], ys[lanes], zs[lanes];
+        for (std::size_t i = 0; i < lanes; ++i) {
+            const int k = int(g() % 36);
+            xs[i] = coordinate(k), ys[i] = coordinate(k / 6), zs[i] = coordinate(k + n);
+        }
+        krs::vec3<T> p;
+        if constexpr (std::floating_point<T>)
+            p = {xs[0], ys[0], zs[0]};
+        else
+            p = {T::load_aligned(xs), T::load_aligned(ys), T::load_aligned(zs)};
+        const T got = krs::value_noise(p), expected = value_noise_hashing_each_corner(p);
+        for (std::size_t i = 0; i < lanes; ++i) {
+            ++compared;
+            if (bits_of(krs::lane_at(got, i)) != bits_of(krs::lane_at(expected, i))) {
+                if (++differing <= 5)
+                    MESSAGE("at (" << xs[i] << ", " << ys[i] << ", " << zs[i] << "): " << krs::lane_at(got, i)
+                                   << ", per corner " << krs::lane_at(expected, i));
+            }
+        }
+    }
+    MESSAGE(compared << " values compared, " << differing << " differ");
+    CHECK(differing == 0);
 }
 
 TEST_CASE("fractal noise and triplanar projection")

@@ -10,6 +10,8 @@
 // the vocabulary of that source; their scalar overloads exist because xsimd 8.1 has none (its
 // scalar `select` arrived in 9.0).
 
+#include "krs/core/rounding.hpp" // convert_float and unfused, which code using lanes calls
+
 #include <xsimd/xsimd.hpp>
 
 #include <algorithm>
@@ -53,78 +55,6 @@ concept lane = std::floating_point<scalar_t<T>> &&
 // 8 with AVX2, 4 with SSE2).
 using packet_f = xsimd::batch<float>;
 using packet_d = xsimd::batch<double>;
-
-// Conversion between float and double that keeps the rounding. g++ 12.2 at -O2 and -O3 (its SLP
-// vectorizer) folds a vectorized (double)(float)x back to x: a constructor that widens its float
-// parameters to double, inlined where the caller just rounded them from doubles, then computed
-// with the unrounded doubles (a torus's axis normalized from the caller's double, in half of the
-// cases of tests/check_float_rounding.cpp; docs/stability.md, "Double to float rounding"). An
-// empty asm that claims to change the float on either side of the conversion makes the float
-// exist, so the fold cannot apply; it costs no instruction.
-namespace detail {
-template <std::floating_point F>
-inline constexpr void keep_as_float(F& x) noexcept
-{
-#if defined(__GNUC__) && !defined(__clang__)
-    if (!std::is_constant_evaluated()) {
-#if defined(__SSE2__)
-        asm("" : "+x"(x));
-#elif defined(__aarch64__)
-        asm("" : "+w"(x));
-#else
-        asm("" : "+m"(x));
-#endif
-    }
-#else
-    (void)x;
-#endif
-}
-}  // namespace detail
-
-template <std::floating_point To, std::floating_point From>
-inline constexpr To convert_float(From x) noexcept
-{
-    if constexpr (std::same_as<To, From>) {
-        return x;
-    } else if constexpr (sizeof(To) < sizeof(From)) {
-        To narrowed = static_cast<To>(x);
-        detail::keep_as_float(narrowed);
-        return narrowed;
-    } else {
-        detail::keep_as_float(x);
-        return static_cast<To>(x);
-    }
-}
-
-// x as rounded in its own type, never fused into the add or subtract that follows. With FMA hardware
-// g++ (default -ffp-contract=fast) and clang (default on) may compute a*b+c as one fma, and may do so
-// in the scalar path and not in the packet one: the results then differ in the last bit. Most code
-// tolerates that (docs/stability.md, "Packet and scalar results under FMA contraction"); code that
-// amplifies the last bit, such as a hash taking the fractional part of a product, wraps its products
-// in `unfused`. An empty asm that claims to change x keeps it a rounded value of its type; no
-// instruction is added, and a build without contraction computes exactly what it did before.
-template <class T>
-inline T unfused(T x) noexcept
-{
-#if defined(__GNUC__)
-    auto& value = [&]() -> auto& {
-        if constexpr (std::floating_point<T>)
-            return x;
-        else
-            return x.data; // an xsimd batch: its register
-    }();
-#if defined(__AVX512F__)
-    asm("" : "+v"(value));
-#elif defined(__SSE2__)
-    asm("" : "+x"(value));
-#elif defined(__aarch64__)
-    asm("" : "+w"(value));
-#else
-    asm("" : "+m"(value));
-#endif
-#endif
-    return x;
-}
 
 // Broadcast a scalar parameter into a lane. Parameters are stored as float (the precision a
 // shader would use); a double lane evaluates the same geometry in double arithmetic.

@@ -11,6 +11,7 @@
 // coordinates of magnitude below about 2^16.
 
 #include "krs/core/lanes.hpp"
+#include "krs/core/rounding.hpp"
 #include "krs/core/vec3.hpp"
 
 #include <cmath>
@@ -35,19 +36,38 @@ inline T fract(const T& x)
 {
     return x - floor_lane(x);
 }
-// Hash of a lattice point to [0, 1): scramble each coordinate by an irrational multiplier, mix the
-// three with a dot product against a shifted copy, and take the fractional part of a product.
+// Hash of a lattice point to [0, 1): scramble each coordinate by an irrational multiplier
+// (`lattice_scramble`, a function of one axis), mix the three with a dot product against a shifted
+// copy, and take the fractional part of a product (`lattice_mix`). The GLSL computes the same
+// per corner, lattice_hash(i + d); value_noise computes each axis's scramble once for i and i + 1
+// and mixes per corner, which gives the same numbers (the scramble is a function of the axis
+// coordinate alone) with 6 floors instead of 24.
+//
+// Each product is rounded before it is added to or floored away (`unfused`): fused into an fma in
+// one path and not in another, a product's last bit moves the fractional part, and with it the
+// lattice value anywhere in [0, 1) (a packet lane against the scalar path, under g++'s default
+// -ffp-contract=fast with FMA: 41% of 64 000 values were equal, the worst 1.98 apart).
 template <class T>
-inline T lattice_hash(const T& x, const T& y, const T& z)
+struct lattice_scramble {
+    T x, y, z;
+};
+template <class T>
+inline lattice_scramble<T> scramble(const T& x, const T& y, const T& z)
 {
-    // Each product is rounded before it is added to or floored away (`unfused`): fused into an fma in
-    // one path and not in another, a product's last bit moves the fractional part, and with it the
-    // lattice value anywhere in [0, 1) (a packet lane against the scalar path, under g++'s default
-    // -ffp-contract=fast with FMA: 41% of 64 000 values were equal, the worst 1.98 apart).
-    T a = fract(unfused(x * T(0.1031f))), b = fract(unfused(y * T(0.11369f))), c = fract(unfused(z * T(0.13787f)));
+    return {fract(unfused(x * T(0.1031f))), fract(unfused(y * T(0.11369f))), fract(unfused(z * T(0.13787f)))};
+}
+template <class T>
+inline T lattice_mix(T a, T b, T c)
+{
     const T m = unfused(a * (b + T(19.19f))) + unfused(b * (c + T(19.19f))) + unfused(c * (a + T(19.19f)));
     a = a + m, b = b + m, c = c + m;
     return fract(unfused((a + b) * c));
+}
+template <class T>
+inline T lattice_hash(const T& x, const T& y, const T& z)
+{
+    const lattice_scramble<T> s = scramble(x, y, z);
+    return lattice_mix(s.x, s.y, s.z);
 }
 template <class T>
 inline T fade(const T& t)
@@ -60,16 +80,17 @@ inline T fade(const T& t)
 template <class T>
 T value_noise(const vec3<T>& p)
 {
-    using detail::lattice_hash;
+    using detail::lattice_mix;
+    const T one(1);
     const T ix = detail::floor_lane(p.x), iy = detail::floor_lane(p.y), iz = detail::floor_lane(p.z);
     const T fx = detail::fade(p.x - ix), fy = detail::fade(p.y - iy), fz = detail::fade(p.z - iz);
-    const T one(1);
-    auto corner = [&](const T& dx, const T& dy, const T& dz) { return lattice_hash(ix + dx, iy + dy, iz + dz); };
-    const T zero(0);
-    const T x00 = mix(corner(zero, zero, zero), corner(one, zero, zero), fx);
-    const T x10 = mix(corner(zero, one, zero), corner(one, one, zero), fx);
-    const T x01 = mix(corner(zero, zero, one), corner(one, zero, one), fx);
-    const T x11 = mix(corner(zero, one, one), corner(one, one, one), fx);
+    // The cell's two lattice coordinates per axis, scrambled once (i, then i + 1); ix + 0 would give
+    // the same scramble as ix (it only turns -0 into +0, and fract(+-0 * k) is +0 either way).
+    const detail::lattice_scramble<T> s0 = detail::scramble(ix, iy, iz), s1 = detail::scramble(ix + one, iy + one, iz + one);
+    const T x00 = mix(lattice_mix(s0.x, s0.y, s0.z), lattice_mix(s1.x, s0.y, s0.z), fx);
+    const T x10 = mix(lattice_mix(s0.x, s1.y, s0.z), lattice_mix(s1.x, s1.y, s0.z), fx);
+    const T x01 = mix(lattice_mix(s0.x, s0.y, s1.z), lattice_mix(s1.x, s0.y, s1.z), fx);
+    const T x11 = mix(lattice_mix(s0.x, s1.y, s1.z), lattice_mix(s1.x, s1.y, s1.z), fx);
     const T v = mix(mix(x00, x10, fy), mix(x01, x11, fy), fz);
     return v * T(2) - one;
 }
