@@ -89,7 +89,9 @@ trap 'exit 130' INT TERM
 cp -a "$pristine" "$run" && rm -f "$run/.complete"
 cp -L /etc/resolv.conf "$run/etc/resolv.conf"
 mkdir -p "$run/root/krs" "$logs"
-git -C "$checkout" archive HEAD | tar -x -C "$run/root/krs"
+# The commit is fixed here: the verdict names what was tested, even if HEAD moves during the run.
+commit="$(git -C "$checkout" rev-parse HEAD)"
+git -C "$checkout" archive "$commit" | tar -x -C "$run/root/krs"
 mount -t proc proc "$run/proc"
 mount --rbind /sys "$run/sys" && mount --make-rslave "$run/sys"
 mount --rbind /dev "$run/dev" && mount --make-rslave "$run/dev"
@@ -127,6 +129,6 @@ case "$mode" in
         ;;
 esac
 
-echo "fresh-root.sh: $suite minbase, $(git -C "$checkout" rev-parse --short HEAD), --$mode:"
+echo "fresh-root.sh: $suite minbase, ${commit:0:7}, --$mode:"
 printf '  %s\n' "${verdicts[@]}"
 exit "$failed"
