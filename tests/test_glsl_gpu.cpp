@@ -14,6 +14,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -340,8 +341,7 @@ TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field o
         const krs::torus ring({0.15f, 0.3f, 0.12f}, {0.3f, 1.0f, -0.2f}, 0.12f, 0.03f);
         krs::glsl::emitter te({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "ring_data", 0});
         te.add(grid, "ring_scene"); // brings krs_torus_* and krs_location
-        float c[12];
-        ring.glsl_constants(c);
+        const std::array<float, 12> c = ring.glsl_parameters();
         const auto v4 = [&](int i) {
             return "vec4(" + krs::glsl::float_literal(c[4 * i]) + ", " + krs::glsl::float_literal(c[4 * i + 1]) + ", " +
                    krs::glsl::float_literal(c[4 * i + 2]) + ", " + krs::glsl::float_literal(c[4 * i + 3]) + ")";

@@ -14,11 +14,14 @@
 // hit the scene and 0 on the sky.
 
 #include "krs/glsl/emitter.hpp"
+#include "krs/kernels/kernels.hpp"
+#include "krs/sequence.hpp"
 #include "krs/shade/kernel_light.hpp"
 #include "krs/trace/box_clip.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <concepts>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -56,15 +59,15 @@ struct view {
 };
 
 namespace detail {
-// Shading palette by kernel type (linear RGB).
+// Shading palette by kernel type (linear RGB): bark for stems, leaf green for spheres, soil for
+// planes, stone for the rest.
 template <class K>
 constexpr vec3f albedo_of()
 {
-    std::string_view n = K::glsl_name;
-    if (n == "krs_torus_capsule" || n == "krs_capsule") return {0.40f, 0.26f, 0.15f};
-    if (n == "krs_sphere") return {0.22f, 0.45f, 0.12f};
-    if (n == "krs_plane") return {0.42f, 0.40f, 0.33f};
-    return {0.70f, 0.68f, 0.64f};
+    if constexpr (std::same_as<K, torus_capsule> || std::same_as<K, capsule>) return {0.40f, 0.26f, 0.15f};
+    else if constexpr (std::same_as<K, sphere>) return {0.22f, 0.45f, 0.12f};
+    else if constexpr (std::same_as<K, plane>) return {0.42f, 0.40f, 0.33f};
+    else return {0.70f, 0.68f, 0.64f};
 }
 } // namespace detail
 
