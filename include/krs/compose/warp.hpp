@@ -27,6 +27,7 @@
 #include <concepts>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <utility>
 
 namespace krs {
@@ -154,6 +155,17 @@ struct noise_warp {
         return 1.0 + double(amplitude) * double(frequency) * std::sqrt(3.0) * value_noise_gradient_bound;
     }
     bounding_sphere domain() const { return bounding_sphere::unbounded(); }
+
+    // GLSL: one vec4 (frequency, amplitude, 0, 0); krs_value_noise from core/noise.hpp.
+    using glsl_needs = std::tuple<value_noise_glsl>;
+    static constexpr std::string_view glsl_name = "krs_noise_warp";
+    static constexpr std::string_view glsl_source = R"(vec3 krs_noise_warp_apply(vec3 p, vec4 w) {
+    vec3 q = p * w.x;
+    return vec3(p.x + w.y * krs_value_noise(q), p.y + w.y * krs_value_noise(vec3(q.x + 31.7, q.y, q.z - 31.7)),
+                p.z + w.y * krs_value_noise(vec3(q.x, q.y + -47.3, q.z + -47.3)));
+}
+)";
+    std::array<float, 4> glsl_parameters() const { return {frequency, amplitude, 0.0f, 0.0f}; }
 };
 
 template <field F, warp W>

@@ -216,11 +216,15 @@ struct krs_kernel_shading {
             (void)sizeof(type_without_glsl<F>);
         }
     }
-    // X's glsl_source, once per shader (guarded, so two pasted snippets define it once too).
+    // X's glsl_source, once per shader (guarded, so two pasted snippets define it once too), after
+    // the GLSL types it calls (a std::tuple of them in X::glsl_needs, e.g. value noise).
     template <class X>
     void library()
     {
         require_glsl_type<X>();
+        if constexpr (requires { typename X::glsl_needs; })
+            [this]<class... Needed>(std::tuple<Needed...>*) { (library<Needed>(), ...); }(
+                static_cast<typename X::glsl_needs*>(nullptr));
         if (included_.insert(std::string(X::glsl_name)).second) library_ += guarded(X::glsl_name, X::glsl_source);
     }
     // Appends x's glsl_parameters() to the data; returns the index of its first vec4. `what` is
