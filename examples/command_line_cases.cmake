@@ -85,3 +85,5 @@ krs_case(glsl_export       2 "--all;'--scene'"                                  
 krs_case(glsl_export       2 "--version"                                           --version)
 krs_case(glsl_export       0 "--scene;--target;--mode"                             --help)
 krs_case(glsl_export       0 ""                                                    --scene sponge --target 330 --output <out>/sponge.glsl)
+krs_case(glsl_export       0 ""                                                    --scene tree --target 450 --mode uniform-buffer
+                                                                                   --output <out>/tree.ubo450.glsl)

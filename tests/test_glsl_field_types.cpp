@@ -1,7 +1,8 @@
 // Every field type's GLSL against its C++, on llvmpipe: one small instance of each kernel and
 // composite, its emitted distance run at 16,384 points (within 1e-5 of the sampled region's
 // extent), and for kernels also the kernel-space point, the reflection bits and the kernel's own
-// normal through a two-mirror sequence's locate and Algorithm 2 shading.
+// normal through a two-mirror sequence's locate and Algorithm 2 shading. The 450 code of each, in
+// every data mode, is also compiled for Vulkan and validated (glslangValidator -V, spirv-val).
 //
 // The cases name the library types they exercise, and the last check reads the library's headers
 // for every type that carries GLSL (a glsl_name, or a glsl_emit member) and fails for one that no
@@ -83,6 +84,18 @@ void check_distance(const std::string& name, const F& field, vec3f center, vec3f
                     double(worst / extent), double(extent), exact);
         INFO(name << (buffer ? " buffer" : " constants"));
         CHECK(worst <= 1e-5f * extent);
+    }
+    // Vulkan: the 450 code of every data mode compiles to SPIR-V that spirv-val accepts.
+    const std::string dir = std::string(KRS_BINARY_DIR) + "/glsl-check";
+    std::filesystem::create_directories(dir);
+    for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer,
+                            krs::glsl::data_mode::uniform_buffer}) {
+        krs::glsl::emitter e({krs::glsl::target::glsl450, mode, name + "_data", 0});
+        e.add(field, name);
+        krs_test::validate_spirv(dir + "/" + name + ".vulkan." + std::string(krs::glsl::mode_name(mode)).substr(0, 3) +
+                                     ".frag",
+                                 e.source(true) + "layout(location = 0) out vec4 krs_out;\nvoid main() { krs_out = vec4(" +
+                                     name + "(vec3(0.5, 0.25, 0.125))); }\n");
     }
 }
 

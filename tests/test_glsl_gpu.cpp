@@ -32,7 +32,7 @@
 namespace {
 
 using krs_test::buffer, krs_test::compile, krs_test::gpu_result, krs_test::link, krs_test::require_context,
-    krs_test::run_points, krs_test::validate_with_glslang;
+    krs_test::run_points, krs_test::validate_spirv, krs_test::validate_with_glslang;
 
 namespace ex = krs::glsl::examples;
 using krs::vec3f;
@@ -170,6 +170,14 @@ std::string wrapper_main(const std::string& name)
            "    krs_out = vec4(" + name + "(vec3(1.0)), w.kernel_point.x + float(w.reflections.x), s.normal.x, 1.0);\n}\n";
 }
 
+// The same calls for Vulkan, where an output needs a location.
+std::string vulkan_main(const std::string& name)
+{
+    return "layout(location = 0) out vec4 krs_out;\nvoid main() {\n    krs_location w = " + name + "_locate(vec3(0.5));\n"
+           "    krs_kernel_shading s = " + name + "_shade(vec3(0.5), vec3(0.0, 1.0, 0.0), vec3(1.0, 0.0, 0.0), 0.01);\n"
+           "    krs_out = vec4(" + name + "(vec3(1.0)), w.kernel_point.x + float(w.reflections.x), s.normal.x, 1.0);\n}\n";
+}
+
 } // namespace
 
 TEST_CASE("glslangValidator accepts every emitted snippet for every target")
@@ -177,7 +185,7 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
     REQUIRE(std::system("\"" KRS_GLSLANG_VALIDATOR "\" --version > /dev/null 2>&1") == 0);
     const std::string dir = std::string(KRS_BINARY_DIR) + "/glsl-check";
     std::system(("mkdir -p \"" + dir + "\"").c_str());
-    int files = 0;
+    int files = 0, spirv_files = 0;
     ex::for_each_scene([&](const auto& s) {
         for (const ex::file_kind& kind : ex::files) {
             const std::string text = ex::file_text(s, kind);
@@ -202,17 +210,31 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
             validate_with_glslang(path + ".frag", krs::glsl::version_line(kind.target) + body);
             ++files;
         }
-        // 450 constants and es300 buffer are not shipped files; check them too.
+        // 450 constants and uniform buffer and es300 buffer are not shipped files; check them too.
         for (const auto& [t, m] : {std::pair{krs::glsl::target::glsl450, krs::glsl::data_mode::constants},
+                                   std::pair{krs::glsl::target::glsl450, krs::glsl::data_mode::uniform_buffer},
                                    std::pair{krs::glsl::target::es300, krs::glsl::data_mode::buffer}}) {
             krs::glsl::emitter e({t, m, s.name + "_data", 0});
             e.add(s.field, s.name);
-            validate_with_glslang(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + ".extra.frag",
-                     e.source(true) + wrapper_main(s.name));
+            validate_with_glslang(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + "." +
+                                      std::to_string(int(m)) + ".extra.frag",
+                                  e.source(true) + wrapper_main(s.name));
             ++files;
         }
+        // Vulkan: the 450 code of every data mode (the shipped buffer450 file among them) to SPIR-V.
+        for (const auto m : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer,
+                             krs::glsl::data_mode::uniform_buffer}) {
+            krs::glsl::emitter e({krs::glsl::target::glsl450, m, s.name + "_data", 0});
+            e.add(s.field, s.name);
+            if (m == krs::glsl::data_mode::buffer)
+                CHECK(e.source() == ex::file_text(s, ex::files[3])); // what glsl/NAME.buffer450.glsl holds
+            validate_spirv(dir + "/" + s.name + ".vulkan." + std::to_string(int(m)) + ".frag",
+                           e.source(true) + vulkan_main(s.name));
+            ++spirv_files;
+        }
     });
-    std::printf("glslangValidator: %d shaders checked\n", files);
+    std::printf("glslangValidator: %d shaders checked, %d compiled for Vulkan and passed spirv-val\n", files,
+                spirv_files);
 }
 
 TEST_CASE("Two shipped snippets in one shader: each library part once, both fields right")
