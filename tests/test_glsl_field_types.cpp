@@ -64,14 +64,14 @@ void check_distance(const std::string& name, const F& field, vec3f center, vec3f
     const float extent = krs::length(half);
     for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
         krs::glsl::emitter e({krs::glsl::target::glsl450, mode, name + "_data", 0});
-        e.add(field, name);
+        const std::string fn = e.add(field, name); // krs_NAME, its data krs_NAME_data
         const bool buffer = mode == krs::glsl::data_mode::buffer;
         // A sequence emits NAME_locate; any other field gets one that reports nothing.
         std::string snippet = e.source();
         if constexpr (!requires(const F& f, vec3f p) { f.locate(p); })
-            snippet += "krs_location " + name + "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
-        const auto gpu = krs_test::run_points(snippet, name, points, buffer ? e.data() : std::vector<float>{}, false,
-                                              name + "_data");
+            snippet += "krs_location " + fn + "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
+        const auto gpu = krs_test::run_points(snippet, fn, points, buffer ? e.data() : std::vector<float>{}, false,
+                                              fn + "_data");
         float worst = 0;
         std::size_t exact = 0;
         for (std::size_t i = 0; i < points.size(); ++i) {
@@ -91,11 +91,11 @@ void check_distance(const std::string& name, const F& field, vec3f center, vec3f
     for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer,
                             krs::glsl::data_mode::uniform_buffer}) {
         krs::glsl::emitter e({krs::glsl::target::glsl450, mode, name + "_data", 0});
-        e.add(field, name);
+        const std::string fn = e.add(field, name);
         krs_test::validate_spirv(dir + "/" + name + ".vulkan." + std::string(krs::glsl::mode_name(mode)).substr(0, 3) +
                                      ".frag",
                                  e.source(true) + "layout(location = 0) out vec4 krs_out;\nvoid main() { krs_out = vec4(" +
-                                     name + "(vec3(0.5, 0.25, 0.125))); }\n");
+                                     fn + "(vec3(0.5, 0.25, 0.125))); }\n");
     }
 }
 
@@ -110,9 +110,8 @@ void check_kernel(const std::string& name, const K& kernel, const char* type)
     b.mirror(krs::mirror(krs::normalize(vec3f{1.0f, 0.2f, 0.1f}), kernel.bound().center.x + 0.3f));
     b.mirror(krs::mirror(krs::normalize(vec3f{-0.1f, 1.0f, 0.3f}), kernel.bound().center.y + 0.2f));
     const krs::sequence<K> s = b.build();
-    const std::string seq = name + "_pair";
-    krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, seq + "_data", 0});
-    e.add(s, seq);
+    krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, name + "_pair_data", 0});
+    const std::string seq = e.add(s, name + "_pair");
     // A locate whose kernel_point slot carries the shading normal.
     const std::string probe = seq + "_probe";
     const std::string snippet = e.source() + "float " + probe + "(vec3 p) { return " + seq + "(p); }\n" +

@@ -104,11 +104,10 @@ void check_scene(const ex::scene<S>& s)
                                 {"330 buffer (UBO std140)", krs::glsl::target::glsl330, krs::glsl::data_mode::buffer}};
     for (const variant& v : variants) {
         krs::glsl::emitter e({v.target, v.mode, s.name + "_data", 0});
-        e.add(s.field, s.name);
+        const std::string fn = e.add(s.field, s.name); // krs_NAME, its data krs_NAME_data
         const bool buffer = v.mode == krs::glsl::data_mode::buffer;
         const std::vector<float> data = buffer ? krs::glsl::pack(s.field, s.name) : std::vector<float>{};
-        const auto gpu = run_points(e.source(), s.name, points, data, v.target == krs::glsl::target::glsl330,
-                                    s.name + "_data");
+        const auto gpu = run_points(e.source(), fn, points, data, v.target == krs::glsl::target::glsl330, fn + "_data");
         const parity r = compare(s, points, gpu);
         const std::size_t compared = r.points - r.near_mirror;
         std::printf("%-8s %-26s points %zu  max |d_gpu - d_cpu| %.3g (%.3g of extent %.3g)  reflection bits equal "
@@ -201,7 +200,7 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
                 files += 2;
                 continue;
             }
-            const std::string body = text + wrapper_main(s.name);
+            const std::string body = text + wrapper_main("krs_" + s.name);
             if (kind.target == krs::glsl::target::glsl330 && kind.mode == krs::glsl::data_mode::constants) {
                 // The constants snippet serves 330 and 450 alike.
                 validate_with_glslang(path + ".450.frag", "#version 450 core\n" + body);
@@ -215,21 +214,21 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
                                    std::pair{krs::glsl::target::glsl450, krs::glsl::data_mode::uniform_buffer},
                                    std::pair{krs::glsl::target::es300, krs::glsl::data_mode::buffer}}) {
             krs::glsl::emitter e({t, m, s.name + "_data", 0});
-            e.add(s.field, s.name);
+            const std::string fn = e.add(s.field, s.name);
             validate_with_glslang(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + "." +
                                       std::to_string(int(m)) + ".extra.frag",
-                                  e.source(true) + wrapper_main(s.name));
+                                  e.source(true) + wrapper_main(fn));
             ++files;
         }
         // Vulkan: the 450 code of every data mode (the shipped buffer450 file among them) to SPIR-V.
         for (const auto m : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer,
                              krs::glsl::data_mode::uniform_buffer}) {
             krs::glsl::emitter e({krs::glsl::target::glsl450, m, s.name + "_data", 0});
-            e.add(s.field, s.name);
+            const std::string fn = e.add(s.field, s.name);
             if (m == krs::glsl::data_mode::buffer)
                 CHECK(e.source() == ex::file_text(s, ex::files[3])); // what glsl/NAME.buffer450.glsl holds
             validate_spirv(dir + "/" + s.name + ".vulkan." + std::to_string(int(m)) + ".frag",
-                           e.source(true) + vulkan_main(s.name));
+                           e.source(true) + vulkan_main(fn));
             ++spirv_files;
         }
     });
@@ -247,10 +246,17 @@ TEST_CASE("Two shipped snippets in one shader: each library part once, both fiel
     const std::string both = ex::file_text(tree, constants) + ex::file_text(terrain, constants);
     const std::string dir = std::string(KRS_BINARY_DIR) + "/glsl-check";
     std::system(("mkdir -p \"" + dir + "\"").c_str());
-    validate_with_glslang(dir + "/tree_and_terrain.frag", "#version 330 core\n" + both + wrapper_main("terrain"));
+    validate_with_glslang(dir + "/tree_and_terrain.frag", "#version 330 core\n" + both + wrapper_main("krs_terrain"));
+    // Pasted into a shader that already has globals named like the scenes: every name the snippets
+    // declare carries the krs_ prefix, so nothing is redefined or hidden.
+    validate_with_glslang(dir + "/tree_and_terrain_in_a_user_shader.frag",
+                          "#version 330 core\nuniform float terrain;\nfloat tree(vec3 p) { return p.x - terrain; }\n" +
+                              both + "out vec4 color;\nvoid main() { color = vec4(tree(vec3(1.0)) + krs_tree(vec3(1.0)) + "
+                                     "krs_terrain(vec3(0.5)) + krs_terrain_locate(vec3(0.5)).dist); }\n");
     const std::vector<vec3f> tree_points = sample_points(tree, 4096), terrain_points = sample_points(terrain, 4096);
-    const parity t = compare(tree, tree_points, run_points(both, "tree", tree_points, {}, false, "tree_data"));
-    const parity g = compare(terrain, terrain_points, run_points(both, "terrain", terrain_points, {}, false, "terrain_data"));
+    const parity t = compare(tree, tree_points, run_points(both, "krs_tree", tree_points, {}, false, "krs_tree_data"));
+    const parity g =
+        compare(terrain, terrain_points, run_points(both, "krs_terrain", terrain_points, {}, false, "krs_terrain_data"));
     CHECK(t.max_error <= 1e-5f * tree.extent());
     CHECK(g.max_error <= 1e-5f * terrain.extent());
 }
@@ -323,11 +329,12 @@ TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field o
     const krs::union_of<warped, krs::box> scene(warped(tree.field, krs::twist_warp(0.2f, 8.0f)),
                                                 krs::box({2.0f, 0.5f, 0.0f}, {0.4f, 0.5f, 0.3f}));
     krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "scene_data", 0});
-    e.add(scene, "scene");
+    const std::string fn = e.add(scene, "scene");
     // The union has no locate of its own: give the compute wrapper one that reports nothing.
-    const std::string snippet = e.source() + "krs_location scene_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
+    const std::string snippet =
+        e.source() + "krs_location " + fn + "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
     const std::vector<vec3f> points = sample_points(tree, 16384);
-    const auto gpu = run_points(snippet, "scene", points, {}, false, "scene_data");
+    const auto gpu = run_points(snippet, fn, points, {}, false, fn + "_data");
     float worst = 0;
     for (std::size_t i = 0; i < points.size(); ++i) worst = std::max(worst, std::abs(gpu[i].distance - scene.distance(points[i])));
     std::printf("union(twisted tree, box) max |d_gpu - d_cpu| %.3g (extent %.3g)\n", double(worst), double(tree.extent()));
@@ -339,7 +346,7 @@ TEST_CASE("GLSL buffer mode animates a sequence without recompiling")
     // The same code, the data of a sequence with moved mirrors: the GPU follows the new data.
     const auto sponge = ex::sponge();
     krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "sponge_data", 0});
-    e.add(sponge.field, "sponge");
+    const std::string fn = e.add(sponge.field, "sponge");
     krs::model::sponge_sequence::builder b;
     for (std::size_t i = 0; i <= sponge.field.mirror_count(); ++i) {
         if (i > 0) {
@@ -352,7 +359,7 @@ TEST_CASE("GLSL buffer mode animates a sequence without recompiling")
     const auto moved = b.build();
     const ex::scene<krs::model::sponge_sequence> s{"sponge", moved, {}, sponge.sample_center, sponge.sample_half};
     const std::vector<vec3f> points = sample_points(s, 16384);
-    const auto gpu = run_points(e.source(), "sponge", points, krs::glsl::pack(moved, "sponge"), false, "sponge_data");
+    const auto gpu = run_points(e.source(), fn, points, krs::glsl::pack(moved, "sponge"), false, fn + "_data");
     const parity r = compare(s, points, gpu);
     CHECK(r.max_error <= 1e-5f * s.extent());
     CHECK(r.bits_equal == r.points - r.near_mirror);
@@ -430,10 +437,10 @@ int validate_fractal(const std::string& dir, const std::string& name, const F& f
     for (const auto t : {krs::glsl::target::glsl330, krs::glsl::target::glsl450, krs::glsl::target::es300})
         for (const auto m : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
             krs::glsl::emitter e({t, m, name + "_data", 0});
-            e.add(field, name);
+            const std::string fn = e.add(field, name);
             validate_with_glslang(dir + "/" + name + "." + std::string(krs::glsl::target_name(t)) +
                          (m == krs::glsl::data_mode::buffer ? ".buffer" : ".constants") + ".frag",
-                     e.source(true) + fractal_main(name));
+                     e.source(true) + fractal_main(fn));
             ++files;
         }
     return files;
@@ -445,13 +452,13 @@ std::vector<float> gpu_distances(const F& field, const std::string& name, const 
                                  krs::glsl::data_mode mode)
 {
     krs::glsl::emitter e({krs::glsl::target::glsl450, mode, name + "_data", 0});
-    e.add(field, name);
+    const std::string fn = e.add(field, name);
     const bool buffer = mode == krs::glsl::data_mode::buffer;
     std::vector<float> data;
     if (buffer) data = krs::glsl::pack(field, name);
-    const std::string snippet = e.source() + "krs_location " + name +
+    const std::string snippet = e.source() + "krs_location " + fn +
                                 "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
-    const auto gpu = run_points(snippet, name, points, data, false, name + "_data");
+    const auto gpu = run_points(snippet, fn, points, data, false, fn + "_data");
     std::vector<float> d(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) d[i] = gpu[i].distance;
     return d;

@@ -10,14 +10,20 @@
 // the function bodies that tie them together.
 //
 //   krs::glsl::emitter e({.target = krs::glsl::target::glsl450});
-//   e.add(tree, "tree");               // float tree(vec3 p); krs_location tree_locate(vec3 p);
-//                                      // krs_kernel_shading tree_shade(vec3 p, vec3 l, vec3 v, float e)
+//   e.add(tree, "tree");               // float krs_tree(vec3 p); krs_location krs_tree_locate(vec3 p);
+//                                      // krs_kernel_shading krs_tree_shade(vec3 p, vec3 l, vec3 v, float e)
 //   std::string code = e.source();     // paste into a shader (e.source(true) adds #version)
+//
+// Safe to paste: every name the text declares at global scope (functions, structs, the data array
+// and its block) starts with `options.prefix` (default krs_), the scene's function included, and
+// every include guard with the prefix in upper case. A shader that already has `float tree(vec3)`
+// or `uniform float terrain;` keeps them; one that uses names starting with the prefix picks another
+// (`{.prefix = "forest_gen_"}`). Internally the text is written with krs_ and renamed on output.
 //
 // A KRS sequence is unrolled: its structure (level count, kernel kinds per level) is fixed in the
 // code and its parameters are read from the data, so the same code serves both data modes.
 //
-// Data layout. All parameters are vec4s in one array (`options.data_name`, default `krs_data`):
+// Data layout. All parameters are vec4s in one array (prefix + `options.data_name`, default krs_data):
 // kernels and mirrors in the order the functions use them, each a fixed number of vec4s (see each
 // type's comment). Because the element is vec4, the layout is the same under std140 and std430:
 // base alignment 16, array stride 16, no padding, element k at byte offset 16 k, components
@@ -71,8 +77,9 @@ enum class data_mode {
 struct options {
     glsl::target target = glsl::target::glsl450;
     data_mode mode = data_mode::constants;
-    std::string data_name = "krs_data"; // the vec4 array; its block is data_name + "_block"
-    int binding = 0;                    // SSBO binding for glsl450 buffers
+    std::string data_name = "data";     // the vec4 array is prefix + data_name; its block + "_block"
+    int binding = 0;                    // the block's binding for glsl450 buffers
+    std::string prefix = "krs_";        // of every global name the text declares
 };
 
 inline std::string_view target_name(target t)
@@ -160,19 +167,23 @@ public:
     {
         if (options_.target == target::shadertoy && options_.mode != data_mode::constants)
             throw invalid_parameter("glsl.options.mode", "Shadertoy has no buffers: use data_mode::constants");
-        require_identifier(options_.data_name);
+        require_prefix(options_.prefix);
+        require_data_name(options_.data_name);
+        array_ = std::string(internal_prefix) + options_.data_name;
     }
 
     const options& settings() const { return options_; }
 
-    // Emits `float NAME(vec3 p)` for any supported field; for a KRS sequence also NAME_locate and
-    // NAME_shade (Algorithm 2). Returns NAME.
+    // Emits `float PREFIXNAME(vec3 p)` for any supported field (krs_tree for "tree"); for a KRS
+    // sequence also PREFIXNAME_locate and PREFIXNAME_shade (Algorithm 2). Returns PREFIXNAME, the
+    // name to call. `name` is made of letters, digits and _.
     template <class F>
     std::string add(const F& f, const std::string& name)
     {
-        field(f, name);
+        require_name("glsl.add.name", name);
+        field(f, std::string(internal_prefix) + name);
         require_unshadowed_data_name();
-        return name;
+        return options_.prefix + name;
     }
 
     // The packed parameters, 4 floats per vec4, in the layout documented above.
@@ -193,7 +204,7 @@ public:
         out += data_declaration();
         out += constants_comments_;
         out += functions_;
-        return out;
+        return with_prefix(out, options_.prefix);
     }
 
     // The structs every locate / shade function returns (emitted once, in the library).
@@ -253,7 +264,7 @@ struct krs_kernel_shading {
         if constexpr (vec4s_of<X> > 0) {
             const auto values = x.glsl_parameters();
             data_.insert(data_.end(), values.begin(), values.end());
-            constants_comments_ += "// " + options_.data_name + "[" + std::to_string(index) + "..." +
+            constants_comments_ += "// " + array_ + "[" + std::to_string(index) + "..." +
                                    std::to_string(index + vec4s_of<X> - 1) + "]: " + what + " (" +
                                    std::string(X::glsl_name) + ")\n";
         }
@@ -264,11 +275,11 @@ struct krs_kernel_shading {
     {
         const std::size_t index = vec4_count_now();
         data_.insert(data_.end(), v.begin(), v.end());
-        constants_comments_ += "// " + options_.data_name + "[" + std::to_string(index) + "]: " + what + "\n";
+        constants_comments_ += "// " + array_ + "[" + std::to_string(index) + "]: " + what + "\n";
         return index;
     }
     // The data element at `index`, as GLSL ("krs_data[7]").
-    std::string at(std::size_t index) const { return options_.data_name + "[" + std::to_string(index) + "]"; }
+    std::string at(std::size_t index) const { return array_ + "[" + std::to_string(index) + "]"; }
     // ", D[k], D[k+1], ...": X's parameters at index k, as the arguments after the point.
     template <class X>
     std::string arguments(std::size_t index) const
@@ -277,7 +288,7 @@ struct krs_kernel_shading {
         for (std::size_t i = 0; i < vec4s_of<X>; ++i) s += ", " + at(index + i);
         return s;
     }
-    const std::string& data_name() const { return options_.data_name; }
+    const std::string& data_name() const { return array_; }
     // Appends a function the composite wrote.
     void function(const std::string& text) { functions_ += text; }
     // `float NAME(vec3 p)` as the min of NAME_0 .. NAME_{count-1} in that order (the C++
@@ -291,43 +302,75 @@ struct krs_kernel_shading {
     }
 
 private:
-    // ---- the data array's name ------------------------------------------------------------
-    // A GLSL identifier outside the implementation's gl_ prefix, and
-    // not one of the library's: every name the library declares at global scope starts with krs_
-    // (the default, krs_data, is the one such name left to the data).
-    static void require_identifier(const std::string& n)
+    // ---- names ------------------------------------------------------------------------------
+    // The text is written with this prefix and renamed to options.prefix by with_prefix.
+    static constexpr std::string_view internal_prefix = "krs_";
+
+    static bool word_char(char c)
     {
-        const auto letter = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
-        const auto digit = [](char c) { return c >= '0' && c <= '9'; };
-        bool ok = !n.empty() && letter(n[0]) && !n.starts_with("gl_");
-        for (char c : n) ok = ok && (letter(c) || digit(c));
-        if (!ok)
-            throw invalid_parameter("glsl.options.data_name",
-                                    "must be a GLSL identifier (letters, digits and _, not starting with a digit or gl_)",
-                                    n);
-        if (n.starts_with("krs_") && n != "krs_data")
-            throw invalid_parameter("glsl.options.data_name", "must not start with krs_ (the library's names) unless it is krs_data", n);
+        return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
     }
-    // The generated functions use the array as `data_name[`: anywhere else in them the name is
-    // something they declare too (a local such as d or p, a function), which hides the array there
-    // and breaks the shader (a data_name of "d" failed to compile). Checked on every add, so the
-    // field that brought the clash is the one refused. (Library functions take their constants as
-    // parameters and never read the array, so their parameter names cannot clash.)
+    // Letters, digits and _ (what follows the prefix in a name).
+    static void require_name(const char* parameter, const std::string& n)
+    {
+        bool ok = !n.empty();
+        for (char c : n) ok = ok && word_char(c);
+        if (!ok) throw invalid_parameter(parameter, "must be letters, digits and _ (it follows the prefix in GLSL names)", n);
+    }
+    // A GLSL identifier, outside the implementation's gl_ names and without GLSL's reserved "__".
+    static void require_prefix(const std::string& p)
+    {
+        const bool starts = !p.empty() && word_char(p[0]) && !(p[0] >= '0' && p[0] <= '9');
+        bool ok = starts && !p.starts_with("gl_") && p.find("__") == std::string::npos;
+        for (char c : p) ok = ok && word_char(c);
+        if (!ok)
+            throw invalid_parameter("glsl.options.prefix",
+                                    "must be a GLSL identifier (letters, digits and _, not starting with a digit), not "
+                                    "starting with gl_ and without __",
+                                    p);
+    }
+    static void require_data_name(const std::string& n) { require_name("glsl.options.data_name", n); }
+
+    // The text with every identifier that starts with krs_ starting with `prefix` instead, and every
+    // one that starts with KRS_ (include guards) with the prefix in upper case.
+    static std::string with_prefix(const std::string& text, const std::string& prefix)
+    {
+        if (prefix == internal_prefix) return text;
+        std::string upper = prefix;
+        for (char& c : upper) c = c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c;
+        std::string out;
+        out.reserve(text.size() + text.size() / 8);
+        for (std::size_t i = 0; i < text.size();) {
+            const bool token_start = i == 0 || !word_char(text[i - 1]);
+            if (token_start && text.compare(i, 4, "krs_") == 0) {
+                out += prefix;
+                i += 4;
+            } else if (token_start && text.compare(i, 4, "KRS_") == 0) {
+                out += upper;
+                i += 4;
+            } else {
+                out += text[i++];
+            }
+        }
+        return out;
+    }
+    // The generated functions use the array as `ARRAY[`: anywhere else in them its name is one they
+    // declare too (a scene's part: data_name "tree_kernel" next to a KIFS named "tree" makes
+    // krs_tree_kernel both), which breaks the shader. Checked on every add, so the field that
+    // brought the clash is the one refused. (Library functions take their constants as parameters
+    // and never read the array.)
     void require_unshadowed_data_name() const
     {
-        const std::string& n = options_.data_name;
-        const auto word = [](char c) {
-            return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
-        };
+        const std::string& n = array_;
+        const auto word = word_char;
         const std::string_view text = functions_;
         for (std::size_t at = text.find(n); at != std::string_view::npos; at = text.find(n, at + 1)) {
             const std::size_t end = at + n.size();
             if ((at > 0 && word(text[at - 1])) || (end < text.size() && word(text[end]))) continue;
             if (end < text.size() && text[end] == '[') continue;
             throw invalid_parameter("glsl.options.data_name",
-                                    "is also a name the generated functions declare (a local variable or a "
-                                    "function), which would hide the data array: choose another",
-                                    n);
+                                    "makes the data array's name one the generated functions declare: choose another",
+                                    options_.data_name);
         }
     }
 
@@ -340,13 +383,13 @@ private:
         if (n == 0) return {};
         const std::string size = std::to_string(n);
         if (options_.mode != data_mode::constants) {
-            const std::string members = options_.data_name + "_block {\n    vec4 " + options_.data_name + "[" + size + "];\n};\n";
+            const std::string members = array_ + "_block {\n    vec4 " + array_ + "[" + size + "];\n};\n";
             const std::string binding = "binding = " + std::to_string(options_.binding);
             if (options_.target != target::glsl450) return "layout(std140) uniform " + members;
             if (options_.mode == data_mode::buffer) return "layout(std430, " + binding + ") readonly buffer " + members;
             return "layout(std140, " + binding + ") uniform " + members;
         }
-        std::string s = "const vec4 " + options_.data_name + "[" + size + "] = vec4[" + size + "](\n";
+        std::string s = "const vec4 " + array_ + "[" + size + "] = vec4[" + size + "](\n";
         for (std::size_t k = 0; k < n; ++k) {
             s += "    vec4(";
             for (int c = 0; c < 4; ++c) s += (c ? ", " : "") + float_literal(data_[4 * k + std::size_t(c)]);
@@ -365,6 +408,7 @@ private:
     }
 
     options options_;
+    std::string array_;              // the data array's name in the text, krs_ + data_name
     std::set<std::string> included_;
     std::string library_;            // each kind's functions, once
     std::string constants_comments_; // what each data entry holds
