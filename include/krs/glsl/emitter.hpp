@@ -82,6 +82,16 @@ struct options {
     std::string prefix = "krs_";        // of every global name the text declares
 };
 
+// Whether `p` can start every global name of the text: a GLSL identifier (letters, digits and _,
+// not starting with a digit), outside the implementation's gl_ names, without GLSL's reserved __.
+inline bool is_prefix(std::string_view p)
+{
+    const auto word = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_'; };
+    bool ok = !p.empty() && !(p[0] >= '0' && p[0] <= '9') && !p.starts_with("gl_") && p.find("__") == std::string_view::npos;
+    for (char c : p) ok = ok && word(c);
+    return ok;
+}
+
 inline std::string_view target_name(target t)
 {
     switch (t) {
@@ -317,13 +327,9 @@ private:
         for (char c : n) ok = ok && word_char(c);
         if (!ok) throw invalid_parameter(parameter, "must be letters, digits and _ (it follows the prefix in GLSL names)", n);
     }
-    // A GLSL identifier, outside the implementation's gl_ names and without GLSL's reserved "__".
     static void require_prefix(const std::string& p)
     {
-        const bool starts = !p.empty() && word_char(p[0]) && !(p[0] >= '0' && p[0] <= '9');
-        bool ok = starts && !p.starts_with("gl_") && p.find("__") == std::string::npos;
-        for (char c : p) ok = ok && word_char(c);
-        if (!ok)
+        if (!is_prefix(p))
             throw invalid_parameter("glsl.options.prefix",
                                     "must be a GLSL identifier (letters, digits and _, not starting with a digit), not "
                                     "starting with gl_ and without __",
