@@ -81,7 +81,16 @@ krs_case(glsl_export       2 "--scene;'sky';one of tree|forest|terrain|sponge"  
 krs_case(glsl_export       2 "--target;'460';one of 330|450|es300|shadertoy"       --target 460)
 krs_case(glsl_export       2 "--mode;'texture';one of constants|buffer"            --mode texture)
 krs_case(glsl_export       2 "--output;missing"                                    --output)
+krs_case(glsl_export       2 "--prefix;'gl_';GLSL identifier"                       --prefix gl_)
+krs_case(glsl_export       2 "--prefix;'1st_'"                                     --prefix 1st_)
+krs_case(glsl_export       2 "--prefix;'my__'"                                     --prefix my__)
+krs_case(glsl_export       2 "--prefix;'a-b'"                                      --prefix a-b)
+krs_case(glsl_export       2 "--prefix;Shadertoy"                                  --target shadertoy --prefix app_)
 krs_case(glsl_export       2 "--all;'--scene'"                                     --all --scene tree)
 krs_case(glsl_export       2 "--version"                                           --version)
 krs_case(glsl_export       0 "--scene;--target;--mode"                             --help)
 krs_case(glsl_export       0 ""                                                    --scene sponge --target 330 --output <out>/sponge.glsl)
+krs_case(glsl_export       0 ""                                                    --scene tree --target 450 --mode uniform-buffer
+                                                                                   --output <out>/tree.ubo450.glsl)
+krs_case(glsl_export       0 ""                                                    --scene forest --prefix forest_gen_
+                                                                                   --output <out>/forest.prefixed.glsl)

@@ -43,10 +43,25 @@ int main(int argc, char** argv)
                                               "regenerates every file of the repository's glsl/ folder.");
     args.choice("--scene", scene, {"tree", "forest", "terrain", "sponge"}, "the scene");
     args.choice("--target", target, {"330", "450", "es300", "shadertoy"}, "the GLSL dialect");
-    args.choice("--mode", mode, {"constants", "buffer"}, "the scene's data as constants or in a buffer");
+    args.choice("--mode", mode, {"constants", "buffer", "uniform-buffer"},
+                "the scene's data as constants, in a buffer (UBO for 330 and ES, SSBO for 450), or in a "
+                "uniform buffer (450: at binding 0, for Vulkan)");
     args.text("--output", output, "the file to write (default and -: stdout)", "FILE");
+    std::string prefix = "krs_";
+    args.app()
+        .add_option("--prefix", prefix, "the start of every global name of a snippet (default krs_)")
+        ->type_name("PREFIX")
+        ->check(CLI::Validator(
+            [](std::string& text) {
+                return krs::glsl::is_prefix(text) ? std::string()
+                                                  : "'" + text + "' is not a GLSL identifier that does not start with "
+                                                              "gl_ and holds no __";
+            },
+            "", "prefix"));
     args.text("--all", all, "write every scene in every target and mode into this folder", "DIR");
     args.parse(argc, argv);
+    if (prefix != "krs_" && (target == "shadertoy" || !all.empty()))
+        args.fail("--prefix: applies to snippets, not to a Shadertoy program or the glsl/ folder (--all)");
     try {
         if (!all.empty()) {
             bool ok = true;
@@ -67,10 +82,11 @@ int main(int argc, char** argv)
         else if (target == "es300") kind.target = krs::glsl::target::es300;
         else kind.target = krs::glsl::target::shadertoy; // the only word left: --target checked it
         if (mode == "constants") kind.mode = krs::glsl::data_mode::constants;
-        else kind.mode = krs::glsl::data_mode::buffer;
+        else if (mode == "buffer") kind.mode = krs::glsl::data_mode::buffer;
+        else kind.mode = krs::glsl::data_mode::uniform_buffer; // the only word left: --mode checked it
         bool ok = false;
         ex::for_each_scene([&](const auto& s) {
-            if (s.name == scene) ok = write(output, ex::file_text(s, kind));
+            if (s.name == scene) ok = write(output, ex::file_text(s, kind, prefix));
         });
         return ok ? 0 : 1;
     } catch (const std::exception& e) {

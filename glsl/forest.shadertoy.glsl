@@ -80,7 +80,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 #endif
-const vec4 forest_data[80] = vec4[80](
+const vec4 krs_forest_data[80] = vec4[80](
     vec4(0.8916828, -0.25330064, -0.3751541, -1.3240795),
     vec4(-0.42183313, -0.28242838, 0.86156315, -1.5855871),
     vec4(-0.28327295, -0.10174031, -0.95362747, -1.6781133),
@@ -161,107 +161,107 @@ const vec4 forest_data[80] = vec4[80](
     vec4(0.0, 1.0, 0.0, 0.0),
     vec4(0.0, -1.0, 0.0, 0.0),
     vec4(0.0, 1.0, 0.0, 0.0));
-// forest_data[0...0]: forest mirror 0 (krs_mirror)
-// forest_data[1...1]: forest mirror 1 (krs_mirror)
-// forest_data[2...2]: forest mirror 2 (krs_mirror)
-// forest_data[3...3]: forest mirror 3 (krs_mirror)
-// forest_data[4...4]: forest mirror 4 (krs_mirror)
-// forest_data[5...5]: forest mirror 5 (krs_mirror)
-// forest_data[6...6]: forest mirror 6 (krs_mirror)
-// forest_data[7...7]: forest mirror 7 (krs_mirror)
-// forest_data[8...8]: forest mirror 8 (krs_mirror)
-// forest_data[9...9]: forest mirror 9 (krs_mirror)
-// forest_data[10...10]: forest mirror 10 (krs_mirror)
-// forest_data[11...11]: forest mirror 11 (krs_mirror)
-// forest_data[12...12]: forest mirror 12 (krs_mirror)
-// forest_data[13...19]: forest kernel 0 (level 0) (krs_torus_capsule)
-// forest_data[20...20]: forest kernel 1 (level 0) (krs_sphere)
-// forest_data[21...21]: forest kernel 2 (level 0) (krs_sphere)
-// forest_data[22...22]: forest kernel 3 (level 0) (krs_sphere)
-// forest_data[23...29]: forest kernel 4 (level 1) (krs_torus_capsule)
-// forest_data[30...36]: forest kernel 5 (level 2) (krs_torus_capsule)
-// forest_data[37...43]: forest kernel 6 (level 3) (krs_torus_capsule)
-// forest_data[44...50]: forest kernel 7 (level 4) (krs_torus_capsule)
-// forest_data[51...57]: forest kernel 8 (level 5) (krs_torus_capsule)
-// forest_data[58...64]: forest kernel 9 (level 6) (krs_torus_capsule)
-// forest_data[65...71]: forest kernel 10 (level 7) (krs_torus_capsule)
-// forest_data[72...78]: forest kernel 11 (level 8) (krs_torus_capsule)
-// forest_data[79...79]: forest kernel 12 (level 13) (krs_plane)
-float forest(vec3 p) {
+// krs_forest_data[0...0]: krs_forest mirror 0 (krs_mirror)
+// krs_forest_data[1...1]: krs_forest mirror 1 (krs_mirror)
+// krs_forest_data[2...2]: krs_forest mirror 2 (krs_mirror)
+// krs_forest_data[3...3]: krs_forest mirror 3 (krs_mirror)
+// krs_forest_data[4...4]: krs_forest mirror 4 (krs_mirror)
+// krs_forest_data[5...5]: krs_forest mirror 5 (krs_mirror)
+// krs_forest_data[6...6]: krs_forest mirror 6 (krs_mirror)
+// krs_forest_data[7...7]: krs_forest mirror 7 (krs_mirror)
+// krs_forest_data[8...8]: krs_forest mirror 8 (krs_mirror)
+// krs_forest_data[9...9]: krs_forest mirror 9 (krs_mirror)
+// krs_forest_data[10...10]: krs_forest mirror 10 (krs_mirror)
+// krs_forest_data[11...11]: krs_forest mirror 11 (krs_mirror)
+// krs_forest_data[12...12]: krs_forest mirror 12 (krs_mirror)
+// krs_forest_data[13...19]: krs_forest kernel 0 (level 0) (krs_torus_capsule)
+// krs_forest_data[20...20]: krs_forest kernel 1 (level 0) (krs_sphere)
+// krs_forest_data[21...21]: krs_forest kernel 2 (level 0) (krs_sphere)
+// krs_forest_data[22...22]: krs_forest kernel 3 (level 0) (krs_sphere)
+// krs_forest_data[23...29]: krs_forest kernel 4 (level 1) (krs_torus_capsule)
+// krs_forest_data[30...36]: krs_forest kernel 5 (level 2) (krs_torus_capsule)
+// krs_forest_data[37...43]: krs_forest kernel 6 (level 3) (krs_torus_capsule)
+// krs_forest_data[44...50]: krs_forest kernel 7 (level 4) (krs_torus_capsule)
+// krs_forest_data[51...57]: krs_forest kernel 8 (level 5) (krs_torus_capsule)
+// krs_forest_data[58...64]: krs_forest kernel 9 (level 6) (krs_torus_capsule)
+// krs_forest_data[65...71]: krs_forest kernel 10 (level 7) (krs_torus_capsule)
+// krs_forest_data[72...78]: krs_forest kernel 11 (level 8) (krs_torus_capsule)
+// krs_forest_data[79...79]: krs_forest kernel 12 (level 13) (krs_plane)
+float krs_forest(vec3 p) {
     float d = 3.0e38;
-    d = min(d, krs_plane_distance(p, forest_data[79]));
-    p = krs_mirror_fold(p, forest_data[12]);
-    p = krs_mirror_fold(p, forest_data[11]);
-    p = krs_mirror_fold(p, forest_data[10]);
-    p = krs_mirror_fold(p, forest_data[9]);
-    p = krs_mirror_fold(p, forest_data[8]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[72], forest_data[73], forest_data[74], forest_data[75], forest_data[76], forest_data[77], forest_data[78]));
-    p = krs_mirror_fold(p, forest_data[7]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[65], forest_data[66], forest_data[67], forest_data[68], forest_data[69], forest_data[70], forest_data[71]));
-    p = krs_mirror_fold(p, forest_data[6]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[58], forest_data[59], forest_data[60], forest_data[61], forest_data[62], forest_data[63], forest_data[64]));
-    p = krs_mirror_fold(p, forest_data[5]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[51], forest_data[52], forest_data[53], forest_data[54], forest_data[55], forest_data[56], forest_data[57]));
-    p = krs_mirror_fold(p, forest_data[4]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[44], forest_data[45], forest_data[46], forest_data[47], forest_data[48], forest_data[49], forest_data[50]));
-    p = krs_mirror_fold(p, forest_data[3]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[37], forest_data[38], forest_data[39], forest_data[40], forest_data[41], forest_data[42], forest_data[43]));
-    p = krs_mirror_fold(p, forest_data[2]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[30], forest_data[31], forest_data[32], forest_data[33], forest_data[34], forest_data[35], forest_data[36]));
-    p = krs_mirror_fold(p, forest_data[1]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[23], forest_data[24], forest_data[25], forest_data[26], forest_data[27], forest_data[28], forest_data[29]));
-    p = krs_mirror_fold(p, forest_data[0]);
-    d = min(d, krs_torus_capsule_distance(p, forest_data[13], forest_data[14], forest_data[15], forest_data[16], forest_data[17], forest_data[18], forest_data[19]));
-    d = min(d, krs_sphere_distance(p, forest_data[20]));
-    d = min(d, krs_sphere_distance(p, forest_data[21]));
-    d = min(d, krs_sphere_distance(p, forest_data[22]));
+    d = min(d, krs_plane_distance(p, krs_forest_data[79]));
+    p = krs_mirror_fold(p, krs_forest_data[12]);
+    p = krs_mirror_fold(p, krs_forest_data[11]);
+    p = krs_mirror_fold(p, krs_forest_data[10]);
+    p = krs_mirror_fold(p, krs_forest_data[9]);
+    p = krs_mirror_fold(p, krs_forest_data[8]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]));
+    p = krs_mirror_fold(p, krs_forest_data[7]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]));
+    p = krs_mirror_fold(p, krs_forest_data[6]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]));
+    p = krs_mirror_fold(p, krs_forest_data[5]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]));
+    p = krs_mirror_fold(p, krs_forest_data[4]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]));
+    p = krs_mirror_fold(p, krs_forest_data[3]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]));
+    p = krs_mirror_fold(p, krs_forest_data[2]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]));
+    p = krs_mirror_fold(p, krs_forest_data[1]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]));
+    p = krs_mirror_fold(p, krs_forest_data[0]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]));
+    d = min(d, krs_sphere_distance(p, krs_forest_data[20]));
+    d = min(d, krs_sphere_distance(p, krs_forest_data[21]));
+    d = min(d, krs_sphere_distance(p, krs_forest_data[22]));
     return d;
 }
-krs_location forest_locate(vec3 p) {
+krs_location krs_forest_locate(vec3 p) {
     krs_location w = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     float d;
-    d = krs_plane_distance(p, forest_data[79]);
+    d = krs_plane_distance(p, krs_forest_data[79]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 12u; w.level = 13u; }
-    if (krs_mirror_signed_distance(p, forest_data[12]) > 0.0) { p = krs_mirror_reflect(p, forest_data[12]); w.reflections.x |= 0x1000u; }
-    if (krs_mirror_signed_distance(p, forest_data[11]) > 0.0) { p = krs_mirror_reflect(p, forest_data[11]); w.reflections.x |= 0x800u; }
-    if (krs_mirror_signed_distance(p, forest_data[10]) > 0.0) { p = krs_mirror_reflect(p, forest_data[10]); w.reflections.x |= 0x400u; }
-    if (krs_mirror_signed_distance(p, forest_data[9]) > 0.0) { p = krs_mirror_reflect(p, forest_data[9]); w.reflections.x |= 0x200u; }
-    if (krs_mirror_signed_distance(p, forest_data[8]) > 0.0) { p = krs_mirror_reflect(p, forest_data[8]); w.reflections.x |= 0x100u; }
-    d = krs_torus_capsule_distance(p, forest_data[72], forest_data[73], forest_data[74], forest_data[75], forest_data[76], forest_data[77], forest_data[78]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[12]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[12]); w.reflections.x |= 0x1000u; }
+    if (krs_mirror_signed_distance(p, krs_forest_data[11]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[11]); w.reflections.x |= 0x800u; }
+    if (krs_mirror_signed_distance(p, krs_forest_data[10]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[10]); w.reflections.x |= 0x400u; }
+    if (krs_mirror_signed_distance(p, krs_forest_data[9]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[9]); w.reflections.x |= 0x200u; }
+    if (krs_mirror_signed_distance(p, krs_forest_data[8]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[8]); w.reflections.x |= 0x100u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 11u; w.level = 8u; }
-    if (krs_mirror_signed_distance(p, forest_data[7]) > 0.0) { p = krs_mirror_reflect(p, forest_data[7]); w.reflections.x |= 0x80u; }
-    d = krs_torus_capsule_distance(p, forest_data[65], forest_data[66], forest_data[67], forest_data[68], forest_data[69], forest_data[70], forest_data[71]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[7]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[7]); w.reflections.x |= 0x80u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 10u; w.level = 7u; }
-    if (krs_mirror_signed_distance(p, forest_data[6]) > 0.0) { p = krs_mirror_reflect(p, forest_data[6]); w.reflections.x |= 0x40u; }
-    d = krs_torus_capsule_distance(p, forest_data[58], forest_data[59], forest_data[60], forest_data[61], forest_data[62], forest_data[63], forest_data[64]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[6]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[6]); w.reflections.x |= 0x40u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 9u; w.level = 6u; }
-    if (krs_mirror_signed_distance(p, forest_data[5]) > 0.0) { p = krs_mirror_reflect(p, forest_data[5]); w.reflections.x |= 0x20u; }
-    d = krs_torus_capsule_distance(p, forest_data[51], forest_data[52], forest_data[53], forest_data[54], forest_data[55], forest_data[56], forest_data[57]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[5]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[5]); w.reflections.x |= 0x20u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 8u; w.level = 5u; }
-    if (krs_mirror_signed_distance(p, forest_data[4]) > 0.0) { p = krs_mirror_reflect(p, forest_data[4]); w.reflections.x |= 0x10u; }
-    d = krs_torus_capsule_distance(p, forest_data[44], forest_data[45], forest_data[46], forest_data[47], forest_data[48], forest_data[49], forest_data[50]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[4]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[4]); w.reflections.x |= 0x10u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 7u; w.level = 4u; }
-    if (krs_mirror_signed_distance(p, forest_data[3]) > 0.0) { p = krs_mirror_reflect(p, forest_data[3]); w.reflections.x |= 0x8u; }
-    d = krs_torus_capsule_distance(p, forest_data[37], forest_data[38], forest_data[39], forest_data[40], forest_data[41], forest_data[42], forest_data[43]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[3]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[3]); w.reflections.x |= 0x8u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 6u; w.level = 3u; }
-    if (krs_mirror_signed_distance(p, forest_data[2]) > 0.0) { p = krs_mirror_reflect(p, forest_data[2]); w.reflections.x |= 0x4u; }
-    d = krs_torus_capsule_distance(p, forest_data[30], forest_data[31], forest_data[32], forest_data[33], forest_data[34], forest_data[35], forest_data[36]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[2]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[2]); w.reflections.x |= 0x4u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 5u; w.level = 2u; }
-    if (krs_mirror_signed_distance(p, forest_data[1]) > 0.0) { p = krs_mirror_reflect(p, forest_data[1]); w.reflections.x |= 0x2u; }
-    d = krs_torus_capsule_distance(p, forest_data[23], forest_data[24], forest_data[25], forest_data[26], forest_data[27], forest_data[28], forest_data[29]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[1]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[1]); w.reflections.x |= 0x2u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 4u; w.level = 1u; }
-    if (krs_mirror_signed_distance(p, forest_data[0]) > 0.0) { p = krs_mirror_reflect(p, forest_data[0]); w.reflections.x |= 0x1u; }
-    d = krs_torus_capsule_distance(p, forest_data[13], forest_data[14], forest_data[15], forest_data[16], forest_data[17], forest_data[18], forest_data[19]);
+    if (krs_mirror_signed_distance(p, krs_forest_data[0]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[0]); w.reflections.x |= 0x1u; }
+    d = krs_torus_capsule_distance(p, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 0u; w.level = 0u; }
-    d = krs_sphere_distance(p, forest_data[20]);
+    d = krs_sphere_distance(p, krs_forest_data[20]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 1u; w.level = 0u; }
-    d = krs_sphere_distance(p, forest_data[21]);
+    d = krs_sphere_distance(p, krs_forest_data[21]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 2u; w.level = 0u; }
-    d = krs_sphere_distance(p, forest_data[22]);
+    d = krs_sphere_distance(p, krs_forest_data[22]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 3u; w.level = 0u; }
     return w;
 }
-krs_kernel_shading forest_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
+krs_kernel_shading krs_forest_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
     krs_kernel_shading s;
     s.where = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     s.light = toLight;
@@ -273,111 +273,111 @@ krs_kernel_shading forest_shade(vec3 p, vec3 toLight, vec3 toEye, float threshol
     float d;
     float e;
     float weight;
-    d = krs_plane_distance(p, forest_data[79]);
+    d = krs_plane_distance(p, krs_forest_data[79]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 12u; s.where.level = 13u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[12]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[12]); s.where.reflections.x |= 0x1000u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[12]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[12]); s.where.reflections.x |= 0x1000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[12]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[12]) - view) * weight;
-    e = krs_mirror_signed_distance(p, forest_data[11]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[11]); s.where.reflections.x |= 0x800u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[12]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[12]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_forest_data[11]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[11]); s.where.reflections.x |= 0x800u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[11]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[11]) - view) * weight;
-    e = krs_mirror_signed_distance(p, forest_data[10]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[10]); s.where.reflections.x |= 0x400u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[11]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[11]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_forest_data[10]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[10]); s.where.reflections.x |= 0x400u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[10]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[10]) - view) * weight;
-    e = krs_mirror_signed_distance(p, forest_data[9]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[9]); s.where.reflections.x |= 0x200u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[10]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[10]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_forest_data[9]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[9]); s.where.reflections.x |= 0x200u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[9]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[9]) - view) * weight;
-    e = krs_mirror_signed_distance(p, forest_data[8]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[8]); s.where.reflections.x |= 0x100u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[9]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[9]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_forest_data[8]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[8]); s.where.reflections.x |= 0x100u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[8]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[8]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[72], forest_data[73], forest_data[74], forest_data[75], forest_data[76], forest_data[77], forest_data[78]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[8]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[8]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 11u; s.where.level = 8u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[7]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[7]); s.where.reflections.x |= 0x80u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[7]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[7]); s.where.reflections.x |= 0x80u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[7]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[7]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[65], forest_data[66], forest_data[67], forest_data[68], forest_data[69], forest_data[70], forest_data[71]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[7]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[7]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 10u; s.where.level = 7u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[6]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[6]); s.where.reflections.x |= 0x40u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[6]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[6]); s.where.reflections.x |= 0x40u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[6]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[6]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[58], forest_data[59], forest_data[60], forest_data[61], forest_data[62], forest_data[63], forest_data[64]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[6]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[6]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 9u; s.where.level = 6u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[5]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[5]); s.where.reflections.x |= 0x20u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[5]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[5]); s.where.reflections.x |= 0x20u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[5]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[5]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[51], forest_data[52], forest_data[53], forest_data[54], forest_data[55], forest_data[56], forest_data[57]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[5]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[5]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 8u; s.where.level = 5u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[4]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[4]); s.where.reflections.x |= 0x10u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[4]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[4]); s.where.reflections.x |= 0x10u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[4]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[4]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[44], forest_data[45], forest_data[46], forest_data[47], forest_data[48], forest_data[49], forest_data[50]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[4]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[4]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 7u; s.where.level = 4u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[3]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[3]); s.where.reflections.x |= 0x8u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[3]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[3]); s.where.reflections.x |= 0x8u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[3]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[3]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[37], forest_data[38], forest_data[39], forest_data[40], forest_data[41], forest_data[42], forest_data[43]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[3]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[3]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 6u; s.where.level = 3u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[2]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[2]); s.where.reflections.x |= 0x4u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[2]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[2]); s.where.reflections.x |= 0x4u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[2]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[2]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[30], forest_data[31], forest_data[32], forest_data[33], forest_data[34], forest_data[35], forest_data[36]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[2]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[2]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 5u; s.where.level = 2u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[1]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[1]); s.where.reflections.x |= 0x2u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[1]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[1]); s.where.reflections.x |= 0x2u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[1]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[1]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[23], forest_data[24], forest_data[25], forest_data[26], forest_data[27], forest_data[28], forest_data[29]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[1]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[1]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 4u; s.where.level = 1u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, forest_data[0]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, forest_data[0]); s.where.reflections.x |= 0x1u; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[0]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[0]); s.where.reflections.x |= 0x1u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, forest_data[0]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, forest_data[0]) - view) * weight;
-    d = krs_torus_capsule_distance(p, forest_data[13], forest_data[14], forest_data[15], forest_data[16], forest_data[17], forest_data[18], forest_data[19]);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[0]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[0]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 0u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, forest_data[20]);
+    d = krs_sphere_distance(p, krs_forest_data[20]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 1u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, forest_data[21]);
+    d = krs_sphere_distance(p, krs_forest_data[21]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 2u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, forest_data[22]);
+    d = krs_sphere_distance(p, krs_forest_data[22]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 3u; s.where.level = 0u; s.light = light; s.view = view; }
     vec3 q = s.where.kernel_point;
-    if (s.where.kernel == 0u) { s.normal = krs_torus_capsule_normal(q, forest_data[13], forest_data[14], forest_data[15], forest_data[16], forest_data[17], forest_data[18], forest_data[19]); s.kind = 0u; }
-    else if (s.where.kernel == 1u) { s.normal = krs_sphere_normal(q, forest_data[20]); s.kind = 1u; }
-    else if (s.where.kernel == 2u) { s.normal = krs_sphere_normal(q, forest_data[21]); s.kind = 1u; }
-    else if (s.where.kernel == 3u) { s.normal = krs_sphere_normal(q, forest_data[22]); s.kind = 1u; }
-    else if (s.where.kernel == 4u) { s.normal = krs_torus_capsule_normal(q, forest_data[23], forest_data[24], forest_data[25], forest_data[26], forest_data[27], forest_data[28], forest_data[29]); s.kind = 0u; }
-    else if (s.where.kernel == 5u) { s.normal = krs_torus_capsule_normal(q, forest_data[30], forest_data[31], forest_data[32], forest_data[33], forest_data[34], forest_data[35], forest_data[36]); s.kind = 0u; }
-    else if (s.where.kernel == 6u) { s.normal = krs_torus_capsule_normal(q, forest_data[37], forest_data[38], forest_data[39], forest_data[40], forest_data[41], forest_data[42], forest_data[43]); s.kind = 0u; }
-    else if (s.where.kernel == 7u) { s.normal = krs_torus_capsule_normal(q, forest_data[44], forest_data[45], forest_data[46], forest_data[47], forest_data[48], forest_data[49], forest_data[50]); s.kind = 0u; }
-    else if (s.where.kernel == 8u) { s.normal = krs_torus_capsule_normal(q, forest_data[51], forest_data[52], forest_data[53], forest_data[54], forest_data[55], forest_data[56], forest_data[57]); s.kind = 0u; }
-    else if (s.where.kernel == 9u) { s.normal = krs_torus_capsule_normal(q, forest_data[58], forest_data[59], forest_data[60], forest_data[61], forest_data[62], forest_data[63], forest_data[64]); s.kind = 0u; }
-    else if (s.where.kernel == 10u) { s.normal = krs_torus_capsule_normal(q, forest_data[65], forest_data[66], forest_data[67], forest_data[68], forest_data[69], forest_data[70], forest_data[71]); s.kind = 0u; }
-    else if (s.where.kernel == 11u) { s.normal = krs_torus_capsule_normal(q, forest_data[72], forest_data[73], forest_data[74], forest_data[75], forest_data[76], forest_data[77], forest_data[78]); s.kind = 0u; }
-    else { s.normal = krs_plane_normal(q, forest_data[79]); s.kind = 2u; }
+    if (s.where.kernel == 0u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]); s.kind = 0u; }
+    else if (s.where.kernel == 1u) { s.normal = krs_sphere_normal(q, krs_forest_data[20]); s.kind = 1u; }
+    else if (s.where.kernel == 2u) { s.normal = krs_sphere_normal(q, krs_forest_data[21]); s.kind = 1u; }
+    else if (s.where.kernel == 3u) { s.normal = krs_sphere_normal(q, krs_forest_data[22]); s.kind = 1u; }
+    else if (s.where.kernel == 4u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]); s.kind = 0u; }
+    else if (s.where.kernel == 5u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]); s.kind = 0u; }
+    else if (s.where.kernel == 6u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]); s.kind = 0u; }
+    else if (s.where.kernel == 7u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]); s.kind = 0u; }
+    else if (s.where.kernel == 8u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]); s.kind = 0u; }
+    else if (s.where.kernel == 9u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]); s.kind = 0u; }
+    else if (s.where.kernel == 10u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]); s.kind = 0u; }
+    else if (s.where.kernel == 11u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]); s.kind = 0u; }
+    else { s.normal = krs_plane_normal(q, krs_forest_data[79]); s.kind = 2u; }
     return s;
 }
 vec3 krs_albedo(uint kind) {
@@ -400,7 +400,7 @@ const float KRS_BAND_PIXELS = 4.0;
 const bool KRS_CLIP = false;
 const vec3 KRS_BOX_LO = vec3(0.0, 0.0, 0.0);
 const vec3 KRS_BOX_HI = vec3(0.0, 0.0, 0.0);
-float krs_scene(vec3 p) { return forest(p); }
+float krs_scene(vec3 p) { return krs_forest(p); }
 // Sphere tracing from t0 to t1; a hit when the distance drops under footprint * t + floor + bias.
 float krs_trace(vec3 origin, vec3 direction, float t0, float t1, float footprint, float bias, out bool found) {
     float t = t0;
@@ -458,7 +458,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     if (found) {
         vec3 p = KRS_EYE + direction * t;
         float band = KRS_BAND_PIXELS * scale * t + 1e-6;
-        krs_kernel_shading s = forest_shade(p, KRS_TO_LIGHT, -direction, band);
+        krs_kernel_shading s = krs_forest_shade(p, KRS_TO_LIGHT, -direction, band);
         float diffuse = max(dot(s.normal, s.light), 0.0);
         if (diffuse > 0.0) {
             float hitThreshold = footprint * t + KRS_THRESHOLD_FLOOR;

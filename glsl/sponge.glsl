@@ -49,7 +49,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 #endif
-const vec4 sponge_data[26] = vec4[26](
+const vec4 krs_sponge_data[26] = vec4[26](
     vec4(0.0, 0.0, 1.0, 0.037037037),
     vec4(-0.70710677, 0.70710677, 0.0, 0.7071067),
     vec4(0.0, -0.70710677, 0.70710677, -1.335646),
@@ -76,83 +76,83 @@ const vec4 sponge_data[26] = vec4[26](
     vec4(1.0, 0.0, 0.0, 0.0),
     vec4(0.0, 1.0, 0.0, 0.0),
     vec4(0.0, 0.0, 1.0, 0.0));
-// sponge_data[0...0]: sponge mirror 0 (krs_mirror)
-// sponge_data[1...1]: sponge mirror 1 (krs_mirror)
-// sponge_data[2...2]: sponge mirror 2 (krs_mirror)
-// sponge_data[3...3]: sponge mirror 3 (krs_mirror)
-// sponge_data[4...4]: sponge mirror 4 (krs_mirror)
-// sponge_data[5...5]: sponge mirror 5 (krs_mirror)
-// sponge_data[6...6]: sponge mirror 6 (krs_mirror)
-// sponge_data[7...7]: sponge mirror 7 (krs_mirror)
-// sponge_data[8...8]: sponge mirror 8 (krs_mirror)
-// sponge_data[9...9]: sponge mirror 9 (krs_mirror)
-// sponge_data[10...10]: sponge mirror 10 (krs_mirror)
-// sponge_data[11...11]: sponge mirror 11 (krs_mirror)
-// sponge_data[12...12]: sponge mirror 12 (krs_mirror)
-// sponge_data[13...13]: sponge mirror 13 (krs_mirror)
-// sponge_data[14...14]: sponge mirror 14 (krs_mirror)
-// sponge_data[15...15]: sponge mirror 15 (krs_mirror)
-// sponge_data[16...16]: sponge mirror 16 (krs_mirror)
-// sponge_data[17...17]: sponge mirror 17 (krs_mirror)
-// sponge_data[18...18]: sponge mirror 18 (krs_mirror)
-// sponge_data[19...19]: sponge mirror 19 (krs_mirror)
-// sponge_data[20...20]: sponge mirror 20 (krs_mirror)
-// sponge_data[21...25]: sponge kernel 0 (level 0) (krs_box)
-float sponge(vec3 p) {
+// krs_sponge_data[0...0]: krs_sponge mirror 0 (krs_mirror)
+// krs_sponge_data[1...1]: krs_sponge mirror 1 (krs_mirror)
+// krs_sponge_data[2...2]: krs_sponge mirror 2 (krs_mirror)
+// krs_sponge_data[3...3]: krs_sponge mirror 3 (krs_mirror)
+// krs_sponge_data[4...4]: krs_sponge mirror 4 (krs_mirror)
+// krs_sponge_data[5...5]: krs_sponge mirror 5 (krs_mirror)
+// krs_sponge_data[6...6]: krs_sponge mirror 6 (krs_mirror)
+// krs_sponge_data[7...7]: krs_sponge mirror 7 (krs_mirror)
+// krs_sponge_data[8...8]: krs_sponge mirror 8 (krs_mirror)
+// krs_sponge_data[9...9]: krs_sponge mirror 9 (krs_mirror)
+// krs_sponge_data[10...10]: krs_sponge mirror 10 (krs_mirror)
+// krs_sponge_data[11...11]: krs_sponge mirror 11 (krs_mirror)
+// krs_sponge_data[12...12]: krs_sponge mirror 12 (krs_mirror)
+// krs_sponge_data[13...13]: krs_sponge mirror 13 (krs_mirror)
+// krs_sponge_data[14...14]: krs_sponge mirror 14 (krs_mirror)
+// krs_sponge_data[15...15]: krs_sponge mirror 15 (krs_mirror)
+// krs_sponge_data[16...16]: krs_sponge mirror 16 (krs_mirror)
+// krs_sponge_data[17...17]: krs_sponge mirror 17 (krs_mirror)
+// krs_sponge_data[18...18]: krs_sponge mirror 18 (krs_mirror)
+// krs_sponge_data[19...19]: krs_sponge mirror 19 (krs_mirror)
+// krs_sponge_data[20...20]: krs_sponge mirror 20 (krs_mirror)
+// krs_sponge_data[21...25]: krs_sponge kernel 0 (level 0) (krs_box)
+float krs_sponge(vec3 p) {
     float d = 3.0e38;
-    p = krs_mirror_fold(p, sponge_data[20]);
-    p = krs_mirror_fold(p, sponge_data[19]);
-    p = krs_mirror_fold(p, sponge_data[18]);
-    p = krs_mirror_fold(p, sponge_data[17]);
-    p = krs_mirror_fold(p, sponge_data[16]);
-    p = krs_mirror_fold(p, sponge_data[15]);
-    p = krs_mirror_fold(p, sponge_data[14]);
-    p = krs_mirror_fold(p, sponge_data[13]);
-    p = krs_mirror_fold(p, sponge_data[12]);
-    p = krs_mirror_fold(p, sponge_data[11]);
-    p = krs_mirror_fold(p, sponge_data[10]);
-    p = krs_mirror_fold(p, sponge_data[9]);
-    p = krs_mirror_fold(p, sponge_data[8]);
-    p = krs_mirror_fold(p, sponge_data[7]);
-    p = krs_mirror_fold(p, sponge_data[6]);
-    p = krs_mirror_fold(p, sponge_data[5]);
-    p = krs_mirror_fold(p, sponge_data[4]);
-    p = krs_mirror_fold(p, sponge_data[3]);
-    p = krs_mirror_fold(p, sponge_data[2]);
-    p = krs_mirror_fold(p, sponge_data[1]);
-    p = krs_mirror_fold(p, sponge_data[0]);
-    d = min(d, krs_box_distance(p, sponge_data[21], sponge_data[22], sponge_data[23], sponge_data[24], sponge_data[25]));
+    p = krs_mirror_fold(p, krs_sponge_data[20]);
+    p = krs_mirror_fold(p, krs_sponge_data[19]);
+    p = krs_mirror_fold(p, krs_sponge_data[18]);
+    p = krs_mirror_fold(p, krs_sponge_data[17]);
+    p = krs_mirror_fold(p, krs_sponge_data[16]);
+    p = krs_mirror_fold(p, krs_sponge_data[15]);
+    p = krs_mirror_fold(p, krs_sponge_data[14]);
+    p = krs_mirror_fold(p, krs_sponge_data[13]);
+    p = krs_mirror_fold(p, krs_sponge_data[12]);
+    p = krs_mirror_fold(p, krs_sponge_data[11]);
+    p = krs_mirror_fold(p, krs_sponge_data[10]);
+    p = krs_mirror_fold(p, krs_sponge_data[9]);
+    p = krs_mirror_fold(p, krs_sponge_data[8]);
+    p = krs_mirror_fold(p, krs_sponge_data[7]);
+    p = krs_mirror_fold(p, krs_sponge_data[6]);
+    p = krs_mirror_fold(p, krs_sponge_data[5]);
+    p = krs_mirror_fold(p, krs_sponge_data[4]);
+    p = krs_mirror_fold(p, krs_sponge_data[3]);
+    p = krs_mirror_fold(p, krs_sponge_data[2]);
+    p = krs_mirror_fold(p, krs_sponge_data[1]);
+    p = krs_mirror_fold(p, krs_sponge_data[0]);
+    d = min(d, krs_box_distance(p, krs_sponge_data[21], krs_sponge_data[22], krs_sponge_data[23], krs_sponge_data[24], krs_sponge_data[25]));
     return d;
 }
-krs_location sponge_locate(vec3 p) {
+krs_location krs_sponge_locate(vec3 p) {
     krs_location w = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     float d;
-    if (krs_mirror_signed_distance(p, sponge_data[20]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[20]); w.reflections.x |= 0x100000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[19]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[19]); w.reflections.x |= 0x80000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[18]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[18]); w.reflections.x |= 0x40000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[17]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[17]); w.reflections.x |= 0x20000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[16]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[16]); w.reflections.x |= 0x10000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[15]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[15]); w.reflections.x |= 0x8000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[14]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[14]); w.reflections.x |= 0x4000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[13]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[13]); w.reflections.x |= 0x2000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[12]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[12]); w.reflections.x |= 0x1000u; }
-    if (krs_mirror_signed_distance(p, sponge_data[11]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[11]); w.reflections.x |= 0x800u; }
-    if (krs_mirror_signed_distance(p, sponge_data[10]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[10]); w.reflections.x |= 0x400u; }
-    if (krs_mirror_signed_distance(p, sponge_data[9]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[9]); w.reflections.x |= 0x200u; }
-    if (krs_mirror_signed_distance(p, sponge_data[8]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[8]); w.reflections.x |= 0x100u; }
-    if (krs_mirror_signed_distance(p, sponge_data[7]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[7]); w.reflections.x |= 0x80u; }
-    if (krs_mirror_signed_distance(p, sponge_data[6]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[6]); w.reflections.x |= 0x40u; }
-    if (krs_mirror_signed_distance(p, sponge_data[5]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[5]); w.reflections.x |= 0x20u; }
-    if (krs_mirror_signed_distance(p, sponge_data[4]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[4]); w.reflections.x |= 0x10u; }
-    if (krs_mirror_signed_distance(p, sponge_data[3]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[3]); w.reflections.x |= 0x8u; }
-    if (krs_mirror_signed_distance(p, sponge_data[2]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[2]); w.reflections.x |= 0x4u; }
-    if (krs_mirror_signed_distance(p, sponge_data[1]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[1]); w.reflections.x |= 0x2u; }
-    if (krs_mirror_signed_distance(p, sponge_data[0]) > 0.0) { p = krs_mirror_reflect(p, sponge_data[0]); w.reflections.x |= 0x1u; }
-    d = krs_box_distance(p, sponge_data[21], sponge_data[22], sponge_data[23], sponge_data[24], sponge_data[25]);
+    if (krs_mirror_signed_distance(p, krs_sponge_data[20]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[20]); w.reflections.x |= 0x100000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[19]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[19]); w.reflections.x |= 0x80000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[18]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[18]); w.reflections.x |= 0x40000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[17]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[17]); w.reflections.x |= 0x20000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[16]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[16]); w.reflections.x |= 0x10000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[15]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[15]); w.reflections.x |= 0x8000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[14]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[14]); w.reflections.x |= 0x4000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[13]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[13]); w.reflections.x |= 0x2000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[12]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[12]); w.reflections.x |= 0x1000u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[11]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[11]); w.reflections.x |= 0x800u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[10]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[10]); w.reflections.x |= 0x400u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[9]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[9]); w.reflections.x |= 0x200u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[8]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[8]); w.reflections.x |= 0x100u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[7]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[7]); w.reflections.x |= 0x80u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[6]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[6]); w.reflections.x |= 0x40u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[5]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[5]); w.reflections.x |= 0x20u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[4]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[4]); w.reflections.x |= 0x10u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[3]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[3]); w.reflections.x |= 0x8u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[2]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[2]); w.reflections.x |= 0x4u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[1]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[1]); w.reflections.x |= 0x2u; }
+    if (krs_mirror_signed_distance(p, krs_sponge_data[0]) > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[0]); w.reflections.x |= 0x1u; }
+    d = krs_box_distance(p, krs_sponge_data[21], krs_sponge_data[22], krs_sponge_data[23], krs_sponge_data[24], krs_sponge_data[25]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 0u; w.level = 0u; }
     return w;
 }
-krs_kernel_shading sponge_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
+krs_kernel_shading krs_sponge_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
     krs_kernel_shading s;
     s.where = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     s.light = toLight;
@@ -164,114 +164,114 @@ krs_kernel_shading sponge_shade(vec3 p, vec3 toLight, vec3 toEye, float threshol
     float d;
     float e;
     float weight;
-    e = krs_mirror_signed_distance(p, sponge_data[20]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[20]); s.where.reflections.x |= 0x100000u; }
+    e = krs_mirror_signed_distance(p, krs_sponge_data[20]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[20]); s.where.reflections.x |= 0x100000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[20]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[20]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[19]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[19]); s.where.reflections.x |= 0x80000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[20]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[20]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[19]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[19]); s.where.reflections.x |= 0x80000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[19]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[19]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[18]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[18]); s.where.reflections.x |= 0x40000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[19]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[19]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[18]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[18]); s.where.reflections.x |= 0x40000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[18]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[18]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[17]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[17]); s.where.reflections.x |= 0x20000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[18]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[18]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[17]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[17]); s.where.reflections.x |= 0x20000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[17]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[17]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[16]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[16]); s.where.reflections.x |= 0x10000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[17]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[17]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[16]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[16]); s.where.reflections.x |= 0x10000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[16]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[16]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[15]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[15]); s.where.reflections.x |= 0x8000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[16]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[16]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[15]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[15]); s.where.reflections.x |= 0x8000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[15]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[15]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[14]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[14]); s.where.reflections.x |= 0x4000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[15]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[15]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[14]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[14]); s.where.reflections.x |= 0x4000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[14]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[14]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[13]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[13]); s.where.reflections.x |= 0x2000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[14]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[14]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[13]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[13]); s.where.reflections.x |= 0x2000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[13]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[13]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[12]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[12]); s.where.reflections.x |= 0x1000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[13]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[13]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[12]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[12]); s.where.reflections.x |= 0x1000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[12]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[12]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[11]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[11]); s.where.reflections.x |= 0x800u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[12]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[12]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[11]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[11]); s.where.reflections.x |= 0x800u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[11]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[11]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[10]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[10]); s.where.reflections.x |= 0x400u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[11]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[11]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[10]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[10]); s.where.reflections.x |= 0x400u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[10]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[10]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[9]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[9]); s.where.reflections.x |= 0x200u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[10]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[10]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[9]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[9]); s.where.reflections.x |= 0x200u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[9]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[9]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[8]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[8]); s.where.reflections.x |= 0x100u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[9]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[9]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[8]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[8]); s.where.reflections.x |= 0x100u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[8]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[8]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[7]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[7]); s.where.reflections.x |= 0x80u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[8]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[8]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[7]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[7]); s.where.reflections.x |= 0x80u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[7]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[7]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[6]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[6]); s.where.reflections.x |= 0x40u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[7]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[7]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[6]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[6]); s.where.reflections.x |= 0x40u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[6]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[6]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[5]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[5]); s.where.reflections.x |= 0x20u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[6]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[6]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[5]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[5]); s.where.reflections.x |= 0x20u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[5]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[5]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[4]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[4]); s.where.reflections.x |= 0x10u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[5]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[5]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[4]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[4]); s.where.reflections.x |= 0x10u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[4]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[4]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[3]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[3]); s.where.reflections.x |= 0x8u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[4]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[4]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[3]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[3]); s.where.reflections.x |= 0x8u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[3]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[3]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[2]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[2]); s.where.reflections.x |= 0x4u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[3]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[3]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[2]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[2]); s.where.reflections.x |= 0x4u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[2]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[2]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[1]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[1]); s.where.reflections.x |= 0x2u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[2]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[2]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[1]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[1]); s.where.reflections.x |= 0x2u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[1]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[1]) - view) * weight;
-    e = krs_mirror_signed_distance(p, sponge_data[0]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, sponge_data[0]); s.where.reflections.x |= 0x1u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[1]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[1]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_sponge_data[0]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_sponge_data[0]); s.where.reflections.x |= 0x1u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, sponge_data[0]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, sponge_data[0]) - view) * weight;
-    d = krs_box_distance(p, sponge_data[21], sponge_data[22], sponge_data[23], sponge_data[24], sponge_data[25]);
+    light = light + (krs_mirror_reflect_direction(light, krs_sponge_data[0]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_sponge_data[0]) - view) * weight;
+    d = krs_box_distance(p, krs_sponge_data[21], krs_sponge_data[22], krs_sponge_data[23], krs_sponge_data[24], krs_sponge_data[25]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 0u; s.where.level = 0u; s.light = light; s.view = view; }
     vec3 q = s.where.kernel_point;
-    { s.normal = krs_box_normal(q, sponge_data[21], sponge_data[22], sponge_data[23], sponge_data[24], sponge_data[25]); s.kind = 0u; }
+    { s.normal = krs_box_normal(q, krs_sponge_data[21], krs_sponge_data[22], krs_sponge_data[23], krs_sponge_data[24], krs_sponge_data[25]); s.kind = 0u; }
     return s;
 }

@@ -33,7 +33,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 #endif
-const vec4 terrain_data[32] = vec4[32](
+const vec4 krs_terrain_data[32] = vec4[32](
     vec4(-0.99984354, 0.0, 0.017687794, 0.041504636),
     vec4(-0.9115515, 0.0, 0.41118595, -0.11483935),
     vec4(-0.69309, 0.0, -0.72085106, -0.05537853),
@@ -66,116 +66,116 @@ const vec4 terrain_data[32] = vec4[32](
     vec4(0.13677897, 0.9871936, -0.08209959, -0.13113962),
     vec4(0.17430322, 0.9840617, -0.035227526, -0.43322626),
     vec4(-0.039376263, 0.96206015, 0.26998103, -1.1835918));
-// terrain_data[0...0]: terrain mirror 0 (krs_mirror)
-// terrain_data[1...1]: terrain mirror 1 (krs_mirror)
-// terrain_data[2...2]: terrain mirror 2 (krs_mirror)
-// terrain_data[3...3]: terrain mirror 3 (krs_mirror)
-// terrain_data[4...4]: terrain mirror 4 (krs_mirror)
-// terrain_data[5...5]: terrain mirror 5 (krs_mirror)
-// terrain_data[6...6]: terrain mirror 6 (krs_mirror)
-// terrain_data[7...7]: terrain mirror 7 (krs_mirror)
-// terrain_data[8...8]: terrain mirror 8 (krs_mirror)
-// terrain_data[9...9]: terrain mirror 9 (krs_mirror)
-// terrain_data[10...10]: terrain mirror 10 (krs_mirror)
-// terrain_data[11...11]: terrain mirror 11 (krs_mirror)
-// terrain_data[12...12]: terrain mirror 12 (krs_mirror)
-// terrain_data[13...13]: terrain mirror 13 (krs_mirror)
-// terrain_data[14...14]: terrain mirror 14 (krs_mirror)
-// terrain_data[15...15]: terrain mirror 15 (krs_mirror)
-// terrain_data[16...16]: terrain mirror 16 (krs_mirror)
-// terrain_data[17...17]: terrain mirror 17 (krs_mirror)
-// terrain_data[18...18]: terrain mirror 18 (krs_mirror)
-// terrain_data[19...19]: terrain mirror 19 (krs_mirror)
-// terrain_data[20...20]: terrain mirror 20 (krs_mirror)
-// terrain_data[21...21]: terrain mirror 21 (krs_mirror)
-// terrain_data[22...22]: terrain mirror 22 (krs_mirror)
-// terrain_data[23...23]: terrain mirror 23 (krs_mirror)
-// terrain_data[24...24]: terrain mirror 24 (krs_mirror)
-// terrain_data[25...25]: terrain mirror 25 (krs_mirror)
-// terrain_data[26...26]: terrain mirror 26 (krs_mirror)
-// terrain_data[27...27]: terrain mirror 27 (krs_mirror)
-// terrain_data[28...28]: terrain kernel 0 (level 0) (krs_plane)
-// terrain_data[29...29]: terrain kernel 1 (level 14) (krs_plane)
-// terrain_data[30...30]: terrain kernel 2 (level 18) (krs_plane)
-// terrain_data[31...31]: terrain kernel 3 (level 23) (krs_plane)
-float terrain(vec3 p) {
+// krs_terrain_data[0...0]: krs_terrain mirror 0 (krs_mirror)
+// krs_terrain_data[1...1]: krs_terrain mirror 1 (krs_mirror)
+// krs_terrain_data[2...2]: krs_terrain mirror 2 (krs_mirror)
+// krs_terrain_data[3...3]: krs_terrain mirror 3 (krs_mirror)
+// krs_terrain_data[4...4]: krs_terrain mirror 4 (krs_mirror)
+// krs_terrain_data[5...5]: krs_terrain mirror 5 (krs_mirror)
+// krs_terrain_data[6...6]: krs_terrain mirror 6 (krs_mirror)
+// krs_terrain_data[7...7]: krs_terrain mirror 7 (krs_mirror)
+// krs_terrain_data[8...8]: krs_terrain mirror 8 (krs_mirror)
+// krs_terrain_data[9...9]: krs_terrain mirror 9 (krs_mirror)
+// krs_terrain_data[10...10]: krs_terrain mirror 10 (krs_mirror)
+// krs_terrain_data[11...11]: krs_terrain mirror 11 (krs_mirror)
+// krs_terrain_data[12...12]: krs_terrain mirror 12 (krs_mirror)
+// krs_terrain_data[13...13]: krs_terrain mirror 13 (krs_mirror)
+// krs_terrain_data[14...14]: krs_terrain mirror 14 (krs_mirror)
+// krs_terrain_data[15...15]: krs_terrain mirror 15 (krs_mirror)
+// krs_terrain_data[16...16]: krs_terrain mirror 16 (krs_mirror)
+// krs_terrain_data[17...17]: krs_terrain mirror 17 (krs_mirror)
+// krs_terrain_data[18...18]: krs_terrain mirror 18 (krs_mirror)
+// krs_terrain_data[19...19]: krs_terrain mirror 19 (krs_mirror)
+// krs_terrain_data[20...20]: krs_terrain mirror 20 (krs_mirror)
+// krs_terrain_data[21...21]: krs_terrain mirror 21 (krs_mirror)
+// krs_terrain_data[22...22]: krs_terrain mirror 22 (krs_mirror)
+// krs_terrain_data[23...23]: krs_terrain mirror 23 (krs_mirror)
+// krs_terrain_data[24...24]: krs_terrain mirror 24 (krs_mirror)
+// krs_terrain_data[25...25]: krs_terrain mirror 25 (krs_mirror)
+// krs_terrain_data[26...26]: krs_terrain mirror 26 (krs_mirror)
+// krs_terrain_data[27...27]: krs_terrain mirror 27 (krs_mirror)
+// krs_terrain_data[28...28]: krs_terrain kernel 0 (level 0) (krs_plane)
+// krs_terrain_data[29...29]: krs_terrain kernel 1 (level 14) (krs_plane)
+// krs_terrain_data[30...30]: krs_terrain kernel 2 (level 18) (krs_plane)
+// krs_terrain_data[31...31]: krs_terrain kernel 3 (level 23) (krs_plane)
+float krs_terrain(vec3 p) {
     float d = 3.0e38;
-    p = krs_mirror_fold(p, terrain_data[27]);
-    p = krs_mirror_fold(p, terrain_data[26]);
-    p = krs_mirror_fold(p, terrain_data[25]);
-    p = krs_mirror_fold(p, terrain_data[24]);
-    p = krs_mirror_fold(p, terrain_data[23]);
-    d = min(d, krs_plane_distance(p, terrain_data[31]));
-    p = krs_mirror_fold(p, terrain_data[22]);
-    p = krs_mirror_fold(p, terrain_data[21]);
-    p = krs_mirror_fold(p, terrain_data[20]);
-    p = krs_mirror_fold(p, terrain_data[19]);
-    p = krs_mirror_fold(p, terrain_data[18]);
-    d = min(d, krs_plane_distance(p, terrain_data[30]));
-    p = krs_mirror_fold(p, terrain_data[17]);
-    p = krs_mirror_fold(p, terrain_data[16]);
-    p = krs_mirror_fold(p, terrain_data[15]);
-    p = krs_mirror_fold(p, terrain_data[14]);
-    d = min(d, krs_plane_distance(p, terrain_data[29]));
-    p = krs_mirror_fold(p, terrain_data[13]);
-    p = krs_mirror_fold(p, terrain_data[12]);
-    p = krs_mirror_fold(p, terrain_data[11]);
-    p = krs_mirror_fold(p, terrain_data[10]);
-    p = krs_mirror_fold(p, terrain_data[9]);
-    p = krs_mirror_fold(p, terrain_data[8]);
-    p = krs_mirror_fold(p, terrain_data[7]);
-    p = krs_mirror_fold(p, terrain_data[6]);
-    p = krs_mirror_fold(p, terrain_data[5]);
-    p = krs_mirror_fold(p, terrain_data[4]);
-    p = krs_mirror_fold(p, terrain_data[3]);
-    p = krs_mirror_fold(p, terrain_data[2]);
-    p = krs_mirror_fold(p, terrain_data[1]);
-    p = krs_mirror_fold(p, terrain_data[0]);
-    d = min(d, krs_plane_distance(p, terrain_data[28]));
+    p = krs_mirror_fold(p, krs_terrain_data[27]);
+    p = krs_mirror_fold(p, krs_terrain_data[26]);
+    p = krs_mirror_fold(p, krs_terrain_data[25]);
+    p = krs_mirror_fold(p, krs_terrain_data[24]);
+    p = krs_mirror_fold(p, krs_terrain_data[23]);
+    d = min(d, krs_plane_distance(p, krs_terrain_data[31]));
+    p = krs_mirror_fold(p, krs_terrain_data[22]);
+    p = krs_mirror_fold(p, krs_terrain_data[21]);
+    p = krs_mirror_fold(p, krs_terrain_data[20]);
+    p = krs_mirror_fold(p, krs_terrain_data[19]);
+    p = krs_mirror_fold(p, krs_terrain_data[18]);
+    d = min(d, krs_plane_distance(p, krs_terrain_data[30]));
+    p = krs_mirror_fold(p, krs_terrain_data[17]);
+    p = krs_mirror_fold(p, krs_terrain_data[16]);
+    p = krs_mirror_fold(p, krs_terrain_data[15]);
+    p = krs_mirror_fold(p, krs_terrain_data[14]);
+    d = min(d, krs_plane_distance(p, krs_terrain_data[29]));
+    p = krs_mirror_fold(p, krs_terrain_data[13]);
+    p = krs_mirror_fold(p, krs_terrain_data[12]);
+    p = krs_mirror_fold(p, krs_terrain_data[11]);
+    p = krs_mirror_fold(p, krs_terrain_data[10]);
+    p = krs_mirror_fold(p, krs_terrain_data[9]);
+    p = krs_mirror_fold(p, krs_terrain_data[8]);
+    p = krs_mirror_fold(p, krs_terrain_data[7]);
+    p = krs_mirror_fold(p, krs_terrain_data[6]);
+    p = krs_mirror_fold(p, krs_terrain_data[5]);
+    p = krs_mirror_fold(p, krs_terrain_data[4]);
+    p = krs_mirror_fold(p, krs_terrain_data[3]);
+    p = krs_mirror_fold(p, krs_terrain_data[2]);
+    p = krs_mirror_fold(p, krs_terrain_data[1]);
+    p = krs_mirror_fold(p, krs_terrain_data[0]);
+    d = min(d, krs_plane_distance(p, krs_terrain_data[28]));
     return d;
 }
-krs_location terrain_locate(vec3 p) {
+krs_location krs_terrain_locate(vec3 p) {
     krs_location w = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     float d;
-    if (krs_mirror_signed_distance(p, terrain_data[27]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[27]); w.reflections.x |= 0x8000000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[26]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[26]); w.reflections.x |= 0x4000000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[25]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[25]); w.reflections.x |= 0x2000000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[24]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[24]); w.reflections.x |= 0x1000000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[23]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[23]); w.reflections.x |= 0x800000u; }
-    d = krs_plane_distance(p, terrain_data[31]);
+    if (krs_mirror_signed_distance(p, krs_terrain_data[27]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[27]); w.reflections.x |= 0x8000000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[26]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[26]); w.reflections.x |= 0x4000000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[25]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[25]); w.reflections.x |= 0x2000000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[24]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[24]); w.reflections.x |= 0x1000000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[23]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[23]); w.reflections.x |= 0x800000u; }
+    d = krs_plane_distance(p, krs_terrain_data[31]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 3u; w.level = 23u; }
-    if (krs_mirror_signed_distance(p, terrain_data[22]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[22]); w.reflections.x |= 0x400000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[21]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[21]); w.reflections.x |= 0x200000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[20]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[20]); w.reflections.x |= 0x100000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[19]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[19]); w.reflections.x |= 0x80000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[18]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[18]); w.reflections.x |= 0x40000u; }
-    d = krs_plane_distance(p, terrain_data[30]);
+    if (krs_mirror_signed_distance(p, krs_terrain_data[22]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[22]); w.reflections.x |= 0x400000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[21]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[21]); w.reflections.x |= 0x200000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[20]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[20]); w.reflections.x |= 0x100000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[19]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[19]); w.reflections.x |= 0x80000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[18]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[18]); w.reflections.x |= 0x40000u; }
+    d = krs_plane_distance(p, krs_terrain_data[30]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 2u; w.level = 18u; }
-    if (krs_mirror_signed_distance(p, terrain_data[17]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[17]); w.reflections.x |= 0x20000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[16]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[16]); w.reflections.x |= 0x10000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[15]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[15]); w.reflections.x |= 0x8000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[14]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[14]); w.reflections.x |= 0x4000u; }
-    d = krs_plane_distance(p, terrain_data[29]);
+    if (krs_mirror_signed_distance(p, krs_terrain_data[17]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[17]); w.reflections.x |= 0x20000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[16]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[16]); w.reflections.x |= 0x10000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[15]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[15]); w.reflections.x |= 0x8000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[14]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[14]); w.reflections.x |= 0x4000u; }
+    d = krs_plane_distance(p, krs_terrain_data[29]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 1u; w.level = 14u; }
-    if (krs_mirror_signed_distance(p, terrain_data[13]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[13]); w.reflections.x |= 0x2000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[12]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[12]); w.reflections.x |= 0x1000u; }
-    if (krs_mirror_signed_distance(p, terrain_data[11]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[11]); w.reflections.x |= 0x800u; }
-    if (krs_mirror_signed_distance(p, terrain_data[10]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[10]); w.reflections.x |= 0x400u; }
-    if (krs_mirror_signed_distance(p, terrain_data[9]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[9]); w.reflections.x |= 0x200u; }
-    if (krs_mirror_signed_distance(p, terrain_data[8]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[8]); w.reflections.x |= 0x100u; }
-    if (krs_mirror_signed_distance(p, terrain_data[7]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[7]); w.reflections.x |= 0x80u; }
-    if (krs_mirror_signed_distance(p, terrain_data[6]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[6]); w.reflections.x |= 0x40u; }
-    if (krs_mirror_signed_distance(p, terrain_data[5]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[5]); w.reflections.x |= 0x20u; }
-    if (krs_mirror_signed_distance(p, terrain_data[4]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[4]); w.reflections.x |= 0x10u; }
-    if (krs_mirror_signed_distance(p, terrain_data[3]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[3]); w.reflections.x |= 0x8u; }
-    if (krs_mirror_signed_distance(p, terrain_data[2]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[2]); w.reflections.x |= 0x4u; }
-    if (krs_mirror_signed_distance(p, terrain_data[1]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[1]); w.reflections.x |= 0x2u; }
-    if (krs_mirror_signed_distance(p, terrain_data[0]) > 0.0) { p = krs_mirror_reflect(p, terrain_data[0]); w.reflections.x |= 0x1u; }
-    d = krs_plane_distance(p, terrain_data[28]);
+    if (krs_mirror_signed_distance(p, krs_terrain_data[13]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[13]); w.reflections.x |= 0x2000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[12]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[12]); w.reflections.x |= 0x1000u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[11]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[11]); w.reflections.x |= 0x800u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[10]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[10]); w.reflections.x |= 0x400u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[9]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[9]); w.reflections.x |= 0x200u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[8]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[8]); w.reflections.x |= 0x100u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[7]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[7]); w.reflections.x |= 0x80u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[6]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[6]); w.reflections.x |= 0x40u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[5]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[5]); w.reflections.x |= 0x20u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[4]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[4]); w.reflections.x |= 0x10u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[3]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[3]); w.reflections.x |= 0x8u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[2]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[2]); w.reflections.x |= 0x4u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[1]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[1]); w.reflections.x |= 0x2u; }
+    if (krs_mirror_signed_distance(p, krs_terrain_data[0]) > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[0]); w.reflections.x |= 0x1u; }
+    d = krs_plane_distance(p, krs_terrain_data[28]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 0u; w.level = 0u; }
     return w;
 }
-krs_kernel_shading terrain_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
+krs_kernel_shading krs_terrain_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
     krs_kernel_shading s;
     s.where = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     s.light = toLight;
@@ -187,158 +187,158 @@ krs_kernel_shading terrain_shade(vec3 p, vec3 toLight, vec3 toEye, float thresho
     float d;
     float e;
     float weight;
-    e = krs_mirror_signed_distance(p, terrain_data[27]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[27]); s.where.reflections.x |= 0x8000000u; }
+    e = krs_mirror_signed_distance(p, krs_terrain_data[27]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[27]); s.where.reflections.x |= 0x8000000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[27]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[27]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[26]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[26]); s.where.reflections.x |= 0x4000000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[27]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[27]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[26]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[26]); s.where.reflections.x |= 0x4000000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[26]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[26]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[25]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[25]); s.where.reflections.x |= 0x2000000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[26]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[26]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[25]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[25]); s.where.reflections.x |= 0x2000000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[25]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[25]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[24]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[24]); s.where.reflections.x |= 0x1000000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[25]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[25]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[24]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[24]); s.where.reflections.x |= 0x1000000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[24]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[24]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[23]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[23]); s.where.reflections.x |= 0x800000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[24]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[24]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[23]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[23]); s.where.reflections.x |= 0x800000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[23]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[23]) - view) * weight;
-    d = krs_plane_distance(p, terrain_data[31]);
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[23]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[23]) - view) * weight;
+    d = krs_plane_distance(p, krs_terrain_data[31]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 3u; s.where.level = 23u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, terrain_data[22]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[22]); s.where.reflections.x |= 0x400000u; }
+    e = krs_mirror_signed_distance(p, krs_terrain_data[22]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[22]); s.where.reflections.x |= 0x400000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[22]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[22]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[21]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[21]); s.where.reflections.x |= 0x200000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[22]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[22]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[21]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[21]); s.where.reflections.x |= 0x200000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[21]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[21]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[20]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[20]); s.where.reflections.x |= 0x100000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[21]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[21]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[20]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[20]); s.where.reflections.x |= 0x100000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[20]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[20]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[19]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[19]); s.where.reflections.x |= 0x80000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[20]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[20]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[19]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[19]); s.where.reflections.x |= 0x80000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[19]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[19]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[18]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[18]); s.where.reflections.x |= 0x40000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[19]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[19]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[18]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[18]); s.where.reflections.x |= 0x40000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[18]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[18]) - view) * weight;
-    d = krs_plane_distance(p, terrain_data[30]);
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[18]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[18]) - view) * weight;
+    d = krs_plane_distance(p, krs_terrain_data[30]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 2u; s.where.level = 18u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, terrain_data[17]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[17]); s.where.reflections.x |= 0x20000u; }
+    e = krs_mirror_signed_distance(p, krs_terrain_data[17]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[17]); s.where.reflections.x |= 0x20000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[17]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[17]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[16]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[16]); s.where.reflections.x |= 0x10000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[17]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[17]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[16]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[16]); s.where.reflections.x |= 0x10000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[16]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[16]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[15]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[15]); s.where.reflections.x |= 0x8000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[16]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[16]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[15]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[15]); s.where.reflections.x |= 0x8000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[15]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[15]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[14]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[14]); s.where.reflections.x |= 0x4000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[15]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[15]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[14]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[14]); s.where.reflections.x |= 0x4000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[14]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[14]) - view) * weight;
-    d = krs_plane_distance(p, terrain_data[29]);
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[14]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[14]) - view) * weight;
+    d = krs_plane_distance(p, krs_terrain_data[29]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 1u; s.where.level = 14u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, terrain_data[13]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[13]); s.where.reflections.x |= 0x2000u; }
+    e = krs_mirror_signed_distance(p, krs_terrain_data[13]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[13]); s.where.reflections.x |= 0x2000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[13]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[13]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[12]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[12]); s.where.reflections.x |= 0x1000u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[13]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[13]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[12]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[12]); s.where.reflections.x |= 0x1000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[12]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[12]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[11]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[11]); s.where.reflections.x |= 0x800u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[12]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[12]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[11]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[11]); s.where.reflections.x |= 0x800u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[11]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[11]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[10]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[10]); s.where.reflections.x |= 0x400u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[11]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[11]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[10]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[10]); s.where.reflections.x |= 0x400u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[10]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[10]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[9]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[9]); s.where.reflections.x |= 0x200u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[10]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[10]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[9]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[9]); s.where.reflections.x |= 0x200u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[9]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[9]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[8]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[8]); s.where.reflections.x |= 0x100u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[9]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[9]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[8]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[8]); s.where.reflections.x |= 0x100u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[8]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[8]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[7]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[7]); s.where.reflections.x |= 0x80u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[8]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[8]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[7]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[7]); s.where.reflections.x |= 0x80u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[7]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[7]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[6]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[6]); s.where.reflections.x |= 0x40u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[7]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[7]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[6]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[6]); s.where.reflections.x |= 0x40u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[6]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[6]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[5]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[5]); s.where.reflections.x |= 0x20u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[6]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[6]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[5]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[5]); s.where.reflections.x |= 0x20u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[5]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[5]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[4]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[4]); s.where.reflections.x |= 0x10u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[5]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[5]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[4]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[4]); s.where.reflections.x |= 0x10u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[4]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[4]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[3]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[3]); s.where.reflections.x |= 0x8u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[4]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[4]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[3]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[3]); s.where.reflections.x |= 0x8u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[3]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[3]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[2]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[2]); s.where.reflections.x |= 0x4u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[3]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[3]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[2]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[2]); s.where.reflections.x |= 0x4u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[2]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[2]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[1]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[1]); s.where.reflections.x |= 0x2u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[2]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[2]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[1]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[1]); s.where.reflections.x |= 0x2u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[1]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[1]) - view) * weight;
-    e = krs_mirror_signed_distance(p, terrain_data[0]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, terrain_data[0]); s.where.reflections.x |= 0x1u; }
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[1]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[1]) - view) * weight;
+    e = krs_mirror_signed_distance(p, krs_terrain_data[0]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_terrain_data[0]); s.where.reflections.x |= 0x1u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, terrain_data[0]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, terrain_data[0]) - view) * weight;
-    d = krs_plane_distance(p, terrain_data[28]);
+    light = light + (krs_mirror_reflect_direction(light, krs_terrain_data[0]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_terrain_data[0]) - view) * weight;
+    d = krs_plane_distance(p, krs_terrain_data[28]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 0u; s.where.level = 0u; s.light = light; s.view = view; }
     vec3 q = s.where.kernel_point;
-    if (s.where.kernel == 0u) { s.normal = krs_plane_normal(q, terrain_data[28]); s.kind = 0u; }
-    else if (s.where.kernel == 1u) { s.normal = krs_plane_normal(q, terrain_data[29]); s.kind = 0u; }
-    else if (s.where.kernel == 2u) { s.normal = krs_plane_normal(q, terrain_data[30]); s.kind = 0u; }
-    else { s.normal = krs_plane_normal(q, terrain_data[31]); s.kind = 0u; }
+    if (s.where.kernel == 0u) { s.normal = krs_plane_normal(q, krs_terrain_data[28]); s.kind = 0u; }
+    else if (s.where.kernel == 1u) { s.normal = krs_plane_normal(q, krs_terrain_data[29]); s.kind = 0u; }
+    else if (s.where.kernel == 2u) { s.normal = krs_plane_normal(q, krs_terrain_data[30]); s.kind = 0u; }
+    else { s.normal = krs_plane_normal(q, krs_terrain_data[31]); s.kind = 0u; }
     return s;
 }

@@ -81,7 +81,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 #endif
-const vec4 tree_data[100] = vec4[100](
+const vec4 krs_tree_data[100] = vec4[100](
     vec4(0.2195773, -0.2812923, -0.934163, -2.4140985),
     vec4(0.45230046, -0.19450445, 0.8703978, -0.8293076),
     vec4(-0.9312768, -0.17704707, -0.3183989, -2.2798545),
@@ -182,117 +182,117 @@ const vec4 tree_data[100] = vec4[100](
     vec4(0.0, 1.0, 0.0, 0.0),
     vec4(0.0, -1.0, 0.0, 0.0),
     vec4(0.0, 1.0, 0.0, 0.0));
-// tree_data[0...0]: tree mirror 0 (krs_mirror)
-// tree_data[1...1]: tree mirror 1 (krs_mirror)
-// tree_data[2...2]: tree mirror 2 (krs_mirror)
-// tree_data[3...3]: tree mirror 3 (krs_mirror)
-// tree_data[4...4]: tree mirror 4 (krs_mirror)
-// tree_data[5...5]: tree mirror 5 (krs_mirror)
-// tree_data[6...6]: tree mirror 6 (krs_mirror)
-// tree_data[7...7]: tree mirror 7 (krs_mirror)
-// tree_data[8...8]: tree mirror 8 (krs_mirror)
-// tree_data[9...9]: tree mirror 9 (krs_mirror)
-// tree_data[10...10]: tree mirror 10 (krs_mirror)
-// tree_data[11...17]: tree kernel 0 (level 0) (krs_torus_capsule)
-// tree_data[18...18]: tree kernel 1 (level 0) (krs_sphere)
-// tree_data[19...19]: tree kernel 2 (level 0) (krs_sphere)
-// tree_data[20...20]: tree kernel 3 (level 0) (krs_sphere)
-// tree_data[21...21]: tree kernel 4 (level 0) (krs_sphere)
-// tree_data[22...28]: tree kernel 5 (level 1) (krs_torus_capsule)
-// tree_data[29...35]: tree kernel 6 (level 2) (krs_torus_capsule)
-// tree_data[36...42]: tree kernel 7 (level 3) (krs_torus_capsule)
-// tree_data[43...49]: tree kernel 8 (level 4) (krs_torus_capsule)
-// tree_data[50...56]: tree kernel 9 (level 5) (krs_torus_capsule)
-// tree_data[57...63]: tree kernel 10 (level 6) (krs_torus_capsule)
-// tree_data[64...70]: tree kernel 11 (level 7) (krs_torus_capsule)
-// tree_data[71...77]: tree kernel 12 (level 8) (krs_torus_capsule)
-// tree_data[78...84]: tree kernel 13 (level 9) (krs_torus_capsule)
-// tree_data[85...91]: tree kernel 14 (level 10) (krs_torus_capsule)
-// tree_data[92...98]: tree kernel 15 (level 11) (krs_torus_capsule)
-// tree_data[99...99]: tree kernel 16 (level 11) (krs_plane)
-float tree(vec3 p) {
+// krs_tree_data[0...0]: krs_tree mirror 0 (krs_mirror)
+// krs_tree_data[1...1]: krs_tree mirror 1 (krs_mirror)
+// krs_tree_data[2...2]: krs_tree mirror 2 (krs_mirror)
+// krs_tree_data[3...3]: krs_tree mirror 3 (krs_mirror)
+// krs_tree_data[4...4]: krs_tree mirror 4 (krs_mirror)
+// krs_tree_data[5...5]: krs_tree mirror 5 (krs_mirror)
+// krs_tree_data[6...6]: krs_tree mirror 6 (krs_mirror)
+// krs_tree_data[7...7]: krs_tree mirror 7 (krs_mirror)
+// krs_tree_data[8...8]: krs_tree mirror 8 (krs_mirror)
+// krs_tree_data[9...9]: krs_tree mirror 9 (krs_mirror)
+// krs_tree_data[10...10]: krs_tree mirror 10 (krs_mirror)
+// krs_tree_data[11...17]: krs_tree kernel 0 (level 0) (krs_torus_capsule)
+// krs_tree_data[18...18]: krs_tree kernel 1 (level 0) (krs_sphere)
+// krs_tree_data[19...19]: krs_tree kernel 2 (level 0) (krs_sphere)
+// krs_tree_data[20...20]: krs_tree kernel 3 (level 0) (krs_sphere)
+// krs_tree_data[21...21]: krs_tree kernel 4 (level 0) (krs_sphere)
+// krs_tree_data[22...28]: krs_tree kernel 5 (level 1) (krs_torus_capsule)
+// krs_tree_data[29...35]: krs_tree kernel 6 (level 2) (krs_torus_capsule)
+// krs_tree_data[36...42]: krs_tree kernel 7 (level 3) (krs_torus_capsule)
+// krs_tree_data[43...49]: krs_tree kernel 8 (level 4) (krs_torus_capsule)
+// krs_tree_data[50...56]: krs_tree kernel 9 (level 5) (krs_torus_capsule)
+// krs_tree_data[57...63]: krs_tree kernel 10 (level 6) (krs_torus_capsule)
+// krs_tree_data[64...70]: krs_tree kernel 11 (level 7) (krs_torus_capsule)
+// krs_tree_data[71...77]: krs_tree kernel 12 (level 8) (krs_torus_capsule)
+// krs_tree_data[78...84]: krs_tree kernel 13 (level 9) (krs_torus_capsule)
+// krs_tree_data[85...91]: krs_tree kernel 14 (level 10) (krs_torus_capsule)
+// krs_tree_data[92...98]: krs_tree kernel 15 (level 11) (krs_torus_capsule)
+// krs_tree_data[99...99]: krs_tree kernel 16 (level 11) (krs_plane)
+float krs_tree(vec3 p) {
     float d = 3.0e38;
-    d = min(d, krs_torus_capsule_distance(p, tree_data[92], tree_data[93], tree_data[94], tree_data[95], tree_data[96], tree_data[97], tree_data[98]));
-    d = min(d, krs_plane_distance(p, tree_data[99]));
-    p = krs_mirror_fold(p, tree_data[10]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[85], tree_data[86], tree_data[87], tree_data[88], tree_data[89], tree_data[90], tree_data[91]));
-    p = krs_mirror_fold(p, tree_data[9]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[78], tree_data[79], tree_data[80], tree_data[81], tree_data[82], tree_data[83], tree_data[84]));
-    p = krs_mirror_fold(p, tree_data[8]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[71], tree_data[72], tree_data[73], tree_data[74], tree_data[75], tree_data[76], tree_data[77]));
-    p = krs_mirror_fold(p, tree_data[7]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[64], tree_data[65], tree_data[66], tree_data[67], tree_data[68], tree_data[69], tree_data[70]));
-    p = krs_mirror_fold(p, tree_data[6]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[57], tree_data[58], tree_data[59], tree_data[60], tree_data[61], tree_data[62], tree_data[63]));
-    p = krs_mirror_fold(p, tree_data[5]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[50], tree_data[51], tree_data[52], tree_data[53], tree_data[54], tree_data[55], tree_data[56]));
-    p = krs_mirror_fold(p, tree_data[4]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[43], tree_data[44], tree_data[45], tree_data[46], tree_data[47], tree_data[48], tree_data[49]));
-    p = krs_mirror_fold(p, tree_data[3]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[36], tree_data[37], tree_data[38], tree_data[39], tree_data[40], tree_data[41], tree_data[42]));
-    p = krs_mirror_fold(p, tree_data[2]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[29], tree_data[30], tree_data[31], tree_data[32], tree_data[33], tree_data[34], tree_data[35]));
-    p = krs_mirror_fold(p, tree_data[1]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[22], tree_data[23], tree_data[24], tree_data[25], tree_data[26], tree_data[27], tree_data[28]));
-    p = krs_mirror_fold(p, tree_data[0]);
-    d = min(d, krs_torus_capsule_distance(p, tree_data[11], tree_data[12], tree_data[13], tree_data[14], tree_data[15], tree_data[16], tree_data[17]));
-    d = min(d, krs_sphere_distance(p, tree_data[18]));
-    d = min(d, krs_sphere_distance(p, tree_data[19]));
-    d = min(d, krs_sphere_distance(p, tree_data[20]));
-    d = min(d, krs_sphere_distance(p, tree_data[21]));
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[92], krs_tree_data[93], krs_tree_data[94], krs_tree_data[95], krs_tree_data[96], krs_tree_data[97], krs_tree_data[98]));
+    d = min(d, krs_plane_distance(p, krs_tree_data[99]));
+    p = krs_mirror_fold(p, krs_tree_data[10]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[85], krs_tree_data[86], krs_tree_data[87], krs_tree_data[88], krs_tree_data[89], krs_tree_data[90], krs_tree_data[91]));
+    p = krs_mirror_fold(p, krs_tree_data[9]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[78], krs_tree_data[79], krs_tree_data[80], krs_tree_data[81], krs_tree_data[82], krs_tree_data[83], krs_tree_data[84]));
+    p = krs_mirror_fold(p, krs_tree_data[8]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[71], krs_tree_data[72], krs_tree_data[73], krs_tree_data[74], krs_tree_data[75], krs_tree_data[76], krs_tree_data[77]));
+    p = krs_mirror_fold(p, krs_tree_data[7]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[64], krs_tree_data[65], krs_tree_data[66], krs_tree_data[67], krs_tree_data[68], krs_tree_data[69], krs_tree_data[70]));
+    p = krs_mirror_fold(p, krs_tree_data[6]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[57], krs_tree_data[58], krs_tree_data[59], krs_tree_data[60], krs_tree_data[61], krs_tree_data[62], krs_tree_data[63]));
+    p = krs_mirror_fold(p, krs_tree_data[5]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[50], krs_tree_data[51], krs_tree_data[52], krs_tree_data[53], krs_tree_data[54], krs_tree_data[55], krs_tree_data[56]));
+    p = krs_mirror_fold(p, krs_tree_data[4]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[43], krs_tree_data[44], krs_tree_data[45], krs_tree_data[46], krs_tree_data[47], krs_tree_data[48], krs_tree_data[49]));
+    p = krs_mirror_fold(p, krs_tree_data[3]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[36], krs_tree_data[37], krs_tree_data[38], krs_tree_data[39], krs_tree_data[40], krs_tree_data[41], krs_tree_data[42]));
+    p = krs_mirror_fold(p, krs_tree_data[2]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[29], krs_tree_data[30], krs_tree_data[31], krs_tree_data[32], krs_tree_data[33], krs_tree_data[34], krs_tree_data[35]));
+    p = krs_mirror_fold(p, krs_tree_data[1]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[22], krs_tree_data[23], krs_tree_data[24], krs_tree_data[25], krs_tree_data[26], krs_tree_data[27], krs_tree_data[28]));
+    p = krs_mirror_fold(p, krs_tree_data[0]);
+    d = min(d, krs_torus_capsule_distance(p, krs_tree_data[11], krs_tree_data[12], krs_tree_data[13], krs_tree_data[14], krs_tree_data[15], krs_tree_data[16], krs_tree_data[17]));
+    d = min(d, krs_sphere_distance(p, krs_tree_data[18]));
+    d = min(d, krs_sphere_distance(p, krs_tree_data[19]));
+    d = min(d, krs_sphere_distance(p, krs_tree_data[20]));
+    d = min(d, krs_sphere_distance(p, krs_tree_data[21]));
     return d;
 }
-krs_location tree_locate(vec3 p) {
+krs_location krs_tree_locate(vec3 p) {
     krs_location w = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     float d;
-    d = krs_torus_capsule_distance(p, tree_data[92], tree_data[93], tree_data[94], tree_data[95], tree_data[96], tree_data[97], tree_data[98]);
+    d = krs_torus_capsule_distance(p, krs_tree_data[92], krs_tree_data[93], krs_tree_data[94], krs_tree_data[95], krs_tree_data[96], krs_tree_data[97], krs_tree_data[98]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 15u; w.level = 11u; }
-    d = krs_plane_distance(p, tree_data[99]);
+    d = krs_plane_distance(p, krs_tree_data[99]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 16u; w.level = 11u; }
-    if (krs_mirror_signed_distance(p, tree_data[10]) > 0.0) { p = krs_mirror_reflect(p, tree_data[10]); w.reflections.x |= 0x400u; }
-    d = krs_torus_capsule_distance(p, tree_data[85], tree_data[86], tree_data[87], tree_data[88], tree_data[89], tree_data[90], tree_data[91]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[10]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[10]); w.reflections.x |= 0x400u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[85], krs_tree_data[86], krs_tree_data[87], krs_tree_data[88], krs_tree_data[89], krs_tree_data[90], krs_tree_data[91]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 14u; w.level = 10u; }
-    if (krs_mirror_signed_distance(p, tree_data[9]) > 0.0) { p = krs_mirror_reflect(p, tree_data[9]); w.reflections.x |= 0x200u; }
-    d = krs_torus_capsule_distance(p, tree_data[78], tree_data[79], tree_data[80], tree_data[81], tree_data[82], tree_data[83], tree_data[84]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[9]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[9]); w.reflections.x |= 0x200u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[78], krs_tree_data[79], krs_tree_data[80], krs_tree_data[81], krs_tree_data[82], krs_tree_data[83], krs_tree_data[84]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 13u; w.level = 9u; }
-    if (krs_mirror_signed_distance(p, tree_data[8]) > 0.0) { p = krs_mirror_reflect(p, tree_data[8]); w.reflections.x |= 0x100u; }
-    d = krs_torus_capsule_distance(p, tree_data[71], tree_data[72], tree_data[73], tree_data[74], tree_data[75], tree_data[76], tree_data[77]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[8]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[8]); w.reflections.x |= 0x100u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[71], krs_tree_data[72], krs_tree_data[73], krs_tree_data[74], krs_tree_data[75], krs_tree_data[76], krs_tree_data[77]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 12u; w.level = 8u; }
-    if (krs_mirror_signed_distance(p, tree_data[7]) > 0.0) { p = krs_mirror_reflect(p, tree_data[7]); w.reflections.x |= 0x80u; }
-    d = krs_torus_capsule_distance(p, tree_data[64], tree_data[65], tree_data[66], tree_data[67], tree_data[68], tree_data[69], tree_data[70]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[7]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[7]); w.reflections.x |= 0x80u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[64], krs_tree_data[65], krs_tree_data[66], krs_tree_data[67], krs_tree_data[68], krs_tree_data[69], krs_tree_data[70]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 11u; w.level = 7u; }
-    if (krs_mirror_signed_distance(p, tree_data[6]) > 0.0) { p = krs_mirror_reflect(p, tree_data[6]); w.reflections.x |= 0x40u; }
-    d = krs_torus_capsule_distance(p, tree_data[57], tree_data[58], tree_data[59], tree_data[60], tree_data[61], tree_data[62], tree_data[63]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[6]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[6]); w.reflections.x |= 0x40u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[57], krs_tree_data[58], krs_tree_data[59], krs_tree_data[60], krs_tree_data[61], krs_tree_data[62], krs_tree_data[63]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 10u; w.level = 6u; }
-    if (krs_mirror_signed_distance(p, tree_data[5]) > 0.0) { p = krs_mirror_reflect(p, tree_data[5]); w.reflections.x |= 0x20u; }
-    d = krs_torus_capsule_distance(p, tree_data[50], tree_data[51], tree_data[52], tree_data[53], tree_data[54], tree_data[55], tree_data[56]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[5]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[5]); w.reflections.x |= 0x20u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[50], krs_tree_data[51], krs_tree_data[52], krs_tree_data[53], krs_tree_data[54], krs_tree_data[55], krs_tree_data[56]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 9u; w.level = 5u; }
-    if (krs_mirror_signed_distance(p, tree_data[4]) > 0.0) { p = krs_mirror_reflect(p, tree_data[4]); w.reflections.x |= 0x10u; }
-    d = krs_torus_capsule_distance(p, tree_data[43], tree_data[44], tree_data[45], tree_data[46], tree_data[47], tree_data[48], tree_data[49]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[4]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[4]); w.reflections.x |= 0x10u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[43], krs_tree_data[44], krs_tree_data[45], krs_tree_data[46], krs_tree_data[47], krs_tree_data[48], krs_tree_data[49]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 8u; w.level = 4u; }
-    if (krs_mirror_signed_distance(p, tree_data[3]) > 0.0) { p = krs_mirror_reflect(p, tree_data[3]); w.reflections.x |= 0x8u; }
-    d = krs_torus_capsule_distance(p, tree_data[36], tree_data[37], tree_data[38], tree_data[39], tree_data[40], tree_data[41], tree_data[42]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[3]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[3]); w.reflections.x |= 0x8u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[36], krs_tree_data[37], krs_tree_data[38], krs_tree_data[39], krs_tree_data[40], krs_tree_data[41], krs_tree_data[42]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 7u; w.level = 3u; }
-    if (krs_mirror_signed_distance(p, tree_data[2]) > 0.0) { p = krs_mirror_reflect(p, tree_data[2]); w.reflections.x |= 0x4u; }
-    d = krs_torus_capsule_distance(p, tree_data[29], tree_data[30], tree_data[31], tree_data[32], tree_data[33], tree_data[34], tree_data[35]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[2]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[2]); w.reflections.x |= 0x4u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[29], krs_tree_data[30], krs_tree_data[31], krs_tree_data[32], krs_tree_data[33], krs_tree_data[34], krs_tree_data[35]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 6u; w.level = 2u; }
-    if (krs_mirror_signed_distance(p, tree_data[1]) > 0.0) { p = krs_mirror_reflect(p, tree_data[1]); w.reflections.x |= 0x2u; }
-    d = krs_torus_capsule_distance(p, tree_data[22], tree_data[23], tree_data[24], tree_data[25], tree_data[26], tree_data[27], tree_data[28]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[1]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[1]); w.reflections.x |= 0x2u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[22], krs_tree_data[23], krs_tree_data[24], krs_tree_data[25], krs_tree_data[26], krs_tree_data[27], krs_tree_data[28]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 5u; w.level = 1u; }
-    if (krs_mirror_signed_distance(p, tree_data[0]) > 0.0) { p = krs_mirror_reflect(p, tree_data[0]); w.reflections.x |= 0x1u; }
-    d = krs_torus_capsule_distance(p, tree_data[11], tree_data[12], tree_data[13], tree_data[14], tree_data[15], tree_data[16], tree_data[17]);
+    if (krs_mirror_signed_distance(p, krs_tree_data[0]) > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[0]); w.reflections.x |= 0x1u; }
+    d = krs_torus_capsule_distance(p, krs_tree_data[11], krs_tree_data[12], krs_tree_data[13], krs_tree_data[14], krs_tree_data[15], krs_tree_data[16], krs_tree_data[17]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 0u; w.level = 0u; }
-    d = krs_sphere_distance(p, tree_data[18]);
+    d = krs_sphere_distance(p, krs_tree_data[18]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 1u; w.level = 0u; }
-    d = krs_sphere_distance(p, tree_data[19]);
+    d = krs_sphere_distance(p, krs_tree_data[19]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 2u; w.level = 0u; }
-    d = krs_sphere_distance(p, tree_data[20]);
+    d = krs_sphere_distance(p, krs_tree_data[20]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 3u; w.level = 0u; }
-    d = krs_sphere_distance(p, tree_data[21]);
+    d = krs_sphere_distance(p, krs_tree_data[21]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 4u; w.level = 0u; }
     return w;
 }
-krs_kernel_shading tree_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
+krs_kernel_shading krs_tree_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold) {
     krs_kernel_shading s;
     s.where = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     s.light = toLight;
@@ -304,112 +304,112 @@ krs_kernel_shading tree_shade(vec3 p, vec3 toLight, vec3 toEye, float threshold)
     float d;
     float e;
     float weight;
-    d = krs_torus_capsule_distance(p, tree_data[92], tree_data[93], tree_data[94], tree_data[95], tree_data[96], tree_data[97], tree_data[98]);
+    d = krs_torus_capsule_distance(p, krs_tree_data[92], krs_tree_data[93], krs_tree_data[94], krs_tree_data[95], krs_tree_data[96], krs_tree_data[97], krs_tree_data[98]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 15u; s.where.level = 11u; s.light = light; s.view = view; }
-    d = krs_plane_distance(p, tree_data[99]);
+    d = krs_plane_distance(p, krs_tree_data[99]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 16u; s.where.level = 11u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[10]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[10]); s.where.reflections.x |= 0x400u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[10]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[10]); s.where.reflections.x |= 0x400u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[10]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[10]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[85], tree_data[86], tree_data[87], tree_data[88], tree_data[89], tree_data[90], tree_data[91]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[10]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[10]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[85], krs_tree_data[86], krs_tree_data[87], krs_tree_data[88], krs_tree_data[89], krs_tree_data[90], krs_tree_data[91]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 14u; s.where.level = 10u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[9]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[9]); s.where.reflections.x |= 0x200u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[9]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[9]); s.where.reflections.x |= 0x200u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[9]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[9]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[78], tree_data[79], tree_data[80], tree_data[81], tree_data[82], tree_data[83], tree_data[84]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[9]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[9]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[78], krs_tree_data[79], krs_tree_data[80], krs_tree_data[81], krs_tree_data[82], krs_tree_data[83], krs_tree_data[84]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 13u; s.where.level = 9u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[8]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[8]); s.where.reflections.x |= 0x100u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[8]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[8]); s.where.reflections.x |= 0x100u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[8]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[8]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[71], tree_data[72], tree_data[73], tree_data[74], tree_data[75], tree_data[76], tree_data[77]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[8]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[8]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[71], krs_tree_data[72], krs_tree_data[73], krs_tree_data[74], krs_tree_data[75], krs_tree_data[76], krs_tree_data[77]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 12u; s.where.level = 8u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[7]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[7]); s.where.reflections.x |= 0x80u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[7]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[7]); s.where.reflections.x |= 0x80u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[7]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[7]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[64], tree_data[65], tree_data[66], tree_data[67], tree_data[68], tree_data[69], tree_data[70]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[7]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[7]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[64], krs_tree_data[65], krs_tree_data[66], krs_tree_data[67], krs_tree_data[68], krs_tree_data[69], krs_tree_data[70]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 11u; s.where.level = 7u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[6]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[6]); s.where.reflections.x |= 0x40u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[6]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[6]); s.where.reflections.x |= 0x40u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[6]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[6]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[57], tree_data[58], tree_data[59], tree_data[60], tree_data[61], tree_data[62], tree_data[63]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[6]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[6]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[57], krs_tree_data[58], krs_tree_data[59], krs_tree_data[60], krs_tree_data[61], krs_tree_data[62], krs_tree_data[63]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 10u; s.where.level = 6u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[5]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[5]); s.where.reflections.x |= 0x20u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[5]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[5]); s.where.reflections.x |= 0x20u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[5]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[5]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[50], tree_data[51], tree_data[52], tree_data[53], tree_data[54], tree_data[55], tree_data[56]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[5]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[5]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[50], krs_tree_data[51], krs_tree_data[52], krs_tree_data[53], krs_tree_data[54], krs_tree_data[55], krs_tree_data[56]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 9u; s.where.level = 5u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[4]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[4]); s.where.reflections.x |= 0x10u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[4]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[4]); s.where.reflections.x |= 0x10u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[4]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[4]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[43], tree_data[44], tree_data[45], tree_data[46], tree_data[47], tree_data[48], tree_data[49]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[4]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[4]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[43], krs_tree_data[44], krs_tree_data[45], krs_tree_data[46], krs_tree_data[47], krs_tree_data[48], krs_tree_data[49]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 8u; s.where.level = 4u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[3]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[3]); s.where.reflections.x |= 0x8u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[3]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[3]); s.where.reflections.x |= 0x8u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[3]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[3]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[36], tree_data[37], tree_data[38], tree_data[39], tree_data[40], tree_data[41], tree_data[42]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[3]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[3]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[36], krs_tree_data[37], krs_tree_data[38], krs_tree_data[39], krs_tree_data[40], krs_tree_data[41], krs_tree_data[42]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 7u; s.where.level = 3u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[2]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[2]); s.where.reflections.x |= 0x4u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[2]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[2]); s.where.reflections.x |= 0x4u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[2]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[2]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[29], tree_data[30], tree_data[31], tree_data[32], tree_data[33], tree_data[34], tree_data[35]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[2]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[2]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[29], krs_tree_data[30], krs_tree_data[31], krs_tree_data[32], krs_tree_data[33], krs_tree_data[34], krs_tree_data[35]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 6u; s.where.level = 2u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[1]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[1]); s.where.reflections.x |= 0x2u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[1]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[1]); s.where.reflections.x |= 0x2u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[1]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[1]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[22], tree_data[23], tree_data[24], tree_data[25], tree_data[26], tree_data[27], tree_data[28]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[1]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[1]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[22], krs_tree_data[23], krs_tree_data[24], krs_tree_data[25], krs_tree_data[26], krs_tree_data[27], krs_tree_data[28]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 5u; s.where.level = 1u; s.light = light; s.view = view; }
-    e = krs_mirror_signed_distance(p, tree_data[0]);
-    if (e > 0.0) { p = krs_mirror_reflect(p, tree_data[0]); s.where.reflections.x |= 0x1u; }
+    e = krs_mirror_signed_distance(p, krs_tree_data[0]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_tree_data[0]); s.where.reflections.x |= 0x1u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
-    light = light + (krs_mirror_reflect_direction(light, tree_data[0]) - light) * weight;
-    view = view + (krs_mirror_reflect_direction(view, tree_data[0]) - view) * weight;
-    d = krs_torus_capsule_distance(p, tree_data[11], tree_data[12], tree_data[13], tree_data[14], tree_data[15], tree_data[16], tree_data[17]);
+    light = light + (krs_mirror_reflect_direction(light, krs_tree_data[0]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_tree_data[0]) - view) * weight;
+    d = krs_torus_capsule_distance(p, krs_tree_data[11], krs_tree_data[12], krs_tree_data[13], krs_tree_data[14], krs_tree_data[15], krs_tree_data[16], krs_tree_data[17]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 0u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, tree_data[18]);
+    d = krs_sphere_distance(p, krs_tree_data[18]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 1u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, tree_data[19]);
+    d = krs_sphere_distance(p, krs_tree_data[19]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 2u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, tree_data[20]);
+    d = krs_sphere_distance(p, krs_tree_data[20]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 3u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, tree_data[21]);
+    d = krs_sphere_distance(p, krs_tree_data[21]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 4u; s.where.level = 0u; s.light = light; s.view = view; }
     vec3 q = s.where.kernel_point;
-    if (s.where.kernel == 0u) { s.normal = krs_torus_capsule_normal(q, tree_data[11], tree_data[12], tree_data[13], tree_data[14], tree_data[15], tree_data[16], tree_data[17]); s.kind = 0u; }
-    else if (s.where.kernel == 1u) { s.normal = krs_sphere_normal(q, tree_data[18]); s.kind = 1u; }
-    else if (s.where.kernel == 2u) { s.normal = krs_sphere_normal(q, tree_data[19]); s.kind = 1u; }
-    else if (s.where.kernel == 3u) { s.normal = krs_sphere_normal(q, tree_data[20]); s.kind = 1u; }
-    else if (s.where.kernel == 4u) { s.normal = krs_sphere_normal(q, tree_data[21]); s.kind = 1u; }
-    else if (s.where.kernel == 5u) { s.normal = krs_torus_capsule_normal(q, tree_data[22], tree_data[23], tree_data[24], tree_data[25], tree_data[26], tree_data[27], tree_data[28]); s.kind = 0u; }
-    else if (s.where.kernel == 6u) { s.normal = krs_torus_capsule_normal(q, tree_data[29], tree_data[30], tree_data[31], tree_data[32], tree_data[33], tree_data[34], tree_data[35]); s.kind = 0u; }
-    else if (s.where.kernel == 7u) { s.normal = krs_torus_capsule_normal(q, tree_data[36], tree_data[37], tree_data[38], tree_data[39], tree_data[40], tree_data[41], tree_data[42]); s.kind = 0u; }
-    else if (s.where.kernel == 8u) { s.normal = krs_torus_capsule_normal(q, tree_data[43], tree_data[44], tree_data[45], tree_data[46], tree_data[47], tree_data[48], tree_data[49]); s.kind = 0u; }
-    else if (s.where.kernel == 9u) { s.normal = krs_torus_capsule_normal(q, tree_data[50], tree_data[51], tree_data[52], tree_data[53], tree_data[54], tree_data[55], tree_data[56]); s.kind = 0u; }
-    else if (s.where.kernel == 10u) { s.normal = krs_torus_capsule_normal(q, tree_data[57], tree_data[58], tree_data[59], tree_data[60], tree_data[61], tree_data[62], tree_data[63]); s.kind = 0u; }
-    else if (s.where.kernel == 11u) { s.normal = krs_torus_capsule_normal(q, tree_data[64], tree_data[65], tree_data[66], tree_data[67], tree_data[68], tree_data[69], tree_data[70]); s.kind = 0u; }
-    else if (s.where.kernel == 12u) { s.normal = krs_torus_capsule_normal(q, tree_data[71], tree_data[72], tree_data[73], tree_data[74], tree_data[75], tree_data[76], tree_data[77]); s.kind = 0u; }
-    else if (s.where.kernel == 13u) { s.normal = krs_torus_capsule_normal(q, tree_data[78], tree_data[79], tree_data[80], tree_data[81], tree_data[82], tree_data[83], tree_data[84]); s.kind = 0u; }
-    else if (s.where.kernel == 14u) { s.normal = krs_torus_capsule_normal(q, tree_data[85], tree_data[86], tree_data[87], tree_data[88], tree_data[89], tree_data[90], tree_data[91]); s.kind = 0u; }
-    else if (s.where.kernel == 15u) { s.normal = krs_torus_capsule_normal(q, tree_data[92], tree_data[93], tree_data[94], tree_data[95], tree_data[96], tree_data[97], tree_data[98]); s.kind = 0u; }
-    else { s.normal = krs_plane_normal(q, tree_data[99]); s.kind = 2u; }
+    if (s.where.kernel == 0u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[11], krs_tree_data[12], krs_tree_data[13], krs_tree_data[14], krs_tree_data[15], krs_tree_data[16], krs_tree_data[17]); s.kind = 0u; }
+    else if (s.where.kernel == 1u) { s.normal = krs_sphere_normal(q, krs_tree_data[18]); s.kind = 1u; }
+    else if (s.where.kernel == 2u) { s.normal = krs_sphere_normal(q, krs_tree_data[19]); s.kind = 1u; }
+    else if (s.where.kernel == 3u) { s.normal = krs_sphere_normal(q, krs_tree_data[20]); s.kind = 1u; }
+    else if (s.where.kernel == 4u) { s.normal = krs_sphere_normal(q, krs_tree_data[21]); s.kind = 1u; }
+    else if (s.where.kernel == 5u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[22], krs_tree_data[23], krs_tree_data[24], krs_tree_data[25], krs_tree_data[26], krs_tree_data[27], krs_tree_data[28]); s.kind = 0u; }
+    else if (s.where.kernel == 6u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[29], krs_tree_data[30], krs_tree_data[31], krs_tree_data[32], krs_tree_data[33], krs_tree_data[34], krs_tree_data[35]); s.kind = 0u; }
+    else if (s.where.kernel == 7u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[36], krs_tree_data[37], krs_tree_data[38], krs_tree_data[39], krs_tree_data[40], krs_tree_data[41], krs_tree_data[42]); s.kind = 0u; }
+    else if (s.where.kernel == 8u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[43], krs_tree_data[44], krs_tree_data[45], krs_tree_data[46], krs_tree_data[47], krs_tree_data[48], krs_tree_data[49]); s.kind = 0u; }
+    else if (s.where.kernel == 9u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[50], krs_tree_data[51], krs_tree_data[52], krs_tree_data[53], krs_tree_data[54], krs_tree_data[55], krs_tree_data[56]); s.kind = 0u; }
+    else if (s.where.kernel == 10u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[57], krs_tree_data[58], krs_tree_data[59], krs_tree_data[60], krs_tree_data[61], krs_tree_data[62], krs_tree_data[63]); s.kind = 0u; }
+    else if (s.where.kernel == 11u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[64], krs_tree_data[65], krs_tree_data[66], krs_tree_data[67], krs_tree_data[68], krs_tree_data[69], krs_tree_data[70]); s.kind = 0u; }
+    else if (s.where.kernel == 12u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[71], krs_tree_data[72], krs_tree_data[73], krs_tree_data[74], krs_tree_data[75], krs_tree_data[76], krs_tree_data[77]); s.kind = 0u; }
+    else if (s.where.kernel == 13u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[78], krs_tree_data[79], krs_tree_data[80], krs_tree_data[81], krs_tree_data[82], krs_tree_data[83], krs_tree_data[84]); s.kind = 0u; }
+    else if (s.where.kernel == 14u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[85], krs_tree_data[86], krs_tree_data[87], krs_tree_data[88], krs_tree_data[89], krs_tree_data[90], krs_tree_data[91]); s.kind = 0u; }
+    else if (s.where.kernel == 15u) { s.normal = krs_torus_capsule_normal(q, krs_tree_data[92], krs_tree_data[93], krs_tree_data[94], krs_tree_data[95], krs_tree_data[96], krs_tree_data[97], krs_tree_data[98]); s.kind = 0u; }
+    else { s.normal = krs_plane_normal(q, krs_tree_data[99]); s.kind = 2u; }
     return s;
 }

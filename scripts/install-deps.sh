@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Install the Debian packages krs needs.  Usage: scripts/install-deps.sh [--tests|--examples|--all|--peers]
-#   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa and glslang (GLSL tests), Python 3
+#   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa, glslang and spirv-tools (GLSL tests), Python 3
 #               (the check of docs/stability.md's figures), OpenImageIO and CLI11 (a test checks an
 #               example's image, others its command line)
 #   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO (and its tools, which its CMake
@@ -14,7 +14,7 @@ set -euo pipefail
 mode="${1:---all}"
 
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
-tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools python3)
+tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools spirv-tools python3)
 examples=(libopenimageio-dev openimageio-tools libcli11-dev)
 benchmarks=(libbenchmark-dev)
 peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost

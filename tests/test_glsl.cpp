@@ -2,14 +2,18 @@
 // back as the same floats, only the kinds a scene uses are emitted, and pack() agrees with the
 // emitter's layout. (Execution on llvmpipe: test_glsl_gpu.cpp.)
 
+#include "krs/fractal/kifs.hpp"
+#include "krs/fractal/log_spherical.hpp"
 #include "krs/glsl/example_scenes.hpp"
 
 #include <doctest/doctest.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -119,9 +123,9 @@ TEST_CASE("glsl emits each kernel kind once and only the kinds a scene uses")
     CHECK(occurrences(text, "krs_plane_distance") == 0);
     CHECK(occurrences(text, "float krs_mirror_signed_distance(") == 1);
     CHECK(occurrences(text, "struct krs_location") == 1);
-    CHECK(occurrences(text, "float bare(vec3 p)") == 1);
-    CHECK(occurrences(text, "krs_location bare_locate(vec3 p)") == 1);
-    CHECK(occurrences(text, "krs_kernel_shading bare_shade(") == 1);
+    CHECK(occurrences(text, "float krs_bare(vec3 p)") == 1);
+    CHECK(occurrences(text, "krs_location krs_bare_locate(vec3 p)") == 1);
+    CHECK(occurrences(text, "krs_kernel_shading krs_bare_shade(") == 1);
 
     // Two fields in one program share the library.
     krs::glsl::emitter e;
@@ -130,8 +134,8 @@ TEST_CASE("glsl emits each kernel kind once and only the kinds a scene uses")
     const std::string both = e.source();
     CHECK(occurrences(both, "float krs_torus_capsule_distance(") == 1);
     CHECK(occurrences(both, "float krs_sphere_distance(") == 1);
-    CHECK(occurrences(both, "float a(vec3 p)") == 1);
-    CHECK(occurrences(both, "float b(vec3 p)") == 1);
+    CHECK(occurrences(both, "float krs_a(vec3 p)") == 1);
+    CHECK(occurrences(both, "float krs_b(vec3 p)") == 1);
 }
 
 TEST_CASE("glsl data layout: pack equals the emitter data and the documented vec4 order")
@@ -150,37 +154,100 @@ TEST_CASE("glsl data layout: pack equals the emitter data and the documented vec
         CHECK(packed[4 * i + 3] == m.offset);
     }
     const std::string text = e.source();
-    CHECK(text.find("layout(std140) uniform data_block {\n    vec4 data[26];\n};") != std::string::npos);
+    CHECK(text.find("layout(std140) uniform krs_data_block {\n    vec4 krs_data[26];\n};") != std::string::npos);
     krs::glsl::emitter ssbo({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "data", 3});
     ssbo.add(s.field, "sponge");
-    CHECK(ssbo.source().find("layout(std430, binding = 3) readonly buffer data_block {") != std::string::npos);
+    CHECK(ssbo.source().find("layout(std430, binding = 3) readonly buffer krs_data_block {") != std::string::npos);
     CHECK_THROWS_AS(krs::glsl::emitter({krs::glsl::target::shadertoy, krs::glsl::data_mode::buffer}),
                     krs::invalid_parameter);
 }
 
-TEST_CASE("glsl data name: an identifier that nothing in the emitted code hides")
+TEST_CASE("glsl data name: follows the prefix, and names nothing else the code declares")
 {
-    // Names the sponge's code also declares (locals of the distance, locate and shade functions,
-    // library parameters): each hid the array, and the shader failed to compile ("d": 'left of [
-    // is not of type array'; "p", "light", "q": 'vector index out of range').
+    // The array is prefix + data_name. A data name that makes it one of the scene's functions
+    // (krs_sponge, krs_sponge_locate) would redefine it: refused by name.
     const auto s = ex::sponge();
-    for (const char* clash : {"d", "p", "w", "s", "e", "q", "light", "view", "weight", "inverse", "sponge"}) {
+    for (const char* clash : {"sponge", "sponge_locate", "sponge_shade"}) {
         INFO(std::string(clash));
         krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, clash, 0});
         CHECK_THROWS_WITH_AS(e.add(s.field, "sponge"), doctest::Contains("glsl.options.data_name"), krs::invalid_parameter);
     }
-    for (const char* fine : {"data", "scene", "krs_data", "D", "p2", "m"}) {
+    // Locals of the generated functions (d, p, light) hid an unprefixed array; prefixed they cannot.
+    for (const char* fine : {"data", "d", "p", "light", "scene", "D", "p2", "1x"}) {
         INFO(std::string(fine));
         krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, fine, 0});
         CHECK_NOTHROW(e.add(s.field, "sponge"));
-        const std::string text = e.source();
-        CHECK(text.find(std::string("vec4 ") + fine + "[") != std::string::npos);
+        CHECK(e.source().find(std::string("vec4 krs_") + fine + "[") != std::string::npos);
     }
-    // Not identifiers, GLSL's gl_ names, or the library's own krs_ names.
-    for (const char* bad : {"", "1x", "gl_data", "a-b", "my data", "krs_mirror_fold", "krs_location"}) {
+    for (const char* bad : {"", "a-b", "my data", "x.y"}) {
         INFO(std::string(bad));
         CHECK_THROWS_WITH_AS(krs::glsl::emitter({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, bad, 0}),
                              doctest::Contains("glsl.options.data_name"), krs::invalid_parameter);
+    }
+    krs::glsl::emitter e;
+    CHECK_THROWS_WITH_AS(e.add(s.field, "my scene"), doctest::Contains("glsl.add.name"), krs::invalid_parameter);
+}
+
+// Identifiers of `text` (maximal runs of letters, digits and _ not starting with a digit).
+std::set<std::string> identifiers(const std::string& text)
+{
+    std::set<std::string> names;
+    const auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+    for (std::size_t i = 0; i < text.size();) {
+        if (!word(text[i])) {
+            ++i;
+            continue;
+        }
+        std::size_t j = i;
+        while (j < text.size() && word(text[j])) ++j;
+        if (!std::isdigit(static_cast<unsigned char>(text[i]))) names.insert(text.substr(i, j - i));
+        i = j;
+    }
+    return names;
+}
+
+TEST_CASE("glsl prefix: every name the snippet declares carries it, the scene function included")
+{
+    const auto s = ex::forest();
+    for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
+        krs::glsl::emitter plain({krs::glsl::target::glsl450, mode, "data", 0});
+        krs::glsl::emitter mine({krs::glsl::target::glsl450, mode, "data", 0, "forest_gen_"});
+        CHECK(plain.add(s.field, "forest") == "krs_forest");
+        CHECK(mine.add(s.field, "forest") == "forest_gen_forest");
+        const std::string a = plain.source(), b = mine.source();
+        // Independent of the renaming: the identifiers the default text declares are those that
+        // start with krs_ (or KRS_ for guards); with the prefix none is left, and each is there
+        // under the new prefix.
+        const std::set<std::string> before = identifiers(a), after = identifiers(b);
+        std::size_t renamed = 0;
+        for (const std::string& n : before) {
+            if (n.rfind("krs_", 0) == 0) {
+                INFO(n);
+                CHECK(after.count("forest_gen_" + n.substr(4)) == 1);
+                ++renamed;
+            } else if (n.rfind("KRS_", 0) == 0) {
+                CHECK(after.count("FOREST_GEN_" + n.substr(4)) == 1);
+            }
+        }
+        CHECK(renamed >= 10); // functions, structs, the data array, the scene's three functions
+        for (const std::string& n : after) {
+            INFO(n);
+            CHECK(n.rfind("krs_", 0) != 0);
+            CHECK(n.rfind("KRS_", 0) != 0);
+        }
+        CHECK(b.find("float forest_gen_forest(vec3 p)") != std::string::npos);
+        // Nothing else changed: the prefix replaced back gives the default text.
+        std::string back = b;
+        for (const auto& [from, to] : {std::pair<std::string, std::string>{"forest_gen_", "krs_"}, {"FOREST_GEN_", "KRS_"}})
+            for (std::size_t at = back.find(from); at != std::string::npos; at = back.find(from, at + to.size()))
+                back.replace(at, from.size(), to);
+        CHECK(back == a);
+    }
+    // Not a GLSL identifier, the implementation's gl_ names, or GLSL's reserved double underscore.
+    for (const char* bad : {"", "1a_", "gl_", "gl_mine", "a-b_", "my__", "x y"}) {
+        INFO(std::string(bad));
+        CHECK_THROWS_WITH_AS(krs::glsl::emitter({krs::glsl::target::glsl330, krs::glsl::data_mode::constants, "data", 0, bad}),
+                             doctest::Contains("glsl.options.prefix"), krs::invalid_parameter);
     }
 }
 
@@ -207,10 +274,10 @@ TEST_CASE("glsl fractals: KIFS and similar shells emit by recursion, pack agrees
     CHECK(occurrences(text, "vec3 krs_sort_fold_apply(") == 1);
     CHECK(occurrences(text, "vec3 krs_plane_fold_apply(") == 1);
     CHECK(occurrences(text, "float krs_box_distance(") == 1);
-    CHECK(occurrences(text, "float menger_kernel(vec3 p)") == 1);
-    CHECK(occurrences(text, "vec3 menger_program(vec3 p)") == 1);
-    CHECK(occurrences(text, "for (int i = 0; i < 4; ++i) p = menger_program(p);") == 1); // last_iteration taps
-    CHECK(occurrences(text, "float cubes(vec3 p)") == 1);
+    CHECK(occurrences(text, "float krs_menger_kernel(vec3 p)") == 1);
+    CHECK(occurrences(text, "vec3 krs_menger_program(vec3 p)") == 1);
+    CHECK(occurrences(text, "for (int i = 0; i < 4; ++i) p = krs_menger_program(p);") == 1); // last_iteration taps
+    CHECK(occurrences(text, "float krs_cubes(vec3 p)") == 1);
     CHECK(krs::glsl::pack(sponge, "menger") ==
           std::vector<float>(e.data().begin(), e.data().begin() + std::ptrdiff_t(krs::glsl::pack(sponge, "menger").size())));
     // Box (5 vec4s), abs (1), sort (none), scale (1), plane (1), then 1 / 3^i for i = 0..4.
@@ -226,8 +293,8 @@ TEST_CASE("glsl fractals: KIFS and similar shells emit by recursion, pack agrees
 
     const auto lotus = krs::make_recursive_lotus(1.0f, 8, {krs::shell_seams::none, 0.02f, 1.0f});
     const std::string shell = krs::glsl::emit(lotus, "lotus");
-    CHECK(occurrences(shell, "float lotus_shell_7(vec3 p)") == 1);
-    CHECK(occurrences(shell, "float lotus_scale(float k)") == 1);
+    CHECK(occurrences(shell, "float krs_lotus_shell_7(vec3 p)") == 1);
+    CHECK(occurrences(shell, "float krs_lotus_scale(float k)") == 1);
     CHECK(occurrences(shell, "for (int j = -1; j <= 1; ++j)") == 0); // seams::none: one shell
     const std::string adjacent = krs::glsl::emit(krs::make_cube_singularity(), "cubes");
     CHECK(occurrences(adjacent, "for (int j = -1; j <= 1; ++j)") == 1);

@@ -5,15 +5,20 @@
 // Built as its own executable (krs_glsl_tests) because it links EGL and OpenGL; CMake option
 // KRS_GLSL_TESTS=OFF leaves it out. A context that cannot be created FAILS the test.
 
+#include "krs/compose.hpp"
+#include "krs/fractal/kifs.hpp"
+#include "krs/fractal/log_spherical.hpp"
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus.hpp"
 
 #include "support/gl_context.hpp"
+#include "support/gpu_points.hpp"
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -26,7 +31,8 @@
 
 namespace {
 
-using krs_test::buffer, krs_test::compile, krs_test::link, krs_test::require_context, krs_test::validate_with_glslang;
+using krs_test::buffer, krs_test::compile, krs_test::gpu_result, krs_test::link, krs_test::require_context,
+    krs_test::run_points, krs_test::validate_spirv, krs_test::validate_with_glslang;
 
 namespace ex = krs::glsl::examples;
 using krs::vec3f;
@@ -34,81 +40,6 @@ using krs::vec3f;
 
 
 
-
-// What one point gives on the GPU: distance, then locate's point, kernel, level and bits.
-struct gpu_result {
-    float distance;
-    vec3f kernel_point;
-    std::uint32_t kernel, level;
-    std::uint64_t reflections;
-};
-
-// Runs NAME(p) and NAME_locate(p) of `snippet` (a 330 or 450 snippet without #version) over the
-// points in a compute shader. `data` is bound as the block of buffer mode (UBO for 330 code,
-// SSBO binding 0 for 450 code); empty for constants mode.
-std::vector<gpu_result> run_points(const std::string& snippet, const std::string& name, const std::vector<vec3f>& points,
-                                   const std::vector<float>& data, bool uniform_block, const std::string& data_name)
-{
-    require_context();
-    const std::string text = "#version 430 core\nlayout(local_size_x = 64) in;\n" + snippet +
-                             "layout(std430, binding = 1) readonly buffer krs_points { float points[]; };\n"
-                             "layout(std430, binding = 2) writeonly buffer krs_results { float results[]; };\n"
-                             "uniform uint count;\n"
-                             "void main() {\n"
-                             "    uint i = gl_GlobalInvocationID.x;\n"
-                             "    if (i >= count) return;\n"
-                             "    vec3 p = vec3(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]);\n"
-                             "    krs_location w = " + name + "_locate(p);\n"
-                             "    results[8u * i] = " + name + "(p);\n"
-                             "    results[8u * i + 1u] = w.kernel_point.x;\n"
-                             "    results[8u * i + 2u] = w.kernel_point.y;\n"
-                             "    results[8u * i + 3u] = w.kernel_point.z;\n"
-                             "    results[8u * i + 4u] = uintBitsToFloat(w.kernel);\n"
-                             "    results[8u * i + 5u] = uintBitsToFloat(w.level);\n"
-                             "    results[8u * i + 6u] = uintBitsToFloat(w.reflections.x);\n"
-                             "    results[8u * i + 7u] = uintBitsToFloat(w.reflections.y);\n"
-                             "}\n";
-    const GLuint program = link({compile(GL_COMPUTE_SHADER, text)});
-    glUseProgram(program);
-    GLuint data_buffer = 0;
-    if (!data.empty()) {
-        if (uniform_block) {
-            data_buffer = buffer(GL_UNIFORM_BUFFER, data.data(), data.size() * sizeof(float), GL_DYNAMIC_DRAW);
-            const GLuint index = glGetUniformBlockIndex(program, (data_name + "_block").c_str());
-            REQUIRE(index != GL_INVALID_INDEX);
-            glUniformBlockBinding(program, index, 0);
-            glBindBufferBase(GL_UNIFORM_BUFFER, 0, data_buffer);
-        } else {
-            data_buffer = buffer(GL_SHADER_STORAGE_BUFFER, data.data(), data.size() * sizeof(float), GL_DYNAMIC_DRAW);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, data_buffer);
-        }
-    }
-    std::vector<float> packed;
-    packed.reserve(points.size() * 3);
-    for (const vec3f& p : points) packed.insert(packed.end(), {p.x, p.y, p.z});
-    const GLuint in = buffer(GL_SHADER_STORAGE_BUFFER, packed.data(), packed.size() * sizeof(float), GL_STATIC_DRAW);
-    const GLuint out = buffer(GL_SHADER_STORAGE_BUFFER, nullptr, points.size() * 8 * sizeof(float), GL_DYNAMIC_READ);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, in);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, out);
-    glUniform1ui(glGetUniformLocation(program, "count"), GLuint(points.size()));
-    glDispatchCompute(GLuint((points.size() + 63) / 64), 1, 1);
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
-    std::vector<float> raw(points.size() * 8);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, out);
-    glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(raw.size() * sizeof(float)), raw.data());
-    REQUIRE(glGetError() == GL_NO_ERROR);
-    const GLuint buffers[3] = {in, out, data_buffer};
-    glDeleteBuffers(data_buffer ? 3 : 2, buffers);
-    glDeleteProgram(program);
-    std::vector<gpu_result> results(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        const float* r = &raw[8 * i];
-        std::uint32_t bits[4];
-        std::memcpy(bits, r + 4, sizeof bits);
-        results[i] = {r[0], {r[1], r[2], r[3]}, bits[0], bits[1], bits[2] | (std::uint64_t(bits[3]) << 32)};
-    }
-    return results;
-}
 
 template <class S>
 std::vector<vec3f> sample_points(const ex::scene<S>& s, std::size_t count)
@@ -173,11 +104,10 @@ void check_scene(const ex::scene<S>& s)
                                 {"330 buffer (UBO std140)", krs::glsl::target::glsl330, krs::glsl::data_mode::buffer}};
     for (const variant& v : variants) {
         krs::glsl::emitter e({v.target, v.mode, s.name + "_data", 0});
-        e.add(s.field, s.name);
+        const std::string fn = e.add(s.field, s.name); // krs_NAME, its data krs_NAME_data
         const bool buffer = v.mode == krs::glsl::data_mode::buffer;
         const std::vector<float> data = buffer ? krs::glsl::pack(s.field, s.name) : std::vector<float>{};
-        const auto gpu = run_points(e.source(), s.name, points, data, v.target == krs::glsl::target::glsl330,
-                                    s.name + "_data");
+        const auto gpu = run_points(e.source(), fn, points, data, v.target == krs::glsl::target::glsl330, fn + "_data");
         const parity r = compare(s, points, gpu);
         const std::size_t compared = r.points - r.near_mirror;
         std::printf("%-8s %-26s points %zu  max |d_gpu - d_cpu| %.3g (%.3g of extent %.3g)  reflection bits equal "
@@ -239,6 +169,14 @@ std::string wrapper_main(const std::string& name)
            "    krs_out = vec4(" + name + "(vec3(1.0)), w.kernel_point.x + float(w.reflections.x), s.normal.x, 1.0);\n}\n";
 }
 
+// The same calls for Vulkan, where an output needs a location.
+std::string vulkan_main(const std::string& name)
+{
+    return "layout(location = 0) out vec4 krs_out;\nvoid main() {\n    krs_location w = " + name + "_locate(vec3(0.5));\n"
+           "    krs_kernel_shading s = " + name + "_shade(vec3(0.5), vec3(0.0, 1.0, 0.0), vec3(1.0, 0.0, 0.0), 0.01);\n"
+           "    krs_out = vec4(" + name + "(vec3(1.0)), w.kernel_point.x + float(w.reflections.x), s.normal.x, 1.0);\n}\n";
+}
+
 } // namespace
 
 TEST_CASE("glslangValidator accepts every emitted snippet for every target")
@@ -246,7 +184,7 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
     REQUIRE(std::system("\"" KRS_GLSLANG_VALIDATOR "\" --version > /dev/null 2>&1") == 0);
     const std::string dir = std::string(KRS_BINARY_DIR) + "/glsl-check";
     std::system(("mkdir -p \"" + dir + "\"").c_str());
-    int files = 0;
+    int files = 0, spirv_files = 0;
     ex::for_each_scene([&](const auto& s) {
         for (const ex::file_kind& kind : ex::files) {
             const std::string text = ex::file_text(s, kind);
@@ -262,7 +200,7 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
                 files += 2;
                 continue;
             }
-            const std::string body = text + wrapper_main(s.name);
+            const std::string body = text + wrapper_main("krs_" + s.name);
             if (kind.target == krs::glsl::target::glsl330 && kind.mode == krs::glsl::data_mode::constants) {
                 // The constants snippet serves 330 and 450 alike.
                 validate_with_glslang(path + ".450.frag", "#version 450 core\n" + body);
@@ -271,17 +209,31 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
             validate_with_glslang(path + ".frag", krs::glsl::version_line(kind.target) + body);
             ++files;
         }
-        // 450 constants and es300 buffer are not shipped files; check them too.
+        // 450 constants and uniform buffer and es300 buffer are not shipped files; check them too.
         for (const auto& [t, m] : {std::pair{krs::glsl::target::glsl450, krs::glsl::data_mode::constants},
+                                   std::pair{krs::glsl::target::glsl450, krs::glsl::data_mode::uniform_buffer},
                                    std::pair{krs::glsl::target::es300, krs::glsl::data_mode::buffer}}) {
             krs::glsl::emitter e({t, m, s.name + "_data", 0});
-            e.add(s.field, s.name);
-            validate_with_glslang(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + ".extra.frag",
-                     e.source(true) + wrapper_main(s.name));
+            const std::string fn = e.add(s.field, s.name);
+            validate_with_glslang(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + "." +
+                                      std::to_string(int(m)) + ".extra.frag",
+                                  e.source(true) + wrapper_main(fn));
             ++files;
         }
+        // Vulkan: the 450 code of every data mode (the shipped buffer450 file among them) to SPIR-V.
+        for (const auto m : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer,
+                             krs::glsl::data_mode::uniform_buffer}) {
+            krs::glsl::emitter e({krs::glsl::target::glsl450, m, s.name + "_data", 0});
+            const std::string fn = e.add(s.field, s.name);
+            if (m == krs::glsl::data_mode::buffer)
+                CHECK(e.source() == ex::file_text(s, ex::files[3])); // what glsl/NAME.buffer450.glsl holds
+            validate_spirv(dir + "/" + s.name + ".vulkan." + std::to_string(int(m)) + ".frag",
+                           e.source(true) + vulkan_main(fn));
+            ++spirv_files;
+        }
     });
-    std::printf("glslangValidator: %d shaders checked\n", files);
+    std::printf("glslangValidator: %d shaders checked, %d compiled for Vulkan and passed spirv-val\n", files,
+                spirv_files);
 }
 
 TEST_CASE("Two shipped snippets in one shader: each library part once, both fields right")
@@ -294,10 +246,17 @@ TEST_CASE("Two shipped snippets in one shader: each library part once, both fiel
     const std::string both = ex::file_text(tree, constants) + ex::file_text(terrain, constants);
     const std::string dir = std::string(KRS_BINARY_DIR) + "/glsl-check";
     std::system(("mkdir -p \"" + dir + "\"").c_str());
-    validate_with_glslang(dir + "/tree_and_terrain.frag", "#version 330 core\n" + both + wrapper_main("terrain"));
+    validate_with_glslang(dir + "/tree_and_terrain.frag", "#version 330 core\n" + both + wrapper_main("krs_terrain"));
+    // Pasted into a shader that already has globals named like the scenes: every name the snippets
+    // declare carries the krs_ prefix, so nothing is redefined or hidden.
+    validate_with_glslang(dir + "/tree_and_terrain_in_a_user_shader.frag",
+                          "#version 330 core\nuniform float terrain;\nfloat tree(vec3 p) { return p.x - terrain; }\n" +
+                              both + "out vec4 color;\nvoid main() { color = vec4(tree(vec3(1.0)) + krs_tree(vec3(1.0)) + "
+                                     "krs_terrain(vec3(0.5)) + krs_terrain_locate(vec3(0.5)).dist); }\n");
     const std::vector<vec3f> tree_points = sample_points(tree, 4096), terrain_points = sample_points(terrain, 4096);
-    const parity t = compare(tree, tree_points, run_points(both, "tree", tree_points, {}, false, "tree_data"));
-    const parity g = compare(terrain, terrain_points, run_points(both, "terrain", terrain_points, {}, false, "terrain_data"));
+    const parity t = compare(tree, tree_points, run_points(both, "krs_tree", tree_points, {}, false, "krs_tree_data"));
+    const parity g =
+        compare(terrain, terrain_points, run_points(both, "krs_terrain", terrain_points, {}, false, "krs_terrain_data"));
     CHECK(t.max_error <= 1e-5f * tree.extent());
     CHECK(g.max_error <= 1e-5f * terrain.extent());
 }
@@ -340,8 +299,7 @@ TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field o
         const krs::torus ring({0.15f, 0.3f, 0.12f}, {0.3f, 1.0f, -0.2f}, 0.12f, 0.03f);
         krs::glsl::emitter te({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "ring_data", 0});
         te.add(grid, "ring_scene"); // brings krs_torus_* and krs_location
-        float c[12];
-        ring.glsl_constants(c);
+        const std::array<float, 12> c = ring.glsl_parameters();
         const auto v4 = [&](int i) {
             return "vec4(" + krs::glsl::float_literal(c[4 * i]) + ", " + krs::glsl::float_literal(c[4 * i + 1]) + ", " +
                    krs::glsl::float_literal(c[4 * i + 2]) + ", " + krs::glsl::float_literal(c[4 * i + 3]) + ")";
@@ -371,11 +329,12 @@ TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field o
     const krs::union_of<warped, krs::box> scene(warped(tree.field, krs::twist_warp(0.2f, 8.0f)),
                                                 krs::box({2.0f, 0.5f, 0.0f}, {0.4f, 0.5f, 0.3f}));
     krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "scene_data", 0});
-    e.add(scene, "scene");
+    const std::string fn = e.add(scene, "scene");
     // The union has no locate of its own: give the compute wrapper one that reports nothing.
-    const std::string snippet = e.source() + "krs_location scene_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
+    const std::string snippet =
+        e.source() + "krs_location " + fn + "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
     const std::vector<vec3f> points = sample_points(tree, 16384);
-    const auto gpu = run_points(snippet, "scene", points, {}, false, "scene_data");
+    const auto gpu = run_points(snippet, fn, points, {}, false, fn + "_data");
     float worst = 0;
     for (std::size_t i = 0; i < points.size(); ++i) worst = std::max(worst, std::abs(gpu[i].distance - scene.distance(points[i])));
     std::printf("union(twisted tree, box) max |d_gpu - d_cpu| %.3g (extent %.3g)\n", double(worst), double(tree.extent()));
@@ -387,7 +346,7 @@ TEST_CASE("GLSL buffer mode animates a sequence without recompiling")
     // The same code, the data of a sequence with moved mirrors: the GPU follows the new data.
     const auto sponge = ex::sponge();
     krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "sponge_data", 0});
-    e.add(sponge.field, "sponge");
+    const std::string fn = e.add(sponge.field, "sponge");
     krs::model::sponge_sequence::builder b;
     for (std::size_t i = 0; i <= sponge.field.mirror_count(); ++i) {
         if (i > 0) {
@@ -400,7 +359,7 @@ TEST_CASE("GLSL buffer mode animates a sequence without recompiling")
     const auto moved = b.build();
     const ex::scene<krs::model::sponge_sequence> s{"sponge", moved, {}, sponge.sample_center, sponge.sample_half};
     const std::vector<vec3f> points = sample_points(s, 16384);
-    const auto gpu = run_points(e.source(), "sponge", points, krs::glsl::pack(moved, "sponge"), false, "sponge_data");
+    const auto gpu = run_points(e.source(), fn, points, krs::glsl::pack(moved, "sponge"), false, fn + "_data");
     const parity r = compare(s, points, gpu);
     CHECK(r.max_error <= 1e-5f * s.extent());
     CHECK(r.bits_equal == r.points - r.near_mirror);
@@ -478,10 +437,10 @@ int validate_fractal(const std::string& dir, const std::string& name, const F& f
     for (const auto t : {krs::glsl::target::glsl330, krs::glsl::target::glsl450, krs::glsl::target::es300})
         for (const auto m : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
             krs::glsl::emitter e({t, m, name + "_data", 0});
-            e.add(field, name);
+            const std::string fn = e.add(field, name);
             validate_with_glslang(dir + "/" + name + "." + std::string(krs::glsl::target_name(t)) +
                          (m == krs::glsl::data_mode::buffer ? ".buffer" : ".constants") + ".frag",
-                     e.source(true) + fractal_main(name));
+                     e.source(true) + fractal_main(fn));
             ++files;
         }
     return files;
@@ -493,13 +452,13 @@ std::vector<float> gpu_distances(const F& field, const std::string& name, const 
                                  krs::glsl::data_mode mode)
 {
     krs::glsl::emitter e({krs::glsl::target::glsl450, mode, name + "_data", 0});
-    e.add(field, name);
+    const std::string fn = e.add(field, name);
     const bool buffer = mode == krs::glsl::data_mode::buffer;
     std::vector<float> data;
     if (buffer) data = krs::glsl::pack(field, name);
-    const std::string snippet = e.source() + "krs_location " + name +
+    const std::string snippet = e.source() + "krs_location " + fn +
                                 "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
-    const auto gpu = run_points(snippet, name, points, data, false, name + "_data");
+    const auto gpu = run_points(snippet, fn, points, data, false, fn + "_data");
     std::vector<float> d(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) d[i] = gpu[i].distance;
     return d;

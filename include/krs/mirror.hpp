@@ -14,6 +14,7 @@
 
 #include "krs/core/validate.hpp"
 
+#include <array>
 #include <algorithm>
 #include <concepts>
 #include <cstdint>
@@ -102,7 +103,6 @@ struct mirror {
 
     // GLSL (krs/glsl/emitter.hpp): the same four operations on one vec4 (normal, offset).
     static constexpr std::string_view glsl_name = "krs_mirror";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(float krs_mirror_signed_distance(vec3 p, vec4 m) { return (m.x * p.x - m.w) + m.y * p.y + m.z * p.z; }
 vec3 krs_mirror_reflect(vec3 p, vec4 m) { return p - m.xyz * (2.0 * krs_mirror_signed_distance(p, m)); }
 vec3 krs_mirror_fold(vec3 p, vec4 m) {
@@ -111,11 +111,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 )";
-    void glsl_constants(float* out) const
-    {
-        const float v[4] = {normal.x, normal.y, normal.z, offset};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
-    }
+    std::array<float, 4> glsl_parameters() const { return {normal.x, normal.y, normal.z, offset}; }
 };
 
 // Axis-aligned mirror: the plane x_axis = position, normal +e_axis (reflects the side above the
@@ -216,7 +212,6 @@ struct axis_mirror {
     // GLSL: one vec4 (axis, above ? 1 : 0, 2 position, position); the fold is one min or max of
     // the indexed coordinate, as above.
     static constexpr std::string_view glsl_name = "krs_axis_mirror";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(float krs_axis_mirror_signed_distance(vec3 p, vec4 m) {
     float x = p[int(m.x)];
     return m.y != 0.0 ? x - m.w : m.w - x;
@@ -238,11 +233,7 @@ vec3 krs_axis_mirror_reflect_direction(vec3 w, vec4 m) {
     return w;
 }
 )";
-    void glsl_constants(float* out) const
-    {
-        const float v[4] = {float(axis), above ? 1.0f : 0.0f, twice_position, position()};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
-    }
+    std::array<float, 4> glsl_parameters() const { return {float(axis), above ? 1.0f : 0.0f, twice_position, position()}; }
 };
 
 // What a KRS level's mirror must offer (both `mirror` and `axis_mirror` do).

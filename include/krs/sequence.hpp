@@ -230,6 +230,11 @@ public:
         return to_world_direction(where, n);
     }
 
+    // GLSL (krs/sequence_glsl.hpp): NAME (Algorithm 1), NAME_locate and NAME_shade (Algorithm 2),
+    // written through a krs::glsl::emitter.
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const;
+
 private:
     static constexpr bool one_axis_folds = requires { Mirror::folds_one_axis; };
 
@@ -413,3 +418,5 @@ template <kernel... Kinds>
 using axis_sequence = basic_sequence<axis_mirror, Kinds...>;
 
 } // namespace krs
+
+#include "krs/sequence_glsl.hpp"

@@ -147,4 +147,24 @@ inline void validate_with_glslang(const std::string& path, const std::string& te
     CHECK(status == 0);
 }
 
+// The same text for Vulkan: glslangValidator -V compiles it to SPIR-V for Vulkan 1.0 and spirv-val
+// (the paths CMake found) validates the module; either's complaint fails the test.
+inline void validate_spirv(const std::string& path, const std::string& text)
+{
+    {
+        std::ofstream out(path, std::ios::binary);
+        out << text;
+        REQUIRE(out.good());
+    }
+    const std::string log = path + ".spv.log";
+    const std::string compile = "\"" KRS_GLSLANG_VALIDATOR "\" -V --target-env vulkan1.0 -o \"" + path + ".spv\" \"" +
+                                path + "\" > \"" + log + "\" 2>&1";
+    const std::string validate = "\"" KRS_SPIRV_VAL "\" --target-env vulkan1.0 \"" + path + ".spv\" >> \"" + log + "\" 2>&1";
+    const int status = std::system((compile + " && " + validate).c_str());
+    std::ifstream in(log);
+    const std::string message((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    INFO(path << " (Vulkan):\n" << message);
+    CHECK(status == 0);
+}
+
 } // namespace krs_test

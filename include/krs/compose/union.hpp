@@ -22,6 +22,7 @@
 #include <array>
 #include <cstddef>
 #include <limits>
+#include <string>
 #include <tuple>
 #include <utility>
 
@@ -54,6 +55,15 @@ public:
     T component_distance(std::size_t i, const vec3<T>& p) const
     {
         return component_distance_impl(i, p, std::make_index_sequence<size>{});
+    }
+
+    // GLSL (krs/glsl/emitter.hpp): component i as NAME_i, NAME their minimum in this order.
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
+    {
+        std::size_t i = 0;
+        std::apply([&](const auto&... c) { (out.field(c, name + "_" + std::to_string(i++)), ...); }, components_);
+        out.minimum_of_parts(name, size);
     }
 
 private:

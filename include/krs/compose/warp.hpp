@@ -22,10 +22,12 @@
 #include "krs/field.hpp"
 #include "krs/shade/texture.hpp"
 
+#include <array>
 #include <cmath>
 #include <concepts>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <utility>
 
 namespace krs {
@@ -82,7 +84,6 @@ struct twist_warp {
 
     // GLSL: one vec4 (rate, 0, 0, 0).
     static constexpr std::string_view glsl_name = "krs_twist_warp";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_twist_warp_apply(vec3 p, vec4 w) {
     float a = p.y * w.x;
     float s = sin(a);
@@ -90,11 +91,7 @@ struct twist_warp {
     return vec3(c * p.x - s * p.z, p.y, s * p.x + c * p.z);
 }
 )";
-    void glsl_constants(float* out) const
-    {
-        out[0] = rate;
-        out[1] = out[2] = out[3] = 0.0f;
-    }
+    std::array<float, 4> glsl_parameters() const { return {rate, 0.0f, 0.0f, 0.0f}; }
 };
 
 // Bend in the xy plane: the point turns about the z axis by rate * x radians.
@@ -121,7 +118,6 @@ struct bend_warp {
 
     // GLSL: one vec4 (rate, 0, 0, 0).
     static constexpr std::string_view glsl_name = "krs_bend_warp";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_bend_warp_apply(vec3 p, vec4 w) {
     float a = p.x * w.x;
     float s = sin(a);
@@ -129,11 +125,7 @@ struct bend_warp {
     return vec3(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
 }
 )";
-    void glsl_constants(float* out) const
-    {
-        out[0] = rate;
-        out[1] = out[2] = out[3] = 0.0f;
-    }
+    std::array<float, 4> glsl_parameters() const { return {rate, 0.0f, 0.0f, 0.0f}; }
 };
 
 // Noise displacement: W(x) = x + a * (N(f x), N(f x + o1), N(f x + o2)) with N = value_noise.
@@ -163,6 +155,17 @@ struct noise_warp {
         return 1.0 + double(amplitude) * double(frequency) * std::sqrt(3.0) * value_noise_gradient_bound;
     }
     bounding_sphere domain() const { return bounding_sphere::unbounded(); }
+
+    // GLSL: one vec4 (frequency, amplitude, 0, 0); krs_value_noise from core/noise.hpp.
+    using glsl_needs = std::tuple<value_noise_glsl>;
+    static constexpr std::string_view glsl_name = "krs_noise_warp";
+    static constexpr std::string_view glsl_source = R"(vec3 krs_noise_warp_apply(vec3 p, vec4 w) {
+    vec3 q = p * w.x;
+    return vec3(p.x + w.y * krs_value_noise(q), p.y + w.y * krs_value_noise(vec3(q.x + 31.7, q.y, q.z - 31.7)),
+                p.z + w.y * krs_value_noise(vec3(q.x, q.y + -47.3, q.z + -47.3)));
+}
+)";
+    std::array<float, 4> glsl_parameters() const { return {frequency, amplitude, 0.0f, 0.0f}; }
 };
 
 template <field F, warp W>
@@ -205,6 +208,36 @@ public:
         const T scale = select(outside > T(0), r / select(len > T(0), len, T(1)), T(1));
         const vec3<T> projected = c + offset * scale;
         return max(outside, field_.distance(warp_.apply(projected)) * T(inverse_bound_));
+    }
+
+    // GLSL (krs/glsl/emitter.hpp): the base field as NAME_base, the warp's NAME_apply from its own
+    // GLSL, 1 / L and the domain ball in the data; the same operations in the same order as
+    // distance().
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
+    {
+        out.field(field_, name + "_base");
+        out.template library<W>();
+        const std::size_t w = out.parameters(warp_, name + " warp");
+        const std::size_t inv = out.vec4({inverse_bound_, 0.0f, 0.0f, 0.0f}, name + " (1 / Lipschitz bound, 0, 0, 0)");
+        const std::string warped = name + "_base(" + std::string(W::glsl_name) + "_apply(";
+        const std::string args = out.template arguments<W>(w) + ")) * " + out.at(inv) + ".x";
+        std::string body = "float " + name + "(vec3 x) {\n";
+        if (!domain_.is_bounded()) {
+            body += "    return " + warped + "x" + args + ";\n}\n";
+        } else {
+            const std::size_t c = out.vec4({domain_.center.x, domain_.center.y, domain_.center.z, domain_.radius},
+                                           name + " domain (center, radius)");
+            // max(|x - c| - R, f(W(P(x))) / L), P the projection onto the domain ball.
+            body += "    vec4 domain = " + out.at(c) + ";\n"
+                    "    vec3 offset = x - domain.xyz;\n"
+                    "    float len = length(offset);\n"
+                    "    float outside = len - domain.w;\n"
+                    "    float scale = outside > 0.0 ? domain.w / (len > 0.0 ? len : 1.0) : 1.0;\n"
+                    "    vec3 projected = domain.xyz + offset * scale;\n"
+                    "    return max(outside, " + warped + "projected" + args + ");\n}\n";
+        }
+        out.function(body);
     }
 
 private:

@@ -60,6 +60,22 @@ public:
         return select(far, outside, max(outside, field_.distance(p)));
     }
 
+    // GLSL (krs/glsl/emitter.hpp): the field as NAME_base; (center, radius) and (margin, 0, 0, 0)
+    // in the data; the same test and the same max as distance().
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
+    {
+        out.field(field_, name + "_base");
+        const std::size_t b = out.vec4({bound_.center.x, bound_.center.y, bound_.center.z, bound_.radius},
+                                       name + " bound (center, radius)");
+        const std::size_t m = out.vec4({margin_, 0.0f, 0.0f, 0.0f}, name + " (margin, 0, 0, 0)");
+        out.function("float " + name + "(vec3 p) {\n"
+                     "    vec4 b = " + out.at(b) + ";\n"
+                     "    float outside = length(p - b.xyz) - b.w;\n"
+                     "    if (outside > " + out.at(m) + ".x) return outside;\n"
+                     "    return max(outside, " + name + "_base(p));\n}\n");
+    }
+
 private:
     static bounding_sphere checked_bound(const F& f)
     {
@@ -106,6 +122,38 @@ public:
         }
         if (all(deep)) return depth;
         return select(deep, depth, max(field_.distance(p), depth));
+    }
+
+    // GLSL (krs/glsl/emitter.hpp): the field as NAME_base; one vec4 (center, radius) per zone and
+    // then (skip_depth_fraction, 0, 0, 0) in the data; the loop of distance() over the zones (with
+    // no zone the field itself).
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
+    {
+        out.field(field_, name + "_base");
+        if (zones_.empty()) {
+            out.function("float " + name + "(vec3 p) { return " + name + "_base(p); }\n");
+            return;
+        }
+        std::size_t first = 0;
+        for (std::size_t j = 0; j < zones_.size(); ++j) {
+            const bounding_sphere& z = zones_[j];
+            const std::size_t at =
+                out.vec4({z.center.x, z.center.y, z.center.z, z.radius}, name + " zone " + std::to_string(j) + " (center, radius)");
+            if (j == 0) first = at;
+        }
+        const std::size_t skip = out.vec4({skip_, 0.0f, 0.0f, 0.0f}, name + " (skip_depth_fraction, 0, 0, 0)");
+        out.function("float " + name + "(vec3 p) {\n"
+                     "    float depth = -3.0e38;\n" // below every zone's depth: the C++'s -infinity
+                     "    bool deep = false;\n"
+                     "    for (int j = 0; j < " + std::to_string(zones_.size()) + "; ++j) {\n"
+                     "        vec4 z = " + out.data_name() + "[" + std::to_string(first) + " + j];\n"
+                     "        float d = z.w - length(p - z.xyz);\n"
+                     "        depth = max(depth, d);\n"
+                     "        deep = deep || d > " + out.at(skip) + ".x * z.w;\n"
+                     "    }\n"
+                     "    if (deep) return depth;\n"
+                     "    return max(" + name + "_base(p), depth);\n}\n");
     }
 
 private:

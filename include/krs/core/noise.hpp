@@ -14,7 +14,9 @@
 #include "krs/core/rounding.hpp"
 #include "krs/core/vec3.hpp"
 
+#include <array>
 #include <cmath>
+#include <string_view>
 
 namespace krs {
 
@@ -94,5 +96,40 @@ T value_noise(const vec3<T>& p)
     const T v = mix(mix(x00, x10, fy), mix(x01, x11, fy), fz);
     return v * T(2) - one;
 }
+
+// value_noise's GLSL (krs/glsl/emitter.hpp; what a warp or texture that samples noise lists in its
+// glsl_needs): the same operations in the same order, mix written as the C++'s a + (b - a) t
+// (GLSL's own mix may round differently). The hash takes the fractional part of products, so a GPU
+// that fuses a product into an add (an fma) moves lattice values anywhere in [0, 1): llvmpipe does
+// not; on such a GPU the noise is a different noise of the same kind, not the C++'s.
+struct value_noise_glsl {
+    static constexpr std::string_view glsl_name = "krs_value_noise";
+    static constexpr std::string_view glsl_source = R"(float krs_lattice_hash(vec3 p) {
+    float a = fract(p.x * 0.1031);
+    float b = fract(p.y * 0.11369);
+    float c = fract(p.z * 0.13787);
+    float m = a * (b + 19.19) + b * (c + 19.19) + c * (a + 19.19);
+    a = a + m;
+    b = b + m;
+    c = c + m;
+    return fract((a + b) * c);
+}
+float krs_fade(float t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+float krs_lerp(float a, float b, float t) { return a + (b - a) * t; }
+float krs_value_noise(vec3 p) {
+    vec3 i = floor(p);
+    float fx = krs_fade(p.x - i.x);
+    float fy = krs_fade(p.y - i.y);
+    float fz = krs_fade(p.z - i.z);
+    float x00 = krs_lerp(krs_lattice_hash(i), krs_lattice_hash(i + vec3(1.0, 0.0, 0.0)), fx);
+    float x10 = krs_lerp(krs_lattice_hash(i + vec3(0.0, 1.0, 0.0)), krs_lattice_hash(i + vec3(1.0, 1.0, 0.0)), fx);
+    float x01 = krs_lerp(krs_lattice_hash(i + vec3(0.0, 0.0, 1.0)), krs_lattice_hash(i + vec3(1.0, 0.0, 1.0)), fx);
+    float x11 = krs_lerp(krs_lattice_hash(i + vec3(0.0, 1.0, 1.0)), krs_lattice_hash(i + vec3(1.0, 1.0, 1.0)), fx);
+    float v = krs_lerp(krs_lerp(x00, x10, fy), krs_lerp(x01, x11, fy), fz);
+    return v * 2.0 - 1.0;
+}
+)";
+    std::array<float, 0> glsl_parameters() const { return {}; }
+};
 
 } // namespace krs

@@ -74,17 +74,13 @@ struct abs_fold {
 
     // GLSL (krs/glsl/emitter.hpp): one vec4, 1 on the folded axes, 0 elsewhere.
     static constexpr std::string_view glsl_name = "krs_abs_fold";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_abs_fold_apply(vec3 p, vec4 m) {
     return vec3(m.x != 0.0 ? abs(p.x) : p.x, m.y != 0.0 ? abs(p.y) : p.y, m.z != 0.0 ? abs(p.z) : p.z);
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 4> glsl_parameters() const
     {
-        out[0] = (Axes & fold_x) ? 1.0f : 0.0f;
-        out[1] = (Axes & fold_y) ? 1.0f : 0.0f;
-        out[2] = (Axes & fold_z) ? 1.0f : 0.0f;
-        out[3] = 0.0f;
+        return {(Axes & fold_x) ? 1.0f : 0.0f, (Axes & fold_y) ? 1.0f : 0.0f, (Axes & fold_z) ? 1.0f : 0.0f, 0.0f};
     }
 };
 
@@ -115,17 +111,12 @@ struct plane_fold {
 
     // GLSL: one vec4 (normal, offset); the arithmetic spelled out in the C++ order.
     static constexpr std::string_view glsl_name = "krs_plane_fold";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_plane_fold_apply(vec3 p, vec4 m) {
     float twice_e = ((-2.0 * m.x) * p.x + 2.0 * m.w) - (2.0 * m.y) * p.y - (2.0 * m.z) * p.z;
     return p + m.xyz * max(twice_e, 0.0);
 }
 )";
-    void glsl_constants(float* out) const
-    {
-        const float v[4] = {normal.x, normal.y, normal.z, offset};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
-    }
+    std::array<float, 4> glsl_parameters() const { return {normal.x, normal.y, normal.z, offset}; }
 };
 
 // Sorts the coordinates so that x >= y >= z: three conditional swaps, each the fold on a plane
@@ -142,7 +133,6 @@ struct sort_fold {
 
     // GLSL: no parameters.
     static constexpr std::string_view glsl_name = "krs_sort_fold";
-    static constexpr int glsl_vec4_count = 0;
     static constexpr std::string_view glsl_source = R"(vec3 krs_sort_fold_apply(vec3 p) {
     float a = max(p.x, p.y);
     float b = min(p.x, p.y);
@@ -150,7 +140,7 @@ struct sort_fold {
     return vec3(max(a, p.z), max(b, c), min(b, c));
 }
 )";
-    void glsl_constants(float*) const {}
+    std::array<float, 0> glsl_parameters() const { return {}; }
 };
 
 // Rotation by `angle` radians about `axis` (right-handed), an isometry.
@@ -176,19 +166,14 @@ struct rotate_step {
 
     // GLSL: three vec4s, the matrix rows (w unused).
     static constexpr std::string_view glsl_name = "krs_rotate_step";
-    static constexpr int glsl_vec4_count = 3;
     static constexpr std::string_view glsl_source = R"(vec3 krs_rotate_step_apply(vec3 p, vec4 a, vec4 b, vec4 c) {
     return vec3(a.x * p.x + a.y * p.y + a.z * p.z, b.x * p.x + b.y * p.y + b.z * p.z, c.x * p.x + c.y * p.y + c.z * p.z);
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 12> glsl_parameters() const
     {
-        for (int i = 0; i < 3; ++i) {
-            out[4 * i] = rows_[i].x;
-            out[4 * i + 1] = rows_[i].y;
-            out[4 * i + 2] = rows_[i].z;
-            out[4 * i + 3] = 0.0f;
-        }
+        return {rows_[0].x, rows_[0].y, rows_[0].z, 0.0f, rows_[1].x, rows_[1].y,
+                rows_[1].z, 0.0f,       rows_[2].x, rows_[2].y, rows_[2].z, 0.0f};
     }
 
 private:
@@ -217,14 +202,9 @@ struct scale_about {
 
     // GLSL: one vec4 ((factor - 1) center, factor).
     static constexpr std::string_view glsl_name = "krs_scale_about";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_scale_about_apply(vec3 p, vec4 m) { return p * m.w - m.xyz; }
 )";
-    void glsl_constants(float* out) const
-    {
-        const float v[4] = {shift_.x, shift_.y, shift_.z, factor_};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
-    }
+    std::array<float, 4> glsl_parameters() const { return {shift_.x, shift_.y, shift_.z, factor_}; }
 
 private:
     float factor_ = 1.0f;
@@ -246,14 +226,9 @@ struct translate_step {
 
     // GLSL: one vec4 (offset, 0).
     static constexpr std::string_view glsl_name = "krs_translate_step";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_translate_step_apply(vec3 p, vec4 m) { return p + m.xyz; }
 )";
-    void glsl_constants(float* out) const
-    {
-        const float v[4] = {offset.x, offset.y, offset.z, 0.0f};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
-    }
+    std::array<float, 4> glsl_parameters() const { return {offset.x, offset.y, offset.z, 0.0f}; }
 };
 
 // The steps of one KIFS iteration, applied in order.
@@ -275,6 +250,29 @@ public:
         return std::apply([](const auto&... step) { return (1.0 * ... * double(step.scale())); }, steps_);
     }
     const std::tuple<Steps...>& steps() const { return steps_; }
+
+    // GLSL (krs/glsl/emitter.hpp): `vec3 NAME_program(vec3 p)` for the KIFS called NAME, one
+    // iteration: each step's _apply from its own GLSL, in order, its parameters in the data.
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
+    {
+        std::string program = "vec3 " + name + "_program(vec3 p) {\n";
+        std::size_t index = 0;
+        std::apply(
+            [&](const auto&... step) {
+                (
+                    [&](const auto& s) {
+                        using S = std::remove_cvref_t<decltype(s)>;
+                        out.template library<S>();
+                        const std::size_t at = out.parameters(s, name + " step " + std::to_string(index++));
+                        program += "    p = " + std::string(S::glsl_name) + "_apply(p" +
+                                   out.template arguments<S>(at) + ");\n";
+                    }(step),
+                    ...);
+            },
+            steps_);
+        out.function(program + "    return p;\n}\n");
+    }
 
 private:
     std::tuple<Steps...> steps_;
@@ -394,17 +392,44 @@ public:
         return min(d, kernel_.distance(p) * T(inverse_scale_[std::size_t(iterations_)]));
     }
 
-    // GLSL (krs/glsl/emitter.hpp, which emits the kernel and the program's steps by recursion and
-    // unrolls nothing: the loop runs `iterations` times, fixed in the code with the taps). The
-    // parameters are the table 1 / s^i, i = 0 .. max_iterations, four per vec4 (zeros past
-    // `iterations`), so the GPU multiplies by the same rounded-down floats as the C++.
+    // GLSL (krs/glsl/emitter.hpp): the kernel as NAME_kernel, one iteration of the program as
+    // NAME_program, and the loop of distance() with the iteration count and the taps fixed in the
+    // code (nothing unrolled). The parameters are the table 1 / s^i, i = 0 .. max_iterations, four
+    // per vec4 (zeros past `iterations`), so the GPU multiplies by the same rounded-down floats as
+    // the C++.
     static constexpr std::string_view glsl_name = "krs_kifs";
-    static constexpr int glsl_vec4_count = (max_iterations + 1 + 3) / 4;
     static constexpr std::string_view glsl_source = "";
-    void glsl_constants(float* out) const
+    std::array<float, (max_iterations + 1 + 3) / 4 * 4> glsl_parameters() const
     {
-        for (int i = 0; i < 4 * glsl_vec4_count; ++i)
-            out[i] = i <= iterations_ ? inverse_scale_[std::size_t(i)] : 0.0f;
+        std::array<float, (max_iterations + 1 + 3) / 4 * 4> table{};
+        for (int i = 0; i <= iterations_; ++i) table[std::size_t(i)] = inverse_scale_[std::size_t(i)];
+        return table;
+    }
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
+    {
+        out.field(kernel_, name + "_kernel");
+        program_.glsl_emit(out, name);
+        const std::size_t table = out.parameters(*this, name + " 1 / scale^i, i = 0.." + std::to_string(iterations_));
+        const int n = iterations_;
+        const auto inverse_scale = [&](const std::string& i) {
+            return out.data_name() + "[" + std::to_string(table) + " + (" + i + " >> 2)][" + i + " & 3]";
+        };
+        const std::string last = out.at(table + std::size_t(n / 4)) + "." + "xyzw"[n % 4];
+        const std::string kernel = name + "_kernel(p)";
+        std::string body = "float " + name + "(vec3 p) {\n";
+        if (taps_ == kifs_taps::every_iteration) {
+            body += "    float d = 3.0e38;\n";
+            if (n > 0)
+                body += "    for (int i = 0; i < " + std::to_string(n) + "; ++i) {\n"
+                        "        d = min(d, " + kernel + " * " + inverse_scale("i") + ");\n"
+                        "        p = " + name + "_program(p);\n    }\n";
+            body += "    return min(d, " + kernel + " * " + last + ");\n}\n";
+        } else {
+            if (n > 0) body += "    for (int i = 0; i < " + std::to_string(n) + "; ++i) p = " + name + "_program(p);\n";
+            body += "    return " + kernel + " * " + last + ";\n}\n";
+        }
+        out.function(body);
     }
 
 private:
@@ -429,14 +454,13 @@ struct tetrahedron {
 
     // GLSL: no parameters (0.57735026 is inv_sqrt3_v<float>).
     static constexpr std::string_view glsl_name = "krs_tetrahedron";
-    static constexpr int glsl_vec4_count = 0;
     static constexpr std::string_view glsl_source = R"(float krs_tetrahedron_distance(vec3 p) {
     float a = max(-p.x - p.y - p.z, p.x + p.y - p.z);
     float b = max(-p.x + p.y + p.z, p.x - p.y + p.z);
     return (max(a, b) - 1.0) * 0.57735026;
 }
 )";
-    void glsl_constants(float*) const {}
+    std::array<float, 0> glsl_parameters() const { return {}; }
 };
 
 // ---- presets -------------------------------------------------------------------------------------

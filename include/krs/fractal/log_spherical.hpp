@@ -101,6 +101,20 @@ inline float inverse_bound(double bound)
     if (double(f) > 1.0 / bound) f = std::nextafter(f, 0.0f);
     return f;
 }
+// GLSL of a tiling (log_polar_tiling, log_spherical_tiling; krs/glsl/emitter.hpp): the tile as
+// NAME_tile, and NAME(p) = finish(p, u, NAME_tile(u)) at the cell coordinates u = cell(p), with the
+// tiling's own _cell and _finish functions and its one vec4 of parameters.
+template <class Tiling, class Out>
+void glsl_emit_tiling(const Tiling& tiling, Out& out, const std::string& name)
+{
+    out.field(tiling.tile(), name + "_tile");
+    out.template library<Tiling>();
+    const std::string c = out.at(out.parameters(tiling, name));
+    const std::string kind(Tiling::glsl_name);
+    out.function("float " + name + "(vec3 p) {\n    vec3 u = " + kind + "_cell(p, " + c + ");\n    return " + kind +
+                 "_finish(p, u, " + name + "_tile(u), " + c + ");\n}\n");
+}
+
 } // namespace detail
 
 // ---- log-polar tiling of the xz plane ----------------------------------------------------------
@@ -155,7 +169,6 @@ public:
     // `NAME(p) = finish(p, u, NAME_tile(u = cell(p)))`): one vec4 (S, height, margin, 1 / bound),
     // the same operations in the same order as distance() (atan and log are the GPU's own).
     static constexpr std::string_view glsl_name = "krs_log_polar_tiling";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_log_polar_tiling_cell(vec3 p, vec4 c) {
     float r = sqrt(p.x * p.x + p.z * p.z);
     float rs = max(r, 1e-30);
@@ -173,10 +186,11 @@ float krs_log_polar_tiling_finish(vec3 p, vec3 u, float tile, vec4 c) {
     return max(sheared, cone) * c.w;
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 4> glsl_parameters() const { return {scale_, height_, margin_, inverse_bound_}; }
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
     {
-        const float v[4] = {scale_, height_, margin_, inverse_bound_};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
+        detail::glsl_emit_tiling(*this, out, name);
     }
 
 private:
@@ -238,7 +252,6 @@ public:
 
     // GLSL: as log_polar_tiling; one vec4 (S, margin, 1 / bound, cells / 2 - 1).
     static constexpr std::string_view glsl_name = "krs_log_spherical_tiling";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(vec3 krs_log_spherical_tiling_cell(vec3 p, vec4 c) {
     float planar = sqrt(p.x * p.x + p.y * p.y);
     float r = sqrt(planar * planar + p.z * p.z);
@@ -261,10 +274,11 @@ float krs_log_spherical_tiling_finish(vec3 p, vec3 u, float tile, vec4 c) {
     return h * r / c.x * c.z;
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 4> glsl_parameters() const { return {scale_, margin_, inverse_bound_, float(cells_ / 2 - 1)}; }
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
     {
-        const float v[4] = {scale_, margin_, inverse_bound_, float(cells_ / 2 - 1)};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
+        detail::glsl_emit_tiling(*this, out, name);
     }
 
 private:
@@ -365,32 +379,69 @@ public:
         return d * T(options_.step_factor);
     }
 
-    // GLSL (krs/glsl/emitter.hpp emits the shell field by recursion as NAME_shell and the seam mode
-    // into the code). Two vec4s: (density, 1 / density, s, 1 - 1/s rounded down) and
-    // (hidden_cutoff, step_factor, first k of the scale table, its length). The emitter appends
-    // the scale table glsl_scale_table(): e^(k / density) for the shells k = k0 .. k0 + n - 1 (as
-    // many as the float radii 1e-30 .. 3.4e38 reach, at most glsl_max_table), computed by the C++
-    // expression, so the GPU scales each shell by the very float the CPU does (its own exp is
+    // GLSL (krs/glsl/emitter.hpp): the prototype shell as NAME_shell, the shell scales from a table
+    // (NAME_scale), the seam mode fixed in the code. Two vec4s of parameters: (density,
+    // 1 / density, s, 1 - 1/s rounded down) and (hidden_cutoff, step_factor, first k of the scale
+    // table, its length); then the scale table e^(k / density) for the shells k = k0 .. k0 + n - 1
+    // (as many as the float radii 1e-30 .. 3.4e38 reach, at most glsl_max_table), computed by the
+    // C++ expression, so the GPU scales each shell by the very float the CPU does (its own exp is
     // ~10 ulp off); shells past the table fall back to the GPU's exp.
     static constexpr std::string_view glsl_name = "krs_similar_shell";
-    static constexpr int glsl_vec4_count = 2;
     static constexpr std::string_view glsl_source = "";
     static constexpr int glsl_max_table = 256;
-    void glsl_constants(float* out) const
+    std::array<float, 8> glsl_parameters() const
     {
         const auto [k0, n] = glsl_table_range();
-        const float v[8] = {density_,      1.0f / density_,         ratio_,   other_shells_,
-                            options_.hidden_cutoff, options_.step_factor, float(k0), float(n)};
-        for (int i = 0; i < 8; ++i) out[i] = v[i];
+        return {density_, 1.0f / density_, ratio_, other_shells_, options_.hidden_cutoff, options_.step_factor,
+                float(k0), float(n)};
     }
-    // The table, padded with zeros to whole vec4s.
-    std::vector<float> glsl_scale_table() const
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
     {
+        out.field(shell_, name + "_shell");
+        const std::size_t header = out.parameters(*this, name + " (density, 1 / density, s, 1 - 1/s), (cutoff, step, k0, n)");
         const auto [k0, n] = glsl_table_range();
-        std::vector<float> t(std::size_t((n + 3) / 4 * 4), 0.0f);
         const float inv_density = 1.0f / density_;
-        for (int i = 0; i < n; ++i) t[std::size_t(i)] = detail::lane_exp(float(k0 + i) * inv_density);
-        return t;
+        const std::size_t first = header + 2; // the table follows the two vec4s of parameters
+        for (int i = 0; i < n; i += 4) {
+            std::array<float, 4> v{}; // zeros past the table's end
+            for (int j = 0; j < 4 && i + j < n; ++j) v[std::size_t(j)] = detail::lane_exp(float(k0 + i + j) * inv_density);
+            out.vec4(v, i == 0 ? name + " shell scales e^(k / density), k = k0.." : name + " shell scales");
+        }
+        const std::string c = out.at(header), o = out.at(header + 1);
+        std::string body = "float " + name + "_scale(float k) {\n"
+                           "    float i = k - " + o + ".z;\n"
+                           "    if (i >= 0.0 && i < " + o + ".w) {\n"
+                           "        int j = int(i);\n"
+                           "        return " + out.data_name() + "[" + std::to_string(first) + " + (j >> 2)][j & 3];\n"
+                           "    }\n"
+                           "    return exp(k * " + c + ".y);\n}\n";
+        body += "float " + name + "_in_shell(vec3 p, float k) {\n    float scale = " + name + "_scale(k);\n"
+                "    return " + name + "_shell(p / scale) * scale;\n}\n";
+        body += "float " + name + "(vec3 p) {\n"
+                "    vec4 c = " + c + ";\n"
+                "    float r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);\n"
+                "    float k = floor(log(max(r, 1e-30)) * c.x);\n";
+        switch (options_.seams) {
+        case shell_seams::none: body += "    float d = " + name + "_in_shell(p, k);\n"; break;
+        case shell_seams::hidden_boundary:
+            body += "    float inner = " + name + "_scale(k);\n"
+                    "    float outer = inner * c.z;\n"
+                    "    float boundary = max(min(r - inner, outer - r), " + o + ".x * r);\n"
+                    "    float d = min(" + name + "_in_shell(p, k), boundary);\n";
+            break;
+        default:
+            body += "    float d = c.w * r;\n"
+                    "    for (int j = -1; j <= 1; ++j) {\n"
+                    "        float kj = k + float(j);\n"
+                    "        float inner = " + name + "_scale(kj);\n"
+                    "        float outer = inner * c.z;\n"
+                    "        float to_shell = max(max(inner - r, r - outer), 0.0);\n"
+                    "        d = min(d, max(" + name + "_in_shell(p, kj), to_shell));\n"
+                    "    }\n";
+            break;
+        }
+        out.function(body + "    return d * " + o + ".y;\n}\n");
     }
 
 private:
@@ -458,11 +509,12 @@ struct lotus_shell {
         for (int i = 1; i < petals; ++i) d = min(d, petal[std::size_t(i)].distance(p));
         return d;
     }
-    // GLSL (krs/glsl/emitter.hpp): the min over these parts in this order, each emitted as a kernel.
-    template <class F>
-    void glsl_for_each_part(F&& f) const
+    // GLSL (krs/glsl/emitter.hpp): petal i as NAME_i, NAME their minimum in this order.
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
     {
-        for (int i = 0; i < petals; ++i) f(petal[std::size_t(i)]);
+        for (int i = 0; i < petals; ++i) out.field(petal[std::size_t(i)], name + "_" + std::to_string(i));
+        out.minimum_of_parts(name, std::size_t(petals));
     }
 };
 
@@ -499,11 +551,12 @@ struct cube_shell {
         for (std::size_t i = 1; i < cube.size(); ++i) d = min(d, cube[i].distance(p));
         return d;
     }
-    // GLSL (krs/glsl/emitter.hpp): the min over these parts in this order, each emitted as a kernel.
-    template <class F>
-    void glsl_for_each_part(F&& f) const
+    // GLSL (krs/glsl/emitter.hpp): cube i as NAME_i, NAME their minimum in this order.
+    template <class Out>
+    void glsl_emit(Out& out, const std::string& name) const
     {
-        for (const box& b : cube) f(b);
+        for (std::size_t i = 0; i < cube.size(); ++i) out.field(cube[i], name + "_" + std::to_string(i));
+        out.minimum_of_parts(name, cube.size());
     }
 };
 

@@ -101,12 +101,13 @@ inline constexpr std::array<file_kind, 5> files{{
     {".shadertoy.glsl", target::shadertoy, data_mode::constants},
 }};
 
-// The text of one file for one scene.
+// The text of one file for one scene (a snippet's names start with `prefix`; a Shadertoy program
+// is a whole program and keeps krs_).
 template <class S>
-std::string file_text(const scene<S>& s, const file_kind& kind)
+std::string file_text(const scene<S>& s, const file_kind& kind, const std::string& prefix = "krs_")
 {
     if (kind.target == target::shadertoy) return shadertoy(s.field, s.camera, s.name);
-    emitter e({kind.target, kind.mode, s.name + "_data", 0});
+    emitter e({kind.target, kind.mode, s.name + "_data", 0, prefix});
     e.add(s.field, s.name);
     return e.source(false);
 }

@@ -14,11 +14,14 @@
 // hit the scene and 0 on the sky.
 
 #include "krs/glsl/emitter.hpp"
+#include "krs/kernels/kernels.hpp"
+#include "krs/sequence.hpp"
 #include "krs/shade/kernel_light.hpp"
 #include "krs/trace/box_clip.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <concepts>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -56,15 +59,15 @@ struct view {
 };
 
 namespace detail {
-// Shading palette by kernel type (linear RGB).
+// Shading palette by kernel type (linear RGB): bark for stems, leaf green for spheres, soil for
+// planes, stone for the rest.
 template <class K>
 constexpr vec3f albedo_of()
 {
-    std::string_view n = K::glsl_name;
-    if (n == "krs_torus_capsule" || n == "krs_capsule") return {0.40f, 0.26f, 0.15f};
-    if (n == "krs_sphere") return {0.22f, 0.45f, 0.12f};
-    if (n == "krs_plane") return {0.42f, 0.40f, 0.33f};
-    return {0.70f, 0.68f, 0.64f};
+    if constexpr (std::same_as<K, torus_capsule> || std::same_as<K, capsule>) return {0.40f, 0.26f, 0.15f};
+    else if constexpr (std::same_as<K, sphere>) return {0.22f, 0.45f, 0.12f};
+    else if constexpr (std::same_as<K, plane>) return {0.42f, 0.40f, 0.33f};
+    else return {0.70f, 0.68f, 0.64f};
 }
 } // namespace detail
 
@@ -80,7 +83,7 @@ template <class M, class... Kinds>
 std::string shadertoy(const basic_sequence<M, Kinds...>& s, const view& v, const std::string& name)
 {
     emitter e({target::shadertoy, data_mode::constants, name + "_data", 0});
-    e.add(s, name);
+    const std::string scene = e.add(s, name); // krs_NAME
     std::string out = "// krs scene '" + name + "' for Shadertoy: paste into the Image tab as-is.\n";
     out += e.source();
     const vec3f palette[] = {detail::albedo_of<Kinds>()...};
@@ -103,7 +106,7 @@ std::string shadertoy(const basic_sequence<M, Kinds...>& s, const view& v, const
     out += std::string("const bool KRS_CLIP = ") + (box.is_bounded() ? "true" : "false") + ";\n";
     out += "const vec3 KRS_BOX_LO = " + vec3_literal(box.is_bounded() ? box.lo : vec3f{}) + ";\n";
     out += "const vec3 KRS_BOX_HI = " + vec3_literal(box.is_bounded() ? box.hi : vec3f{}) + ";\n";
-    out += "float krs_scene(vec3 p) { return " + name + "(p); }\n";
+    out += "float krs_scene(vec3 p) { return " + scene + "(p); }\n";
     out += R"(// Sphere tracing from t0 to t1; a hit when the distance drops under footprint * t + floor + bias.
 float krs_trace(vec3 origin, vec3 direction, float t0, float t1, float footprint, float bias, out bool found) {
     float t = t0;
@@ -161,7 +164,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     if (found) {
         vec3 p = KRS_EYE + direction * t;
         float band = KRS_BAND_PIXELS * scale * t + 1e-6;
-        krs_kernel_shading s = )" + name + R"(_shade(p, KRS_TO_LIGHT, -direction, band);
+        krs_kernel_shading s = )" + scene + R"(_shade(p, KRS_TO_LIGHT, -direction, band);
         float diffuse = max(dot(s.normal, s.light), 0.0);
         if (diffuse > 0.0) {
             float hitThreshold = footprint * t + KRS_THRESHOLD_FLOOR;

@@ -13,6 +13,7 @@
 #include "krs/core/validate.hpp"
 #include "krs/kernels/capsule.hpp"
 
+#include <array>
 #include <cmath>
 #include <string_view>
 
@@ -93,7 +94,6 @@ struct box {
     // GLSL: five vec4s (center, oriented ? 1 : 0), (half extents, 0), (axis x, 0), (axis y, 0),
     // (axis z, 0). The orientation test is uniform, as in C++.
     static constexpr std::string_view glsl_name = "krs_box";
-    static constexpr int glsl_vec4_count = 5;
     static constexpr std::string_view glsl_source = R"(vec3 krs_box_local(vec3 p, vec4 c, vec4 ax, vec4 ay, vec4 az) {
     vec3 d = p - c.xyz;
     return c.w != 0.0 ? vec3(dot(d, ax.xyz), dot(d, ay.xyz), dot(d, az.xyz)) : d;
@@ -115,14 +115,14 @@ vec3 krs_box_normal(vec3 p, vec4 c, vec4 h, vec4 ax, vec4 ay, vec4 az) {
     return c.w != 0.0 ? ax.xyz * g.x + ay.xyz * g.y + az.xyz * g.z : g;
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 20> glsl_parameters() const
     {
-        const float v[20] = {center_.x, center_.y, center_.z, oriented_ ? 1.0f : 0.0f,
-                             half_extents_.x, half_extents_.y, half_extents_.z, 0.0f,
-                             axes_[0].x, axes_[0].y, axes_[0].z, 0.0f,
-                             axes_[1].x, axes_[1].y, axes_[1].z, 0.0f,
-                             axes_[2].x, axes_[2].y, axes_[2].z, 0.0f};
-        for (int i = 0; i < 20; ++i) out[i] = v[i];
+        return {
+                center_.x, center_.y, center_.z, oriented_ ? 1.0f : 0.0f,
+                half_extents_.x, half_extents_.y, half_extents_.z, 0.0f,
+                axes_[0].x, axes_[0].y, axes_[0].z, 0.0f,
+                axes_[1].x, axes_[1].y, axes_[1].z, 0.0f,
+                axes_[2].x, axes_[2].y, axes_[2].z, 0.0f};
     }
 
 private:

@@ -10,6 +10,7 @@
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
 
+#include <array>
 #include <string_view>
 
 namespace krs {
@@ -81,7 +82,6 @@ struct capsule {
     // GLSL: three vec4s (a, radius), (b - a, 1 / |b - a|^2), (perpendicular, 0): the stored float
     // values, so the GPU clamps the same t as the CPU.
     static constexpr std::string_view glsl_name = "krs_capsule";
-    static constexpr int glsl_vec4_count = 3;
     static constexpr std::string_view glsl_source = R"(vec3 krs_capsule_offset(vec3 p, vec4 a, vec4 ab) {
     vec3 ap = p - a.xyz;
     float t = clamp(dot(ap, ab.xyz) * ab.w, 0.0, 1.0);
@@ -94,11 +94,11 @@ vec3 krs_capsule_normal(vec3 p, vec4 a, vec4 ab, vec4 perpendicular) {
     return len > 0.0 ? q / len : perpendicular.xyz;
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 12> glsl_parameters() const
     {
-        const float v[12] = {a.x, a.y, a.z, radius, axis_.x, axis_.y, axis_.z, inverse_length_squared_,
-                             perpendicular_.x, perpendicular_.y, perpendicular_.z, 0.0f};
-        for (int i = 0; i < 12; ++i) out[i] = v[i];
+        return {
+                a.x, a.y, a.z, radius, axis_.x, axis_.y, axis_.z, inverse_length_squared_,
+                perpendicular_.x, perpendicular_.y, perpendicular_.z, 0.0f};
     }
 
 private:

@@ -10,6 +10,7 @@
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
 
+#include <array>
 #include <algorithm>
 #include <string_view>
 
@@ -66,15 +67,10 @@ struct plane {
 
     // GLSL: one vec4 (unit normal, offset).
     static constexpr std::string_view glsl_name = "krs_plane";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(float krs_plane_distance(vec3 p, vec4 n) { return (n.x * p.x - n.w) + n.y * p.y + n.z * p.z; }
 vec3 krs_plane_normal(vec3 p, vec4 n) { return n.xyz; }
 )";
-    void glsl_constants(float* out) const
-    {
-        const float v[4] = {normal_direction.x, normal_direction.y, normal_direction.z, offset};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
-    }
+    std::array<float, 4> glsl_parameters() const { return {normal_direction.x, normal_direction.y, normal_direction.z, offset}; }
 };
 
 } // namespace krs

@@ -8,6 +8,7 @@
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
 
+#include <array>
 #include <string_view>
 
 namespace krs {
@@ -47,7 +48,6 @@ struct sphere {
     // GLSL (krs/glsl/emitter.hpp): the same distance and normal, parameters packed as one vec4
     // (center, radius).
     static constexpr std::string_view glsl_name = "krs_sphere";
-    static constexpr int glsl_vec4_count = 1;
     static constexpr std::string_view glsl_source = R"(float krs_sphere_distance(vec3 p, vec4 s) { return length(p - s.xyz) - s.w; }
 vec3 krs_sphere_normal(vec3 p, vec4 s) {
     vec3 q = p - s.xyz;
@@ -55,11 +55,7 @@ vec3 krs_sphere_normal(vec3 p, vec4 s) {
     return len > 0.0 ? q / len : vec3(0.0, 0.0, 1.0);
 }
 )";
-    void glsl_constants(float* out) const
-    {
-        const float v[4] = {center.x, center.y, center.z, radius};
-        for (int i = 0; i < 4; ++i) out[i] = v[i];
-    }
+    std::array<float, 4> glsl_parameters() const { return {center.x, center.y, center.z, radius}; }
 };
 
 } // namespace krs

@@ -21,6 +21,7 @@
 #include "krs/core/validate.hpp"
 #include "krs/kernels/torus_capsule.hpp" // surface_uv
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string_view>
@@ -95,7 +96,6 @@ public:
 
     // GLSL: the same distance and normal; three vec4s: (center, R), (axis, r), (in-plane e1, 0).
     static constexpr std::string_view glsl_name = "krs_torus";
-    static constexpr int glsl_vec4_count = 3;
     static constexpr std::string_view glsl_source = R"(float krs_torus_distance(vec3 p, vec4 t0, vec4 t1, vec4 t2) {
     vec3 q = p - t0.xyz;
     float h = dot(q, t1.xyz);
@@ -113,11 +113,11 @@ vec3 krs_torus_normal(vec3 p, vec4 t0, vec4 t1, vec4 t2) {
     return ol > 0.0 ? offset / ol : outward;
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 12> glsl_parameters() const
     {
-        const float v[12] = {center_.x, center_.y, center_.z, major_, axis_.x,      axis_.y,
-                             axis_.z,   minor_,    in_plane_.x, in_plane_.y, in_plane_.z, 0.0f};
-        for (int i = 0; i < 12; ++i) out[i] = v[i];
+        return {
+                center_.x, center_.y, center_.z, major_, axis_.x,      axis_.y,
+                axis_.z,   minor_,    in_plane_.x, in_plane_.y, in_plane_.z, 0.0f};
     }
 
 private:

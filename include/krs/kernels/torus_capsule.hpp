@@ -27,6 +27,7 @@
 #include "krs/core/validate.hpp"
 #include "krs/kernels/capsule.hpp"
 
+#include <array>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -212,7 +213,6 @@ public:
     // (chord middle, kappa), (plane normal, cos alpha), (toward control, h sin alpha),
     // (start, radius), (end, major ? 1 : 0), (start tangent, 0), (end tangent, 0).
     static constexpr std::string_view glsl_name = "krs_torus_capsule";
-    static constexpr int glsl_vec4_count = 7;
     static constexpr std::string_view glsl_source = R"(float krs_torus_capsule_distance(vec3 p, vec4 t0, vec4 t1, vec4 t2, vec4 t3, vec4 t4, vec4 t5, vec4 t6) {
     vec3 u = p - t0.xyz;
     float h = dot(u, t1.xyz);
@@ -250,16 +250,16 @@ vec3 krs_torus_capsule_normal(vec3 p, vec4 t0, vec4 t1, vec4 t2, vec4 t3, vec4 t
     return inArc ? torusDir : (ls <= le ? sd : ed);
 }
 )";
-    void glsl_constants(float* out) const
+    std::array<float, 28> glsl_parameters() const
     {
-        const float v[28] = {chord_middle_.x, chord_middle_.y, chord_middle_.z, curvature_,
-                             plane_normal_.x, plane_normal_.y, plane_normal_.z, cos_half_angle_,
-                             toward_control_.x, toward_control_.y, toward_control_.z, chord_offset_,
-                             start_.x, start_.y, start_.z, radius_,
-                             end_.x, end_.y, end_.z, major_ ? 1.0f : 0.0f,
-                             start_tangent_.x, start_tangent_.y, start_tangent_.z, 0.0f,
-                             end_tangent_.x, end_tangent_.y, end_tangent_.z, 0.0f};
-        for (int i = 0; i < 28; ++i) out[i] = v[i];
+        return {
+                chord_middle_.x, chord_middle_.y, chord_middle_.z, curvature_,
+                plane_normal_.x, plane_normal_.y, plane_normal_.z, cos_half_angle_,
+                toward_control_.x, toward_control_.y, toward_control_.z, chord_offset_,
+                start_.x, start_.y, start_.z, radius_,
+                end_.x, end_.y, end_.z, major_ ? 1.0f : 0.0f,
+                start_tangent_.x, start_tangent_.y, start_tangent_.z, 0.0f,
+                end_tangent_.x, end_tangent_.y, end_tangent_.z, 0.0f};
     }
 
 private:
