@@ -21,7 +21,8 @@
 #   --rebuild  debootstrap the cached pristine root again
 #   --keep     keep this run's root (with its build trees) for inspection
 # Environment: KRS_FRESH_ROOT cache directory (default /var/tmp/krs-fresh-root: pristine/ is the
-#              cached root, run/ this run's copy, logs/ the step logs); KRS_FRESH_SUITE (bookworm);
+#              cached root, run.<pid>/ a run's copy, logs/<mode>.<pid>/ its step logs);
+#              KRS_FRESH_SUITE (bookworm);
 #              KRS_FRESH_MIRROR (default: the host's).
 set -euo pipefail
 
@@ -34,7 +35,7 @@ for arg in "$@"; do
         --readme) mode=readme ;;
         --rebuild) rebuild=1 ;;
         --keep) keep=1 ;;
-        -h | --help) sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h | --help) sed -n '2,26p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "fresh-root.sh: unknown option '$arg' (use --ci, --readme, --rebuild, --keep)" >&2; exit 2 ;;
     esac
 done
@@ -58,35 +59,50 @@ host_mirror() {
 }
 
 # The pristine root is made once; .complete marks a debootstrap that finished (an interrupted one is
-# made again).
-pristine="$cache/pristine" run="$cache/run" logs="$cache/logs"
+# made again). Runs may overlap (CI's --ci while someone runs --readme): a lock guards the making,
+# and each run has its own copy and logs, named by its process id.
+pristine="$cache/pristine" run="$cache/run.$$" logs="$cache/logs/$mode.$$"
+mkdir -p "$cache"
+exec 9> "$cache/.lock"
+flock 9
 if [ "$rebuild" -eq 1 ] || [ ! -e "$pristine/.complete" ]; then
     mirror="${KRS_FRESH_MIRROR:-$(host_mirror)}"
     [ -n "$mirror" ] || { echo "fresh-root.sh: no Debian mirror in the host's apt sources; set KRS_FRESH_MIRROR" >&2; exit 2; }
     command -v debootstrap >/dev/null || { apt-get update -q && apt-get install -y -q debootstrap; } >/dev/null
     echo "fresh-root.sh: debootstrap --variant=minbase $suite from $mirror into $pristine"
-    rm -rf --one-file-system "$pristine" && mkdir -p "$cache"
+    rm -rf --one-file-system "$pristine"
     debootstrap --variant=minbase "$suite" "$pristine" "$mirror" > "$cache/debootstrap.log" 2>&1 ||
         { tail -n 20 "$cache/debootstrap.log"; echo "fresh-root.sh: debootstrap failed" >&2; exit 1; }
     touch "$pristine/.complete"
 fi
 
-# This run's copy; its mounts go away on any exit.
-unmount_run() {
+# unmount_tree DIR: the mounts of a run's copy.
+unmount_tree() {
     local m
     for m in dev sys proc; do
-        if mountpoint -q "$run/$m"; then umount -R "$run/$m" || umount -R -l "$run/$m"; fi
+        if mountpoint -q "$1/$m"; then umount -R "$1/$m" || umount -R -l "$1/$m"; fi
     done
 }
+# What interrupted earlier runs left: copies whose process is gone (and the one shared copy of
+# earlier versions of this script).
+for old in "$cache"/run "$cache"/run.*; do
+    [ -d "$old" ] || continue
+    pid="${old##*/run.}"
+    if [ "$old" = "$cache/run" ] || ! kill -0 "$pid" 2> /dev/null; then
+        unmount_tree "$old"
+        rm -rf --one-file-system "$old"
+    fi
+done
+cp -a "$pristine" "$run" && rm -f "$run/.complete"
+flock -u 9
+# This run's copy; its mounts go away on any exit.
 # shellcheck disable=SC2317 # called by the EXIT trap
 cleanup() {
-    unmount_run
+    unmount_tree "$run"
     if [ "$keep" -eq 0 ]; then rm -rf --one-file-system "$run"; else echo "fresh-root.sh: kept $run"; fi
 }
-unmount_run; rm -rf --one-file-system "$run" # what an interrupted earlier run left
 trap cleanup EXIT
 trap 'exit 130' INT TERM
-cp -a "$pristine" "$run" && rm -f "$run/.complete"
 cp -L /etc/resolv.conf "$run/etc/resolv.conf"
 mkdir -p "$run/root/krs" "$logs"
 # The commit is fixed here: the verdict names what was tested, even if HEAD moves during the run.
