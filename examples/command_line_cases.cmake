@@ -85,6 +85,8 @@ krs_case(glsl_export       2 "--prefix;'gl_';GLSL identifier"                   
 krs_case(glsl_export       2 "--prefix;'1st_'"                                     --prefix 1st_)
 krs_case(glsl_export       2 "--prefix;'my__'"                                     --prefix my__)
 krs_case(glsl_export       2 "--prefix;'a-b'"                                      --prefix a-b)
+krs_case(glsl_export       2 "--prefix;'App_'"                                     --prefix App_)
+krs_case(glsl_export       2 "--prefix;'app'"                                      --prefix app)
 krs_case(glsl_export       2 "--prefix;Shadertoy"                                  --target shadertoy --prefix app_)
 krs_case(glsl_export       2 "--all;'--scene'"                                     --all --scene tree)
 krs_case(glsl_export       2 "--version"                                           --version)

@@ -54,8 +54,8 @@ int main(int argc, char** argv)
         ->check(CLI::Validator(
             [](std::string& text) {
                 return krs::glsl::is_prefix(text) ? std::string()
-                                                  : "'" + text + "' is not a GLSL identifier that does not start with "
-                                                              "gl_ and holds no __";
+                                                  : "'" + text + "' is not a GLSL identifier prefix (lower-case letters, "
+                                                              "digits and _, a letter first and _ last, not gl_, no __)";
             },
             "", "prefix"));
     args.text("--all", all, "write every scene in every target and mode into this folder", "DIR");

@@ -158,6 +158,15 @@ TEST_CASE("glsl data layout: pack equals the emitter data and the documented vec
     krs::glsl::emitter ssbo({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "data", 3});
     ssbo.add(s.field, "sponge");
     CHECK(ssbo.source().find("layout(std430, binding = 3) readonly buffer krs_data_block {") != std::string::npos);
+    // The uniform-buffer mode: a UBO at the binding in 450, the plain UBO in 330.
+    krs::glsl::emitter ubo({krs::glsl::target::glsl450, krs::glsl::data_mode::uniform_buffer, "data", 3});
+    ubo.add(s.field, "sponge");
+    CHECK(ubo.source().find("layout(std140, binding = 3) uniform krs_data_block {\n    vec4 krs_data[26];\n};") !=
+          std::string::npos);
+    krs::glsl::emitter ubo330({krs::glsl::target::glsl330, krs::glsl::data_mode::uniform_buffer, "data", 3});
+    ubo330.add(s.field, "sponge");
+    const std::string ubo330_text = ubo330.source();
+    CHECK(ubo330_text.substr(ubo330_text.find('\n')) == text.substr(text.find('\n'))); // all but the header line
     CHECK_THROWS_AS(krs::glsl::emitter({krs::glsl::target::shadertoy, krs::glsl::data_mode::buffer}),
                     krs::invalid_parameter);
 }
@@ -173,19 +182,67 @@ TEST_CASE("glsl data name: follows the prefix, and names nothing else the code d
         CHECK_THROWS_WITH_AS(e.add(s.field, "sponge"), doctest::Contains("glsl.options.data_name"), krs::invalid_parameter);
     }
     // Locals of the generated functions (d, p, light) hid an unprefixed array; prefixed they cannot.
+    // And names of the library: the struct krs_location, the mirror's fold (the sponge uses it).
+    for (const char* clash : {"location", "kernel_shading", "mirror_fold"}) {
+        INFO(std::string(clash));
+        krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::constants, clash, 0});
+        CHECK_THROWS_WITH_AS(e.add(s.field, "sponge"), doctest::Contains("glsl.options.data_name"), krs::invalid_parameter);
+    }
     for (const char* fine : {"data", "d", "p", "light", "scene", "D", "p2", "1x"}) {
         INFO(std::string(fine));
         krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, fine, 0});
         CHECK_NOTHROW(e.add(s.field, "sponge"));
         CHECK(e.source().find(std::string("vec4 krs_") + fine + "[") != std::string::npos);
     }
-    for (const char* bad : {"", "a-b", "my data", "x.y"}) {
+    for (const char* bad : {"", "a-b", "my data", "x.y", "_x", "a__b"}) {
         INFO(std::string(bad));
         CHECK_THROWS_WITH_AS(krs::glsl::emitter({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, bad, 0}),
                              doctest::Contains("glsl.options.data_name"), krs::invalid_parameter);
     }
-    krs::glsl::emitter e;
-    CHECK_THROWS_WITH_AS(e.add(s.field, "my scene"), doctest::Contains("glsl.add.name"), krs::invalid_parameter);
+    // In buffer mode the block is a global name too (a clash with the data's names is reported
+    // against the data name, whichever side brought it).
+    krs::glsl::emitter blocked({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, "data", 0});
+    CHECK_THROWS_WITH_AS(blocked.add(s.field, "data_block"), doctest::Contains("krs_data_block"), krs::invalid_parameter);
+    CHECK(blocked.array_name() == "krs_data");
+    CHECK(blocked.block_name() == "krs_data_block");
+}
+
+TEST_CASE("glsl scene names: one that makes a name the library or an earlier field declares is refused")
+{
+    const auto s = ex::sponge();
+    krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "data", 0});
+    REQUIRE(e.add(s.field, "sponge") == "krs_sponge");
+    const std::string before = e.source();
+    // The structs, a library function the scene uses, and the same scene again.
+    for (const char* clash : {"location", "kernel_shading", "mirror_fold", "box_distance", "sponge", "sponge_locate"}) {
+        INFO(std::string(clash));
+        CHECK_THROWS_WITH_AS(e.add(s.field, clash), doctest::Contains("glsl.add.name"), krs::invalid_parameter);
+        CHECK(e.source() == before); // a refused field leaves nothing behind
+    }
+    for (const char* bad : {"", "my scene", "_x", "a__b", "x-y"}) {
+        INFO(std::string(bad));
+        CHECK_THROWS_WITH_AS(e.add(s.field, bad), doctest::Contains("glsl.add.name"), krs::invalid_parameter);
+    }
+    CHECK_NOTHROW(e.add(s.field, "sponge2"));
+    // A Shadertoy program declares krs_scene, krs_sky, krs_trace ... beside the scene's krs_NAME.
+    for (const char* clash : {"scene", "sky", "trace", "clip", "albedo"}) {
+        INFO(std::string(clash));
+        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, s.camera, clash), doctest::Contains("glsl.shadertoy.name"),
+                             krs::invalid_parameter);
+    }
+    CHECK_NOTHROW(krs::glsl::shadertoy(s.field, s.camera, "my_scene"));
+}
+
+TEST_CASE("glsl twice_declared reads a text's global names")
+{
+    // Independent of the emitter: small texts written by hand.
+    CHECK(krs::glsl::twice_declared("float a(vec3 p) { return 1.0; }\nfloat b(vec3 p) {\n    return a(p);\n}\n") == "");
+    CHECK(krs::glsl::twice_declared("float a(vec3 p) { return 1.0; }\nvec3 a(vec3 p) { return p; }\n") == "a");
+    CHECK(krs::glsl::twice_declared("struct s {\n    float a;\n};\nfloat s(vec3 p) { return 0.0; }\n") == "s");
+    CHECK(krs::glsl::twice_declared("const vec4 d[2] = vec4[2](\n    vec4(0.0),\n    vec4(1.0));\nfloat d(float x) { return x; }\n") == "d");
+    CHECK(krs::glsl::twice_declared("layout(std140) uniform b {\n    vec4 d[2];\n};\nfloat d(float x) { return x; }\n") == "d");
+    CHECK(krs::glsl::twice_declared("layout(std140) uniform b {\n    vec4 d[2];\n};\nfloat b(float x) { return x; }\n") == "b");
+    CHECK(krs::glsl::twice_declared("#ifndef A\n#define A\nfloat f(float x) { return x; }\n#endif\n// f\n") == "");
 }
 
 // Identifiers of `text` (maximal runs of letters, digits and _ not starting with a digit).
@@ -212,6 +269,7 @@ TEST_CASE("glsl prefix: every name the snippet declares carries it, the scene fu
     for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
         krs::glsl::emitter plain({krs::glsl::target::glsl450, mode, "data", 0});
         krs::glsl::emitter mine({krs::glsl::target::glsl450, mode, "data", 0, "forest_gen_"});
+        CHECK(mine.array_name() == "forest_gen_data");
         CHECK(plain.add(s.field, "forest") == "krs_forest");
         CHECK(mine.add(s.field, "forest") == "forest_gen_forest");
         const std::string a = plain.source(), b = mine.source();
@@ -243,8 +301,10 @@ TEST_CASE("glsl prefix: every name the snippet declares carries it, the scene fu
                 back.replace(at, from.size(), to);
         CHECK(back == a);
     }
-    // Not a GLSL identifier, the implementation's gl_ names, or GLSL's reserved double underscore.
-    for (const char* bad : {"", "1a_", "gl_", "gl_mine", "a-b_", "my__", "x y"}) {
+    // Not a GLSL identifier, the implementation's gl_ names, GLSL's reserved double underscore; not
+    // ending in _ (prefix "i" and name "n" spell the keyword in); upper case (guards carry the prefix
+    // in upper case, so KRS_ and krs_ snippets would share them and one library would vanish).
+    for (const char* bad : {"", "1a_", "gl_", "gl_mine_", "a-b_", "my__", "x y_", "i", "gl", "KRS_", "Krs_", "_a_"}) {
         INFO(std::string(bad));
         CHECK_THROWS_WITH_AS(krs::glsl::emitter({krs::glsl::target::glsl330, krs::glsl::data_mode::constants, "data", 0, bad}),
                              doctest::Contains("glsl.options.prefix"), krs::invalid_parameter);

@@ -1,7 +1,7 @@
 // Every field type's GLSL against its C++, on llvmpipe: one small instance of each kernel and
 // composite, its emitted distance run at 16,384 points (within 1e-5 of the sampled region's
-// extent), and for kernels also the kernel-space point, the reflection bits and the kernel's own
-// normal through a two-mirror sequence's locate and Algorithm 2 shading. The 450 code of each, in
+// extent), and for kernels also the reflection bits and the kernel's own normal through a
+// two-mirror sequence's locate and Algorithm 2 shading. The 450 code of each, in
 // every data mode, is also compiled for Vulkan and validated (glslangValidator -V, spirv-val).
 //
 // The cases name the library types they exercise, and the last check reads the library's headers
@@ -99,8 +99,8 @@ void check_distance(const std::string& name, const F& field, vec3f center, vec3f
     }
 }
 
-// A kernel through a sequence of itself and two mirrors: distance, locate (kernel-space point,
-// level, reflection bits) and the kernel's own normal from NAME_shade, against the C++.
+// A kernel through a sequence of itself and two mirrors: distance, locate's reflection bits and
+// the kernel's own normal from NAME_shade (in the kernel-space point's slot), against the C++.
 template <class K>
 void check_kernel(const std::string& name, const K& kernel, const char* type)
 {
@@ -153,14 +153,15 @@ void check_kernel(const std::string& name, const K& kernel, const char* type)
     covered().insert("mirror");
 }
 
-// The library's headers: every class or struct that carries GLSL (its body holds `glsl_name =` or
-// `void glsl_emit(`: the last one opened before that line), in every header of include/krs but
-// the emitter's own folder.
+// The library's headers: every class or struct that carries GLSL (its body names glsl_name,
+// glsl_parameters or glsl_emit, however declared: the last class opened before that word), in
+// every header of include/krs but the emitter's own folder; a class whose name is followed by
+// template arguments or attributes is found by the word before its brace.
 std::set<std::string> types_with_glsl()
 {
     const std::filesystem::path root = std::filesystem::path(KRS_SOURCE_DIR) / "include" / "krs";
-    const std::regex opening(R"((?:struct|class)\s+(\w+)\s*(?:final\s*)?(?::[^{;]*)?\{)");
-    const std::regex marker(R"(glsl_name\s*=|void glsl_emit\()");
+    const std::regex opening(R"((?:struct|class)\s+(?:alignas\([^)]*\)\s*)?(\w+)[^{;()]*\{)");
+    const std::regex marker(R"(\bglsl_(?:name|parameters|emit)\b)");
     std::set<std::string> with_glsl;
     for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
         if (entry.path().extension() != ".hpp" || entry.path().parent_path().filename() == "glsl") continue;

@@ -101,13 +101,17 @@ void check_scene(const ex::scene<S>& s)
     };
     const variant variants[] = {{"450 constants", krs::glsl::target::glsl450, krs::glsl::data_mode::constants},
                                 {"450 buffer (SSBO std430)", krs::glsl::target::glsl450, krs::glsl::data_mode::buffer},
+                                {"450 uniform buffer (UBO)", krs::glsl::target::glsl450,
+                                 krs::glsl::data_mode::uniform_buffer},
                                 {"330 buffer (UBO std140)", krs::glsl::target::glsl330, krs::glsl::data_mode::buffer}};
     for (const variant& v : variants) {
         krs::glsl::emitter e({v.target, v.mode, s.name + "_data", 0});
         const std::string fn = e.add(s.field, s.name); // krs_NAME, its data krs_NAME_data
-        const bool buffer = v.mode == krs::glsl::data_mode::buffer;
+        const bool buffer = v.mode != krs::glsl::data_mode::constants;
+        const bool uniform_block =
+            v.target == krs::glsl::target::glsl330 || v.mode == krs::glsl::data_mode::uniform_buffer;
         const std::vector<float> data = buffer ? krs::glsl::pack(s.field, s.name) : std::vector<float>{};
-        const auto gpu = run_points(e.source(), fn, points, data, v.target == krs::glsl::target::glsl330, fn + "_data");
+        const auto gpu = run_points(e.source(), fn, points, data, uniform_block, e.array_name());
         const parity r = compare(s, points, gpu);
         const std::size_t compared = r.points - r.near_mirror;
         std::printf("%-8s %-26s points %zu  max |d_gpu - d_cpu| %.3g (%.3g of extent %.3g)  reflection bits equal "
@@ -509,6 +513,7 @@ TEST_CASE("glslangValidator accepts every fractal preset for every target")
         std::string id = name + "_" + label;
         for (char& ch : id)
             if (ch == ' ' || ch == ',' || ch == '.') ch = '_';
+        for (std::size_t at = id.find("__"); at != std::string::npos; at = id.find("__")) id.erase(at, 1);
         files += validate_fractal(dir, id, f);
     });
     files += validate_fractal(dir, "log_polar",

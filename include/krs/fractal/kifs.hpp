@@ -399,9 +399,10 @@ public:
     // the C++.
     static constexpr std::string_view glsl_name = "krs_kifs";
     static constexpr std::string_view glsl_source = "";
-    std::array<float, (max_iterations + 1 + 3) / 4 * 4> glsl_parameters() const
+    static constexpr std::size_t glsl_table_size = (max_iterations + 1 + 3) / 4 * 4; // whole vec4s
+    std::array<float, glsl_table_size> glsl_parameters() const
     {
-        std::array<float, (max_iterations + 1 + 3) / 4 * 4> table{};
+        std::array<float, glsl_table_size> table{};
         for (int i = 0; i <= iterations_; ++i) table[std::size_t(i)] = inverse_scale_[std::size_t(i)];
         return table;
     }

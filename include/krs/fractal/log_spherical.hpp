@@ -402,11 +402,13 @@ public:
         const std::size_t header = out.parameters(*this, name + " (density, 1 / density, s, 1 - 1/s), (cutoff, step, k0, n)");
         const auto [k0, n] = glsl_table_range();
         const float inv_density = 1.0f / density_;
-        const std::size_t first = header + 2; // the table follows the two vec4s of parameters
+        std::size_t first = header + 2; // where the table starts (it has no entry when n is 0)
         for (int i = 0; i < n; i += 4) {
             std::array<float, 4> v{}; // zeros past the table's end
             for (int j = 0; j < 4 && i + j < n; ++j) v[std::size_t(j)] = detail::lane_exp(float(k0 + i + j) * inv_density);
-            out.vec4(v, i == 0 ? name + " shell scales e^(k / density), k = k0.." : name + " shell scales");
+            const std::size_t at =
+                out.vec4(v, i == 0 ? name + " shell scales e^(k / density), k = k0.." : name + " shell scales");
+            if (i == 0) first = at;
         }
         const std::string c = out.at(header), o = out.at(header + 1);
         std::string body = "float " + name + "_scale(float k) {\n"

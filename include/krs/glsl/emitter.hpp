@@ -82,14 +82,81 @@ struct options {
     std::string prefix = "krs_";        // of every global name the text declares
 };
 
-// Whether `p` can start every global name of the text: a GLSL identifier (letters, digits and _,
-// not starting with a digit), outside the implementation's gl_ names, without GLSL's reserved __.
+// A letter, digit or _: what GLSL names are made of.
+inline constexpr bool is_name_char(char c)
+{
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+}
+
+// Whether `p` can start every global name of the text: lower-case letters, digits and _, starting
+// with a letter and ending with _ (prefix + name then never spells a keyword or built-in such as
+// `in` or `mix`), without GLSL's reserved __ and outside the implementation's gl_. Lower case,
+// because include guards carry the prefix in upper case: prefixes that differ only in case would
+// share guards, and the second snippet's library would vanish.
 inline bool is_prefix(std::string_view p)
 {
-    const auto word = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_'; };
-    bool ok = !p.empty() && !(p[0] >= '0' && p[0] <= '9') && !p.starts_with("gl_") && p.find("__") == std::string_view::npos;
-    for (char c : p) ok = ok && word(c);
+    bool ok = p.size() >= 2 && p[0] >= 'a' && p[0] <= 'z' && p.back() == '_' && !p.starts_with("gl_") &&
+              p.find("__") == std::string_view::npos;
+    for (char c : p) ok = ok && is_name_char(c) && !(c >= 'A' && c <= 'Z');
     return ok;
+}
+
+// Whether `n` can follow the prefix in a name: letters, digits and _, not starting with _ and
+// without __ (the prefix's own _ and GLSL's reserved double underscore).
+inline bool is_name_part(std::string_view n)
+{
+    bool ok = !n.empty() && n[0] != '_' && n.find("__") == std::string_view::npos;
+    for (char c : n) ok = ok && is_name_char(c);
+    return ok;
+}
+
+// The first name a GLSL text declares twice at global scope, or "" when none is. Global
+// declarations are the lines that start at column 0 (the emitter indents everything inside a body
+// or a block): `TYPE NAME(` functions, `[const] TYPE NAME[` or `NAME =` constants, `struct NAME`,
+// and a block's name with the names declared inside it.
+inline std::string twice_declared(std::string_view text)
+{
+    std::vector<std::string> names;
+    const auto word_at = [&](std::size_t& i) {
+        while (i < text.size() && text[i] == ' ') ++i;
+        const std::size_t start = i;
+        while (i < text.size() && is_name_char(text[i])) ++i;
+        return std::string(text.substr(start, i - start));
+    };
+    bool in_block = false;
+    for (std::size_t line = 0; line < text.size();) {
+        std::size_t end = text.find('\n', line);
+        if (end == std::string_view::npos) end = text.size();
+        const std::string_view l = text.substr(line, end - line);
+        std::size_t i = line;
+        if (in_block) {
+            if (l.starts_with("};")) in_block = false;
+            else if (!l.empty() && l[0] == ' ') { // a member: TYPE NAME[N];
+                word_at(i);
+                names.push_back(word_at(i));
+            }
+        } else if (!l.empty() && is_name_char(l[0])) {
+            if (l.starts_with("layout(")) { // layout(...) uniform|readonly buffer NAME {
+                const std::size_t brace = l.find('{');
+                std::size_t last = brace == std::string_view::npos ? l.size() : brace; // the name ends before it
+                while (last > 0 && !is_name_char(l[last - 1])) --last;
+                std::size_t first = last;
+                while (first > 0 && is_name_char(l[first - 1])) --first;
+                names.emplace_back(l.substr(first, last - first));
+                in_block = brace != std::string_view::npos;
+            } else {
+                std::string first = word_at(i);
+                if (first == "const" || first == "uniform") first = word_at(i);
+                const std::string name = word_at(i);
+                if (!name.empty()) names.push_back(name);
+            }
+        }
+        line = end + 1;
+    }
+    std::set<std::string> seen;
+    for (const std::string& n : names)
+        if (!seen.insert(n).second) return n;
+    return {};
 }
 
 inline std::string_view target_name(target t)
@@ -125,7 +192,7 @@ inline std::string version_line(target t)
 // `glsl_parameters()` returns them as a std::array<float, 4 N>, the N vec4s its functions take after
 // the point, in their order. The array is the one statement of the layout: its size is the vec4
 // count, and the functions' parameter lists are checked by compiling every type's GLSL
-// (tests/test_glsl_gpu.cpp, "every field type").
+// (tests/test_glsl_field_types.cpp).
 template <class X>
 concept glsl_type = requires(const X& x) {
     { X::glsl_name } -> std::convertible_to<std::string_view>;
@@ -154,7 +221,7 @@ class emitter;
 // part, `library`, `parameters`, `vec4`, `at`, `arguments`, `function`). Out is a template
 // parameter so that the field's header needs nothing from krs/glsl/.
 template <class F>
-concept glsl_composite = requires(const F& f, emitter& out, const std::string& name) { f.glsl_emit(out, name); };
+concept glsl_composite = field<F> && requires(const F& f, emitter& out, const std::string& name) { f.glsl_emit(out, name); };
 
 // Instantiated for a type the emitter cannot write: the compiler's error names the type as this
 // template's argument ("In instantiation of 'struct krs::glsl::type_without_glsl<...>'").
@@ -186,15 +253,32 @@ public:
 
     // Emits `float PREFIXNAME(vec3 p)` for any supported field (krs_tree for "tree"); for a KRS
     // sequence also PREFIXNAME_locate and PREFIXNAME_shade (Algorithm 2). Returns PREFIXNAME, the
-    // name to call. `name` is made of letters, digits and _.
+    // name to call. `name` is letters, digits and _ (not starting with _, no __). A name that makes
+    // one the library or an earlier field declares (add(f, "location") and the struct
+    // krs_location; "mirror_fold"; a second "tree") is refused and the emitter is left as it was.
     template <class F>
     std::string add(const F& f, const std::string& name)
     {
         require_name("glsl.add.name", name);
+        const emitter before = *this;
         field(f, std::string(internal_prefix) + name);
-        require_unshadowed_data_name();
+        const std::string again = twice_declared(internal_text());
+        if (!again.empty()) {
+            *this = before;
+            if (again == array_ || again == array_ + "_block")
+                throw invalid_parameter("glsl.options.data_name",
+                                        "makes " + again + ", which the library or the field declares too: choose another",
+                                        options_.data_name);
+            throw invalid_parameter("glsl.add.name",
+                                    "makes " + again + ", which the library or an earlier field declares too: choose another",
+                                    name);
+        }
         return options_.prefix + name;
     }
+
+    // The data array's and its block's names in the text (what a host binds by name).
+    std::string array_name() const { return options_.prefix + options_.data_name; }
+    std::string block_name() const { return array_name() + "_block"; }
 
     // The packed parameters, 4 floats per vec4, in the layout documented above.
     const std::vector<float>& data() const { return data_; }
@@ -209,11 +293,7 @@ public:
         out += "// Generated by krs::glsl (target " + std::string(target_name(options_.target)) + ", " +
                std::string(mode_name(options_.mode)) + " mode). Do not edit.\n";
         if (options_.target == target::es300) out += "precision highp float;\nprecision highp int;\n";
-        out += guarded("KRS_GLSL_COMMON", common_library);
-        out += library_;
-        out += data_declaration();
-        out += constants_comments_;
-        out += functions_;
+        out += internal_text();
         return with_prefix(out, options_.prefix);
     }
 
@@ -298,6 +378,7 @@ struct krs_kernel_shading {
         for (std::size_t i = 0; i < vec4s_of<X>; ++i) s += ", " + at(index + i);
         return s;
     }
+    // The data array's name as the composites write it (krs_..., renamed with the rest on output).
     const std::string& data_name() const { return array_; }
     // Appends a function the composite wrote.
     void function(const std::string& text) { functions_ += text; }
@@ -316,23 +397,18 @@ private:
     // The text is written with this prefix and renamed to options.prefix by with_prefix.
     static constexpr std::string_view internal_prefix = "krs_";
 
-    static bool word_char(char c)
-    {
-        return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
-    }
-    // Letters, digits and _ (what follows the prefix in a name).
     static void require_name(const char* parameter, const std::string& n)
     {
-        bool ok = !n.empty();
-        for (char c : n) ok = ok && word_char(c);
-        if (!ok) throw invalid_parameter(parameter, "must be letters, digits and _ (it follows the prefix in GLSL names)", n);
+        if (!is_name_part(n))
+            throw invalid_parameter(parameter, "must be letters, digits and _, not starting with _ and without __ (it "
+                                               "follows the prefix in GLSL names)", n);
     }
     static void require_prefix(const std::string& p)
     {
         if (!is_prefix(p))
             throw invalid_parameter("glsl.options.prefix",
-                                    "must be a GLSL identifier (letters, digits and _, not starting with a digit), not "
-                                    "starting with gl_ and without __",
+                                    "must be lower-case letters, digits and _, start with a letter, end with _, not "
+                                    "start with gl_ and hold no __",
                                     p);
     }
     static void require_data_name(const std::string& n) { require_name("glsl.options.data_name", n); }
@@ -347,7 +423,7 @@ private:
         std::string out;
         out.reserve(text.size() + text.size() / 8);
         for (std::size_t i = 0; i < text.size();) {
-            const bool token_start = i == 0 || !word_char(text[i - 1]);
+            const bool token_start = i == 0 || !is_name_char(text[i - 1]);
             if (token_start && text.compare(i, 4, "krs_") == 0) {
                 out += prefix;
                 i += 4;
@@ -360,24 +436,11 @@ private:
         }
         return out;
     }
-    // The generated functions use the array as `ARRAY[`: anywhere else in them its name is one they
-    // declare too (a scene's part: data_name "tree_kernel" next to a KIFS named "tree" makes
-    // krs_tree_kernel both), which breaks the shader. Checked on every add, so the field that
-    // brought the clash is the one refused. (Library functions take their constants as parameters
-    // and never read the array.)
-    void require_unshadowed_data_name() const
+    // Everything after the version and precision lines, before renaming.
+    std::string internal_text() const
     {
-        const std::string& n = array_;
-        const auto word = word_char;
-        const std::string_view text = functions_;
-        for (std::size_t at = text.find(n); at != std::string_view::npos; at = text.find(n, at + 1)) {
-            const std::size_t end = at + n.size();
-            if ((at > 0 && word(text[at - 1])) || (end < text.size() && word(text[end]))) continue;
-            if (end < text.size() && text[end] == '[') continue;
-            throw invalid_parameter("glsl.options.data_name",
-                                    "makes the data array's name one the generated functions declare: choose another",
-                                    options_.data_name);
-        }
+        return guarded("KRS_GLSL_COMMON", common_library) + library_ + data_declaration() + constants_comments_ +
+               functions_;
     }
 
     // ---- data -----------------------------------------------------------------------------

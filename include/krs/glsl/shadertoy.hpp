@@ -179,6 +179,12 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     fragColor = vec4(sqrt(clamp(color, 0.0, 1.0)), found ? 1.0 : 0.0);
 }
 )";
+    // The program's own names (krs_scene, krs_trace, krs_sky, ...) share the scene's prefix: a scene
+    // named "sky" or "scene" would define one of them twice.
+    const std::string again = twice_declared(out);
+    if (!again.empty())
+        throw invalid_parameter("glsl.shadertoy.name",
+                                "makes " + again + ", which the Shadertoy program declares too: choose another name", name);
     return out;
 }
 
