@@ -413,13 +413,19 @@ private:
     }
     static void require_data_name(const std::string& n) { require_name("glsl.options.data_name", n); }
 
+    // ASCII letters to upper case: include guards are the guarded names so, and carry the prefix so.
+    static std::string upper_case(std::string_view text)
+    {
+        std::string upper(text);
+        for (char& c : upper) c = c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c;
+        return upper;
+    }
     // The text with every identifier that starts with krs_ starting with `prefix` instead, and every
     // one that starts with KRS_ (include guards) with the prefix in upper case.
     static std::string with_prefix(const std::string& text, const std::string& prefix)
     {
         if (prefix == internal_prefix) return text;
-        std::string upper = prefix;
-        for (char& c : upper) c = c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c;
+        const std::string upper = upper_case(prefix);
         std::string out;
         out.reserve(text.size() + text.size() / 8);
         for (std::size_t i = 0; i < text.size();) {
@@ -471,8 +477,7 @@ private:
     // struct and function once (unguarded, the second krs_location was a redefinition).
     static std::string guarded(std::string_view name, std::string_view code)
     {
-        std::string macro(name);
-        for (char& c : macro) c = c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c;
+        const std::string macro = upper_case(name);
         return "#ifndef " + macro + "\n#define " + macro + "\n" + std::string(code) + "#endif\n";
     }
 
