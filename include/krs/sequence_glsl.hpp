@@ -48,6 +48,20 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
                                                   std::to_string(kernel_level(k)) + ")");
             },
             kernels_[k]);
+    // The per-level early exit of the C++ walk (distances() in krs/sequence.hpp): below the highest
+    // kernel level, where L_i's bounding sphere is finite, the walk stops once the folded point is
+    // farther from that sphere than d, since no kernel instance still to come can then lower d. The
+    // sphere (center, radius with the C++'s rounding margin) is data, after the kernels, so a
+    // buffer of another sequence of the same structure brings its own bounds; the value is the
+    // full walk's, only the work differs (options.level_early_exit = false writes the full walk,
+    // for timing it: bench/bench_glsl_llvmpipe.cpp).
+    std::vector<std::size_t> bound_at(n);
+    const std::size_t tested_levels = out.settings().level_early_exit ? bound_tests_below_ : 0;
+    for (std::size_t i = 0; i < tested_levels; ++i) {
+        const bounding_sphere& b = level_bounds_[i];
+        bound_at[i] = out.vec4({b.center.x, b.center.y, b.center.z, b.radius * 1.0001f + 1e-5f},
+                               name + " bound of level " + std::to_string(i) + " (center, radius with margin)");
+    }
     // Kernel k's distance or normal call at point expression `p`.
     const auto kernel_call = [&](std::size_t k, const char* what, const std::string& p) {
         return std::visit(
@@ -73,8 +87,15 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
 
     // Algorithm 1: the distance.
     std::string body = "float " + name + "(vec3 p) {\n    float d = 3.0e38;\n";
+    if (tested_levels > 0) body += "    vec3 v;\n    float reach;\n";
     for (std::size_t i = n + 1; i-- > 0;) {
         if (i < n) body += "    p = " + mirror_fn + "fold(p, " + out.at(mirror_at[i]) + ");\n";
+        if (i < tested_levels) {
+            const std::string b = out.at(bound_at[i]);
+            // The C++'s test term for term: |p - c|^2 > (d + r)^2 with d + r > 0.
+            body += "    v = p - " + b + ".xyz;\n    reach = d + " + b + ".w;\n"
+                    "    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;\n";
+        }
         for (std::uint32_t k = level_begin(i); k < level_begin(i + 1); ++k)
             body += "    d = min(d, " + kernel_call(k, "distance", "p") + ");\n";
     }

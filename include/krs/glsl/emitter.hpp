@@ -25,7 +25,7 @@
 //
 // Data layout. All parameters are vec4s in one array (prefix + `options.data_name`, default krs_data):
 // kernels and mirrors in the order the functions use them, each a fixed number of vec4s (see each
-// type's comment). Because the element is vec4, the layout is the same under std140 and std430:
+// type's comment), then what a composite computes (a sequence's level bounds for its early exit). Because the element is vec4, the layout is the same under std140 and std430:
 // base alignment 16, array stride 16, no padding, element k at byte offset 16 k, components
 // x, y, z, w at +0, +4, +8, +12. So the host buffer is exactly `emitter::data()` (float[4 N]).
 //   - data_mode::constants: `const vec4 krs_data[N] = vec4[N](...);` baked into the code.
@@ -80,6 +80,9 @@ struct options {
     std::string data_name = "data";     // the vec4 array is prefix + data_name; its block + "_block"
     int binding = 0;                    // the block's binding for glsl450 buffers
     std::string prefix = "krs_";        // of every global name the text declares
+    // A sequence's distance leaves its unrolled walk at the C++'s per-level early exit (same value,
+    // less work far from the finer levels). Off writes the full walk: only for timing the exit.
+    bool level_early_exit = true;
 };
 
 // A letter, digit or _: what GLSL names are made of.
