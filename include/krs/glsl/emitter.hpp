@@ -48,7 +48,9 @@
 #include "krs/field.hpp"
 #include "krs/glsl/literal.hpp"
 
+#include <algorithm>
 #include <array>
+#include <initializer_list>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -56,6 +58,7 @@
 #include <string>
 #include <string_view>
 #include <tuple>
+#include <utility>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -217,6 +220,20 @@ template <class F>
 concept glsl_field = field<F> && glsl_type<F>;
 
 class emitter;
+
+// Shading functions: the GLSL of krs/shade/ (soft shadow, ambient occlusion, fractal noise,
+// triplanar projection), compose/depth.hpp (depth output and the depth-buffer limit) and kernel uv,
+// next to their C++. Each such type has a member
+//     template <class Out> void glsl_shading(Out& out, const std::string& function, const std::string& field) const;
+// that runs the type's own validate() (so a bad value is the C++'s error, with the C++'s parameter
+// name) and then writes `... FUNCTION(...)` with its validated values baked in as constants named
+// as the C++ members are. A function that samples a field (soft shadow, ambient occlusion) calls
+// `float FIELD(vec3 p)`, the distance of a field added to the same emitter before: GLSL has no
+// function parameters, so the emitter writes one such function per field asked for, rather than a
+// macro or a generic by name. Users call emitter::add_shading.
+template <class S>
+concept glsl_shading = requires(const S& s, emitter& out, const std::string& n) { s.glsl_shading(out, n, n); };
+
 // A field made of other fields (a sequence, a union, a warp, KIFS, a log-spherical tiling or shell,
 // bounded, empty zones) writes its own GLSL next to its C++: a member
 //     template <class Out> void glsl_emit(Out& out, const std::string& name) const;
@@ -265,17 +282,33 @@ public:
         require_name("glsl.add.name", name);
         const emitter before = *this;
         field(f, std::string(internal_prefix) + name);
-        const std::string again = twice_declared(internal_text());
-        if (!again.empty()) {
+        refuse_twice_declared(before, "glsl.add.name", name);
+        fields_.insert(name);
+        return options_.prefix + name;
+    }
+
+    // Emits the shading function `s` (a glsl_shading type: soft_shadow_options,
+    // ambient_occlusion_options, fractal_noise, triplanar_projection, depth_projection,
+    // torus_capsule_uv) as PREFIXNAME; returns that name. `field` names a field added before
+    // (add(f, field)) for the functions that sample one: soft_shadow_options gives
+    //     float PREFIXNAME(vec3 p, vec3 n, vec3 to_light)   calling PREFIXFIELD(p)
+    // (each type's comment gives its signature). s.validate() runs first: a bad value throws the
+    // C++'s invalid_parameter, and the emitter is left as it was.
+    template <glsl_shading S>
+    std::string add_shading(const S& s, const std::string& name, const std::string& field = {})
+    {
+        require_name("glsl.add_shading.name", name);
+        if (!field.empty() && !fields_.contains(field))
+            throw invalid_parameter("glsl.add_shading.field", "must name a field added to this emitter before", field);
+        const emitter before = *this;
+        try {
+            s.glsl_shading(*this, std::string(internal_prefix) + name,
+                           field.empty() ? std::string() : std::string(internal_prefix) + field);
+        } catch (...) {
             *this = before;
-            if (again == array_ || again == array_ + "_block")
-                throw invalid_parameter("glsl.options.data_name",
-                                        "makes " + again + ", which the library or the field declares too: choose another",
-                                        options_.data_name);
-            throw invalid_parameter("glsl.add.name",
-                                    "makes " + again + ", which the library or an earlier field declares too: choose another",
-                                    name);
+            throw;
         }
+        refuse_twice_declared(before, "glsl.add_shading.name", name);
         return options_.prefix + name;
     }
 
@@ -385,6 +418,29 @@ struct krs_kernel_shading {
     const std::string& data_name() const { return array_; }
     // Appends a function the composite wrote.
     void function(const std::string& text) { functions_ += text; }
+    // A float as a GLSL literal that reads back as the same float.
+    static std::string literal(float v) { return float_literal(v); }
+    // `text` with each whole word that is a key of `values` replaced by its value: how a shading
+    // function writes its GLSL (upper-case placeholders NAME, FIELD, HARDNESS, ...) with the names
+    // and validated values of one request.
+    static std::string fill(std::string_view text, std::initializer_list<std::pair<std::string_view, std::string>> values)
+    {
+        std::string out;
+        for (std::size_t i = 0; i < text.size();) {
+            if (!is_name_char(text[i])) {
+                out += text[i++];
+                continue;
+            }
+            std::size_t end = i;
+            while (end < text.size() && is_name_char(text[end])) ++end;
+            const std::string_view word = text.substr(i, end - i);
+            const auto* hit = std::find_if(values.begin(), values.end(), [&](const auto& v) { return v.first == word; });
+            out += hit != values.end() ? std::string_view(hit->second) : word;
+            i = end;
+        }
+        return out;
+    }
+
     // `float NAME(vec3 p)` as the min of NAME_0 .. NAME_{count-1} in that order (the C++
     // `d = part0; d = min(d, part_i)`), for unions and fields made of parts.
     void minimum_of_parts(const std::string& name, std::size_t count)
@@ -415,6 +471,22 @@ private:
                                     p);
     }
     static void require_data_name(const std::string& n) { require_name("glsl.options.data_name", n); }
+
+    // A name the latest addition made twice (see twice_declared) puts the emitter back to `before`
+    // and is refused, as the data name's fault when it is the data array's or block's.
+    void refuse_twice_declared(const emitter& before, const char* parameter, const std::string& name)
+    {
+        const std::string again = twice_declared(internal_text());
+        if (again.empty()) return;
+        *this = before;
+        if (again == array_ || again == array_ + "_block")
+            throw invalid_parameter("glsl.options.data_name",
+                                    "makes " + again + ", which the library or the field declares too: choose another",
+                                    options_.data_name);
+        throw invalid_parameter(parameter,
+                                "makes " + again + ", which the library or an earlier field declares too: choose another",
+                                name);
+    }
 
     // ASCII letters to upper case: include guards are the guarded names so, and carry the prefix so.
     static std::string upper_case(std::string_view text)
@@ -487,6 +559,7 @@ private:
     options options_;
     std::string array_;              // the data array's name in the text, krs_ + data_name
     std::set<std::string> included_;
+    std::set<std::string> fields_;   // the names add() was given
     std::string library_;            // each kind's functions, once
     std::string constants_comments_; // what each data entry holds
     std::string functions_;          // the bodies
