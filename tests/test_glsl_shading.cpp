@@ -275,6 +275,101 @@ TEST_CASE("GLSL fractal noise and triplanar projection match the C++ on llvmpipe
     CHECK(t.worst <= 1e-5f);
 }
 
+TEST_CASE("GLSL depth output and depth-buffer limit match the C++ on llvmpipe")
+{
+    const krs::depth_projection projection(0.25f, 400.0f);
+    krs::glsl::emitter e({krs::glsl::target::glsl450});
+    const std::string fn = e.add_shading(projection, "camera");
+    std::mt19937_64 g(0xde97);
+    const vec3f forward = krs::normalize(vec3f{0.2f, -0.3f, 1.0f});
+    std::vector<std::array<vec3f, 3>> in(point_count);
+    for (auto& t : in) {
+        // Directions in front of the camera and some parallel or behind (c <= 0: no limit); t and
+        // depths over the whole range, with some beyond it (clamped).
+        vec3f d = unit_direction(g);
+        if (krs::dot(d, forward) < 0 && g() % 4 != 0) d = -d;
+        t = {d, forward,
+             {float(std::exp(krs_test::uniform(g, std::log(0.05), std::log(800.0)))), float(krs_test::uniform(g, -0.1, 1.1)),
+              float(krs_test::uniform(g, 1.0, 600.0))}};
+    }
+    const std::vector<float> depth = run(e.source(), fn + "_hit_depth(c.x, a, b)", in);
+    const std::vector<float> limit = run(e.source(), fn + "_ray_limit(c.y, a, b, c.z)", in);
+    const std::vector<float> view = run(e.source(), fn + "_view_depth(c.y)", in);
+    const agreement da = compare(depth, [&](std::size_t i) { return projection.hit_depth(in[i][2].x, in[i][0], in[i][1]); });
+    const agreement la = compare(limit, [&](std::size_t i) {
+        return projection.ray_limit(in[i][2].y, in[i][0], in[i][1], in[i][2].z);
+    });
+    const agreement va = compare(view, [&](std::size_t i) { return projection.view_depth(in[i][2].y); });
+    std::printf("depth output: max |gpu - cpu| %.3g, bit-equal %zu/%zu; ray limit: max %.3g, bit-equal %zu; view depth: "
+                "max %.3g, bit-equal %zu\n",
+                double(da.worst), da.equal, depth.size(), double(la.worst), la.equal, double(va.worst), va.equal);
+    // + - * / and clamp only, in the C++'s order, all exact on llvmpipe: bit for bit (a division of
+    // llvmpipe's could be 1 ulp off: 1 ulp of 1 is 1.2e-7 for the depth, of 600 is 6e-5 for t).
+    CHECK(da.worst <= 1.2e-7f);
+    CHECK(la.worst <= 6.2e-5f);
+    CHECK(va.worst <= 6.2e-5f);
+    std::size_t capped = 0;
+    for (std::size_t i = 0; i < in.size(); ++i) capped += limit[i] < in[i][2].z;
+    CHECK(capped > in.size() / 4); // the raster does limit most rays (the test can see a wrong limit)
+}
+
+TEST_CASE("GLSL kernel uv of a sequence matches the C++ torus_capsule::uv on llvmpipe")
+{
+    const auto tree = ex::tree();
+    krs::glsl::emitter e({krs::glsl::target::glsl450});
+    e.add(tree.field, "tree");
+    const std::string fn = e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv");
+    // The C++'s location of each point, handed to the GLSL (a in the kernel point, b.x the
+    // kernel): the uv alone is compared, not the walk. Near-surface points until 16,384 lie on
+    // torus capsules (the branches; the rest are leaves).
+    std::vector<std::array<vec3f, 3>> in;
+    std::vector<krs::surface_uv<float>> cpu;
+    std::size_t without_uv = 0;
+    shading_inputs near;
+    for (std::uint64_t seed = 0x0b; in.size() < point_count; ++seed)
+    for (const auto& r : (near = near_surface(tree, seed)).rays) {
+        if (in.size() == point_count) break;
+        const krs::location<float> w = tree.field.locate(r[0]);
+        const auto* k = std::get_if<krs::torus_capsule>(&tree.field.kernels()[w.kernel]);
+        if (!k) {
+            ++without_uv;
+            continue;
+        }
+        in.push_back({w.kernel_point, vec3f{float(w.kernel), 0, 0}, {}});
+        cpu.push_back(k->uv(w.kernel_point));
+    }
+    const std::string where = "krs_location(0.0, a, uint(b.x), 0u, uvec2(0u))";
+    const std::vector<float> u = run(e.source(), fn + "(" + where + ").x", in);
+    const std::vector<float> v = run(e.source(), fn + "(" + where + ").y", in);
+    const agreement ua = compare(u, [&](std::size_t i) { return cpu[i].u; });
+    // v wraps at the tube's inside (atan2 at +-pi): 0 and 1 are the same angle.
+    float worst_v = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        const float dv = std::abs(v[i] - cpu[i].v);
+        worst_v = std::max(worst_v, std::min(dv, 1.0f - dv));
+    }
+    std::printf("kernel uv: %zu points on torus capsules (%zu on other kinds), max |u| %.3g (bit-equal %zu), max |v| "
+                "%.3g\n",
+                in.size(), without_uv, double(ua.worst), ua.equal, double(worst_v));
+    REQUIRE(in.size() == point_count);
+    // GLSL's atan(y, x) is within 3e-6 of the C++'s (llvmpipe); u divides the angle by kappa and by
+    // twice the half arc length (u <= 1 over the arc: the relative error carries over) and v by
+    // 2 pi: 1e-5 for both.
+    CHECK(ua.worst <= 1e-5f);
+    CHECK(worst_v <= 1e-5f);
+    // A kernel without uv gets vec2(0) (the tree's spheres: leaves).
+    CHECK(without_uv > 0);
+    {
+        for (const auto& r : near.rays) {
+            const krs::location<float> w = tree.field.locate(r[0]);
+            if (std::holds_alternative<krs::torus_capsule>(tree.field.kernels()[w.kernel])) continue;
+            const std::vector<std::array<vec3f, 3>> one{{w.kernel_point, vec3f{float(w.kernel), 0, 0}, {}}};
+            CHECK(run(e.source(), "length(" + fn + "(" + where + "))", one)[0] == 0.0f);
+            break;
+        }
+    }
+}
+
 TEST_CASE("GLSL shading: bad parameters are refused with the C++ parameter's name, the emitter unchanged")
 {
     const auto tree = ex::tree();
@@ -314,6 +409,12 @@ TEST_CASE("GLSL shading: bad parameters are refused with the C++ parameter's nam
     refused([&] { e.add_shading(n, "noise"); }, "fractal_noise.gain");
     refused([&] { e.add_shading(krs::triplanar_projection{"stripes", -1.0f}, "tri"); }, "triplanar.sharpness");
     refused([&] { e.add_shading(krs::triplanar_projection{"9lives", 4.0f}, "tri"); }, "triplanar.pattern");
+    krs::depth_projection camera;
+    camera.far_plane = 0.05f; // public fields: below near_plane
+    refused([&] { e.add_shading(camera, "camera"); }, "depth_projection.far_plane");
+    camera = {};
+    camera.near_plane = -1.0f;
+    refused([&] { e.add_shading(camera, "camera"); }, "depth_projection.near_plane");
     refused([&] { e.add_shading(krs::fractal_noise{}, "tree"); }, "glsl.add_shading.name");
     refused([&] { e.add_shading(krs::fractal_noise{}, "_bad"); }, "glsl.add_shading.name");
 }
@@ -331,6 +432,8 @@ TEST_CASE("GLSL shading compiles for 330, 450 and ES 3.00 (glslangValidator) and
             e.add_shading(krs::ambient_occlusion_options{}, "tree_occlusion", "tree");
             e.add_shading(krs::fractal_noise{}, "rock");
             e.add_shading(krs::triplanar_projection{prefix + "rock_pattern", 4.0f}, "facade");
+            e.add_shading(krs::depth_projection(0.1f, 100.0f), "camera");
+            e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv");
             const std::string p = prefix;
             // The pattern, a 2D slice of the snippet's own noise, is defined by the shader after
             // the snippet (declared before it, as a user does).
@@ -340,7 +443,10 @@ TEST_CASE("GLSL shading compiles for 330, 450 and ES 3.00 (glslangValidator) and
                                      "layout(location = 0) out vec4 color;\n"
                                      "void main() {\n    vec3 p = vec3(0.5, 2.0, 0.25);\n    vec3 n = vec3(0.0, 1.0, 0.0);\n"
                                      "    color = vec4(" + p + "tree_shadow(p, n, normalize(vec3(1.0))), " + p +
-                                     "tree_occlusion(p, n), " + p + "rock(p), " + p + "facade(p, n));\n}\n";
+                                     "tree_occlusion(p, n), " + p + "rock(p), " + p + "facade(p, n));\n"
+                                     "    color.xy += " + p + "tree_uv(" + p + "tree_locate(p));\n"
+                                     "    color.z += " + p + "camera_hit_depth(2.0, n, n) + " + p +
+                                     "camera_ray_limit(0.5, n, n, 50.0);\n}\n";
             const std::string file = dir + "/shading." + std::string(krs::glsl::target_name(t)) + "." +
                                      prefix.substr(0, prefix.size() - 1) + ".frag";
             if (t == krs::glsl::target::es300) {

@@ -234,6 +234,11 @@ public:
     // written through a krs::glsl::emitter.
     template <class Out>
     void glsl_emit(Out& out, const std::string& name) const;
+    // GLSL `vec2 FUNCTION(krs_location where)`: the uv of the kernel `where` names at its
+    // kernel_point, for kinds with a uv (a glsl_uv_source); vec2(0) for the others. Written by
+    // emitter::add_shading(kernel_uv_glsl{sequence}, ...) (krs/sequence_glsl.hpp).
+    template <class Out>
+    void glsl_uv_emit(Out& out, const std::string& function) const;
 
 private:
     static constexpr bool one_axis_folds = requires { Mirror::folds_one_axis; };

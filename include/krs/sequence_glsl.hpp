@@ -142,4 +142,43 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
     out.function(body + "    return s;\n}\n");
 }
 
+template <mirror_kind Mirror, kernel... Kinds>
+template <class Out>
+void basic_sequence<Mirror, Kinds...>::glsl_uv_emit(Out& out, const std::string& function) const
+{
+    // Each kernel with a uv gets its parameters again, then its uv vec4: the uv request is
+    // independent of the distance's data (either may be emitted without the other).
+    std::string body = "vec2 " + function + "(krs_location where) {\n    vec3 q = where.kernel_point;\n";
+    for (std::size_t k = 0; k < kernels_.size(); ++k)
+        std::visit(
+            [&](const auto& kernel) {
+                using K = std::remove_cvref_t<decltype(kernel)>;
+                if constexpr (requires { K::glsl_uv_source; kernel.glsl_uv_parameters(); }) {
+                    out.library_text(K::glsl_uv_name, K::glsl_uv_source);
+                    const std::size_t at = out.parameters(kernel, function + " kernel " + std::to_string(k));
+                    const std::size_t uv_at = out.vec4(kernel.glsl_uv_parameters(), function + " kernel " +
+                                                                                        std::to_string(k) + " uv");
+                    body += "    if (where.kernel == " + std::to_string(k) + "u) return " + std::string(K::glsl_uv_name) +
+                            "(q" + out.template arguments<K>(at) + ", " + out.at(uv_at) + ");\n";
+                }
+            },
+            kernels_[k]);
+    out.function(body + "    return vec2(0.0);\n}\n");
+}
+
+// The request emitter::add_shading takes for a sequence's kernel uv (see glsl_uv_emit):
+//     krs::glsl::emitter e; e.add(tree, "tree"); e.add_shading(krs::kernel_uv_glsl{tree}, "tree_uv");
+//     ... vec2 uv = krs_tree_uv(krs_tree_locate(p));
+template <class Sequence>
+struct kernel_uv_glsl {
+    const Sequence& sequence;
+    template <class Out>
+    void glsl_shading(Out& out, const std::string& function, const std::string&) const
+    {
+        sequence.glsl_uv_emit(out, function);
+    }
+};
+template <class Sequence>
+kernel_uv_glsl(const Sequence&) -> kernel_uv_glsl<Sequence>;
+
 } // namespace krs

@@ -380,6 +380,12 @@ struct krs_kernel_shading {
                 static_cast<typename X::glsl_needs*>(nullptr));
         if (included_.insert(std::string(X::glsl_name)).second) library_ += guarded(X::glsl_name, X::glsl_source);
     }
+    // Library text that is not a GLSL type's (a kernel's uv function), once per shader, guarded by
+    // `name` as a type's is.
+    void library_text(std::string_view name, std::string_view code)
+    {
+        if (included_.insert(std::string(name)).second) library_ += guarded(name, code);
+    }
     // Appends x's glsl_parameters() to the data; returns the index of its first vec4. `what` is
     // the comment the data listing gets.
     template <class X>
@@ -420,9 +426,10 @@ struct krs_kernel_shading {
     void function(const std::string& text) { functions_ += text; }
     // A float as a GLSL literal that reads back as the same float.
     static std::string literal(float v) { return float_literal(v); }
-    // `text` with each whole word that is a key of `values` replaced by its value: how a shading
-    // function writes its GLSL (upper-case placeholders NAME, FIELD, HARDNESS, ...) with the names
-    // and validated values of one request.
+    // `text` with each whole word that is a key of `values` replaced by its value, and the key part
+    // of a word that is a key, _ and more (NAME_view_depth: a request's own helper names): how a
+    // shading function writes its GLSL (upper-case placeholders NAME, FIELD, HARDNESS, ...) with the
+    // names and validated values of one request.
     static std::string fill(std::string_view text, std::initializer_list<std::pair<std::string_view, std::string>> values)
     {
         std::string out;
@@ -434,8 +441,11 @@ struct krs_kernel_shading {
             std::size_t end = i;
             while (end < text.size() && is_name_char(text[end])) ++end;
             const std::string_view word = text.substr(i, end - i);
-            const auto* hit = std::find_if(values.begin(), values.end(), [&](const auto& v) { return v.first == word; });
-            out += hit != values.end() ? std::string_view(hit->second) : word;
+            const auto* hit = std::find_if(values.begin(), values.end(), [&](const auto& v) {
+                return word == v.first || (word.starts_with(v.first) && word[v.first.size()] == '_');
+            });
+            if (hit == values.end()) out += word;
+            else out += hit->second + std::string(word.substr(hit->first.size()));
             i = end;
         }
         return out;
