@@ -12,6 +12,8 @@
 //   krs::glsl::emitter e({.target = krs::glsl::target::glsl450});
 //   e.add(tree, "tree");               // float krs_tree(vec3 p); krs_location krs_tree_locate(vec3 p);
 //                                      // krs_kernel_shading krs_tree_shade(vec3 p, vec3 l, vec3 v, float e)
+//   e.add_shading(krs::soft_shadow_options{}, "tree_shadow", "tree");
+//                                      // float krs_tree_shadow(vec3 p, vec3 n, vec3 to_light)
 //   std::string code = e.source();     // paste into a shader (e.source(true) adds #version)
 //
 // Safe to paste: every name the text declares at global scope (functions, structs, the data array
