@@ -22,7 +22,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
+#include <regex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -326,17 +330,18 @@ TEST_CASE("GLSL kernel uv of a sequence matches the C++ torus_capsule::uv on llv
     std::vector<krs::surface_uv<float>> cpu;
     std::size_t without_uv = 0;
     shading_inputs near;
-    for (std::uint64_t seed = 0x0b; in.size() < point_count; ++seed)
-    for (const auto& r : (near = near_surface(tree, seed)).rays) {
-        if (in.size() == point_count) break;
-        const krs::location<float> w = tree.field.locate(r[0]);
-        const auto* k = std::get_if<krs::torus_capsule>(&tree.field.kernels()[w.kernel]);
-        if (!k) {
-            ++without_uv;
-            continue;
+    for (std::uint64_t seed = 0x0b; in.size() < point_count; ++seed) {
+        for (const auto& r : (near = near_surface(tree, seed)).rays) {
+            if (in.size() == point_count) break;
+            const krs::location<float> w = tree.field.locate(r[0]);
+            const auto* k = std::get_if<krs::torus_capsule>(&tree.field.kernels()[w.kernel]);
+            if (!k) {
+                ++without_uv;
+                continue;
+            }
+            in.push_back({w.kernel_point, vec3f{float(w.kernel), 0, 0}, {}});
+            cpu.push_back(k->uv(w.kernel_point));
         }
-        in.push_back({w.kernel_point, vec3f{float(w.kernel), 0, 0}, {}});
-        cpu.push_back(k->uv(w.kernel_point));
     }
     const std::string where = "krs_location(0.0, a, uint(b.x), 0u, uvec2(0u))";
     const std::vector<float> u = run(e.source(), fn + "(" + where + ").x", in);
@@ -460,4 +465,37 @@ TEST_CASE("GLSL shading compiles for 330, 450 and ES 3.00 (glslangValidator) and
             if (t == krs::glsl::target::glsl450) krs_test::validate_spirv(file + ".vk.frag", text);
         }
     }
+}
+
+// The shading types the cases above run. A type of include/krs that gains GLSL shading (a
+// glsl_shading member: the last class opened before it owns it) without a case here fails this.
+TEST_CASE("Every type of include/krs with GLSL shading is run by a case of this file")
+{
+    const std::set<std::string> run = {"soft_shadow_options", "ambient_occlusion_options", "fractal_noise",
+                                       "triplanar_projection", "depth_projection", "kernel_uv_glsl"};
+    const std::filesystem::path root = std::filesystem::path(KRS_SOURCE_DIR) / "include" / "krs";
+    const std::regex opening(R"((?:struct|class)\s+(\w+)[^{;()<>]*\{)"); // not `template <class X>`
+    const std::regex marker(R"(\bvoid\s+glsl_shading\s*\()");
+    std::set<std::string> found;
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+        // (The emitter's folder describes the member in prose; it owns none.)
+        if (entry.path().extension() != ".hpp" || entry.path().parent_path().filename() == "glsl") continue;
+        std::ifstream in(entry.path());
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        std::vector<std::pair<std::ptrdiff_t, std::string>> classes;
+        for (auto it = std::sregex_iterator(text.begin(), text.end(), opening); it != std::sregex_iterator(); ++it)
+            classes.emplace_back(it->position(), (*it)[1].str());
+        for (auto it = std::sregex_iterator(text.begin(), text.end(), marker); it != std::sregex_iterator(); ++it) {
+            std::string owner;
+            for (const auto& [at, name] : classes)
+                if (at < it->position()) owner = name;
+            found.insert(owner);
+        }
+    }
+    for (const std::string& type : found) {
+        INFO("krs::" << type << " has GLSL shading that no case of tests/test_glsl_shading.cpp runs");
+        CHECK(run.count(type) == 1);
+    }
+    // The scan sees the library (a broken pattern would find nothing and pass).
+    CHECK(found.size() == run.size());
 }
