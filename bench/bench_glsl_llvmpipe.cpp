@@ -7,14 +7,17 @@
 // SIMD lanes and compiles an `if` (a return, once lowered, is nested ifs) to a lane mask pushed
 // over code that runs regardless (gallivm's if_cond; only loops test for a mask of no lanes and
 // branch). There the skipped levels still run and the exit's tests are extra work, so this table
-// shows what the exit costs on llvmpipe (on this machine 0.53-0.90 full/exit in three runs under
-// other builds' load), not what it saves on a GPU.
+// shows what the exit costs on llvmpipe, not what it saves on a GPU: on this machine (2 cores,
+// Mesa 22.3) full/exit was 0.82-0.89 in two runs of --repeat 9, the tiles no better than the
+// scattered points, as masks without branches predict.
 //
 //     bench_glsl_llvmpipe [--csv FILE] [--repeat R] [--points N]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
-// For each example scene with level bounds (tree, forest) and two sampling regions (the tests'
-// box around the scene, and that box doubled, where more points are far), N points (default
+// For each example scene with level bounds (tree, forest) and three samplings (the tests' box
+// around the scene; that box doubled, where more points are far; and the doubled box in tiles of
+// 64 nearby points, as a sphere tracer's neighbouring pixels, so lanes that run together leave the
+// walk together), N points (default
 // 2^18) are evaluated by the scene's distance in one compute dispatch; time is the best of R
 // (default 5) dispatches, each waited for by reading a result back, after one warm-up dispatch (llvmpipe
 // compiles the shader to machine code at the first). Built with the benchmarks when the GLSL
@@ -30,6 +33,7 @@
 #include "support/text.hpp"
 #include "support/timing.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -156,20 +160,33 @@ int main(int argc, char** argv)
                 count, repeat);
     std::printf("%-7s %-10s %12s %12s %9s %9s\n", "scene", "region", "exit (ms)", "full (ms)", "full/exit", "equal");
     const auto row = [&](const auto& scene) {
-        for (const float scale : {1.0f, 2.0f}) {
+        for (const float scale : {1.0f, 2.0f, -2.0f}) {
+            // scale < 0: the box doubled, in clusters of 64 consecutive points (one work group)
+            // within 1/100 of the box around a random center, as the pixels of a tile are: lanes
+            // that run together then mostly leave the walk together.
+            const bool clustered = scale < 0;
+            const float s = std::abs(scale);
             std::mt19937_64 g(0xbe7c);
             std::uniform_real_distribution<float> u(-1.0f, 1.0f);
             std::vector<float> points(3 * count);
+            vec3f center = scene.sample_center;
             for (std::size_t i = 0; i < count; ++i) {
-                points[3 * i] = scene.sample_center.x + scale * scene.sample_half.x * u(g);
-                points[3 * i + 1] = scene.sample_center.y + scale * scene.sample_half.y * u(g);
-                points[3 * i + 2] = scene.sample_center.z + scale * scene.sample_half.z * u(g);
+                float spread = s;
+                if (clustered) {
+                    if (i % 64 == 0)
+                        center = scene.sample_center + vec3f{s * scene.sample_half.x * u(g), s * scene.sample_half.y * u(g),
+                                                             s * scene.sample_half.z * u(g)};
+                    spread = 0.01f * s;
+                }
+                points[3 * i] = center.x + spread * scene.sample_half.x * u(g);
+                points[3 * i + 1] = center.y + spread * scene.sample_half.y * u(g);
+                points[3 * i + 2] = center.z + spread * scene.sample_half.z * u(g);
             }
             const timing early = time_distance(scene.field, true, points, repeat);
             const timing full = time_distance(scene.field, false, points, repeat);
             std::size_t equal = 0;
             for (std::size_t i = 0; i < count; ++i) equal += early.distances[i] == full.distances[i];
-            const std::string region = scale == 1.0f ? "box" : "box x2";
+            const std::string region = clustered ? "x2 tiles" : (scale == 1.0f ? "box" : "box x2");
             const double ratio = full.seconds / early.seconds;
             std::printf("%-7s %-10s %12.2f %12.2f %9.2f %4zu/%zu\n", scene.name.c_str(), region.c_str(),
                         1e3 * early.seconds, 1e3 * full.seconds, ratio, equal, count);
