@@ -27,9 +27,10 @@
 //
 // Data layout. All parameters are vec4s in one array (prefix + `options.data_name`, default krs_data):
 // kernels and mirrors in the order the functions use them, each a fixed number of vec4s (see each
-// type's comment), then what a composite computes (a sequence's level bounds for its early exit). Because the element is vec4, the layout is the same under std140 and std430:
-// base alignment 16, array stride 16, no padding, element k at byte offset 16 k, components
-// x, y, z, w at +0, +4, +8, +12. So the host buffer is exactly `emitter::data()` (float[4 N]).
+// type's comment), then what a composite computes (a sequence's level bounds for its early exit).
+// Because the element is vec4, the layout is the same under std140 and std430: base alignment 16,
+// array stride 16, no padding, element k at byte offset 16 k, components x, y, z, w at +0, +4, +8,
+// +12. So the host buffer is exactly `emitter::data()` (float[4 N]).
 //   - data_mode::constants: `const vec4 krs_data[N] = vec4[N](...);` baked into the code.
 //   - data_mode::buffer, glsl330 / es300: `layout(std140) uniform krs_data_block { vec4 krs_data[N]; };`
 //     bind it with glUniformBlockBinding + glBindBufferBase(GL_UNIFORM_BUFFER, ...).
@@ -49,6 +50,7 @@
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 #include "krs/glsl/literal.hpp"
+#include "krs/glsl/names.hpp"
 
 #include <algorithm>
 #include <array>
@@ -90,12 +92,6 @@ struct options {
     bool level_early_exit = true;
 };
 
-// A letter, digit or _: what GLSL names are made of.
-inline constexpr bool is_name_char(char c)
-{
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
-}
-
 // Whether `p` can start every global name of the text: lower-case letters, digits and _, starting
 // with a letter and ending with _ (prefix + name then never spells a keyword or built-in such as
 // `in` or `mix`), without GLSL's reserved __ and outside the implementation's gl_. Lower case,
@@ -106,15 +102,6 @@ inline bool is_prefix(std::string_view p)
     bool ok = p.size() >= 2 && p[0] >= 'a' && p[0] <= 'z' && p.back() == '_' && !p.starts_with("gl_") &&
               p.find("__") == std::string_view::npos;
     for (char c : p) ok = ok && is_name_char(c) && !(c >= 'A' && c <= 'Z');
-    return ok;
-}
-
-// Whether `n` can follow the prefix in a name: letters, digits and _, not starting with _ and
-// without __ (the prefix's own _ and GLSL's reserved double underscore).
-inline bool is_name_part(std::string_view n)
-{
-    bool ok = !n.empty() && n[0] != '_' && n.find("__") == std::string_view::npos;
-    for (char c : n) ok = ok && is_name_char(c);
     return ok;
 }
 

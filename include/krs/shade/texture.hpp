@@ -15,6 +15,7 @@
 
 #include "krs/core/noise.hpp"
 #include "krs/core/validate.hpp"
+#include "krs/glsl/names.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -132,17 +133,18 @@ T triplanar(const Pattern& pattern, const vec3<T>& p, const vec3<T>& n, float sh
 // GLSL's pow(x, y) is exp2(y log2(x)) to within a few ulp: the weights, and so the result, differ
 // from the C++'s by about 1e-6 relative.
 struct triplanar_projection {
-    std::string pattern;     // a GLSL function name
+    std::string pattern;     // a GLSL function name of the shader's, not starting with krs_ or gl_
     float sharpness = 4.0f;  // > 0
 
     void validate() const
     {
         detail::validate_triplanar(sharpness);
-        bool name = !pattern.empty() && !(pattern[0] >= '0' && pattern[0] <= '9') && !pattern.starts_with("gl_") &&
-                    pattern.find("__") == std::string::npos;
-        for (char c : pattern)
-            name = name && ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_');
-        if (!name) throw invalid_parameter("triplanar.pattern", "must be a GLSL function name", pattern);
+        if (!glsl::is_user_function_name(pattern))
+            throw invalid_parameter("triplanar_projection.pattern",
+                                    "must be a GLSL function name of the shader's: letters, digits and _, not "
+                                    "starting with a digit or _, without __, and not starting with gl_ (reserved) "
+                                    "or krs_ (the emitter renames such words to its prefix)",
+                                    pattern);
     }
 
     static constexpr std::string_view glsl_source = R"(float NAME(vec3 p, vec3 n) {
