@@ -415,10 +415,11 @@ struct krs_kernel_shading {
     void function(const std::string& text) { functions_ += text; }
     // A float as a GLSL literal that reads back as the same float.
     static std::string literal(float v) { return float_literal(v); }
-    // `text` with each whole word that is a key of `values` replaced by its value, and the key part
-    // of a word that is a key, _ and more (NAME_view_depth: a request's own helper names): how a
-    // shading function writes its GLSL (upper-case placeholders NAME, FIELD, HARDNESS, ...) with the
-    // names and validated values of one request.
+    // `text` with each whole word that is a key of `values` replaced by its value, and otherwise
+    // the key part of a word that is a key, _ and more (NAME_view_depth: a request's own helper
+    // names; the longest such key): how a shading function writes its GLSL (upper-case
+    // placeholders NAME, FIELD, HARDNESS, ...) with the names and validated values of one request.
+    // An exact match comes first, so MAX_STEPS is never MAX's value followed by _STEPS.
     static std::string fill(std::string_view text, std::initializer_list<std::pair<std::string_view, std::string>> values)
     {
         std::string out;
@@ -430,10 +431,15 @@ struct krs_kernel_shading {
             std::size_t end = i;
             while (end < text.size() && is_name_char(text[end])) ++end;
             const std::string_view word = text.substr(i, end - i);
-            const auto* hit = std::find_if(values.begin(), values.end(), [&](const auto& v) {
-                return word == v.first || (word.starts_with(v.first) && word[v.first.size()] == '_');
-            });
-            if (hit == values.end()) out += word;
+            const std::pair<std::string_view, std::string>* hit = nullptr;
+            for (const auto& v : values)
+                if (word == v.first) hit = &v;
+            if (!hit)
+                for (const auto& v : values)
+                    if (word.size() > v.first.size() && word.starts_with(v.first) && word[v.first.size()] == '_' &&
+                        (!hit || v.first.size() > hit->first.size()))
+                        hit = &v;
+            if (!hit) out += word;
             else out += hit->second + std::string(word.substr(hit->first.size()));
             i = end;
         }
