@@ -86,9 +86,12 @@ struct depth_projection {
         return std::min<S>(t_of_view_depth(view_depth(buffer_value), direction, forward), max_distance);
     }
 
-    // The four functions above in GLSL, line for line (dot written out in the C++'s order;
-    // clamp(x, a, b) is min(max(x, a), b) in both). A ray parallel to the image plane has no
-    // infinity to take the min with in GLSL ES: it takes max_distance directly.
+    // The four functions above in GLSL, line for line (dot written out in the C++'s order). For
+    // finite and infinite x, GLSL's clamp(x, a, b), min(max(x, a), b), is std::clamp's value; for
+    // a NaN std::clamp returns the NaN, while GLSL leaves min and max of a NaN undefined (llvmpipe
+    // returns the other operand, so a NaN clamps to the lower end: tests/test_glsl_shading.cpp pins
+    // it). A ray parallel to the image plane has no infinity to take the min with in GLSL ES: it
+    // takes max_distance directly.
     static constexpr std::string_view glsl_source = R"(float NAME_buffer_depth(float z) {
     const float near_plane = NEAR_PLANE;
     const float far_plane = FAR_PLANE;

@@ -216,12 +216,16 @@ class emitter;
 //     template <class Out> void glsl_shading(Out& out, const std::string& function, const std::string& field) const;
 // that runs the type's own validate() (so a bad value is the C++'s error, with the C++'s parameter
 // name) and then writes `... FUNCTION(...)` with its validated values baked in as constants named
-// as the C++ members are. A function that samples a field (soft shadow, ambient occlusion) calls
-// `float FIELD(vec3 p)`, the distance of a field added to the same emitter before: GLSL has no
-// function parameters, so the emitter writes one such function per field asked for, rather than a
-// macro or a generic by name. Users call emitter::add_shading.
+// as the C++ members are. A type whose function reads a field added to the same emitter before
+// says so with `static constexpr bool glsl_takes_field = true;`: soft shadow and ambient occlusion
+// call `float FIELD(vec3 p)` (GLSL has no function parameters, so the emitter writes one such
+// function per field asked for, rather than a macro or a generic by name), kernel uv reads the
+// sequence FIELD's kernel parameters from the data. Users call emitter::add_shading.
 template <class S>
 concept glsl_shading = requires(const S& s, emitter& out, const std::string& n) { s.glsl_shading(out, n, n); };
+// Whether add_shading needs a field for S (and refuses one for the other types).
+template <class S>
+inline constexpr bool glsl_takes_field = requires { requires S::glsl_takes_field; };
 
 // A field made of other fields (a sequence, a union, a warp, KIFS, a log-spherical tiling or shell,
 // bounded, empty zones) writes its own GLSL next to its C++: a member
@@ -278,8 +282,9 @@ public:
 
     // Emits the shading function `s` (a glsl_shading type: soft_shadow_options,
     // ambient_occlusion_options, fractal_noise, triplanar_projection, depth_projection,
-    // torus_capsule_uv) as PREFIXNAME; returns that name. `field` names a field added before
-    // (add(f, field)) for the functions that sample one: soft_shadow_options gives
+    // kernel_uv_glsl) as PREFIXNAME; returns that name. `field` names a field added before
+    // (add(f, field)) for the types that read one (glsl_takes_field) and is refused for the others:
+    // soft_shadow_options gives
     //     float PREFIXNAME(vec3 p, vec3 n, vec3 to_light)   calling PREFIXFIELD(p)
     // (each type's comment gives its signature). s.validate() runs first: a bad value throws the
     // C++'s invalid_parameter, and the emitter is left as it was.
@@ -287,8 +292,14 @@ public:
     std::string add_shading(const S& s, const std::string& name, const std::string& field = {})
     {
         require_name("glsl.add_shading.name", name);
-        if (!field.empty() && !fields_.contains(field))
-            throw invalid_parameter("glsl.add_shading.field", "must name a field added to this emitter before", field);
+        if constexpr (glsl_takes_field<S>) {
+            if (field.empty())
+                throw invalid_parameter("glsl.add_shading.field", "this request reads a field: name one added before");
+            if (!fields_.contains(field))
+                throw invalid_parameter("glsl.add_shading.field", "must name a field added to this emitter before", field);
+        } else if (!field.empty()) {
+            throw invalid_parameter("glsl.add_shading.field", "this request takes no field (it samples none)", field);
+        }
         const emitter before = *this;
         try {
             s.glsl_shading(*this, std::string(internal_prefix) + name,

@@ -51,7 +51,9 @@ struct soft_shadow_options {
     }
 
     // float NAME(vec3 p, vec3 n, vec3 to_light): soft_shadow(FIELD, p, n, to_light, *this).
-    // (The NaN test is written `d >= threshold` negated, as the C++, so a NaN blocks.)
+    // (The test is written `d >= threshold` negated, as the C++, so a NaN distance blocks where
+    // the implementation keeps NaNs, as llvmpipe does; GLSL lets a compiler assume there are none,
+    // so elsewhere a NaN's outcome is the driver's.)
     static constexpr std::string_view glsl_source = R"(float NAME(vec3 p, vec3 n, vec3 to_light) {
     const float hardness = HARDNESS;
     const float threshold = THRESHOLD;
@@ -70,11 +72,11 @@ struct soft_shadow_options {
     return clamp(visible, 0.0, 1.0);
 }
 )";
+    static constexpr bool glsl_takes_field = true;
     template <class Out>
     void glsl_shading(Out& out, const std::string& function, const std::string& field) const
     {
         validate();
-        if (field.empty()) throw invalid_parameter("glsl.add_shading.field", "a soft shadow samples a field: name one");
         out.function(Out::fill(glsl_source, {{"NAME", function}, {"FIELD", field}, {"HARDNESS", Out::literal(hardness)},
                                              {"THRESHOLD", Out::literal(threshold)},
                                              {"MAX_DISTANCE", Out::literal(max_distance)},
@@ -122,7 +124,8 @@ struct ambient_occlusion_options {
     }
 
     // float NAME(vec3 p, vec3 n): ambient_occlusion(FIELD, p, n, *this). A non-finite result
-    // (a field that returns inf or NaN) is 1, as in the C++.
+    // (a field that returns inf or NaN) is 1, as in the C++, where the implementation keeps NaNs
+    // and infinities (llvmpipe does): GLSL lets isnan and isinf be false on one that does not.
     static constexpr std::string_view glsl_source = R"(float NAME(vec3 p, vec3 n) {
     const float step = STEP;
     const int samples = SAMPLES;
@@ -142,12 +145,11 @@ struct ambient_occlusion_options {
     return isnan(ao) || isinf(ao) ? 1.0 : clamp(ao, 0.0, 1.0);
 }
 )";
+    static constexpr bool glsl_takes_field = true;
     template <class Out>
     void glsl_shading(Out& out, const std::string& function, const std::string& field) const
     {
         validate();
-        if (field.empty())
-            throw invalid_parameter("glsl.add_shading.field", "ambient occlusion samples a field: name one");
         out.function(Out::fill(glsl_source, {{"NAME", function}, {"FIELD", field}, {"STEP", Out::literal(step)},
                                              {"SAMPLES", std::to_string(samples)}, {"FALLOFF", Out::literal(falloff)},
                                              {"STRENGTH", Out::literal(strength)}}));
