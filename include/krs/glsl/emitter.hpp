@@ -58,6 +58,7 @@
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <set>
 #include <string>
 #include <string_view>
@@ -422,6 +423,18 @@ struct krs_kernel_shading {
     }
     // The data array's name as the composites write it (krs_..., renamed with the rest on output).
     const std::string& data_name() const { return array_; }
+    // Records where a sequence named `name` put its kernels' parameters (the index of each one's
+    // first vec4) and each one's kind (its index in the type list), for requests that read them.
+    void record_kernels(const std::string& name, std::vector<std::size_t> at, std::vector<std::size_t> kinds)
+    {
+        kernels_at_[name] = {std::move(at), std::move(kinds)};
+    }
+    // What record_kernels recorded for `name`, or null.
+    const std::pair<std::vector<std::size_t>, std::vector<std::size_t>>* recorded_kernels(const std::string& name) const
+    {
+        const auto it = kernels_at_.find(name);
+        return it == kernels_at_.end() ? nullptr : &it->second;
+    }
     // Appends a function the composite wrote.
     void function(const std::string& text) { functions_ += text; }
     // A float as a GLSL literal that reads back as the same float.
@@ -580,6 +593,7 @@ private:
     std::string constants_comments_; // what each data entry holds
     std::string functions_;          // the bodies
     std::vector<float> data_;
+    std::map<std::string, std::pair<std::vector<std::size_t>, std::vector<std::size_t>>> kernels_at_;
 };
 
 // The data of `f` in the emitter's layout (std140 == std430 here): upload it to the block of code
