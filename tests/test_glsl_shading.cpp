@@ -13,6 +13,8 @@
 #include "krs/shade/texture.hpp"
 
 #include "support/gl_context.hpp"
+#include "support/gpu_points.hpp"
+#include "support/header_scan.hpp"
 #include "support/random.hpp"
 
 #include <doctest/doctest.h>
@@ -24,6 +26,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <regex>
 #include <set>
@@ -38,7 +41,8 @@ namespace ex = krs::glsl::examples;
 constexpr std::size_t point_count = 16384;
 
 // Runs `expression` (GLSL, a float of vec3 a, b, c) once per input triple in a compute shader after
-// `snippet` (a 450 snippet without #version); one float per triple.
+// `snippet` (a 450 snippet without #version); one float per triple. (A field's distance alone runs
+// through krs_test::run_points; this is for the shading functions' several inputs.)
 std::vector<float> run(const std::string& snippet, const std::string& expression, const std::vector<std::array<vec3f, 3>>& in,
                        const std::vector<float>& data = {})
 {
@@ -143,47 +147,116 @@ std::string check_dir()
 
 } // namespace
 
-TEST_CASE("GLSL sequence walk: the per-level early exit gives the full walk's value, and is live")
-{
-    const auto tree = ex::tree();
-    std::mt19937_64 g(0x7ee);
-    std::vector<std::array<vec3f, 3>> in(point_count);
-    for (auto& t : in) t[0] = uniform_in_box(g, tree.sample_center, tree.sample_half * 2.0f);
+namespace {
 
-    krs::glsl::emitter early({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "tree_data", 0});
-    const std::string fn = early.add(tree.field, "tree");
-    krs::glsl::options full_walk{krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "tree_data", 0};
+// The number of level bounds the early exit tests, from the kernels alone: the levels below the
+// highest kernel level (down to it d is infinite), and below the lowest level holding a plane (an
+// unbounded kernel: every L_i from there on is unbounded).
+template <class S>
+std::size_t expected_level_bounds(const S& field)
+{
+    std::size_t top = 0, first_plane = field.mirror_count() + 1;
+    for (std::size_t k = 0; k < field.kernels().size(); ++k) {
+        top = std::max<std::size_t>(top, field.kernel_level(k));
+        if (std::holds_alternative<krs::plane>(field.kernels()[k]))
+            first_plane = std::min<std::size_t>(first_plane, field.kernel_level(k));
+    }
+    return std::min(top, first_plane);
+}
+
+template <class S>
+void check_early_exit(const ex::scene<S>& scene)
+{
+    INFO(scene.name);
+    const auto& field = scene.field;
+    std::mt19937_64 g(0x7ee);
+    std::vector<vec3f> points(point_count);
+    for (vec3f& p : points) p = uniform_in_box(g, scene.sample_center, scene.sample_half * 2.0f);
+
+    krs::glsl::emitter early({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer});
+    const std::string fn = early.add(field, scene.name);
+    krs::glsl::options full_walk{krs::glsl::target::glsl450, krs::glsl::data_mode::buffer};
     full_walk.level_early_exit = false;
     krs::glsl::emitter full(full_walk);
-    full.add(tree.field, "tree");
-    // A bound per tested level (at most one per mirror), one vec4 each, after the kernels: the
-    // data before them is the full walk's.
-    REQUIRE(early.vec4_count() > full.vec4_count());
-    const std::size_t bounds = early.vec4_count() - full.vec4_count();
-    CHECK(bounds <= tree.field.mirror_count());
-    CHECK(std::equal(full.data().begin(), full.data().end(), early.data().begin()));
+    full.add(field, scene.name);
+    // The data does not depend on the option (pack() has none): mirrors, kernels, then one vec4
+    // per tested level, as many as the kernels' levels say.
+    CHECK(early.data() == full.data());
+    CHECK(krs::glsl::pack(field, scene.name) == early.data());
+    const std::size_t bounds = expected_level_bounds(field);
+    std::size_t parameters = field.mirror_count() * krs::glsl::vec4s_of<typename S::mirror_type>;
+    for (const auto& k : field.kernels())
+        parameters += std::visit([](const auto& kernel) { return krs::glsl::vec4s_of<std::remove_cvref_t<decltype(kernel)>>; }, k);
+    CHECK(bounds > 0);
+    CHECK(early.vec4_count() == parameters + bounds);
+    const auto tests_in = [](const std::string& text) {
+        std::size_t n = 0;
+        for (std::size_t at = text.find("> reach * reach"); at != std::string::npos; at = text.find("> reach * reach", at + 1)) ++n;
+        return n;
+    };
+    CHECK(tests_in(early.source()) == bounds);
+    CHECK(tests_in(full.source()) == 0);
 
-    const std::vector<float> with_exit = run(early.source(), fn + "(a)", in, early.data());
-    const std::vector<float> without = run(full.source(), fn + "(a)", in, full.data());
+    const auto distances = [&](const krs::glsl::emitter& e, const std::vector<float>& data) {
+        std::vector<float> d;
+        for (const auto& r : krs_test::run_points(e.source(), fn, points, data, false, fn + "_data")) d.push_back(r.distance);
+        return d;
+    };
+    const std::vector<float> with_exit = distances(early, early.data());
+    const std::vector<float> without = distances(full, full.data());
     std::size_t same = 0;
-    for (std::size_t i = 0; i < in.size(); ++i)
+    for (std::size_t i = 0; i < points.size(); ++i)
         same += std::bit_cast<std::uint32_t>(with_exit[i]) == std::bit_cast<std::uint32_t>(without[i]);
-    const agreement cpu = compare(with_exit, [&](std::size_t i) { return tree.field.distance(in[i][0]); });
-    std::printf("early exit: %zu level bounds; %zu/%zu equal to the full walk bit for bit; against the C++: max "
+    const agreement cpu = compare(with_exit, [&](std::size_t i) { return field.distance(points[i]); });
+    std::printf("early exit (%s): %zu level bounds; %zu/%zu equal to the full walk bit for bit; against the C++: max "
                 "|d| %.3g, bit-equal %zu/%zu\n",
-                bounds, same, in.size(), double(cpu.worst), cpu.equal, in.size());
-    CHECK(same == in.size());
-    CHECK(cpu.worst <= 1e-5f * tree.extent());
+                scene.name.c_str(), bounds, same, points.size(), double(cpu.worst), cpu.equal, points.size());
+    CHECK(same == points.size());
+    CHECK(cpu.worst <= 1e-5f * scene.extent());
 
-    // Live: the same code with every level bound shrunk to its center (radius 0, a wrong bound) exits
-    // too soon at some points, so the exit's test is what stops the walk, not a dead branch.
-    std::vector<float> shrunk = early.data();
-    for (std::size_t k = full.vec4_count(); k < early.vec4_count(); ++k) shrunk[4 * k + 3] = 0.0f;
-    const std::vector<float> wrong = run(early.source(), fn + "(a)", in, shrunk);
-    std::size_t changed = 0;
-    for (std::size_t i = 0; i < in.size(); ++i) changed += wrong[i] != with_exit[i];
-    std::printf("early exit with bounds shrunk to points: %zu/%zu distances change\n", changed, in.size());
-    CHECK(changed > 0);
+    // Live: the kernels of the lowest kernel level poisoned (radius 1e30, a distance of -1e30) in
+    // a copy of the data. The full walk evaluates them at every point and returns the poison
+    // everywhere; the early exit keeps the unpoisoned value at the points it leaves before that
+    // level, which only its test (at that level or above) can do.
+    std::uint32_t lowest = std::numeric_limits<std::uint32_t>::max();
+    for (std::size_t k = 0; k < field.kernels().size(); ++k) lowest = std::min(lowest, field.kernel_level(k));
+    REQUIRE(lowest < bounds);
+    std::vector<float> poisoned = early.data();
+    std::size_t at = field.mirror_count() * krs::glsl::vec4s_of<typename S::mirror_type>, poisons = 0;
+    for (std::size_t k = 0; k < field.kernels().size(); ++k) {
+        std::visit(
+            [&](const auto& kernel) {
+                using K = std::remove_cvref_t<decltype(kernel)>;
+                // The radius: sphere (center, radius); torus capsule t3.w (start, radius).
+                if (field.kernel_level(k) == lowest && std::is_same_v<K, krs::sphere>) poisoned[4 * at + 3] = 1e30f, ++poisons;
+                if (field.kernel_level(k) == lowest && std::is_same_v<K, krs::torus_capsule>)
+                    poisoned[4 * (at + 3) + 3] = 1e30f, ++poisons;
+                at += krs::glsl::vec4s_of<K>;
+            },
+            field.kernels()[k]);
+    }
+    REQUIRE(poisons > 0);
+    const std::vector<float> full_poisoned = distances(full, poisoned);
+    const std::vector<float> early_poisoned = distances(early, poisoned);
+    std::size_t full_kept = 0, early_kept = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        full_kept += full_poisoned[i] == without[i];
+        early_kept += early_poisoned[i] == with_exit[i];
+    }
+    std::printf("early exit (%s) with level %u's kernels poisoned: the full walk keeps %zu/%zu distances, the early "
+                "exit %zu\n",
+                scene.name.c_str(), unsigned(lowest), full_kept, points.size(), early_kept);
+    CHECK(full_kept == 0);
+    CHECK(early_kept > 0);
+    CHECK(early_kept < points.size()); // and the points that do reach the level see the poison
+}
+
+} // namespace
+
+TEST_CASE("GLSL sequence walk: the per-level early exit gives the full walk's value, and is live")
+{
+    check_early_exit(ex::tree());
+    check_early_exit(ex::forest());
 }
 
 TEST_CASE("GLSL soft shadow and ambient occlusion match the C++ on llvmpipe")
@@ -208,34 +281,36 @@ TEST_CASE("GLSL soft shadow and ambient occlusion match the C++ on llvmpipe")
 
     const std::vector<float> s = run(e.source(), shadow_fn + "(a, b, c)", in.rays);
     const std::vector<float> o = run(e.source(), ao_fn + "(a, b)", in.rays);
-    const agreement sa = compare(s, [&](std::size_t i) {
-        return krs::soft_shadow(tree.field, in.rays[i][0], in.rays[i][1], in.rays[i][2], shadow);
-    });
+    std::vector<float> cpu_shadow(s.size());
+    for (std::size_t i = 0; i < s.size(); ++i)
+        cpu_shadow[i] = krs::soft_shadow(tree.field, in.rays[i][0], in.rays[i][1], in.rays[i][2], shadow);
+    const agreement sa = compare(s, [&](std::size_t i) { return cpu_shadow[i]; });
     const agreement oa =
         compare(o, [&](std::size_t i) { return krs::ambient_occlusion(tree.field, in.rays[i][0], in.rays[i][1], ao); });
-    std::size_t shadowed = 0, open = 0;
-    for (float v : s) shadowed += v == 0.0f, open += v == 1.0f;
-    std::printf("soft shadow: %zu rays (%zu blocked, %zu fully lit), max |gpu - cpu| %.3g, bit-equal %zu\n",
-                s.size(), shadowed, open, double(sa.worst), sa.equal);
+    std::size_t shadowed = 0, open = 0, off = 0;
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        shadowed += s[i] == 0.0f, open += s[i] == 1.0f;
+        off += std::abs(s[i] - cpu_shadow[i]) > 1e-3f;
+    }
+    std::printf("soft shadow: %zu rays (%zu blocked, %zu fully lit), max |gpu - cpu| %.3g, bit-equal %zu, off by > 1e-3 "
+                "%zu\n",
+                s.size(), shadowed, open, double(sa.worst), sa.equal, off);
     std::printf("ambient occlusion: %zu points, max |gpu - cpu| %.3g, bit-equal %zu\n", o.size(), double(oa.worst),
                 oa.equal);
     // The inputs cover the function's range: some rays blocked, some lit, most in between.
     CHECK(shadowed > 0);
     CHECK(open > 0);
-    // Tolerances. The tree's GLSL distance agrees with the C++ to 1e-5 of the extent (bit for bit
-    // on llvmpipe, tests/test_glsl_gpu.cpp), and each march repeats the C++'s operations in its
-    // order, so a step's sample point moves by at most a few ulp of t. Ambient occlusion is a
-    // weighted sum of 6 ratios (s - d) / s with s >= 0.06: an error e in d moves it by at most
-    // strength * e / 0.06 = 22 e, so 1e-5 * extent (6e-5) gives 1.3e-3; we allow 1e-3 and it
-    // is exact in practice. The soft shadow is a minimum of hardness * d / t over the march; t
-    // starts at the first step's d >= threshold, so a last-bit change of the ratio keeps it
-    // within ~1e-6 relative, except where a march passes within the hit threshold: there one
-    // side returns 0 and the other a small positive value, at most hardness * 2 threshold / t.
-    // We allow 1e-3 absolute for all but 0.1 % of rays, and report the worst.
-    CHECK(oa.worst <= 1e-3f);
-    std::size_t off = 0;
-    for (std::size_t i = 0; i < s.size(); ++i)
-        off += std::abs(s[i] - krs::soft_shadow(tree.field, in.rays[i][0], in.rays[i][1], in.rays[i][2], shadow)) > 1e-3f;
+    // Tolerances. Each function repeats the C++'s operations in its order, and the tree's GLSL
+    // distance equals the C++'s bit for bit at most points on llvmpipe and within an ulp or two
+    // elsewhere (tests/test_glsl_gpu.cpp). Ambient occlusion is 1 - strength * sum w_j (s_j - d_j)
+    // / s_j / sum w_j with s_j >= 0.06: an ulp of d_j (<= 3e-8 for d_j < 0.5) moves it by at most
+    // strength * 3e-8 / 0.06 = 6.5e-7, the sum's own rounding a few ulp of 1 more: 1e-6.
+    CHECK(oa.worst <= 1e-6f);
+    // The soft shadow has no such bound: a march that passes within the hit threshold returns 0
+    // on one side and up to hardness * d / t on the other, whatever the last-bit difference that
+    // decided it. Away from that, an ulp of a step moves the next sample point by an ulp of t and
+    // the ratio hardness * d / t by a few ulp: 1e-3 is far above that. So all but 0.1 % of rays
+    // agree to 1e-3 (the threshold flips are that rare), and the worst is reported, not bounded.
     CHECK(off <= s.size() / 1000);
 }
 
@@ -244,6 +319,8 @@ TEST_CASE("GLSL fractal noise and triplanar projection match the C++ on llvmpipe
     std::mt19937_64 g(0x401e);
     std::vector<std::array<vec3f, 3>> in(point_count);
     for (auto& t : in) t = {uniform_in_box(g, {0, 0, 0}, {20, 20, 20}), unit_direction(g), {}};
+    // Some zero normals: no weight, the plain mean of the three projections (triplanar's other branch).
+    for (std::size_t i = 0; i < in.size(); i += 1024) in[i][1] = {0, 0, 0};
     // A pattern written twice, in C++ and GLSL, from sin and cos only (1 ulp apart on llvmpipe).
     const auto pattern = [](float u, float v) { return std::sin(3.0f * u) * std::cos(2.0f * v) + 0.25f * u; };
     const std::string pattern_glsl = "float stripes(float u, float v) { return sin(3.0 * u) * cos(2.0 * v) + 0.25 * u; }\n";
@@ -277,6 +354,11 @@ TEST_CASE("GLSL fractal noise and triplanar projection match the C++ on llvmpipe
     // (<= 6e-8 absolute) and pow (~10 ulp of each weight) make the blend differ by a few 1e-6 of
     // that: 1e-5 absolute.
     CHECK(t.worst <= 1e-5f);
+    // Where the normal is zero, the mean of the three projections, written out here.
+    for (std::size_t i = 0; i < in.size(); i += 1024) {
+        const vec3f p = in[i][0];
+        CHECK(std::abs(tri[i] - (pattern(p.y, p.z) + pattern(p.z, p.x) + pattern(p.x, p.y)) / 3.0f) <= 1e-5f);
+    }
 }
 
 TEST_CASE("GLSL depth output and depth-buffer limit match the C++ on llvmpipe")
@@ -315,64 +397,144 @@ TEST_CASE("GLSL depth output and depth-buffer limit match the C++ on llvmpipe")
     std::size_t capped = 0;
     for (std::size_t i = 0; i < in.size(); ++i) capped += limit[i] < in[i][2].z;
     CHECK(capped > in.size() / 4); // the raster does limit most rays (the test can see a wrong limit)
+
+    // Non-finite input, where GLSL leaves min, max and so clamp of a NaN undefined: this pins what
+    // llvmpipe does (it keeps NaNs, and min / max of a NaN give the other operand). An infinite
+    // hit is at the far plane on both sides; a NaN clamps to the lower end in GLSL (a NaN buffer
+    // value reads as the near plane, a NaN hit as depth 0) where the C++'s std::clamp keeps it.
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    const std::vector<std::array<vec3f, 3>> odd{{forward, forward, {inf, nan, 0}}, {forward, forward, {nan, -inf, 0}},
+                                                 {forward, forward, {-inf, inf, 0}}};
+    const std::vector<float> odd_depth = run(e.source(), fn + "_hit_depth(c.x, a, b)", odd);
+    const std::vector<float> odd_view = run(e.source(), fn + "_view_depth(c.y)", odd);
+    CHECK(odd_depth[0] == 1.0f);
+    CHECK(projection.hit_depth(inf, forward, forward) == 1.0f);
+    CHECK(odd_view[0] == projection.view_depth(0.0f)); // view_depth(NaN): the near plane
+    CHECK(std::isnan(projection.view_depth(nan)));     // the C++ keeps the NaN
+    CHECK(odd_depth[1] == 0.0f);                        // hit_depth(NaN): depth 0
+    CHECK(std::isnan(projection.hit_depth(nan, forward, forward)));
+    CHECK(odd_view[1] == projection.view_depth(-inf));  // -inf and inf clamp as in the C++
+    CHECK(odd_depth[2] == projection.hit_depth(-inf, forward, forward));
+    CHECK(odd_view[2] == projection.view_depth(inf));
 }
+
+namespace {
+
+// The C++'s location of near-surface points of `s` handed to the GLSL (a the kernel point, b.x the
+// kernel), until `count` lie on torus capsules (the branches), with their C++ uv; `other` gets
+// points on other kinds (the leaves).
+template <class S>
+void uv_inputs(const S& s, std::size_t count, std::vector<std::array<vec3f, 3>>& on_capsules,
+               std::vector<krs::surface_uv<float>>& cpu, std::vector<std::array<vec3f, 3>>& other)
+{
+    for (std::uint64_t seed = 0x0b; on_capsules.size() < count; ++seed) {
+        for (const auto& r : near_surface(s, seed).rays) {
+            if (on_capsules.size() == count) break;
+            const krs::location<float> w = s.field.locate(r[0]);
+            const std::array<vec3f, 3> input{w.kernel_point, vec3f{float(w.kernel), 0, 0}, {}};
+            if (const auto* k = std::get_if<krs::torus_capsule>(&s.field.kernels()[w.kernel])) {
+                on_capsules.push_back(input);
+                cpu.push_back(k->uv(w.kernel_point));
+            } else {
+                other.push_back(input);
+            }
+        }
+    }
+}
+
+// The largest difference of u and of v (v wraps at the tube's inside, atan2 at +-pi: 0 and 1 are
+// the same angle).
+std::pair<float, float> uv_worst(const std::vector<float>& u, const std::vector<float>& v, const std::vector<krs::surface_uv<float>>& cpu)
+{
+    float worst_u = 0, worst_v = 0;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+        worst_u = std::max(worst_u, std::abs(u[i] - cpu[i].u));
+        const float dv = std::abs(v[i] - cpu[i].v);
+        worst_v = std::max(worst_v, std::min(dv, 1.0f - dv));
+    }
+    return {worst_u, worst_v};
+}
+
+const std::string uv_where = "krs_location(0.0, a, uint(b.x), 0u, uvec2(0u))";
+
+} // namespace
 
 TEST_CASE("GLSL kernel uv of a sequence matches the C++ torus_capsule::uv on llvmpipe")
 {
     const auto tree = ex::tree();
     krs::glsl::emitter e({krs::glsl::target::glsl450});
     e.add(tree.field, "tree");
-    const std::string fn = e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv");
-    // The C++'s location of each point, handed to the GLSL (a in the kernel point, b.x the
-    // kernel): the uv alone is compared, not the walk. Near-surface points until 16,384 lie on
-    // torus capsules (the branches; the rest are leaves).
-    std::vector<std::array<vec3f, 3>> in;
+    const std::size_t field_vec4s = e.vec4_count();
+    const std::string fn = e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv", "tree");
+    // The kernels' parameters are the field's: the request adds one vec4 per torus capsule.
+    std::size_t capsules = 0;
+    for (const auto& k : tree.field.kernels()) capsules += std::holds_alternative<krs::torus_capsule>(k);
+    CHECK(e.vec4_count() == field_vec4s + capsules);
+    std::vector<std::array<vec3f, 3>> in, other;
     std::vector<krs::surface_uv<float>> cpu;
-    std::size_t without_uv = 0;
-    shading_inputs near;
-    for (std::uint64_t seed = 0x0b; in.size() < point_count; ++seed) {
-        for (const auto& r : (near = near_surface(tree, seed)).rays) {
-            if (in.size() == point_count) break;
-            const krs::location<float> w = tree.field.locate(r[0]);
-            const auto* k = std::get_if<krs::torus_capsule>(&tree.field.kernels()[w.kernel]);
-            if (!k) {
-                ++without_uv;
-                continue;
-            }
-            in.push_back({w.kernel_point, vec3f{float(w.kernel), 0, 0}, {}});
-            cpu.push_back(k->uv(w.kernel_point));
-        }
-    }
-    const std::string where = "krs_location(0.0, a, uint(b.x), 0u, uvec2(0u))";
-    const std::vector<float> u = run(e.source(), fn + "(" + where + ").x", in);
-    const std::vector<float> v = run(e.source(), fn + "(" + where + ").y", in);
-    const agreement ua = compare(u, [&](std::size_t i) { return cpu[i].u; });
-    // v wraps at the tube's inside (atan2 at +-pi): 0 and 1 are the same angle.
-    float worst_v = 0;
-    for (std::size_t i = 0; i < v.size(); ++i) {
-        const float dv = std::abs(v[i] - cpu[i].v);
-        worst_v = std::max(worst_v, std::min(dv, 1.0f - dv));
-    }
-    std::printf("kernel uv: %zu points on torus capsules (%zu on other kinds), max |u| %.3g (bit-equal %zu), max |v| "
-                "%.3g\n",
-                in.size(), without_uv, double(ua.worst), ua.equal, double(worst_v));
-    REQUIRE(in.size() == point_count);
+    uv_inputs(tree, point_count, in, cpu, other);
+    const std::vector<float> u = run(e.source(), fn + "(" + uv_where + ").x", in);
+    const std::vector<float> v = run(e.source(), fn + "(" + uv_where + ").y", in);
+    const auto [worst_u, worst_v] = uv_worst(u, v, cpu);
+    std::printf("kernel uv: %zu points on torus capsules (%zu on other kinds), max |u| %.3g, max |v| %.3g\n", in.size(),
+                other.size(), double(worst_u), double(worst_v));
     // GLSL's atan(y, x) is within 3e-6 of the C++'s (llvmpipe); u divides the angle by kappa and by
     // twice the half arc length (u <= 1 over the arc: the relative error carries over) and v by
     // 2 pi: 1e-5 for both.
-    CHECK(ua.worst <= 1e-5f);
+    CHECK(worst_u <= 1e-5f);
     CHECK(worst_v <= 1e-5f);
     // A kernel without uv gets vec2(0) (the tree's spheres: leaves).
-    CHECK(without_uv > 0);
-    {
-        for (const auto& r : near.rays) {
-            const krs::location<float> w = tree.field.locate(r[0]);
-            if (std::holds_alternative<krs::torus_capsule>(tree.field.kernels()[w.kernel])) continue;
-            const std::vector<std::array<vec3f, 3>> one{{w.kernel_point, vec3f{float(w.kernel), 0, 0}, {}}};
-            CHECK(run(e.source(), "length(" + fn + "(" + where + "))", one)[0] == 0.0f);
-            break;
-        }
+    REQUIRE(!other.empty());
+    const std::vector<float> lengths = run(e.source(), "length(" + fn + "(" + uv_where + "))", other);
+    CHECK(std::count(lengths.begin(), lengths.end(), 0.0f) == std::ptrdiff_t(other.size()));
+}
+
+TEST_CASE("GLSL kernel uv in buffer mode follows the data of another sequence of the same structure")
+{
+    // Two trees of one structure (same levels, seed, leaves: same kernel kinds per level) and
+    // other shapes; the code is emitted for the first, the data of the same calls for the second.
+    const auto tree = ex::tree();
+    krs::model::tree_style style;
+    style.levels = 12;
+    style.seed = 3;
+    style.bend = 0.3f;
+    style.trunk_radius = 0.16f;
+    const ex::scene<krs::model::tree_sequence> bent{"bent", krs::model::build_tree(krs::model::grow_tree(style)), {},
+                                                    tree.sample_center, tree.sample_half};
+    REQUIRE(bent.field.kernels().size() == tree.field.kernels().size());
+    for (std::size_t k = 0; k < tree.field.kernels().size(); ++k) {
+        REQUIRE(bent.field.kernels()[k].index() == tree.field.kernels()[k].index());
+        REQUIRE(bent.field.kernel_level(k) == tree.field.kernel_level(k));
     }
+    const krs::glsl::options o{krs::glsl::target::glsl450, krs::glsl::data_mode::buffer};
+    krs::glsl::emitter e(o), moved(o);
+    e.add(tree.field, "tree");
+    const std::string fn = e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv", "tree");
+    moved.add(bent.field, "tree");
+    moved.add_shading(krs::kernel_uv_glsl{bent.field}, "tree_uv", "tree");
+    // pack() of the new sequence is the leading part of its data (the uv vec4s follow).
+    const std::vector<float> packed = krs::glsl::pack(bent.field, "tree");
+    REQUIRE(packed.size() < moved.data().size());
+    CHECK(std::equal(packed.begin(), packed.end(), moved.data().begin()));
+    CHECK(moved.data() != e.data());
+
+    std::vector<std::array<vec3f, 3>> in, other;
+    std::vector<krs::surface_uv<float>> cpu;
+    uv_inputs(bent, 4096, in, cpu, other);
+    const auto [worst_u, worst_v] =
+        uv_worst(run(e.source(), fn + "(" + uv_where + ").x", in, moved.data()),
+                 run(e.source(), fn + "(" + uv_where + ").y", in, moved.data()), cpu);
+    // The same code with the first tree's data is far off: the test can see stale data.
+    std::vector<std::array<vec3f, 3>> first(in.begin(), in.begin() + 256);
+    const auto [stale_u, stale_v] = uv_worst(run(e.source(), fn + "(" + uv_where + ").x", first, e.data()),
+                                             run(e.source(), fn + "(" + uv_where + ").y", first, e.data()),
+                                             std::vector<krs::surface_uv<float>>(cpu.begin(), cpu.begin() + 256));
+    std::printf("kernel uv in buffer mode, the bent tree's data: max |u| %.3g, max |v| %.3g (the first tree's data: %.3g, "
+                "%.3g)\n",
+                double(worst_u), double(worst_v), double(stale_u), double(stale_v));
+    CHECK(worst_u <= 1e-5f); // as in the case above
+    CHECK(worst_v <= 1e-5f);
+    CHECK(std::max(stale_u, stale_v) > 1e-3f);
 }
 
 TEST_CASE("GLSL shading: bad parameters are refused with the C++ parameter's name, the emitter unchanged")
@@ -413,7 +575,11 @@ TEST_CASE("GLSL shading: bad parameters are refused with the C++ parameter's nam
     n.gain = 0.0f;
     refused([&] { e.add_shading(n, "noise"); }, "fractal_noise.gain");
     refused([&] { e.add_shading(krs::triplanar_projection{"stripes", -1.0f}, "tri"); }, "triplanar.sharpness");
-    refused([&] { e.add_shading(krs::triplanar_projection{"9lives", 4.0f}, "tri"); }, "triplanar.pattern");
+    // Not a name, reserved by GLSL (gl_, __), or one the emitter would rename (krs_).
+    for (const char* pattern : {"9lives", "", "a-b", "_stripes", "gl_stripes", "my__stripes", "krs_stripes"}) {
+        INFO("pattern " << pattern);
+        refused([&] { e.add_shading(krs::triplanar_projection{pattern, 4.0f}, "tri"); }, "triplanar_projection.pattern");
+    }
     krs::depth_projection camera;
     camera.far_plane = 0.05f; // public fields: below near_plane
     refused([&] { e.add_shading(camera, "camera"); }, "depth_projection.far_plane");
@@ -422,47 +588,86 @@ TEST_CASE("GLSL shading: bad parameters are refused with the C++ parameter's nam
     refused([&] { e.add_shading(camera, "camera"); }, "depth_projection.near_plane");
     refused([&] { e.add_shading(krs::fractal_noise{}, "tree"); }, "glsl.add_shading.name");
     refused([&] { e.add_shading(krs::fractal_noise{}, "_bad"); }, "glsl.add_shading.name");
+    // A field given to a request that reads none is refused, not ignored.
+    refused([&] { e.add_shading(krs::fractal_noise{}, "noise", "tree"); }, "glsl.add_shading.field");
+    refused([&] { e.add_shading(krs::triplanar_projection{"stripes", 4.0f}, "tri", "tree"); }, "glsl.add_shading.field");
+    refused([&] { e.add_shading(krs::depth_projection{}, "camera", "tree"); }, "glsl.add_shading.field");
+    // Kernel uv reads its sequence's kernels where add() put them: it needs that sequence's name.
+    refused([&] { e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv"); }, "glsl.add_shading.field");
+    refused([&] { e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv", "forest"); }, "glsl.add_shading.field");
+    const auto forest = ex::forest(); // a sequence of the same kinds but other kernels
+    refused([&] { e.add_shading(krs::kernel_uv_glsl{forest.field}, "tree_uv", "tree"); }, "glsl.add_shading.field");
+}
+
+TEST_CASE("GLSL shading: a field named as a shading function's helper is refused")
+{
+    krs::glsl::emitter e({krs::glsl::target::glsl450});
+    e.add_shading(krs::depth_projection{}, "camera");
+    const std::string before = e.source();
+    try {
+        e.add(ex::tree().field, "camera_view_depth");
+        FAIL("a field named camera_view_depth was accepted beside depth_projection's krs_camera_view_depth");
+    } catch (const krs::invalid_parameter& error) {
+        CHECK(error.parameter() == std::string("glsl.add.name"));
+    }
+    CHECK(e.source() == before);
 }
 
 TEST_CASE("GLSL shading compiles for 330, 450 and ES 3.00 (glslangValidator) and for Vulkan (spirv-val)")
 {
     const auto tree = ex::tree();
     const std::string dir = check_dir();
+    // A word of capitals and digits outside the preprocessor lines (include guards): a placeholder
+    // of a shading function's GLSL that fill() left.
+    const std::regex placeholder(R"(\b[A-Z][A-Z0-9_]+\b)");
     for (const auto t : {krs::glsl::target::glsl330, krs::glsl::target::glsl450, krs::glsl::target::es300}) {
-        for (const std::string prefix : {"krs_", "scene_"}) {
-            krs::glsl::options o{t, krs::glsl::data_mode::constants, "data", 0, prefix};
-            krs::glsl::emitter e(o);
-            e.add(tree.field, "tree");
-            e.add_shading(krs::soft_shadow_options{}, "tree_shadow", "tree");
-            e.add_shading(krs::ambient_occlusion_options{}, "tree_occlusion", "tree");
-            e.add_shading(krs::fractal_noise{}, "rock");
-            e.add_shading(krs::triplanar_projection{prefix + "rock_pattern", 4.0f}, "facade");
-            e.add_shading(krs::depth_projection(0.1f, 100.0f), "camera");
-            e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv");
-            const std::string p = prefix;
-            // The pattern, a 2D slice of the snippet's own noise, is defined by the shader after
-            // the snippet (declared before it, as a user does).
-            const std::string text = krs::glsl::version_line(t) +
-                                     "float " + p + "rock_pattern(float u, float v);\n" + e.source() + "float " + p +
-                                     "rock_pattern(float u, float v) { return " + p + "rock(vec3(u, v, 0.0)); }\n"
-                                     "layout(location = 0) out vec4 color;\n"
-                                     "void main() {\n    vec3 p = vec3(0.5, 2.0, 0.25);\n    vec3 n = vec3(0.0, 1.0, 0.0);\n"
-                                     "    color = vec4(" + p + "tree_shadow(p, n, normalize(vec3(1.0))), " + p +
-                                     "tree_occlusion(p, n), " + p + "rock(p), " + p + "facade(p, n));\n"
-                                     "    color.xy += " + p + "tree_uv(" + p + "tree_locate(p));\n"
-                                     "    color.z += " + p + "camera_hit_depth(2.0, n, n) + " + p +
-                                     "camera_ray_limit(0.5, n, n, 50.0);\n}\n";
-            const std::string file = dir + "/shading." + std::string(krs::glsl::target_name(t)) + "." +
-                                     prefix.substr(0, prefix.size() - 1) + ".frag";
-            if (t == krs::glsl::target::es300) {
-                // ES: the precision lines of the snippet come after the pattern's declaration, so
-                // the declaration gets one of its own.
-                krs_test::validate_with_glslang(file, krs::glsl::version_line(t) + "precision highp float;\n" +
-                                                          text.substr(krs::glsl::version_line(t).size()));
-            } else {
-                krs_test::validate_with_glslang(file, text);
+        for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
+            for (const std::string prefix : {"krs_", "scene_"}) {
+                krs::glsl::options o{t, mode, "data", 0, prefix};
+                krs::glsl::emitter e(o);
+                e.add(tree.field, "tree");
+                e.add_shading(krs::soft_shadow_options{}, "tree_shadow", "tree");
+                e.add_shading(krs::ambient_occlusion_options{}, "tree_occlusion", "tree");
+                e.add_shading(krs::fractal_noise{}, "rock");
+                e.add_shading(krs::triplanar_projection{"rock_pattern", 4.0f}, "facade");
+                e.add_shading(krs::depth_projection(0.1f, 100.0f), "camera");
+                e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv", "tree");
+                const std::string snippet = e.source();
+                if (prefix != "krs_") CHECK(snippet.find("krs_") == std::string::npos);
+                std::size_t line = 0;
+                for (std::size_t end; line < snippet.size(); line = end + 1) {
+                    end = snippet.find('\n', line);
+                    if (end == std::string::npos) end = snippet.size();
+                    const std::string l = snippet.substr(line, end - line);
+                    if (l.starts_with("#")) continue;
+                    INFO(l);
+                    CHECK(!std::regex_search(l, placeholder));
+                }
+                const std::string p = prefix;
+                // The pattern, a 2D slice of the snippet's own noise, is the shader's, defined after
+                // the snippet (declared before it, as a user does).
+                const std::string text = krs::glsl::version_line(t) + "float rock_pattern(float u, float v);\n" + snippet +
+                                         "float rock_pattern(float u, float v) { return " + p + "rock(vec3(u, v, 0.0)); }\n"
+                                         "layout(location = 0) out vec4 color;\n"
+                                         "void main() {\n    vec3 p = vec3(0.5, 2.0, 0.25);\n    vec3 n = vec3(0.0, 1.0, 0.0);\n"
+                                         "    color = vec4(" + p + "tree_shadow(p, n, normalize(vec3(1.0))), " + p +
+                                         "tree_occlusion(p, n), " + p + "rock(p), " + p + "facade(p, n));\n"
+                                         "    color.xy += " + p + "tree_uv(" + p + "tree_locate(p));\n"
+                                         "    color.z += " + p + "camera_hit_depth(2.0, n, n) + " + p +
+                                         "camera_ray_limit(0.5, n, n, 50.0);\n}\n";
+                const std::string file = dir + "/shading." + std::string(krs::glsl::target_name(t)) + "." +
+                                         (mode == krs::glsl::data_mode::buffer ? "buffer." : "") +
+                                         prefix.substr(0, prefix.size() - 1) + ".frag";
+                if (t == krs::glsl::target::es300) {
+                    // ES: the precision lines of the snippet come after the pattern's declaration, so
+                    // the declaration gets one of its own.
+                    krs_test::validate_with_glslang(file, krs::glsl::version_line(t) + "precision highp float;\n" +
+                                                              text.substr(krs::glsl::version_line(t).size()));
+                } else {
+                    krs_test::validate_with_glslang(file, text);
+                }
+                if (t == krs::glsl::target::glsl450) krs_test::validate_spirv(file + ".vk.frag", text);
             }
-            if (t == krs::glsl::target::glsl450) krs_test::validate_spirv(file + ".vk.frag", text);
         }
     }
 }
@@ -473,25 +678,7 @@ TEST_CASE("Every type of include/krs with GLSL shading is run by a case of this 
 {
     const std::set<std::string> run = {"soft_shadow_options", "ambient_occlusion_options", "fractal_noise",
                                        "triplanar_projection", "depth_projection", "kernel_uv_glsl"};
-    const std::filesystem::path root = std::filesystem::path(KRS_SOURCE_DIR) / "include" / "krs";
-    const std::regex opening(R"((?:struct|class)\s+(\w+)[^{;()<>]*\{)"); // not `template <class X>`
-    const std::regex marker(R"(\bvoid\s+glsl_shading\s*\()");
-    std::set<std::string> found;
-    for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-        // (The emitter's folder describes the member in prose; it owns none.)
-        if (entry.path().extension() != ".hpp" || entry.path().parent_path().filename() == "glsl") continue;
-        std::ifstream in(entry.path());
-        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        std::vector<std::pair<std::ptrdiff_t, std::string>> classes;
-        for (auto it = std::sregex_iterator(text.begin(), text.end(), opening); it != std::sregex_iterator(); ++it)
-            classes.emplace_back(it->position(), (*it)[1].str());
-        for (auto it = std::sregex_iterator(text.begin(), text.end(), marker); it != std::sregex_iterator(); ++it) {
-            std::string owner;
-            for (const auto& [at, name] : classes)
-                if (at < it->position()) owner = name;
-            found.insert(owner);
-        }
-    }
+    const std::set<std::string> found = krs_test::classes_with(std::regex(R"(\bvoid\s+glsl_shading\s*\()"));
     for (const std::string& type : found) {
         INFO("krs::" << type << " has GLSL shading that no case of tests/test_glsl_shading.cpp runs");
         CHECK(run.count(type) == 1);
