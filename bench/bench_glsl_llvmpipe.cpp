@@ -2,41 +2,41 @@
 // OpenGL), timed against the full walk the emitter writes with options.level_early_exit = false.
 // The two give the same distance at every point (tests/test_glsl_shading.cpp checks it bit for
 // bit); the exit saves the levels below where a point is farther from L_i's bounding sphere than
-// the nearest kernel found so far, so it pays far from the finer levels: where the hardware skips
-// code that no lane of a wave runs. llvmpipe does not: it runs each shader invocation group as
-// SIMD lanes and compiles an `if` (a return, once lowered, is nested ifs) to a lane mask pushed
-// over code that runs regardless (gallivm's if_cond; only loops test for a mask of no lanes and
-// branch). There the skipped levels still run and the exit's tests are extra work, so this table
-// shows what the exit costs on llvmpipe, not what it saves on a GPU: on this machine (2 cores,
-// Mesa 22.3) full/exit was 0.82-0.89 in two runs of --repeat 9, the tiles no better than the
-// scattered points, as masks without branches predict.
+// the nearest kernel found so far, so it pays far from the finer levels, where the hardware skips
+// code that no lane of a wave runs.
+//
+// Why llvmpipe may not: it runs a group of invocations as SIMD lanes, and in Mesa's gallivm
+// (src/gallium/auxiliary/gallivm/lp_bld_nir_soa.c, read in Mesa 21.3.8's copy, not in the 22.3
+// this machine runs) if_cond pushes the condition onto the execution mask
+// (lp_exec_mask_cond_push) and emits no branch, so code under an `if` (a return, once lowered, is
+// nested ifs) would run for every lane, masked. That the skipped levels still run here is a
+// hypothesis that fits the figures, not a measurement: on this machine (2 cores, Mesa 22.3)
+// full/exit was 0.82-0.89 in two runs of --repeat 9, the tiles no better than the scattered
+// points. So the table shows what the exit costs on llvmpipe, not what it saves on a GPU.
 //
 //     bench_glsl_llvmpipe [--csv FILE] [--repeat R] [--points N]
-//     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
-// For each example scene with level bounds (tree, forest) and three samplings (the tests' box
-// around the scene; that box doubled, where more points are far; and the doubled box in tiles of
-// 64 nearby points, as a sphere tracer's neighbouring pixels, so lanes that run together leave the
-// walk together), N points (default
-// 2^18) are evaluated by the scene's distance in one compute dispatch; time is the best of R
-// (default 5) dispatches, each waited for by reading a result back, after one warm-up dispatch (llvmpipe
-// compiles the shader to machine code at the first). Built with the benchmarks when the GLSL
-// tests are on (KRS_GLSL_TESTS: Mesa, EGL).
-
-#define GL_GLEXT_PROTOTYPES 1
-#include <EGL/egl.h>
-#include <EGL/eglext.h>
-#include <GL/glcorearb.h>
+// The CSV goes next to the executable, as <executable>.csv, unless --csv names one. For each
+// example scene with level bounds (tree, forest) and three samplings (the tests' box around the
+// scene; that box doubled, where more points are far; and the doubled box in tiles of 64 nearby
+// points, as a sphere tracer's neighbouring pixels, so lanes that run together leave the walk
+// together), N points (default 2^18, at least 64) are evaluated by the scene's distance in one
+// compute dispatch; time is the best of R (default 5, at least 1) dispatches, each waited for by
+// reading a result back, after one warm-up dispatch (llvmpipe compiles the shader to machine code
+// at the first). Built with the benchmarks when the GLSL tests are on (KRS_GLSL_TESTS: Mesa, EGL).
 
 #include "krs/glsl/emitter.hpp"
 #include "krs/glsl/example_scenes.hpp"
+#include "support/gl_program.hpp" // tests/support: the GLSL tests' context, compile and link
 #include "support/text.hpp"
 #include "support/timing.hpp"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -45,43 +45,6 @@
 namespace {
 
 using krs::vec3f;
-
-// One headless llvmpipe context (surfaceless EGL, OpenGL 4.3 core), as the GLSL tests make it.
-void make_context()
-{
-    const EGLDisplay display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    EGLint major = 0, minor = 0;
-    if (display == EGL_NO_DISPLAY || !eglInitialize(display, &major, &minor))
-        throw std::runtime_error("no EGL display (is libgl1-mesa-dri installed?)");
-    eglBindAPI(EGL_OPENGL_API);
-    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 3,
-                                 EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-    const EGLContext context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
-    if (context == EGL_NO_CONTEXT || !eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))
-        throw std::runtime_error("no OpenGL 4.3 core context");
-}
-
-GLuint compute_program(const std::string& text)
-{
-    const GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
-    const char* source = text.c_str();
-    glShaderSource(shader, 1, &source, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        throw std::runtime_error(std::string("shader compilation failed: ") + log);
-    }
-    const GLuint program = glCreateProgram();
-    glAttachShader(program, shader);
-    glLinkProgram(program);
-    glDeleteShader(shader);
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) throw std::runtime_error("program link failed");
-    return program;
-}
 
 struct timing {
     double seconds;
@@ -96,13 +59,14 @@ timing time_distance(const S& field, bool early_exit, const std::vector<float>& 
     o.level_early_exit = early_exit;
     krs::glsl::emitter e(o);
     const std::string fn = e.add(field, "scene");
-    const GLuint program = compute_program("#version 430 core\nlayout(local_size_x = 64) in;\n" + e.source() +
-                                           "layout(std430, binding = 1) readonly buffer bench_in { float points[]; };\n"
-                                           "layout(std430, binding = 2) writeonly buffer bench_out { float results[]; };\n"
-                                           "uniform uint count;\n"
-                                           "void main() {\n    uint i = gl_GlobalInvocationID.x;\n"
-                                           "    if (i >= count) return;\n"
-                                           "    results[i] = " + fn + "(vec3(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]));\n}\n");
+    const std::string text = "#version 430 core\nlayout(local_size_x = 64) in;\n" + e.source() +
+                             "layout(std430, binding = 1) readonly buffer bench_in { float points[]; };\n"
+                             "layout(std430, binding = 2) writeonly buffer bench_out { float results[]; };\n"
+                             "uniform uint count;\n"
+                             "void main() {\n    uint i = gl_GlobalInvocationID.x;\n"
+                             "    if (i >= count) return;\n"
+                             "    results[i] = " + fn + "(vec3(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]));\n}\n";
+    const GLuint program = krs_test::link({krs_test::compile(GL_COMPUTE_SHADER, text)});
     const std::size_t count = points.size() / 3;
     GLuint buffers[2];
     glGenBuffers(2, buffers);
@@ -142,17 +106,39 @@ int main(int argc, char** argv)
     std::string csv_path = bench::csv_next_to_executable(argv[0]);
     int repeat = 5;
     std::size_t count = std::size_t(1) << 18;
-    for (int i = 1; i + 1 < argc; i += 2) {
+    const auto usage = [&] {
+        std::fprintf(stderr,
+                     "usage: %s [--csv FILE] [--repeat R] [--points N]   (whole numbers: R in [1, 1000], N in "
+                     "[64, 2^26])\n",
+                     argv[0]);
+        return 2;
+    };
+    // A whole number in [least, most], or nothing.
+    const auto whole = [](const char* text, long least, long most) -> std::optional<long> {
+        char* end = nullptr;
+        errno = 0;
+        const long v = std::strtol(text, &end, 10);
+        if (end == text || *end != '\0' || errno != 0 || v < least || v > most) return std::nullopt;
+        return v;
+    };
+    for (int i = 1; i < argc; i += 2) {
         const std::string a = argv[i];
-        if (a == "--csv") csv_path = argv[i + 1];
-        else if (a == "--repeat") repeat = std::max(1, std::atoi(argv[i + 1]));
-        else if (a == "--points") count = std::size_t(std::max(64, std::atoi(argv[i + 1])));
-        else {
-            std::fprintf(stderr, "usage: %s [--csv FILE] [--repeat R] [--points N]\n", argv[0]);
-            return 2;
+        if (i + 1 >= argc) return usage(); // an option without its value
+        if (a == "--csv") {
+            csv_path = argv[i + 1];
+        } else if (a == "--repeat") {
+            const auto v = whole(argv[i + 1], 1, 1000);
+            if (!v) return usage();
+            repeat = int(*v);
+        } else if (a == "--points") {
+            const auto v = whole(argv[i + 1], 64, long(1) << 26);
+            if (!v) return usage();
+            count = std::size_t(*v);
+        } else {
+            return usage();
         }
     }
-    make_context();
+    krs_test::require_context();
     std::ofstream csv(csv_path);
     csv << "scene,region,points,early_exit_ms,full_walk_ms,full_over_early,equal_distances\n";
     std::printf("GLSL sequence distance on llvmpipe: per-level early exit against the full walk (%zu points, best of "
