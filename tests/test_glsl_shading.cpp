@@ -418,6 +418,18 @@ TEST_CASE("GLSL depth output and depth-buffer limit match the C++ on llvmpipe")
     CHECK(odd_view[2] == projection.view_depth(inf));
 }
 
+// What the shading comments say of NaNs on llvmpipe (GLSL lets a compiler assume there are none):
+// a NaN computed from the input reaches isnan, isinf sees an infinity, and a comparison with a NaN
+// is false, so soft shadow's !(d >= threshold) blocks and ambient occlusion's non-finite test holds.
+TEST_CASE("llvmpipe keeps NaNs and infinities: isnan, isinf and a negated comparison see them")
+{
+    const std::vector<std::array<vec3f, 3>> in{{vec3f{0, 0, 1}, {}, {}}};
+    CHECK(run("", "isnan(a.x / a.y) ? 1.0 : 0.0", in)[0] == 1.0f);           // 0 / 0
+    CHECK(run("", "isinf(a.z / a.y) ? 1.0 : 0.0", in)[0] == 1.0f);           // 1 / 0
+    CHECK(run("", "!(a.x / a.y >= 1e-4) ? 1.0 : 0.0", in)[0] == 1.0f);
+    CHECK(run("", "(a.x / a.y >= 1e-4) ? 1.0 : 0.0", in)[0] == 0.0f);
+}
+
 namespace {
 
 // The C++'s location of near-surface points of `s` handed to the GLSL (a the kernel point, b.x the
