@@ -80,7 +80,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 #endif
-const vec4 krs_forest_data[80] = vec4[80](
+const vec4 krs_forest_data[93] = vec4[93](
     vec4(0.8916828, -0.25330064, -0.3751541, -1.3240795),
     vec4(-0.42183313, -0.28242838, 0.86156315, -1.5855871),
     vec4(-0.28327295, -0.10174031, -0.95362747, -1.6781133),
@@ -160,7 +160,20 @@ const vec4 krs_forest_data[80] = vec4[80](
     vec4(0.0, 2.0, 0.0, 0.0),
     vec4(0.0, 1.0, 0.0, 0.0),
     vec4(0.0, -1.0, 0.0, 0.0),
-    vec4(0.0, 1.0, 0.0, 0.0));
+    vec4(0.0, 1.0, 0.0, 0.0),
+    vec4(0.89292395, 7.6381946, 0.8966165, 0.26892865),
+    vec4(1.0144407, 7.536896, 0.85175186, 0.48526597),
+    vec4(0.91418767, 7.39036, 1.0298663, 0.80619526),
+    vec4(0.8328306, 7.289422, 0.7346337, 1.1906224),
+    vec4(1.2526108, 7.102113, 0.9943321, 1.7320116),
+    vec4(0.61086476, 6.9632173, 1.0850037, 2.4351182),
+    vec4(1.2221632, 6.731636, 0.15917134, 3.5685828),
+    vec4(1.3088096, 6.205453, 1.5307122, 5.0402956),
+    vec4(-0.1547805, 6.205453, 0.16599429, 7.0416355),
+    vec4(5.03968, 6.205453, -0.74849844, 12.316513),
+    vec4(7.697253, 6.205453, 6.1534276, 19.713158),
+    vec4(19.711084, 6.205453, 3.4746685, 32.02326),
+    vec4(37.393776, 6.205453, 18.382023, 55.153645));
 // krs_forest_data[0...0]: krs_forest mirror 0 (krs_mirror)
 // krs_forest_data[1...1]: krs_forest mirror 1 (krs_mirror)
 // krs_forest_data[2...2]: krs_forest mirror 2 (krs_mirror)
@@ -187,30 +200,84 @@ const vec4 krs_forest_data[80] = vec4[80](
 // krs_forest_data[65...71]: krs_forest kernel 10 (level 7) (krs_torus_capsule)
 // krs_forest_data[72...78]: krs_forest kernel 11 (level 8) (krs_torus_capsule)
 // krs_forest_data[79...79]: krs_forest kernel 12 (level 13) (krs_plane)
+// krs_forest_data[80]: krs_forest bound of level 0 (center, radius with margin)
+// krs_forest_data[81]: krs_forest bound of level 1 (center, radius with margin)
+// krs_forest_data[82]: krs_forest bound of level 2 (center, radius with margin)
+// krs_forest_data[83]: krs_forest bound of level 3 (center, radius with margin)
+// krs_forest_data[84]: krs_forest bound of level 4 (center, radius with margin)
+// krs_forest_data[85]: krs_forest bound of level 5 (center, radius with margin)
+// krs_forest_data[86]: krs_forest bound of level 6 (center, radius with margin)
+// krs_forest_data[87]: krs_forest bound of level 7 (center, radius with margin)
+// krs_forest_data[88]: krs_forest bound of level 8 (center, radius with margin)
+// krs_forest_data[89]: krs_forest bound of level 9 (center, radius with margin)
+// krs_forest_data[90]: krs_forest bound of level 10 (center, radius with margin)
+// krs_forest_data[91]: krs_forest bound of level 11 (center, radius with margin)
+// krs_forest_data[92]: krs_forest bound of level 12 (center, radius with margin)
 float krs_forest(vec3 p) {
     float d = 3.0e38;
+    vec3 v;
+    float reach;
     d = min(d, krs_plane_distance(p, krs_forest_data[79]));
     p = krs_mirror_fold(p, krs_forest_data[12]);
+    v = p - krs_forest_data[92].xyz;
+    reach = d + krs_forest_data[92].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     p = krs_mirror_fold(p, krs_forest_data[11]);
+    v = p - krs_forest_data[91].xyz;
+    reach = d + krs_forest_data[91].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     p = krs_mirror_fold(p, krs_forest_data[10]);
+    v = p - krs_forest_data[90].xyz;
+    reach = d + krs_forest_data[90].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     p = krs_mirror_fold(p, krs_forest_data[9]);
+    v = p - krs_forest_data[89].xyz;
+    reach = d + krs_forest_data[89].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     p = krs_mirror_fold(p, krs_forest_data[8]);
+    v = p - krs_forest_data[88].xyz;
+    reach = d + krs_forest_data[88].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]));
     p = krs_mirror_fold(p, krs_forest_data[7]);
+    v = p - krs_forest_data[87].xyz;
+    reach = d + krs_forest_data[87].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]));
     p = krs_mirror_fold(p, krs_forest_data[6]);
+    v = p - krs_forest_data[86].xyz;
+    reach = d + krs_forest_data[86].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]));
     p = krs_mirror_fold(p, krs_forest_data[5]);
+    v = p - krs_forest_data[85].xyz;
+    reach = d + krs_forest_data[85].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]));
     p = krs_mirror_fold(p, krs_forest_data[4]);
+    v = p - krs_forest_data[84].xyz;
+    reach = d + krs_forest_data[84].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]));
     p = krs_mirror_fold(p, krs_forest_data[3]);
+    v = p - krs_forest_data[83].xyz;
+    reach = d + krs_forest_data[83].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]));
     p = krs_mirror_fold(p, krs_forest_data[2]);
+    v = p - krs_forest_data[82].xyz;
+    reach = d + krs_forest_data[82].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]));
     p = krs_mirror_fold(p, krs_forest_data[1]);
+    v = p - krs_forest_data[81].xyz;
+    reach = d + krs_forest_data[81].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]));
     p = krs_mirror_fold(p, krs_forest_data[0]);
+    v = p - krs_forest_data[80].xyz;
+    reach = d + krs_forest_data[80].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]));
     d = min(d, krs_sphere_distance(p, krs_forest_data[20]));
     d = min(d, krs_sphere_distance(p, krs_forest_data[21]));

@@ -81,7 +81,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 #endif
-const vec4 krs_tree_data[100] = vec4[100](
+const vec4 krs_tree_data[111] = vec4[111](
     vec4(0.2195773, -0.2812923, -0.934163, -2.4140985),
     vec4(0.45230046, -0.19450445, 0.8703978, -0.8293076),
     vec4(-0.9312768, -0.17704707, -0.3183989, -2.2798545),
@@ -181,7 +181,18 @@ const vec4 krs_tree_data[100] = vec4[100](
     vec4(0.0, 2.0, 0.0, 0.0),
     vec4(0.0, 1.0, 0.0, 0.0),
     vec4(0.0, -1.0, 0.0, 0.0),
-    vec4(0.0, 1.0, 0.0, 0.0));
+    vec4(0.0, 1.0, 0.0, 0.0),
+    vec4(0.83669555, 8.172565, 0.39327356, 0.11863852),
+    vec4(0.85172415, 8.153313, 0.32933635, 0.18708885),
+    vec4(0.8862047, 8.116079, 0.40036285, 0.29304072),
+    vec4(0.790894, 8.05928, 0.36570862, 0.4409069),
+    vec4(0.9658919, 7.989945, 0.2997912, 0.64795077),
+    vec4(0.8419779, 7.9262414, 0.5473996, 0.9479419),
+    vec4(0.7391781, 7.8103633, 0.23190139, 1.3599551),
+    vec4(1.1850924, 7.5962825, 0.50132155, 1.9525012),
+    vec4(0.32672334, 7.4592104, 0.70000625, 2.844254),
+    vec4(0.9877187, 7.150823, -0.32041872, 4.0986876),
+    vec4(1.1343458, 6.708647, 1.2331294, 5.7207427));
 // krs_tree_data[0...0]: krs_tree mirror 0 (krs_mirror)
 // krs_tree_data[1...1]: krs_tree mirror 1 (krs_mirror)
 // krs_tree_data[2...2]: krs_tree mirror 2 (krs_mirror)
@@ -210,31 +221,77 @@ const vec4 krs_tree_data[100] = vec4[100](
 // krs_tree_data[85...91]: krs_tree kernel 14 (level 10) (krs_torus_capsule)
 // krs_tree_data[92...98]: krs_tree kernel 15 (level 11) (krs_torus_capsule)
 // krs_tree_data[99...99]: krs_tree kernel 16 (level 11) (krs_plane)
+// krs_tree_data[100]: krs_tree bound of level 0 (center, radius with margin)
+// krs_tree_data[101]: krs_tree bound of level 1 (center, radius with margin)
+// krs_tree_data[102]: krs_tree bound of level 2 (center, radius with margin)
+// krs_tree_data[103]: krs_tree bound of level 3 (center, radius with margin)
+// krs_tree_data[104]: krs_tree bound of level 4 (center, radius with margin)
+// krs_tree_data[105]: krs_tree bound of level 5 (center, radius with margin)
+// krs_tree_data[106]: krs_tree bound of level 6 (center, radius with margin)
+// krs_tree_data[107]: krs_tree bound of level 7 (center, radius with margin)
+// krs_tree_data[108]: krs_tree bound of level 8 (center, radius with margin)
+// krs_tree_data[109]: krs_tree bound of level 9 (center, radius with margin)
+// krs_tree_data[110]: krs_tree bound of level 10 (center, radius with margin)
 float krs_tree(vec3 p) {
     float d = 3.0e38;
+    vec3 v;
+    float reach;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[92], krs_tree_data[93], krs_tree_data[94], krs_tree_data[95], krs_tree_data[96], krs_tree_data[97], krs_tree_data[98]));
     d = min(d, krs_plane_distance(p, krs_tree_data[99]));
     p = krs_mirror_fold(p, krs_tree_data[10]);
+    v = p - krs_tree_data[110].xyz;
+    reach = d + krs_tree_data[110].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[85], krs_tree_data[86], krs_tree_data[87], krs_tree_data[88], krs_tree_data[89], krs_tree_data[90], krs_tree_data[91]));
     p = krs_mirror_fold(p, krs_tree_data[9]);
+    v = p - krs_tree_data[109].xyz;
+    reach = d + krs_tree_data[109].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[78], krs_tree_data[79], krs_tree_data[80], krs_tree_data[81], krs_tree_data[82], krs_tree_data[83], krs_tree_data[84]));
     p = krs_mirror_fold(p, krs_tree_data[8]);
+    v = p - krs_tree_data[108].xyz;
+    reach = d + krs_tree_data[108].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[71], krs_tree_data[72], krs_tree_data[73], krs_tree_data[74], krs_tree_data[75], krs_tree_data[76], krs_tree_data[77]));
     p = krs_mirror_fold(p, krs_tree_data[7]);
+    v = p - krs_tree_data[107].xyz;
+    reach = d + krs_tree_data[107].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[64], krs_tree_data[65], krs_tree_data[66], krs_tree_data[67], krs_tree_data[68], krs_tree_data[69], krs_tree_data[70]));
     p = krs_mirror_fold(p, krs_tree_data[6]);
+    v = p - krs_tree_data[106].xyz;
+    reach = d + krs_tree_data[106].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[57], krs_tree_data[58], krs_tree_data[59], krs_tree_data[60], krs_tree_data[61], krs_tree_data[62], krs_tree_data[63]));
     p = krs_mirror_fold(p, krs_tree_data[5]);
+    v = p - krs_tree_data[105].xyz;
+    reach = d + krs_tree_data[105].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[50], krs_tree_data[51], krs_tree_data[52], krs_tree_data[53], krs_tree_data[54], krs_tree_data[55], krs_tree_data[56]));
     p = krs_mirror_fold(p, krs_tree_data[4]);
+    v = p - krs_tree_data[104].xyz;
+    reach = d + krs_tree_data[104].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[43], krs_tree_data[44], krs_tree_data[45], krs_tree_data[46], krs_tree_data[47], krs_tree_data[48], krs_tree_data[49]));
     p = krs_mirror_fold(p, krs_tree_data[3]);
+    v = p - krs_tree_data[103].xyz;
+    reach = d + krs_tree_data[103].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[36], krs_tree_data[37], krs_tree_data[38], krs_tree_data[39], krs_tree_data[40], krs_tree_data[41], krs_tree_data[42]));
     p = krs_mirror_fold(p, krs_tree_data[2]);
+    v = p - krs_tree_data[102].xyz;
+    reach = d + krs_tree_data[102].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[29], krs_tree_data[30], krs_tree_data[31], krs_tree_data[32], krs_tree_data[33], krs_tree_data[34], krs_tree_data[35]));
     p = krs_mirror_fold(p, krs_tree_data[1]);
+    v = p - krs_tree_data[101].xyz;
+    reach = d + krs_tree_data[101].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[22], krs_tree_data[23], krs_tree_data[24], krs_tree_data[25], krs_tree_data[26], krs_tree_data[27], krs_tree_data[28]));
     p = krs_mirror_fold(p, krs_tree_data[0]);
+    v = p - krs_tree_data[100].xyz;
+    reach = d + krs_tree_data[100].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     d = min(d, krs_torus_capsule_distance(p, krs_tree_data[11], krs_tree_data[12], krs_tree_data[13], krs_tree_data[14], krs_tree_data[15], krs_tree_data[16], krs_tree_data[17]));
     d = min(d, krs_sphere_distance(p, krs_tree_data[18]));
     d = min(d, krs_sphere_distance(p, krs_tree_data[19]));

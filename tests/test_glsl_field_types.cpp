@@ -17,6 +17,7 @@
 
 #include "support/gl_context.hpp"
 #include "support/gpu_points.hpp"
+#include "support/header_scan.hpp"
 #include "support/random.hpp"
 
 #include <doctest/doctest.h>
@@ -154,31 +155,8 @@ void check_kernel(const std::string& name, const K& kernel, const char* type)
 }
 
 // The library's headers: every class or struct that carries GLSL (its body names glsl_name,
-// glsl_parameters or glsl_emit, however declared: the last class opened before that word), in
-// every header of include/krs but the emitter's own folder; a class whose name is followed by
-// template arguments or attributes is found by the word before its brace.
-std::set<std::string> types_with_glsl()
-{
-    const std::filesystem::path root = std::filesystem::path(KRS_SOURCE_DIR) / "include" / "krs";
-    const std::regex opening(R"((?:struct|class)\s+(?:alignas\([^)]*\)\s*)?(\w+)[^{;()]*\{)");
-    const std::regex marker(R"(\bglsl_(?:name|parameters|emit)\b)");
-    std::set<std::string> with_glsl;
-    for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-        if (entry.path().extension() != ".hpp" || entry.path().parent_path().filename() == "glsl") continue;
-        std::ifstream in(entry.path());
-        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        std::vector<std::pair<std::ptrdiff_t, std::string>> classes;
-        for (auto it = std::sregex_iterator(text.begin(), text.end(), opening); it != std::sregex_iterator(); ++it)
-            classes.emplace_back(it->position(), (*it)[1].str());
-        for (auto it = std::sregex_iterator(text.begin(), text.end(), marker); it != std::sregex_iterator(); ++it) {
-            std::string owner;
-            for (const auto& [at, name] : classes)
-                if (at < it->position()) owner = name;
-            if (!owner.empty()) with_glsl.insert(owner);
-        }
-    }
-    return with_glsl;
-}
+// glsl_parameters or glsl_emit, however declared).
+std::set<std::string> types_with_glsl() { return krs_test::classes_with(std::regex(R"(\bglsl_(?:name|parameters|emit)\b)")); }
 
 } // namespace
 

@@ -53,6 +53,10 @@ struct location {
     bool reflected(std::size_t i) const { return (reflections >> i) & 1u; }
 };
 
+// The radius the per-level early exit tests against: the level bound's radius with a margin for
+// the bound's own float rounding (the C++ walk below and its GLSL, krs/sequence_glsl.hpp, both).
+inline float early_exit_radius(const bounding_sphere& b) { return b.radius * 1.0001f + 1e-5f; }
+
 template <mirror_kind Mirror, kernel... Kinds>
 class basic_sequence {
     static_assert(sizeof...(Kinds) > 0, "krs::sequence needs at least one kernel kind");
@@ -155,7 +159,7 @@ public:
             // Nor where L_i is unbounded (it holds a plane): a terrain of planes never tests.
             if (i < bound_tests_below_) {
                 const bounding_sphere& b = level_bounds_[i];
-                const T radius(b.radius * 1.0001f + 1e-5f); // margin for the bound's float rounding
+                const T radius(early_exit_radius(b));
                 const vec3<T> center(b.center);
                 each(all_k, [&](auto k) {
                     const T reach = d[k] + radius;
@@ -234,6 +238,12 @@ public:
     // written through a krs::glsl::emitter.
     template <class Out>
     void glsl_emit(Out& out, const std::string& name) const;
+    // GLSL `vec2 FUNCTION(krs_location where)`: the uv of the kernel `where` names at its
+    // kernel_point, for kinds with a uv (a glsl_uv_source); vec2(0) for the others. Reads the
+    // kernel parameters of `field`, this sequence's GLSL name in `out`. Written by
+    // emitter::add_shading(kernel_uv_glsl{sequence}, NAME, FIELD) (krs/sequence_glsl.hpp).
+    template <class Out>
+    void glsl_uv_emit(Out& out, const std::string& function, const std::string& field) const;
 
 private:
     static constexpr bool one_axis_folds = requires { Mirror::folds_one_axis; };

@@ -15,6 +15,7 @@
 // bits are a uvec2: bit i of the 64-bit word is bit (i % 32) of component i / 32 (x the low word),
 // as location::reflections on the CPU.
 
+#include "krs/core/validate.hpp"
 #include "krs/sequence.hpp"
 
 #include <charconv>
@@ -48,6 +49,27 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
                                                   std::to_string(kernel_level(k)) + ")");
             },
             kernels_[k]);
+    // Where each kernel's parameters are, for requests that read them (kernel_uv_glsl).
+    {
+        std::vector<std::size_t> kinds(kernels_.size());
+        for (std::size_t k = 0; k < kernels_.size(); ++k) kinds[k] = kernels_[k].index();
+        out.record_kernels(name, kernel_at, kinds);
+    }
+    // The per-level early exit of the C++ walk (distances() in krs/sequence.hpp): below the highest
+    // kernel level, where L_i's bounding sphere is finite, the walk stops once the folded point is
+    // farther from that sphere than d, since no kernel instance still to come can then lower d. The
+    // sphere (center, early_exit_radius) is data, after the kernels, so a buffer of another
+    // sequence of the same structure brings its own bounds; the value is the full walk's, only the
+    // work differs. options.level_early_exit = false writes the full walk, for timing it
+    // (bench/bench_glsl_llvmpipe.cpp); the bounds are written to the data all the same, so the
+    // layout, and pack(), do not depend on the option.
+    std::vector<std::size_t> bound_at(n);
+    for (std::size_t i = 0; i < bound_tests_below_; ++i) {
+        const bounding_sphere& b = level_bounds_[i];
+        bound_at[i] = out.vec4({b.center.x, b.center.y, b.center.z, early_exit_radius(b)},
+                               name + " bound of level " + std::to_string(i) + " (center, radius with margin)");
+    }
+    const std::size_t tested_levels = out.settings().level_early_exit ? bound_tests_below_ : 0;
     // Kernel k's distance or normal call at point expression `p`.
     const auto kernel_call = [&](std::size_t k, const char* what, const std::string& p) {
         return std::visit(
@@ -73,8 +95,15 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
 
     // Algorithm 1: the distance.
     std::string body = "float " + name + "(vec3 p) {\n    float d = 3.0e38;\n";
+    if (tested_levels > 0) body += "    vec3 v;\n    float reach;\n";
     for (std::size_t i = n + 1; i-- > 0;) {
         if (i < n) body += "    p = " + mirror_fn + "fold(p, " + out.at(mirror_at[i]) + ");\n";
+        if (i < tested_levels) {
+            const std::string b = out.at(bound_at[i]);
+            // The C++'s test term for term: |p - c|^2 > (d + r)^2 with d + r > 0.
+            body += "    v = p - " + b + ".xyz;\n    reach = d + " + b + ".w;\n"
+                    "    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;\n";
+        }
         for (std::uint32_t k = level_begin(i); k < level_begin(i + 1); ++k)
             body += "    d = min(d, " + kernel_call(k, "distance", "p") + ");\n";
     }
@@ -120,5 +149,56 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
     }
     out.function(body + "    return s;\n}\n");
 }
+
+template <mirror_kind Mirror, kernel... Kinds>
+template <class Out>
+void basic_sequence<Mirror, Kinds...>::glsl_uv_emit(Out& out, const std::string& function, const std::string& field) const
+{
+    // The kernels' parameters are the field's own (where its glsl_emit put them), so data packed
+    // for the field moves the uv with it; each kernel with a uv adds one vec4 of its own after.
+    const auto* recorded = out.recorded_kernels(field);
+    bool same = recorded && recorded->first.size() == kernels_.size();
+    for (std::size_t k = 0; same && k < kernels_.size(); ++k) same = recorded->second[k] == kernels_[k].index();
+    if (!same)
+        throw invalid_parameter("glsl.add_shading.field",
+                                "must name a sequence added before with the kernel kinds of kernel_uv_glsl's, in order",
+                                field);
+    const std::vector<std::size_t> kernel_at = recorded->first;
+    std::string body = "vec2 " + function + "(krs_location where) {\n    vec3 q = where.kernel_point;\n";
+    for (std::size_t k = 0; k < kernels_.size(); ++k)
+        std::visit(
+            [&](const auto& kernel) {
+                using K = std::remove_cvref_t<decltype(kernel)>;
+                if constexpr (requires { K::glsl_uv_source; kernel.glsl_uv_parameters(); }) {
+                    out.library_text(K::glsl_uv_name, K::glsl_uv_source);
+                    const std::size_t uv_at = out.vec4(kernel.glsl_uv_parameters(), function + " kernel " +
+                                                                                        std::to_string(k) + " uv");
+                    body += "    if (where.kernel == " + std::to_string(k) + "u) return " + std::string(K::glsl_uv_name) +
+                            "(q" + out.template arguments<K>(kernel_at[k]) + ", " + out.at(uv_at) + ");\n";
+                }
+            },
+            kernels_[k]);
+    out.function(body + "    return vec2(0.0);\n}\n");
+}
+
+// The request emitter::add_shading takes for a sequence's kernel uv (see glsl_uv_emit), with the
+// name of the same sequence added before, whose kernel parameters it reads:
+//     krs::glsl::emitter e; e.add(tree, "tree"); e.add_shading(krs::kernel_uv_glsl{tree}, "tree_uv", "tree");
+//     ... vec2 uv = krs_tree_uv(krs_tree_locate(p));
+// Its data is the field's followed by one vec4 per kernel with a uv (torus capsules: chord
+// direction, twice the half arc length): a host animating in buffer mode uploads the data of an
+// emitter given the same calls for the new sequence, of which pack(sequence) is the leading part.
+template <class Sequence>
+struct kernel_uv_glsl {
+    const Sequence& sequence;
+    static constexpr bool glsl_takes_field = true;
+    template <class Out>
+    void glsl_shading(Out& out, const std::string& function, const std::string& field) const
+    {
+        sequence.glsl_uv_emit(out, function, field);
+    }
+};
+template <class Sequence>
+kernel_uv_glsl(const Sequence&) -> kernel_uv_glsl<Sequence>;
 
 } // namespace krs

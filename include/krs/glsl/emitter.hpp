@@ -12,6 +12,8 @@
 //   krs::glsl::emitter e({.target = krs::glsl::target::glsl450});
 //   e.add(tree, "tree");               // float krs_tree(vec3 p); krs_location krs_tree_locate(vec3 p);
 //                                      // krs_kernel_shading krs_tree_shade(vec3 p, vec3 l, vec3 v, float e)
+//   e.add_shading(krs::soft_shadow_options{}, "tree_shadow", "tree");
+//                                      // float krs_tree_shadow(vec3 p, vec3 n, vec3 to_light)
 //   std::string code = e.source();     // paste into a shader (e.source(true) adds #version)
 //
 // Safe to paste: every name the text declares at global scope (functions, structs, the data array
@@ -25,9 +27,10 @@
 //
 // Data layout. All parameters are vec4s in one array (prefix + `options.data_name`, default krs_data):
 // kernels and mirrors in the order the functions use them, each a fixed number of vec4s (see each
-// type's comment). Because the element is vec4, the layout is the same under std140 and std430:
-// base alignment 16, array stride 16, no padding, element k at byte offset 16 k, components
-// x, y, z, w at +0, +4, +8, +12. So the host buffer is exactly `emitter::data()` (float[4 N]).
+// type's comment), then what a composite computes (a sequence's level bounds for its early exit).
+// Because the element is vec4, the layout is the same under std140 and std430: base alignment 16,
+// array stride 16, no padding, element k at byte offset 16 k, components x, y, z, w at +0, +4, +8,
+// +12. So the host buffer is exactly `emitter::data()` (float[4 N]).
 //   - data_mode::constants: `const vec4 krs_data[N] = vec4[N](...);` baked into the code.
 //   - data_mode::buffer, glsl330 / es300: `layout(std140) uniform krs_data_block { vec4 krs_data[N]; };`
 //     bind it with glUniformBlockBinding + glBindBufferBase(GL_UNIFORM_BUFFER, ...).
@@ -47,15 +50,20 @@
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 #include "krs/glsl/literal.hpp"
+#include "krs/glsl/names.hpp"
 
+#include <algorithm>
 #include <array>
+#include <initializer_list>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <set>
 #include <string>
 #include <string_view>
 #include <tuple>
+#include <utility>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -80,13 +88,10 @@ struct options {
     std::string data_name = "data";     // the vec4 array is prefix + data_name; its block + "_block"
     int binding = 0;                    // the block's binding for glsl450 buffers
     std::string prefix = "krs_";        // of every global name the text declares
+    // A sequence's distance leaves its unrolled walk at the C++'s per-level early exit (same value,
+    // less work far from the finer levels). Off writes the full walk: only for timing the exit.
+    bool level_early_exit = true;
 };
-
-// A letter, digit or _: what GLSL names are made of.
-inline constexpr bool is_name_char(char c)
-{
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
-}
 
 // Whether `p` can start every global name of the text: lower-case letters, digits and _, starting
 // with a letter and ending with _ (prefix + name then never spells a keyword or built-in such as
@@ -98,15 +103,6 @@ inline bool is_prefix(std::string_view p)
     bool ok = p.size() >= 2 && p[0] >= 'a' && p[0] <= 'z' && p.back() == '_' && !p.starts_with("gl_") &&
               p.find("__") == std::string_view::npos;
     for (char c : p) ok = ok && is_name_char(c) && !(c >= 'A' && c <= 'Z');
-    return ok;
-}
-
-// Whether `n` can follow the prefix in a name: letters, digits and _, not starting with _ and
-// without __ (the prefix's own _ and GLSL's reserved double underscore).
-inline bool is_name_part(std::string_view n)
-{
-    bool ok = !n.empty() && n[0] != '_' && n.find("__") == std::string_view::npos;
-    for (char c : n) ok = ok && is_name_char(c);
     return ok;
 }
 
@@ -214,6 +210,24 @@ template <class F>
 concept glsl_field = field<F> && glsl_type<F>;
 
 class emitter;
+
+// Shading functions: the GLSL of krs/shade/ (soft shadow, ambient occlusion, fractal noise,
+// triplanar projection), compose/depth.hpp (depth output and the depth-buffer limit) and kernel uv,
+// next to their C++. Each such type has a member
+//     template <class Out> void glsl_shading(Out& out, const std::string& function, const std::string& field) const;
+// that runs the type's own validate() (so a bad value is the C++'s error, with the C++'s parameter
+// name) and then writes `... FUNCTION(...)` with its validated values baked in as constants named
+// as the C++ members are. A type whose function reads a field added to the same emitter before
+// says so with `static constexpr bool glsl_takes_field = true;`: soft shadow and ambient occlusion
+// call `float FIELD(vec3 p)` (GLSL has no function parameters, so the emitter writes one such
+// function per field asked for, rather than a macro or a generic by name), kernel uv reads the
+// sequence FIELD's kernel parameters from the data. Users call emitter::add_shading.
+template <class S>
+concept glsl_shading = requires(const S& s, emitter& out, const std::string& n) { s.glsl_shading(out, n, n); };
+// Whether add_shading needs a field for S (and refuses one for the other types).
+template <class S>
+inline constexpr bool glsl_takes_field = requires { requires S::glsl_takes_field; };
+
 // A field made of other fields (a sequence, a union, a warp, KIFS, a log-spherical tiling or shell,
 // bounded, empty zones) writes its own GLSL next to its C++: a member
 //     template <class Out> void glsl_emit(Out& out, const std::string& name) const;
@@ -262,17 +276,40 @@ public:
         require_name("glsl.add.name", name);
         const emitter before = *this;
         field(f, std::string(internal_prefix) + name);
-        const std::string again = twice_declared(internal_text());
-        if (!again.empty()) {
-            *this = before;
-            if (again == array_ || again == array_ + "_block")
-                throw invalid_parameter("glsl.options.data_name",
-                                        "makes " + again + ", which the library or the field declares too: choose another",
-                                        options_.data_name);
-            throw invalid_parameter("glsl.add.name",
-                                    "makes " + again + ", which the library or an earlier field declares too: choose another",
-                                    name);
+        refuse_twice_declared(before, "glsl.add.name", name);
+        fields_.insert(name);
+        return options_.prefix + name;
+    }
+
+    // Emits the shading function `s` (a glsl_shading type: soft_shadow_options,
+    // ambient_occlusion_options, fractal_noise, triplanar_projection, depth_projection,
+    // kernel_uv_glsl) as PREFIXNAME; returns that name. `field` names a field added before
+    // (add(f, field)) for the types that read one (glsl_takes_field) and is refused for the others:
+    // soft_shadow_options gives
+    //     float PREFIXNAME(vec3 p, vec3 n, vec3 to_light)   calling PREFIXFIELD(p)
+    // (each type's comment gives its signature). s.validate() runs first: a bad value throws the
+    // C++'s invalid_parameter, and the emitter is left as it was.
+    template <glsl_shading S>
+    std::string add_shading(const S& s, const std::string& name, const std::string& field = {})
+    {
+        require_name("glsl.add_shading.name", name);
+        if constexpr (glsl_takes_field<S>) {
+            if (field.empty())
+                throw invalid_parameter("glsl.add_shading.field", "this request reads a field: name one added before");
+            if (!fields_.contains(field))
+                throw invalid_parameter("glsl.add_shading.field", "must name a field added to this emitter before", field);
+        } else if (!field.empty()) {
+            throw invalid_parameter("glsl.add_shading.field", "this request takes no field (it samples none)", field);
         }
+        const emitter before = *this;
+        try {
+            s.glsl_shading(*this, std::string(internal_prefix) + name,
+                           field.empty() ? std::string() : std::string(internal_prefix) + field);
+        } catch (...) {
+            *this = before;
+            throw;
+        }
+        refuse_twice_declared(before, "glsl.add_shading.name", name);
         return options_.prefix + name;
     }
 
@@ -344,6 +381,12 @@ struct krs_kernel_shading {
                 static_cast<typename X::glsl_needs*>(nullptr));
         if (included_.insert(std::string(X::glsl_name)).second) library_ += guarded(X::glsl_name, X::glsl_source);
     }
+    // Library text that is not a GLSL type's (a kernel's uv function), once per shader, guarded by
+    // `name` as a type's is.
+    void library_text(std::string_view name, std::string_view code)
+    {
+        if (included_.insert(std::string(name)).second) library_ += guarded(name, code);
+    }
     // Appends x's glsl_parameters() to the data; returns the index of its first vec4. `what` is
     // the comment the data listing gets.
     template <class X>
@@ -380,8 +423,53 @@ struct krs_kernel_shading {
     }
     // The data array's name as the composites write it (krs_..., renamed with the rest on output).
     const std::string& data_name() const { return array_; }
+    // Records where a sequence named `name` put its kernels' parameters (the index of each one's
+    // first vec4) and each one's kind (its index in the type list), for requests that read them.
+    void record_kernels(const std::string& name, std::vector<std::size_t> at, std::vector<std::size_t> kinds)
+    {
+        kernels_at_[name] = {std::move(at), std::move(kinds)};
+    }
+    // What record_kernels recorded for `name`, or null.
+    const std::pair<std::vector<std::size_t>, std::vector<std::size_t>>* recorded_kernels(const std::string& name) const
+    {
+        const auto it = kernels_at_.find(name);
+        return it == kernels_at_.end() ? nullptr : &it->second;
+    }
     // Appends a function the composite wrote.
     void function(const std::string& text) { functions_ += text; }
+    // A float as a GLSL literal that reads back as the same float.
+    static std::string literal(float v) { return float_literal(v); }
+    // `text` with each whole word that is a key of `values` replaced by its value, and otherwise
+    // the key part of a word that is a key, _ and more (NAME_view_depth: a request's own helper
+    // names; the longest such key): how a shading function writes its GLSL (upper-case
+    // placeholders NAME, FIELD, HARDNESS, ...) with the names and validated values of one request.
+    // An exact match comes first, so MAX_STEPS is never MAX's value followed by _STEPS.
+    static std::string fill(std::string_view text, std::initializer_list<std::pair<std::string_view, std::string>> values)
+    {
+        std::string out;
+        for (std::size_t i = 0; i < text.size();) {
+            if (!is_name_char(text[i])) {
+                out += text[i++];
+                continue;
+            }
+            std::size_t end = i;
+            while (end < text.size() && is_name_char(text[end])) ++end;
+            const std::string_view word = text.substr(i, end - i);
+            const std::pair<std::string_view, std::string>* hit = nullptr;
+            for (const auto& v : values)
+                if (word == v.first) hit = &v;
+            if (!hit)
+                for (const auto& v : values)
+                    if (word.size() > v.first.size() && word.starts_with(v.first) && word[v.first.size()] == '_' &&
+                        (!hit || v.first.size() > hit->first.size()))
+                        hit = &v;
+            if (!hit) out += word;
+            else out += hit->second + std::string(word.substr(hit->first.size()));
+            i = end;
+        }
+        return out;
+    }
+
     // `float NAME(vec3 p)` as the min of NAME_0 .. NAME_{count-1} in that order (the C++
     // `d = part0; d = min(d, part_i)`), for unions and fields made of parts.
     void minimum_of_parts(const std::string& name, std::size_t count)
@@ -412,6 +500,22 @@ private:
                                     p);
     }
     static void require_data_name(const std::string& n) { require_name("glsl.options.data_name", n); }
+
+    // A name the latest addition made twice (see twice_declared) puts the emitter back to `before`
+    // and is refused, as the data name's fault when it is the data array's or block's.
+    void refuse_twice_declared(const emitter& before, const char* parameter, const std::string& name)
+    {
+        const std::string again = twice_declared(internal_text());
+        if (again.empty()) return;
+        *this = before;
+        if (again == array_ || again == array_ + "_block")
+            throw invalid_parameter("glsl.options.data_name",
+                                    "makes " + again + ", which the library or the field declares too: choose another",
+                                    options_.data_name);
+        throw invalid_parameter(parameter,
+                                "makes " + again + ", which the library or an earlier field declares too: choose another",
+                                name);
+    }
 
     // ASCII letters to upper case: include guards are the guarded names so, and carry the prefix so.
     static std::string upper_case(std::string_view text)
@@ -484,10 +588,12 @@ private:
     options options_;
     std::string array_;              // the data array's name in the text, krs_ + data_name
     std::set<std::string> included_;
+    std::set<std::string> fields_;   // the names add() was given
     std::string library_;            // each kind's functions, once
     std::string constants_comments_; // what each data entry holds
     std::string functions_;          // the bodies
     std::vector<float> data_;
+    std::map<std::string, std::pair<std::vector<std::size_t>, std::vector<std::size_t>>> kernels_at_;
 };
 
 // The data of `f` in the emitter's layout (std140 == std430 here): upload it to the block of code

@@ -262,6 +262,27 @@ vec3 krs_torus_capsule_normal(vec3 p, vec4 t0, vec4 t1, vec4 t2, vec4 t3, vec4 t
                 end_tangent_.x, end_tangent_.y, end_tangent_.z, 0.0f};
     }
 
+    // uv() in GLSL: vec2 krs_torus_capsule_uv(p, the seven vec4s of glsl_parameters(), (chord
+    // direction, 2 half_arc_length)), the evaluation above up to the radial term and then uv()'s
+    // lines (atan(y, x) is GLSL's atan2). Written by krs::kernel_uv_glsl for the kernels of a
+    // sequence (krs/sequence_glsl.hpp).
+    static constexpr std::string_view glsl_uv_name = "krs_torus_capsule_uv";
+    static constexpr std::string_view glsl_uv_source = R"(vec2 krs_torus_capsule_uv(vec3 p, vec4 t0, vec4 t1, vec4 t2, vec4 t3, vec4 t4, vec4 t5, vec4 t6, vec4 t7) {
+    vec3 u = p - t0.xyz;
+    float h = dot(u, t1.xyz);
+    vec3 up = u - t1.xyz * h;
+    float wl = length(up * t0.w + t2.xyz * t1.w);
+    float radial = (t0.w * dot(up, up) + 2.0 * t1.w * dot(up, t2.xyz) - t2.w) / (wl + 1.0);
+    float along = dot(up, t7.xyz);
+    float fromMid = t0.w > 0.0 ? atan(t0.w * along, t1.w + t0.w * dot(up, t2.xyz)) / t0.w : along;
+    return vec2(clamp(0.5 + fromMid / t7.w, 0.0, 1.0), atan(h, radial) / 6.2831855 + 0.5);
+}
+)";
+    std::array<float, 4> glsl_uv_parameters() const
+    {
+        return {chord_direction_.x, chord_direction_.y, chord_direction_.z, 2 * half_arc_length_};
+    }
+
 private:
     template <class T>
     struct arc_point {

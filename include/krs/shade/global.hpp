@@ -15,12 +15,22 @@
 // shortfall (s_j - d) / s_j measures how much nearby geometry closes in. Samples are weighted by
 // falloff^(j-1) (near samples matter more) and normalized, and the result is
 // clamp(1 - strength * sum w_j (s_j - d_j) / s_j, 0, 1): 1 open, 0 fully enclosed.
+//
+// GLSL: each options struct carries its function's GLSL (`glsl_source`), the C++ loop line for line
+// with the validated options baked in under their C++ names. A shader has no function parameters,
+// so the function is written per field: emitter::add_shading(options, "NAME", "FIELD") writes
+// `PREFIXNAME`, which samples `float PREFIXFIELD(vec3 p)`, a field added to the same emitter.
+// The march's arithmetic is the C++'s, so on an implementation that rounds as C++ float does
+// the results agree; elsewhere a step's last-bit difference moves the next sample point, and the
+// shadow (a minimum of ratios along the march) moves by a like relative amount.
 
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <string_view>
 
 namespace krs {
 
@@ -38,6 +48,39 @@ struct soft_shadow_options {
         if (max_steps < 1)
             throw invalid_parameter("soft_shadow_options.max_steps", "must be >= 1", std::to_string(max_steps));
         return *this;
+    }
+
+    // float NAME(vec3 p, vec3 n, vec3 to_light): soft_shadow(FIELD, p, n, to_light, *this).
+    // (The test is written `d >= threshold` negated, as the C++, so a NaN distance blocks where
+    // the implementation keeps NaNs, as llvmpipe does; GLSL lets a compiler assume there are none,
+    // so elsewhere a NaN's outcome is the driver's.)
+    static constexpr std::string_view glsl_source = R"(float NAME(vec3 p, vec3 n, vec3 to_light) {
+    const float hardness = HARDNESS;
+    const float threshold = THRESHOLD;
+    const float max_distance = MAX_DISTANCE;
+    const int max_steps = MAX_STEPS;
+    vec3 origin = p + n * (2.0 * threshold);
+    float visible = 1.0;
+    float t = 0.0;
+    for (int step = 0; step < max_steps; ++step) {
+        float d = FIELD(origin + to_light * t);
+        if (!(d >= threshold)) return 0.0;
+        if (t > 0.0) visible = min(visible, hardness * d / t);
+        t += d;
+        if (t > max_distance) break;
+    }
+    return clamp(visible, 0.0, 1.0);
+}
+)";
+    static constexpr bool glsl_takes_field = true;
+    template <class Out>
+    void glsl_shading(Out& out, const std::string& function, const std::string& field) const
+    {
+        validate();
+        out.function(Out::fill(glsl_source, {{"NAME", function}, {"FIELD", field}, {"HARDNESS", Out::literal(hardness)},
+                                             {"THRESHOLD", Out::literal(threshold)},
+                                             {"MAX_DISTANCE", Out::literal(max_distance)},
+                                             {"MAX_STEPS", std::to_string(max_steps)}}));
     }
 };
 
@@ -78,6 +121,38 @@ struct ambient_occlusion_options {
             throw invalid_parameter("ambient_occlusion_options.falloff", "must be <= 1", detail::to_text(falloff));
         require_non_negative("ambient_occlusion_options.strength", strength);
         return *this;
+    }
+
+    // float NAME(vec3 p, vec3 n): ambient_occlusion(FIELD, p, n, *this). A non-finite result
+    // (a field that returns inf or NaN) is 1, as in the C++, where the implementation keeps NaNs
+    // and infinities (llvmpipe does): GLSL lets isnan and isinf be false on one that does not.
+    static constexpr std::string_view glsl_source = R"(float NAME(vec3 p, vec3 n) {
+    const float step = STEP;
+    const int samples = SAMPLES;
+    const float falloff = FALLOFF;
+    const float strength = STRENGTH;
+    float occlusion = 0.0;
+    float total = 0.0;
+    float weight = 1.0;
+    for (int j = 1; j <= samples; ++j) {
+        float s = float(j) * step;
+        float d = FIELD(p + n * s);
+        occlusion += weight * (s - d) / s;
+        total += weight;
+        weight *= falloff;
+    }
+    float ao = 1.0 - strength * occlusion / total;
+    return isnan(ao) || isinf(ao) ? 1.0 : clamp(ao, 0.0, 1.0);
+}
+)";
+    static constexpr bool glsl_takes_field = true;
+    template <class Out>
+    void glsl_shading(Out& out, const std::string& function, const std::string& field) const
+    {
+        validate();
+        out.function(Out::fill(glsl_source, {{"NAME", function}, {"FIELD", field}, {"STEP", Out::literal(step)},
+                                             {"SAMPLES", std::to_string(samples)}, {"FALLOFF", Out::literal(falloff)},
+                                             {"STRENGTH", Out::literal(strength)}}));
     }
 };
 

@@ -8,12 +8,19 @@
 // noise, or a 2D pattern projected along the three axes and blended by the normal (triplanar).
 //
 // Value noise itself lives in krs/core/noise.hpp.
+//
+// GLSL: fractal_noise and triplanar_projection carry their functions' GLSL (`glsl_source`), the C++
+// line for line with the validated values baked in under their C++ names; emitter::add_shading
+// writes them (fractal noise after the value noise it sums, once per shader).
 
 #include "krs/core/noise.hpp"
 #include "krs/core/validate.hpp"
+#include "krs/glsl/names.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <string_view>
 
 namespace krs {
 
@@ -62,7 +69,42 @@ struct fractal_noise {
         }
         return sum / T(total);
     }
+
+    // float NAME(vec3 p): operator()(p). The amplitude, total and frequency are float in the C++
+    // too, so each octave's weights round alike.
+    static constexpr std::string_view glsl_source = R"(float NAME(vec3 p) {
+    const int octaves = OCTAVES;
+    const float frequency = FREQUENCY;
+    const float lacunarity = LACUNARITY;
+    const float gain = GAIN;
+    float sum = 0.0;
+    float amplitude = 1.0;
+    float total = 0.0;
+    float f = frequency;
+    for (int o = 0; o < octaves; ++o) {
+        float shift = 17.31 * float(o);
+        sum += amplitude * krs_value_noise(vec3(p.x * f + shift, p.y * f - shift, p.z * f + shift));
+        total += amplitude;
+        amplitude *= gain;
+        f *= lacunarity;
+    }
+    return sum / total;
+}
+)";
+    template <class Out>
+    void glsl_shading(Out& out, const std::string& function, const std::string&) const
+    {
+        validate();
+        out.template library<value_noise_glsl>();
+        out.function(Out::fill(glsl_source, {{"NAME", function}, {"OCTAVES", std::to_string(octaves)},
+                                             {"FREQUENCY", Out::literal(frequency)},
+                                             {"LACUNARITY", Out::literal(lacunarity)}, {"GAIN", Out::literal(gain)}}));
+    }
 };
+
+namespace detail {
+inline void validate_triplanar(float sharpness) { require_positive("triplanar.sharpness", sharpness); }
+} // namespace detail
 
 // Triplanar projection: the 2D pattern `pattern(u, v)` projected along x (onto (y, z)), y (onto
 // (z, x)) and z (onto (x, y)), blended with weights |n_axis|^sharpness (normalized), so faces see
@@ -70,7 +112,7 @@ struct fractal_noise {
 template <class Pattern, class T>
 T triplanar(const Pattern& pattern, const vec3<T>& p, const vec3<T>& n, float sharpness = 4.0f)
 {
-    require_positive("triplanar.sharpness", sharpness);
+    detail::validate_triplanar(sharpness);
     const vec3<T> a = abs(n);
     T wx, wy, wz;
     if constexpr (std::floating_point<T>) {
@@ -83,5 +125,48 @@ T triplanar(const Pattern& pattern, const vec3<T>& p, const vec3<T>& n, float sh
     const T sx = pattern(p.y, p.z), sy = pattern(p.z, p.x), sz = pattern(p.x, p.y);
     return select(total > T(0), (wx * sx + wy * sy + wz * sz) / safe, (sx + sy + sz) / T(3));
 }
+
+// triplanar() in GLSL: the pattern is a GLSL function `float pattern(float u, float v)` of the
+// shader's (declared before the snippet) or of another snippet, named by `pattern`; `sharpness` as
+// triplanar()'s. emitter::add_shading(triplanar_projection{"stripes", 4.0f}, "NAME") writes
+//     float NAME(vec3 p, vec3 n)     triplanar(stripes, p, n, sharpness)
+// GLSL's pow(x, y) is exp2(y log2(x)) to within a few ulp: the weights, and so the result, differ
+// from the C++'s by about 1e-6 relative.
+struct triplanar_projection {
+    std::string pattern;     // a GLSL function name of the shader's, not starting with krs_ or gl_
+    float sharpness = 4.0f;  // > 0
+
+    void validate() const
+    {
+        detail::validate_triplanar(sharpness);
+        if (!glsl::is_user_function_name(pattern))
+            throw invalid_parameter("triplanar_projection.pattern",
+                                    "must be a GLSL function name of the shader's: letters, digits and _, not "
+                                    "starting with a digit or _, without __, and not starting with gl_ (reserved) "
+                                    "or krs_ (the emitter renames such words to its prefix)",
+                                    pattern);
+    }
+
+    static constexpr std::string_view glsl_source = R"(float NAME(vec3 p, vec3 n) {
+    const float sharpness = SHARPNESS;
+    vec3 a = abs(n);
+    float wx = pow(a.x, sharpness);
+    float wy = pow(a.y, sharpness);
+    float wz = pow(a.z, sharpness);
+    float total = wx + wy + wz;
+    float sx = PATTERN(p.y, p.z);
+    float sy = PATTERN(p.z, p.x);
+    float sz = PATTERN(p.x, p.y);
+    return total > 0.0 ? (wx * sx + wy * sy + wz * sz) / total : (sx + sy + sz) / 3.0;
+}
+)";
+    template <class Out>
+    void glsl_shading(Out& out, const std::string& function, const std::string&) const
+    {
+        validate();
+        out.function(Out::fill(glsl_source, {{"NAME", function}, {"SHARPNESS", Out::literal(sharpness)},
+                                             {"PATTERN", pattern}}));
+    }
+};
 
 } // namespace krs
