@@ -1,0 +1,152 @@
+#pragma once
+// The walk of a ray's samples through the bricks of voxel_bricks.hpp (like NanoVDB's HDDA, a
+// hierarchical walk that steps over empty nodes): one sample at a time, what the sample finds,
+// and how far the ray may jump when it lies in an empty brick or an empty 16^3 block.
+//
+// A ray's samples sit at t_k = t_0 + (k + 1/2) ds. `probe` maps a sample's position to its cell
+// ((p - origin) x cells per unit, truncated: the float operations the GLSL marcher repeats) and
+// its place in the bricks, and says whether the sample reads a voxel (`looks`: in the grid and in
+// a non-empty brick) and how many samples to advance: 1, or in an empty brick the steps to the
+// exit of the largest empty brick or block along the ray, less a margin for rounding (below) and
+// rounded up. The invariant: the samples a walk looks at are exactly the samples that plain
+// stepping (advance 1 always) finds in non-empty bricks, in the same order; only the empty ones
+// between are not computed (tested against such stepping and against a fine walk along the ray).
+//
+// Why the margin. The exit is predicted from this sample's position, but each sample's position
+// is computed anew in floats, p = o + d t then (p - origin) x cells per unit, with an error of a
+// few ulps of |o| + t + |origin|: 2^-21 of that in all, both samples' errors counted, in steps.
+// Close to the tree it is the 1e-3 of the exit's own rounding; from a camera 1000 units away it
+// grows to several steps, and skips stop short rather than jump over a voxel. `skip_margin`
+// gives it at t from `margin_at_origin(o)`, the part computed once per ray.
+//
+// The slopes are the t it takes to cross one cell along each axis (0 for an axis the ray does not
+// move along), so an empty brick costs multiplications. When all lanes of a packet leave a brick
+// by the same face along an axis (rays of neighbouring pixels nearly always do, shadow rays toward
+// one light always: `faces_of`), the exit is one product per axis instead of two and a choice per
+// lane; the same exit either way. One template serves a scalar ray (T = float) and a packet of
+// rays, one per lane (T = krs::packet_f).
+
+#include "hypertree/render/voxel_bricks.hpp"
+#include "hypertree/volume.hpp"
+#include "krs/core/lanes.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace hypertree {
+
+class brick_walk {
+public:
+    // The directions of a packet's rays, per axis: all toward +, all toward -, all still, or mixed.
+    struct exit_faces {
+        enum face : int { low, high, none, per_lane };
+        face along[3] = {per_lane, per_lane, per_lane};
+    };
+
+    // What a sample finds, lane by lane: its cell (0 outside the grid), its place in the bricks
+    // (negative in an empty brick, below -64 in an empty block), whether it reads a voxel, and how
+    // many samples to advance.
+    template <class T>
+    struct probe_result {
+        krs::index_lanes<T> place;
+        krs::mask_t<T> looks;
+        T advance;
+        krs::index_lanes<T> cell[3];
+    };
+
+    brick_walk() = default;
+    // Samples `step` apart (world units) through the grid of `volume`.
+    brick_walk(const hypervolume& volume, float step)
+        : origin_(volume.origin()), cells_per_unit_(volume.cells_per_unit()), grid_{volume.grid().x, volume.grid().y, volume.grid().z},
+          step_(step), rounding_per_step_(float(0x1.0p-21 / double(step))),
+          grid_reach_(std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)}))
+    {
+    }
+
+    float step() const { return step_; }
+    const std::array<int, 3>& grid() const { return grid_; }
+
+    // The slopes of the lanes of a unit direction: 1 / (d * cells per unit) per axis, or 0.
+    template <class T>
+    void slopes_of(const krs::vec3<T>& d, T (&slope)[3]) const
+    {
+        using krs::select;
+        const T zero(0.0f), dir[3] = {d.x * T(cells_per_unit_.x), d.y * T(cells_per_unit_.y), d.z * T(cells_per_unit_.z)};
+        for (int a = 0; a < 3; ++a) slope[a] = select(dir[a] != zero, T(1.0f) / dir[a], zero);
+    }
+    template <class T>
+    static exit_faces faces_of(const T (&slope)[3])
+    {
+        using krs::all; // (unqualified below: packets take xsimd's, found by argument)
+        exit_faces faces;
+        const T zero(0.0f);
+        for (int a = 0; a < 3; ++a) {
+            if (all(slope[a] > zero)) faces.along[a] = exit_faces::high;
+            else if (all(slope[a] < zero)) faces.along[a] = exit_faces::low;
+            else if (all(slope[a] == zero)) faces.along[a] = exit_faces::none;
+        }
+        return faces;
+    }
+
+    // The sample at p of rays with these slopes and faces; lanes not `running` look at nothing.
+    // `margin` is skip_margin at the sample's t.
+    template <class T>
+    [[gnu::always_inline]] probe_result<T> probe(const voxel_bricks& bricks, const krs::vec3<T>& p, const T (&slope)[3],
+                                                 const krs::mask_t<T>& running, const T& margin, const exit_faces& faces) const
+    {
+        using I = krs::index_lanes<T>;
+        using krs::select, krs::min, krs::ceil, krs::index_to_float, krs::truncate_to_index;
+        const T zero(0.0f), one(1.0f);
+        const T f[3] = {(p.x - T(origin_.x)) * T(cells_per_unit_.x), (p.y - T(origin_.y)) * T(cells_per_unit_.y),
+                        (p.z - T(origin_.z)) * T(cells_per_unit_.z)};
+        auto inside = running;
+        for (int a = 0; a < 3; ++a) inside = inside & (f[a] >= zero) & (f[a] < T(float(grid_[std::size_t(a)])));
+        // Lanes outside the grid look up cell 0 (their result is not used): a float to int
+        // conversion outside int's range would be undefined.
+        I c[3];
+        for (int a = 0; a < 3; ++a) c[a] = krs::index_min(truncate_to_index(select(inside, f[a], zero)), I(grid_[std::size_t(a)] - 1));
+        const I place = bricks.view_of().place(c[0], c[1], c[2]);
+        const T found = index_to_float(place); // >= 0: a voxel; < -64: an empty 16^3 block
+        const krs::mask_t<T> looks = inside & (found >= zero);
+        const auto in_block = found < T(-64.5f);
+        T exit(3.0e38f);
+        for (int a = 0; a < 3; ++a) {
+            const T lo = select(in_block, index_to_float(c[a] & I(~15)), index_to_float(c[a] & I(~3)));
+            const T hi = lo + select(in_block, T(16.0f), T(4.0f));
+            switch (faces.along[a]) {
+            case exit_faces::high: exit = min(exit, (hi - f[a]) * slope[a]); break;
+            case exit_faces::low: exit = min(exit, (lo - f[a]) * slope[a]); break;
+            case exit_faces::none: break;
+            default: // lanes going different ways
+                exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
+            }
+        }
+        const T steps = ceil(exit / T(step_) - margin);
+        const T advance = select(inside & (found < zero), select(steps > one, min(steps, T(1.0e6f)), one), one);
+        return {place, looks, advance, {c[0], c[1], c[2]}};
+    }
+
+    // How many steps short of an empty brick's exit a skip must stop, for a ray from `from` at t:
+    // skip_margin(margin_at_origin(from), t).
+    template <class T>
+    T margin_at_origin(const krs::vec3<T>& from) const
+    {
+        using krs::abs, krs::max;
+        const T reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + T(grid_reach_);
+        return T(1e-3f) + reach * T(rounding_per_step_);
+    }
+    template <class T>
+    T skip_margin(const T& at_origin, const T& t) const
+    {
+        return at_origin + t * T(rounding_per_step_);
+    }
+
+private:
+    krs::vec3f origin_{}, cells_per_unit_{};
+    std::array<int, 3> grid_{};
+    float step_ = 1;
+    float rounding_per_step_ = 0, grid_reach_ = 0; // skip_margin's: 2^-21 / step, and max |origin|
+};
+
+} // namespace hypertree
