@@ -557,7 +557,7 @@ TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of
         REQUIRE(scalars.seal());
         const std::size_t values = packets.slots() * packets.stride();
         CHECK(std::equal(packets.values(), packets.values() + values, scalars.values()));
-        // Rays reading a sealed table (march_shaded) and rays shading as they go (march_shading).
+        // Rays reading a sealed table (march_shaded_ahead) and rays shading as they go (march_shading_as_met).
         render_settings ahead, as_met;
         as_met.shade_ahead = false;
         for (int s : {1, 2}) {
