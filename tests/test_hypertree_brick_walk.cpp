@@ -91,7 +91,7 @@ std::vector<looked_at> walked(const scattered& s, const brick_walk& w, const krs
     const float m0 = w.margin_at_origin(o);
     for (float k = 0; k < float(count);) {
         const float t = t0 + (k + 0.5f) * w.step();
-        const auto found = w.probe<float>(s.bricks, o + d * t, slope, true, w.skip_margin(m0, t), faces);
+        const auto found = w.probe<float>(s.bricks.view_of(), o + d * t, slope, true, w.skip_margin(m0, t), faces);
         if (found.looks) out.push_back({k, found.cell[0], found.cell[1], found.cell[2]});
         skipped += std::size_t(found.advance - 1);
         k += found.advance;
@@ -226,8 +226,8 @@ TEST_CASE("brick walk: a packet's lanes walk as the scalar walk, and known exit 
         while (any(running)) {
             const P t = P(0.0f) + (k + P(0.5f)) * P(ds);
             const krs::vec3<P> p = op + dp * t;
-            const auto found = w.probe(s.bricks, p, slope, running, w.skip_margin(m0, t), faces);
-            const auto per_lane = w.probe(s.bricks, p, slope, running, w.skip_margin(m0, t), brick_walk::exit_faces{});
+            const auto found = w.probe(s.bricks.view_of(), p, slope, running, w.skip_margin(m0, t), faces);
+            const auto per_lane = w.probe(s.bricks.view_of(), p, slope, running, w.skip_margin(m0, t), brick_walk::exit_faces{});
             const auto a = krs::lanes_of(found.advance), b = krs::lanes_of(per_lane.advance), ks = krs::lanes_of(k);
             const std::uint64_t looks = krs::mask_bits<P>(found.looks);
             const auto cx = krs::lanes_of(krs::index_to_float(found.cell[0])), cy = krs::lanes_of(krs::index_to_float(found.cell[1])),

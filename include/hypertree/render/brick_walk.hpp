@@ -91,8 +91,9 @@ public:
 
     // The sample at p of rays with these slopes and faces; lanes not `running` look at nothing.
     // `margin` is skip_margin at the sample's t.
+    // `bricks` is the bricks' view_of(), best copied into a local before the loop (see there).
     template <class T>
-    [[gnu::always_inline]] probe_result<T> probe(const voxel_bricks& bricks, const krs::vec3<T>& p, const T (&slope)[3],
+    [[gnu::always_inline]] probe_result<T> probe(const voxel_bricks::view& bricks, const krs::vec3<T>& p, const T (&slope)[3],
                                                  const krs::mask_t<T>& running, const T& margin, const exit_faces& faces) const
     {
         using I = krs::index_lanes<T>;
@@ -106,7 +107,7 @@ public:
         // conversion outside int's range would be undefined.
         I c[3];
         for (int a = 0; a < 3; ++a) c[a] = krs::index_min(truncate_to_index(select(inside, f[a], zero)), I(grid_[std::size_t(a)] - 1));
-        const I place = bricks.view_of().place(c[0], c[1], c[2]);
+        const I place = bricks.place(c[0], c[1], c[2]);
         const T found = index_to_float(place); // >= 0: a voxel; < -64: an empty 16^3 block
         const krs::mask_t<T> looks = inside & (found >= zero);
         const auto in_block = found < T(-64.5f);

@@ -171,6 +171,9 @@ public:
                                            std::array<krs::mask_t<T>, K> running) const
     {
         using krs::select, krs::max, krs::any;
+        // Locals, so what every sample reads stays in registers (see voxel_bricks::view).
+        const brick_walk walk = walk_;
+        const voxel_bricks::view view = bricks_.view_of();
         const krs::vec3<T> direction{T(l.x), T(l.y), T(l.z)};
         T slope[3];
         walk_.slopes_of(direction, slope);
@@ -192,7 +195,7 @@ public:
                 running[k] = running[k] & (t < t1[k]) & (transmittance[k] >= least);
                 if (!any(running[k])) continue;
                 marching = true;
-                const brick_walk::probe_result<T> found = probe(p[k] + direction * t, slope, running[k], walk_.skip_margin(margin0[k], t), faces);
+                const brick_walk::probe_result<T> found = probe(walk, view, p[k] + direction * t, slope, running[k], walk.skip_margin(margin0[k], t), faces);
                 const T alpha = krs::gather(alpha_at, krs::index_max(found.place, krs::index_lanes<T>(0)));
                 transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
                 lookups[k] = lookups[k] + select(found.looks, one, zero);
@@ -295,10 +298,11 @@ private:
 
     // The brick walk's probe, and with use_spheres the part spheres' test on top.
     template <class T>
-    [[gnu::always_inline]] brick_walk::probe_result<T> probe(const krs::vec3<T>& p, const T (&slope)[3], const krs::mask_t<T>& running,
-                                                             const T& margin, const brick_walk::exit_faces& faces) const
+    [[gnu::always_inline]] brick_walk::probe_result<T> probe(const brick_walk& walk, const voxel_bricks::view& view, const krs::vec3<T>& p,
+                                                             const T (&slope)[3], const krs::mask_t<T>& running, const T& margin,
+                                                             const brick_walk::exit_faces& faces) const
     {
-        brick_walk::probe_result<T> found = walk_.probe(bricks_, p, slope, running, margin, faces);
+        brick_walk::probe_result<T> found = walk.probe(view, p, slope, running, margin, faces);
         if (options_.use_spheres) found.looks = found.looks & inside_a_sphere(p);
         return found;
     }
@@ -314,6 +318,8 @@ private:
     {
         using I = krs::index_lanes<T>;
         using krs::any, krs::select;
+        const brick_walk walk = walk_;
+        const voxel_bricks::view view = bricks_.view_of();
         const T ds(walk_.step()), half(0.5f), zero(0.0f), one(1.0f), least(options_.min_transmittance);
         const float* alpha_at = alpha_at_.data();
         const std::int32_t* slot_at = bricks_.slots();
@@ -341,7 +347,7 @@ private:
                 march_result<T>& o = out[r];
                 const T t = t0[r] + (k[r] + half) * ds;
                 const krs::vec3<T> p = rays[r].origin + rays[r].direction * t;
-                const brick_walk::probe_result<T> found = probe(p, slope[r], active[r], walk_.skip_margin(margin0[r], t), faces[r]);
+                const brick_walk::probe_result<T> found = probe(walk, view, p, slope[r], active[r], walk.skip_margin(margin0[r], t), faces[r]);
                 const I place = krs::index_max(found.place, I(0));
                 const T a = select(found.looks, krs::gather(alpha_at, place), zero);
                 const I entry = krs::gather(slot_at, place) * stride;
@@ -372,6 +378,8 @@ private:
     march_result<T> march_shading_as_met(const krs::ray<T>& ray, march_context context) const
     {
         ray_cache* cache = std::floating_point<T> ? context.rays : nullptr;
+        const brick_walk walk = walk_;
+        const voxel_bricks::view view = bricks_.view_of();
         using krs::any;
         (void)cache;
         march_result<T> out;
@@ -406,7 +414,7 @@ private:
                 if (!((running >> i) & 1u)) continue;
                 const krs::vec3f pi{px[i], py[i], pz[i]};
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
-                const brick_walk::probe_result<float> found = probe<float>(pi, slope[i], true, margin[i], faces[i]);
+                const brick_walk::probe_result<float> found = probe<float>(walk, view, pi, slope[i], true, margin[i], faces[i]);
                 if (!found.looks) {
                     advance[i] = found.advance;
                     continue;
