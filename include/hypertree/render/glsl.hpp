@@ -27,8 +27,9 @@
 //
 // bound to the sampler `<prefix><name>_bricks` (a `usamplerBuffer`, the shader's only uniform),
 // read with texelFetch. The shader finds a voxel as voxel_bricks::view::place does (two reads, one
-// per level, then a byte of a word). A buffer texture holds GL_MAX_TEXTURE_BUFFER_SIZE texels
-// (2^27 on current desktop drivers, llvmpipe included; 65536 is all GL guarantees).
+// per level, then a byte of a word). A buffer texture holds GL_MAX_TEXTURE_BUFFER_SIZE texels, a
+// limit to query: GL guarantees only 65536, and tree A at resolution 300 takes about 1.2 million
+// words (75^3 brick ranks, and 25 000 non-empty bricks of 32 words).
 //
 // Everything else is constants in the code: the box, the grid and its mapping, the brick table's
 // sizes and offsets, the step, the opacity per density byte, the color per level, the lights and
