@@ -24,15 +24,18 @@
 // by the same face along an axis (rays of neighbouring pixels nearly always do, shadow rays toward
 // one light always: `faces_of`), the exit is one product per axis instead of two and a choice per
 // lane; the same exit either way. One template serves a scalar ray (T = float) and a packet of
-// rays, one per lane (T = krs::packet_f).
+// rays, one per lane (T = krs::packet_f); glsl() writes the same walk for the GPU marcher.
 
 #include "hypertree/render/voxel_bricks.hpp"
 #include "hypertree/volume.hpp"
 #include "krs/core/lanes.hpp"
+#include "krs/glsl/literal.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
+#include <string_view>
 
 namespace hypertree {
 
@@ -141,6 +144,63 @@ public:
     T skip_margin(const T& at_origin, const T& t) const
     {
         return at_origin + t * T(rounding_per_step_);
+    }
+
+    // The same walk as GLSL, for the marcher of glsl.hpp: constants $_grid_reach and
+    // $_rounding_per_step (this walk's floats), `float $_margin_at_origin(vec3 from)`,
+    // `vec3 $_slopes(vec3 d)` and `int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell,
+    // out float advance)`, which returns the sample's place (< 0: nothing to look at) and how many
+    // samples to advance, as probe() does for one lane. Every `$` is `name`; the caller emits
+    // $_origin, $_cells_per_unit, $_grid, $_step and `int $_place(ivec3)`
+    // (voxel_bricks::view::place) before it.
+    std::string glsl(const std::string& name) const
+    {
+        std::string s = "const float " + name + "_grid_reach = " + krs::glsl::float_literal(grid_reach_) + ";\n";
+        s += "const float " + name + "_rounding_per_step = " + krs::glsl::float_literal(rounding_per_step_) + ";\n";
+        for (char c : std::string_view(R"(
+// brick_walk::margin_at_origin: steps a skip stops short of an empty brick's exit, but for t.
+float $_margin_at_origin(vec3 from) {
+    float reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + $_grid_reach;
+    return 1e-3 + reach * $_rounding_per_step;
+}
+
+// brick_walk::probe for one ray: the place of the sample at p (< 0: none to look at), its cell,
+// and the samples to advance (1, or in an empty brick or block the whole steps to its exit).
+int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance) {
+    advance = 1.0;
+    cell = ivec3(0);
+    vec3 f = vec3((p.x - $_origin.x) * $_cells_per_unit.x, (p.y - $_origin.y) * $_cells_per_unit.y,
+                  (p.z - $_origin.z) * $_cells_per_unit.z);
+    if (!(f.x >= 0.0 && f.y >= 0.0 && f.z >= 0.0 && f.x < float($_grid.x) && f.y < float($_grid.y) && f.z < float($_grid.z)))
+        return -1;
+    cell = ivec3(min(int(f.x), $_grid.x - 1), min(int(f.y), $_grid.y - 1), min(int(f.z), $_grid.z - 1));
+    int place = $_place(cell);
+    if (place >= 0) return place;
+    bool in_block = place < -64;
+    float exit = 3.0e38;
+    for (int a = 0; a < 3; ++a) {
+        float lo = float(in_block ? (cell[a] & ~15) : (cell[a] & ~3));
+        float hi = lo + (in_block ? 16.0 : 4.0);
+        if (slope[a] > 0.0) exit = min(exit, (hi - f[a]) * slope[a]);
+        else if (slope[a] < 0.0) exit = min(exit, (lo - f[a]) * slope[a]);
+    }
+    float steps = ceil(exit / $_step - margin);
+    advance = steps > 1.0 ? min(steps, 1.0e6) : 1.0;
+    return -1;
+}
+
+// brick_walk::slopes_of: the t to cross one cell along each axis, 0 for an axis not moved along.
+vec3 $_slopes(vec3 d) {
+    vec3 s = vec3(d.x * $_cells_per_unit.x, d.y * $_cells_per_unit.y, d.z * $_cells_per_unit.z);
+    return vec3(s.x != 0.0 ? 1.0 / s.x : 0.0, s.y != 0.0 ? 1.0 / s.y : 0.0, s.z != 0.0 ? 1.0 / s.z : 0.0);
+}
+
+)"))
+            if (c == '$')
+                s += name;
+            else
+                s += c;
+        return s;
     }
 
 private:

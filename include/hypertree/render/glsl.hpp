@@ -38,11 +38,13 @@
 // the same point), the part spheres, the structure flows. A tree with other options is new code;
 // the bricks stay.
 //
-// What the GPU leaves out: the empty-space skipping (a skipped sample is empty), the shadow memo
-// (a memoized shadow is a pure function of its voxel) and the ray cache (a cached voxel equals the
-// bricks'). Each only spares work on the CPU and none changes a pixel, so the GPU computes the
-// same values directly. The part-sphere test is kept (use_spheres): it also changes no pixel, but
-// it is the paper's traversal and costs the GPU a few dot products against a texel fetch.
+// Rays and shadow rays walk the bricks as the CPU's do (brick_walk::glsl, emitted from the walk's
+// own constants): a sample in an empty brick or 16^3 block is not looked up and the ray jumps to
+// the brick's exit, taking exactly the samples it would have stepped through. What the GPU
+// leaves out: the shadow memo (a memoized shadow is a pure function of its voxel) and the ray
+// cache (a cached voxel equals the bricks'). Each only spares work on the CPU and changes no
+// pixel, so the GPU computes the same values directly. The part-sphere test is kept
+// (use_spheres): it also changes no pixel, but it is the paper's traversal.
 //
 // Names: every global the code declares starts with the prefix (default krs_, checked by
 // krs::glsl::is_prefix as the KRS snippets' is) and then the tree's name: <prefix><name>_*, and
@@ -59,6 +61,7 @@
 // tests). For Vulkan (SPIR-V) set hypertree_glsl_options::binding: the sampler then carries
 // layout(binding = N), which GLSL below 4.20 does not accept.
 
+#include "hypertree/render/brick_walk.hpp"
 #include "hypertree/render/march_options.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/render/voxel_bricks.hpp"
@@ -146,6 +149,7 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
                                      "must be letters, digits and _, not starting with _ and without __ (it follows the prefix)", glsl.name);
     options.validate(v, shape.box);
     const voxel_shading shading(options, shape, colors);
+    const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
     const std::string n = glsl.prefix + glsl.name;
     const auto integer = [](auto i) { return std::to_string(i); };
 
@@ -167,7 +171,7 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
     s += "const int " + n + "_block_offset = " + integer(bricks.block_offset) + ";\n";
     s += "const int " + n + "_density_offset = " + integer(bricks.density_offset) + ";\n";
     s += "const int " + n + "_level_offset = " + integer(bricks.level_offset) + ";\n";
-    s += "const float " + n + "_step = " + float_literal(options.step_factor * float(v.smallest_voxel_side())) + ";\n";
+    s += "const float " + n + "_step = " + float_literal(walk.step()) + ";\n";
     s += "const float " + n + "_min_transmittance = " + float_literal(options.min_transmittance) + ";\n";
     s += shading.glsl_constants(n, bricks.level_count);
     // Voxel centers per axis: origin + (c + 1/2) side in double, then float, as the marcher's
@@ -227,7 +231,8 @@ void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
 }
 
 )", n);
-    s += detail::with_name(R"(// The marcher's probe: the cell of p, false outside the grid (and outside every part sphere).
+    s += detail::with_name(R"(// The cell of p, false outside the grid (and outside every part sphere): a lookup by point;
+// the marches walk with $_probe.
 bool $_cell(vec3 p, out ivec3 cell) {
     cell = ivec3(0);
     float fx = (p.x - $_origin.x) * $_cells_per_unit.x, fy = (p.y - $_origin.y) * $_cells_per_unit.y,
@@ -262,35 +267,57 @@ int $_place(ivec3 c) {
     return ((rank << 6) | (c.x & 3) | ((c.y & 3) << 2) | ((c.z & 3) << 4)) + ((rank >> 31) & code);
 }
 
-// The voxel of a cell: x = density, y = level; (0, 0) in an empty brick. Byte k of a word is the
-// place 4 w + k.
-uvec2 $_voxel(ivec3 cell) {
-    int place = $_place(cell);
-    if (place < 0) return uvec2(0u);
+// The voxel at a place >= 0: x = density, y = level. Byte k of word w is place 4 w + k.
+uvec2 $_voxel_at(int place) {
     uint shift = uint(8 * (place & 3));
     uint density = (texelFetch($_bricks, $_density_offset + (place >> 2)).r >> shift) & 255u;
     uint level = (texelFetch($_bricks, $_level_offset + (place >> 2)).r >> shift) & 255u;
     return uvec2(density, level);
 }
 
-// The density at p, 0 outside the grid and the spheres.
-int $_density_at(vec3 p) {
-    ivec3 cell;
-    return $_cell(p, cell) ? int($_voxel(cell).x) : 0;
+// The voxel of a cell; (0, 0) in an empty brick.
+uvec2 $_voxel(ivec3 cell) {
+    int place = $_place(cell);
+    return place < 0 ? uvec2(0u) : $_voxel_at(place);
 }
 
-// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
-// out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's step and
-// early exit.
+)",
+                           n);
+    s += walk.glsl(n);
+    s += "// Whether p lies in a part sphere (use_spheres; else always).\n";
+    if (spheres) {
+        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
+             detail::with_name(R"(; ++i) {
+        vec3 d = p - $_spheres[i].xyz;
+        if ($_dot(d, d) <= $_spheres[i].w) return true;
+    }
+    return false;
+}
+
+)",
+                               n);
+    } else {
+        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    return true;\n}\n\n", n);
+    }
+    s += detail::with_name(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
+// out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's brick walk
+// and early exit.
 float $_shadow_transmittance(vec3 p, vec3 l) {
     float t0, t1;
     $_enter_box(p, l, t0, t1);
     float transmittance = 1.0;
     float base = max(t0, 0.0);
-    for (int j = 1;; ++j) {
-        float t = base + float(j) * $_step;
+    vec3 slope = $_slopes(l);
+    float margin0 = $_margin_at_origin(p);
+    for (float j = 1.0;;) {
+        float t = base + j * $_step;
         if (!(t < t1 && transmittance >= $_min_transmittance)) break;
-        transmittance *= 1.0 - $_alpha[$_density_at(p + l * t)];
+        vec3 q = p + l * t;
+        ivec3 cell;
+        float advance;
+        int place = $_probe(q, slope, margin0 + t * $_rounding_per_step, cell, advance);
+        if (place >= 0 && $_in_spheres(q)) transmittance *= 1.0 - $_alpha[int($_voxel_at(place).x)];
+        j += advance;
     }
     return transmittance;
 }
@@ -332,13 +359,17 @@ vec3 $_normal(vec3 p) {
     float ds = $_step;
     vec3 color = vec3(0.0);
     float transmittance = 1.0;
-    for (int k = 0;; ++k) {
-        float t = t0 + (float(k) + 0.5) * ds;
+    vec3 slope = $_slopes(direction);
+    float margin0 = $_margin_at_origin(origin);
+    for (float k = 0.0;;) {
+        float t = t0 + (k + 0.5) * ds;
         if (!(t < t1)) break;
         vec3 p = origin + direction * t;
         ivec3 cell;
-        if ($_cell(p, cell)) {
-            uvec2 v = $_voxel(cell);
+        float advance;
+        int place = $_probe(p, slope, margin0 + t * $_rounding_per_step, cell, advance);
+        if (place >= 0 && $_in_spheres(p)) {
+            uvec2 v = $_voxel_at(place);
             if (v.x != 0u) {
                 float a = $_alpha[int(v.x)];
                 vec3 c = $_shade($_shading_point(p, cell), int(v.y), -direction);
@@ -346,6 +377,7 @@ vec3 $_normal(vec3 p) {
                 transmittance = transmittance * (1.0 - a);
             }
         }
+        k += advance;
         if (!(transmittance >= $_min_transmittance)) break;
     }
     return vec4(color, transmittance);
