@@ -110,9 +110,9 @@ int main(int argc, char** argv)
                 rs.supersampling = s;
                 rs.parallel_for = bench::parallel_for(threads);
                 const auto row = [&]<class S>(const char* name, const S& store, std::optional<double> paper) {
-                    const auto make = [&] { return volume_marcher<S>(store, shape, depth_colors::tree(tree.branch_depth, tree.tree_depth)); };
+                    const auto make = [&] { return volume_marcher(store, shape, depth_colors::tree(tree.branch_depth, tree.tree_depth)); };
                     const double setup = bench::best_seconds(5, [&] { (void)make(); });
-                    const volume_marcher<S> marcher = make();
+                    const volume_marcher marcher = make();
                     image img;
                     const double scalar = bench::best_seconds(5, [&] { img = render<float>(marcher, camera, rs); });
                     const double packet = bench::best_seconds(5, [&] { img = render<krs::packet_f>(marcher, camera, rs); });
@@ -162,7 +162,7 @@ int main(int argc, char** argv)
         render_settings reference_settings;
         reference_settings.supersampling = 4;
         reference_settings.parallel_for = bench::parallel_for(threads);
-        const volume_marcher<bit_array_store> reference_marcher(store, shape, colors, reference_options);
+        const volume_marcher reference_marcher(store, shape, colors, reference_options);
         image reference;
         const double reference_seconds = bench::best_seconds(1, [&] { reference = render<float>(reference_marcher, camera, reference_settings); });
         std::printf("speed against error: tree A, resolution 300, %dx%d, %u thread(s); reference (step 0.25, s = 4, shadow "
@@ -172,7 +172,7 @@ int main(int argc, char** argv)
 
         const auto measure = [&]<class S>(const std::string& name, const S& st, const tree_shape& sh, march_options mo, render_settings rs) {
             rs.parallel_for = bench::parallel_for(threads);
-            const volume_marcher<S> marcher(st, sh, colors, mo);
+            const volume_marcher marcher(st, sh, colors, mo);
             image img;
             const double secs = bench::best_seconds(2, [&] { img = render<float>(marcher, camera, rs); });
             const double error = rmse(img, reference);

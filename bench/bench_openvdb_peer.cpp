@@ -316,7 +316,7 @@ int main(int argc, char** argv)
                 for (voxel_index i : any_index) s += store.at(i).density;
                 sink = sink + s;
             });
-            std::optional<volume_marcher<S>> marcher;
+            std::optional<volume_marcher> marcher;
             r.setup_ms = bench::best_seconds(1, [&] { marcher.emplace(store, shape, white, options); }) * 1e3;
             r.accelerator = marcher->memory_bytes();
             image scalar, packet;

@@ -72,7 +72,7 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     const tree_shape shape = tree_shape::of(volume, voxels);
     march_options mo;
     mo.density_scale = o.density_scale;
-    const volume_marcher<S> marcher(store, shape, colors, mo);
+    const volume_marcher marcher(store, shape, colors, mo);
 
     const krs::pinhole_camera camera = framing_camera(shape.box, o.width, o.height);
 

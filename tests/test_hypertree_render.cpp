@@ -64,7 +64,7 @@ TEST_CASE("hypertree render transmittance through a slab matches the closed form
             o.step_factor = step_factor;
             o.min_transmittance = 0;
             o.shadows = false;
-            const volume_marcher<index_list_store> m(store, tree_shape::of(store), depth_colors{}, o);
+            const volume_marcher m(store, tree_shape::of(store), depth_colors{}, o);
             // Along x through voxel centers: 3 voxels = 3 / step_factor samples of one density.
             const krs::ray<float> r{{-1, 16.5f, 16.5f}, {1, 0, 0}};
             const auto result = m.march(r);
@@ -81,7 +81,7 @@ TEST_CASE("hypertree render stops at full opacity and shadows behind an opaque w
 {
     const auto store = slab(255, 2);
     march_options o;
-    const volume_marcher<index_list_store> m(store, tree_shape::of(store), depth_colors{}, o);
+    const volume_marcher m(store, tree_shape::of(store), depth_colors{}, o);
     const auto result = m.march(krs::ray<float>{{-1, 16.5f, 16.5f}, {1, 0, 0}});
     CHECK(result.transmittance == 0.0f);
     CHECK(result.lookups == doctest::Approx(1 + 1)); // the first sample (and its shadow ray's first)
@@ -100,7 +100,7 @@ TEST_CASE("hypertree render of an empty tree is the background")
     tree_shape boxed = tree_shape::of(empty);
     boxed.box = world_box{{0, 0, 0}, {1, 1, 1}};
     for (const tree_shape& shape : {tree_shape::of(empty), boxed}) {
-        const volume_marcher<index_list_store> m(empty, shape, depth_colors{});
+        const volume_marcher m(empty, shape, depth_colors{});
         float lookups = 0;
         CHECK(m.shadow_transmittance({0.5f, 0.5f, 0.5f}, {0, 1, 0}, lookups) == 1.0f);
         CHECK(m.march(krs::ray<float>{{0.5f, 0.5f, -2.0f}, {0, 0, 1}}).transmittance == 1.0f);
@@ -143,7 +143,7 @@ TEST_CASE("hypertree render: skipping empty bricks never skips a voxel, from a c
         o.shadows = false;
         o.lights.clear();
         o.min_transmittance = 0;
-        const volume_marcher<index_list_store> m(store, shape, depth_colors{}, o);
+        const volume_marcher m(store, shape, depth_colors{}, o);
         // The reference: samples at t0 + (k + 1/2) ds from the box's slab entry, each looked up.
         const float ds = m.step();
         const double exponent = double(step_factor);
@@ -195,9 +195,12 @@ TEST_CASE("hypertree render refuses bad options, naming them")
 {
     const auto store = slab(100, 2);
     const tree_shape shape = tree_shape::of(store);
+    // The options alone, the marcher and the GLSL emitter refuse alike.
     const auto refuses = [&](march_options o, const char* parameter) {
-        CHECK_THROWS_WITH_AS(volume_marcher<index_list_store>(store, shape, depth_colors{}, o), doctest::Contains(parameter),
+        CHECK_THROWS_WITH_AS(o.validate(store.volume(), shape.box), doctest::Contains(parameter), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(volume_marcher(store, shape, depth_colors{}, o), doctest::Contains(parameter),
                              krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(hypertree_glsl(store, shape, depth_colors{}, o), doctest::Contains(parameter), krs::invalid_parameter);
     };
     for (float bad : {0.0f, -1.0f, std::nanf("")}) {
         march_options o;
@@ -214,8 +217,10 @@ TEST_CASE("hypertree render refuses bad options, naming them")
     o = {};
     o.step_factor = 1e-6f;
     refuses(o, "march_options.step_factor");
+    CHECK_NOTHROW(o.validate()); // (a bound of the tree, not of the options alone)
     o.step_factor = 1e-4f; // 450 000 samples across the slab's box (diagonal 45): fine
-    CHECK_NOTHROW(volume_marcher<index_list_store>(store, shape, depth_colors{}, o));
+    CHECK_NOTHROW(volume_marcher(store, shape, depth_colors{}, o));
+    CHECK_NOTHROW(o.validate(store.volume(), shape.box));
     o = {};
     o.lights.assign(9, directional_light{});
     refuses(o, "march_options.lights");
@@ -243,9 +248,9 @@ TEST_CASE("hypertree render refuses bad options, naming them")
     o = {};
     o.min_transmittance = 2.0f;
     refuses(o, "march_options.min_transmittance");
-    CHECK_THROWS_WITH_AS(volume_marcher<index_list_store>(store, shape, depth_colors({{0, 3, {std::nanf(""), 0, 0}, {1, 1, 1}}})),
+    CHECK_THROWS_WITH_AS(volume_marcher(store, shape, depth_colors({{0, 3, {std::nanf(""), 0, 0}, {1, 1, 1}}})),
                          doctest::Contains("depth_colors.first"), krs::invalid_parameter);
-    const volume_marcher<index_list_store> m(store, shape, depth_colors{});
+    const volume_marcher m(store, shape, depth_colors{});
     const krs::pinhole_camera camera({16, 16, -40}, {16, 16, 16}, {0, 1, 0}, 40, 8, 8);
     for (int s : {0, 17}) {
         render_settings rs;
@@ -271,7 +276,7 @@ TEST_CASE("hypertree render packets give the scalar pixels")
 {
     const small_scene scene(small_tree());
     const auto shape = tree_shape::of(scene.parts);
-    const volume_marcher<partitioned_store> m(scene.parts, shape, depth_colors::tree(3, 6));
+    const volume_marcher m(scene.parts, shape, depth_colors::tree(3, 6));
     const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 48, 40);
     render_settings s;
     s.supersampling = 2;
@@ -309,8 +314,8 @@ TEST_CASE("hypertree render bounding spheres and the ray cache change no pixel")
     march_options with, without;
     with.use_spheres = true;
     without.use_spheres = false;
-    const volume_marcher<index_list_store> a(scene.list, shape, depth_colors::tree(3, 6), with);
-    const volume_marcher<index_list_store> b(scene.list, shape, depth_colors::tree(3, 6), without);
+    const volume_marcher a(scene.list, shape, depth_colors::tree(3, 6), with);
+    const volume_marcher b(scene.list, shape, depth_colors::tree(3, 6), without);
     const krs::pinhole_camera camera({0.0f, 0.7f, -2.2f}, {0, 0.6f, 0}, {0, 1, 0}, 45, 64, 56);
     const image with_spheres = render<float>(a, camera), box_only = render<float>(b, camera);
     CHECK(max_difference(with_spheres, box_only) == 0.0); // "change no pixel": not a one
@@ -491,7 +496,7 @@ TEST_CASE("hypertree shadow rays: a packet of points gives each lane the scalar 
     for (bool spheres : {false, true}) {
         march_options o;
         o.use_spheres = spheres;
-        const volume_marcher<index_list_store> m(scene.list, shape, depth_colors::tree(3, 6), o);
+        const volume_marcher m(scene.list, shape, depth_colors::tree(3, 6), o);
         const hypervolume& v = scene.list.volume();
         constexpr std::size_t n = krs::lane_count<krs::packet_f>;
         // Shadow rays from every non-empty voxel's center (and from points between voxels),
@@ -533,49 +538,6 @@ TEST_CASE("hypertree shadow rays: a packet of points gives each lane the scalar 
     }
 }
 
-TEST_CASE("hypertree probe: a packet whose rays leave bricks by the same faces skips exactly as lanes that choose their own")
-{
-    const small_scene scene(small_tree());
-    const volume_marcher<index_list_store> m(scene.list, tree_shape::of(scene.list), depth_colors::tree(3, 6));
-    using P = krs::packet_f;
-    using marcher = volume_marcher<index_list_store>;
-    constexpr std::size_t n = krs::lane_count<P>;
-    const krs::vec3f lo(scene.list.volume().origin()), size(scene.list.volume().extent());
-    std::uint32_t state = 9;
-    const auto uniform = [&] {
-        state = state * 1664525u + 1013904223u;
-        return float(state >> 8) * 0x1.0p-24f;
-    };
-    std::size_t skipping = 0, agreed = 0;
-    for (int round = 0; round < 3000; ++round) {
-        // Directions near one direction (same signs per axis, but for axes where it is near 0),
-        // sometimes exactly along an axis.
-        krs::vec3f base{uniform() * 2 - 1, uniform() * 2 - 1, uniform() * 2 - 1};
-        if (round % 7 == 0) base.y = 0;
-        std::array<float, n> px, py, pz, dx, dy, dz;
-        for (std::size_t k = 0; k < n; ++k) {
-            px[k] = lo.x + uniform() * size.x, py[k] = lo.y + uniform() * size.y, pz[k] = lo.z + uniform() * size.z;
-            const krs::vec3f d = krs::normalize(base + krs::vec3f{uniform(), uniform(), uniform()} * 0.05f);
-            dx[k] = d.x, dy[k] = round % 7 == 0 ? 0.0f : d.y, dz[k] = d.z;
-        }
-        const krs::vec3<P> p{P::load_unaligned(px.data()), P::load_unaligned(py.data()), P::load_unaligned(pz.data())};
-        const krs::vec3<P> d{P::load_unaligned(dx.data()), P::load_unaligned(dy.data()), P::load_unaligned(dz.data())};
-        P slope[3];
-        m.slopes_of(d, slope);
-        const marcher::exit_faces faces = marcher::faces_of(slope);
-        agreed += faces.along[0] != marcher::exit_faces::per_lane && faces.along[2] != marcher::exit_faces::per_lane;
-        const P margin(1e-3f);
-        const auto a = krs::lanes_of(m.probe_lanes(p, slope, krs::mask_t<P>(true), margin, faces).advance);
-        const auto b = krs::lanes_of(m.probe_lanes(p, slope, krs::mask_t<P>(true), margin, marcher::exit_faces{}).advance);
-        for (std::size_t k = 0; k < n; ++k) {
-            REQUIRE(a[k] == b[k]);
-            skipping += a[k] > 1;
-        }
-    }
-    CHECK(skipping > 1000); // the skips were compared
-    CHECK(agreed > 1000);   // and the packets' faces were known
-}
-
 TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of voxels shaded as rays meet them")
 {
     const small_scene scene(small_tree());
@@ -586,7 +548,7 @@ TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of
     spheres.use_spheres = true;
     const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 48, 40);
     for (const march_options& o : {march_options{}, two_lights, spheres}) {
-        const volume_marcher<index_list_store> m(scene.list, shape, depth_colors::tree(3, 6), o);
+        const volume_marcher m(scene.list, shape, depth_colors::tree(3, 6), o);
         // The shading pass: packets of voxels and one voxel at a time store the same values.
         shade_memo packets = m.new_shade_memo(), scalars = m.new_shade_memo();
         m.shade_bricks<krs::packet_f>(packets, 0, m.bricks().brick_count());
@@ -595,7 +557,7 @@ TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of
         REQUIRE(scalars.seal());
         const std::size_t values = packets.slots() * packets.stride();
         CHECK(std::equal(packets.values(), packets.values() + values, scalars.values()));
-        // Rays reading a sealed table (march_shaded) and rays shading as they go (march_shading).
+        // Rays reading a sealed table (march_shaded_ahead) and rays shading as they go (march_shading_as_met).
         render_settings ahead, as_met;
         as_met.shade_ahead = false;
         for (int s : {1, 2}) {

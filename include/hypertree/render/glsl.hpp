@@ -1,40 +1,55 @@
 #pragma once
 // The hypertree raymarcher as GLSL (paper section 8 on a GPU): the loop of volume_marcher
-// (marcher.hpp), emitted as a fragment-shader function that marches the same samples, stops at the
-// same transmittance and shades with the same formulas, so a GPU image of a tree equals the CPU
-// image up to the last bits of exp, pow and the float (not double) shading geometry.
+// (marcher.hpp), emitted as a fragment-shader function that marches the same samples through the
+// same bricks, stops at the same transmittance and shades with the same formulas and constants
+// (voxel_shading.hpp), so a GPU image of a tree equals the CPU image up to the last bits of exp,
+// pow and the float (not double) shading geometry.
 //
-//     const packed_volume texels = pack_volume(store);            // upload once as a 3D texture
-//     const std::string code = hypertree_glsl(store, shape, colors, options);
-//     // in the shader: vec4 m = march_hypertree(origin, unit_direction);
-//     //                color = m.rgb + m.a * background;           // as render() composites
+//     const packed_bricks bricks = pack_bricks(marcher.bricks());  // or pack_bricks(store)
+//     const std::string code = hypertree_glsl(store.volume(), bricks, shape, colors, options);
+//     // in the shader: vec4 m = krs_march_hypertree(origin, unit_direction);
+//     //                color = m.rgb + m.a * background;             // as render() composites
 //
 // Two parts, as NanoVDB splits a grid from the code that reads it:
 //
-// The volume is data: `pack_volume` writes the hypervolume's whole grid, two bytes per voxel
-// (density, level), in the store's index order x + nx (y + ny z), which is also OpenGL's 3D
-// texture order (x fastest, then rows along y, then slices along z). Upload it as an integer
-// texture, so the shader reads the bytes themselves and no normalization can round them:
+// The volume is data: the marcher's own bricks (voxel_bricks.hpp), the one layout both marchers
+// read, made by voxel_bricks' constructor from any store. `pack_bricks` does not lay anything out
+// again: it concatenates the brick arrays, word for word as they lie in the CPU's memory, into one
+// buffer of 32-bit words: the brick ranks (int32 per 4^3 brick of the grid, -1 when empty), the
+// block codes (int32 per 16^3 block, 0 or -64), then the densities and the levels by place
+// (rank * 64 + offset in the brick), four bytes to a word, the first in the low byte (the memory
+// order of a little-endian CPU). The GPU gets it as a buffer texture of R32UI texels:
 //
-//     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-//     glTexImage3D(GL_TEXTURE_3D, 0, GL_RG8UI, nx, ny, nz, 0, GL_RG_INTEGER, GL_UNSIGNED_BYTE, bytes);
-//     GL_TEXTURE_MIN_FILTER and GL_TEXTURE_MAG_FILTER = GL_NEAREST (integer textures are never filtered)
+//     glBindBuffer(GL_TEXTURE_BUFFER, buffer);
+//     glBufferData(GL_TEXTURE_BUFFER, words.size() * 4, words.data(), GL_STATIC_DRAW);
+//     glBindTexture(GL_TEXTURE_BUFFER, texture);
+//     glTexBuffer(GL_TEXTURE_BUFFER, GL_R32UI, buffer);
 //
-// and bind it to the sampler `<name>_volume` (a `usampler3D`, the shader's only uniform). Empty
-// voxels are (0, 0); the shader reads the texel with texelFetch, no filtering, no wrapping.
+// bound to the sampler `<prefix><name>_bricks` (a `usamplerBuffer`, the shader's only uniform),
+// read with texelFetch. The shader finds a voxel as voxel_bricks::view::place does (two reads, one
+// per level, then a byte of a word). A buffer texture holds GL_MAX_TEXTURE_BUFFER_SIZE texels, a
+// limit to query: GL guarantees only 65536, and tree A at resolution 300 takes about 1.2 million
+// words (75^3 brick ranks, and 25 000 non-empty bricks of 32 words).
 //
-// Everything else is constants in the code: the box, the grid and its mapping, the step, the
-// opacity per density byte (the marcher's table, computed by the same double pow), the color per
-// level, each axis's voxel centers (as the float the CPU rounds its double centers to, so per-voxel
-// shadow rays start from the same point), the part spheres, the structure flows, the crown sphere,
-// the lights and the shading weights. A tree with other options is new code; the volume texture
-// stays.
+// Everything else is constants in the code: the box, the grid and its mapping, the brick table's
+// sizes and offsets, the step, the opacity per density byte, the color per level, the lights and
+// the shading weights (all from voxel_shading, the C++ values the CPU uses), each axis's voxel
+// centers (as the float the CPU rounds its double centers to, so per-voxel shadow rays start from
+// the same point), the part spheres, the structure flows. A tree with other options is new code;
+// the bricks stay.
 //
-// What the GPU leaves out: the brick occupancy bits, the shadow memo and the ray cache. Each only
-// spares work on the CPU (a skipped brick is empty, a memoized shadow is a pure function of its
-// voxel, a cached voxel equals the store's), and none changes a pixel, so the GPU computes the
-// same values directly. The part-sphere test is kept (use_spheres): it also changes no pixel, but
-// it is the paper's traversal and costs the GPU a few dot products against a texel fetch.
+// Rays and shadow rays walk the bricks as the CPU's do (brick_walk::glsl, emitted from the walk's
+// own constants): a sample in an empty brick or 16^3 block is not looked up and the ray jumps to
+// the brick's exit, taking exactly the samples it would have stepped through. What the GPU
+// leaves out: the shadow memo (a memoized shadow is a pure function of its voxel) and the ray
+// cache (a cached voxel equals the bricks'). Each only spares work on the CPU and changes no
+// pixel, so the GPU computes the same values directly. The part-sphere test is kept
+// (use_spheres): it also changes no pixel, but it is the paper's traversal.
+//
+// Names: every global the code declares starts with the prefix (default krs_, checked by
+// krs::glsl::is_prefix as the KRS snippets' is) and then the tree's name: <prefix><name>_*, and
+// the march function <prefix>march_<name>. Distinct names or prefixes let several trees share one
+// shader.
 //
 // Precision. Sample positions, the slab test, cell indices, opacities and the front-to-back sums
 // are the same float operations in the same order as the C++ (bit for bit on llvmpipe when the
@@ -42,9 +57,16 @@
 // the crown depth and the flow normal in double, the GLSL in float (GLSL has no double exp, and
 // doubles are slow on many GPUs), and GLSL's exp and pow are a few ulp from the C library's.
 //
-// The code is one text for GLSL 3.30 and 4.x (no #version line; a 4.3 context runs it in the tests).
+// The code is one text for GLSL 3.30 and 4.x (no #version line; a 4.3 context runs it in the
+// tests). For Vulkan (SPIR-V) set hypertree_glsl_options::binding: the sampler then carries
+// layout(binding = N), which GLSL below 4.20 does not accept.
 
-#include "hypertree/render/marcher.hpp"
+#include "hypertree/render/brick_walk.hpp"
+#include "hypertree/render/march_options.hpp"
+#include "hypertree/render/tree_shape.hpp"
+#include "hypertree/render/voxel_bricks.hpp"
+#include "hypertree/render/voxel_shading.hpp"
+#include "krs/glsl/emitter.hpp"
 #include "krs/glsl/literal.hpp"
 
 #include <algorithm>
@@ -55,118 +77,103 @@
 
 namespace hypertree {
 
-// The grid of a store as the bytes of an RG8UI 3D texture: texels[2 i] = density and
-// texels[2 i + 1] = level of voxel index i = x + width (y + height z).
-struct packed_volume {
-    int width = 0, height = 0, depth = 0; // the hypervolume's grid (texture size in texels)
-    std::vector<std::uint8_t> texels;
+// The bricks of voxel_bricks as one buffer of 32-bit words (see above), with where each array
+// starts and the sizes the shader's constants need.
+struct packed_bricks {
+    std::vector<std::uint32_t> words;
+    std::uint32_t rank_offset = 0, block_offset = 0, density_offset = 0, level_offset = 0; // in words
+    std::array<std::uint32_t, 3> grid_bricks{}, grid_blocks{};
     int level_count = 1; // 1 + the deepest level stored: the length of the shader's color table
 };
 
-// Refuses a grid whose texture would exceed `budget` (a dense copy of the whole hypervolume:
-// 2 bytes per voxel, empty or not).
-template <voxel_store S>
-packed_volume pack_volume(const S& store, memory_budget budget = {})
+// Refuses bricks whose buffer would exceed `budget`, or 2^31 words (the shader's int offsets).
+inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budget = {})
 {
-    const hypervolume& v = store.volume();
-    const std::uint64_t bytes = v.voxel_count() * 2;
-    if (bytes > budget.bytes)
-        throw invalid_parameter("pack_volume", "the texture (2 bytes per voxel of the whole grid) exceeds the memory budget",
-                                std::to_string(bytes) + " bytes");
-    packed_volume out;
-    out.width = v.grid().x, out.height = v.grid().y, out.depth = v.grid().z;
-    out.texels.assign(std::size_t(bytes), 0);
-    store.for_each([&](voxel_index i, voxel value) {
-        out.texels[2 * std::size_t(i)] = value.density;
-        out.texels[2 * std::size_t(i) + 1] = value.level;
-        out.level_count = std::max(out.level_count, int(value.level) + 1);
-    });
+    const auto ranks = bricks.brick_ranks(), codes = bricks.block_codes();
+    const auto density = bricks.densities(), level = bricks.levels();
+    const std::size_t words = ranks.size() + codes.size() + (density.size() + 3) / 4 + (level.size() + 3) / 4;
+    if (words * 4 > budget.bytes || words >= (std::size_t(1) << 31))
+        throw krs::invalid_parameter("pack_bricks.bricks", "the buffer (4 bytes per brick and per block of the grid, 2 per voxel of "
+                                                          "the non-empty bricks) must fit the memory budget and 2^31 words",
+                                     std::to_string(words * 4) + " bytes");
+    packed_bricks out;
+    out.words.reserve(words);
+    for (std::int32_t r : ranks) out.words.push_back(std::uint32_t(r));
+    out.block_offset = std::uint32_t(out.words.size());
+    for (std::int32_t c : codes) out.words.push_back(std::uint32_t(c));
+    const auto bytes = [&](std::span<const std::uint8_t> b) {
+        for (std::size_t i = 0; i < b.size(); i += 4) {
+            std::uint32_t w = 0;
+            for (std::size_t k = 0; k < 4 && i + k < b.size(); ++k) w |= std::uint32_t(b[i + k]) << (8 * k);
+            out.words.push_back(w);
+        }
+    };
+    out.density_offset = std::uint32_t(out.words.size());
+    bytes(density);
+    out.level_offset = std::uint32_t(out.words.size());
+    bytes(level);
+    for (std::size_t a = 0; a < 3; ++a)
+        out.grid_bricks[a] = std::uint32_t(bricks.grid_bricks()[a]), out.grid_blocks[a] = std::uint32_t(bricks.grid_blocks()[a]);
+    out.level_count = level_count(bricks);
     return out;
+}
+template <voxel_store S>
+packed_bricks pack_bricks(const S& store, memory_budget budget = {})
+{
+    return pack_bricks(voxel_bricks(store), budget);
 }
 
 struct hypertree_glsl_options {
-    // The march function is march_<name>; its constants and helpers are <name>_*, its sampler
-    // <name>_volume. Distinct names let several trees share one shader.
+    // The tree's name in the code: <prefix><name>_* and <prefix>march_<name>.
     std::string name = "hypertree";
+    std::string prefix = "krs_";
+    // >= 0: the sampler is declared layout(binding = N) (GLSL 4.20 and later, Vulkan).
+    int binding = -1;
 };
 
-namespace detail {
-
-using krs::glsl::float_literal, krs::glsl::vec3_literal;
-
-inline std::string glsl_float_array(const std::string& name, const std::vector<float>& values)
-{
-    std::string s = "const float " + name + "[" + std::to_string(values.size()) + "] = float[" + std::to_string(values.size()) + "](";
-    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? (i % 8 ? ", " : ",\n    ") : "") + float_literal(values[i]);
-    return s + ");\n";
-}
-inline std::string glsl_vec3_array(const std::string& name, const std::vector<krs::vec3f>& values)
-{
-    std::string s = "const vec3 " + name + "[" + std::to_string(values.size()) + "] = vec3[" + std::to_string(values.size()) + "](";
-    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ",\n    " : "") + vec3_literal(values[i]);
-    return s + ");\n";
-}
-// Every `$` of a template becomes the name prefix.
-inline std::string with_name(std::string_view text, const std::string& name)
-{
-    std::string s;
-    s.reserve(text.size() + 64);
-    for (char c : text)
-        if (c == '$')
-            s += name;
-        else
-            s += c;
-    return s;
-}
-
-} // namespace detail
-
-// The GLSL of the marcher that volume_marcher(store, shape, colors, options) is: constants, the
-// sampler uniform and `vec4 march_<name>(vec3 origin, vec3 direction)` returning the premultiplied
-// color (rgb) and the remaining transmittance (a) of a ray with a unit direction, as
-// march_result. The texture bound to <name>_volume must be pack_volume(store).
-template <voxel_store S>
-std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_colors& colors, const march_options& options,
-                           const hypertree_glsl_options& glsl = {})
+// The GLSL of the marcher that volume_marcher(store, shape, colors, options) is, for the bricks
+// `bricks` = pack_bricks(store) of a store of `volume`: constants, the sampler uniform and
+// `vec4 <prefix>march_<name>(vec3 origin, vec3 direction)` returning the premultiplied color (rgb)
+// and the remaining transmittance (a) of a ray with a unit direction, as march_result.
+inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bricks, const tree_shape& shape, const depth_colors& colors,
+                                  const march_options& options, const hypertree_glsl_options& glsl = {})
 {
     using krs::glsl::float_literal, krs::glsl::vec3_literal;
-    // The marcher validates the options and normalizes the lights; building one here makes the
-    // same checks with the same messages.
-    const volume_marcher<S> marcher(store, shape, colors, options);
-    const std::string& n = glsl.name;
-    const hypervolume& v = store.volume();
-    int level_count = 1;
-    store.for_each([&](voxel_index, voxel value) { level_count = std::max(level_count, int(value.level) + 1); });
+    if (!krs::glsl::is_prefix(glsl.prefix))
+        throw krs::invalid_parameter("hypertree_glsl_options.prefix",
+                                     "must be lower-case letters, digits and _, start with a letter, end with _, not start with gl_ "
+                                     "and hold no __",
+                                     glsl.prefix);
+    if (!krs::glsl::is_name_part(glsl.name))
+        throw krs::invalid_parameter("hypertree_glsl_options.name",
+                                     "must be letters, digits and _, not starting with _ and without __ (it follows the prefix)", glsl.name);
+    options.validate(v, shape.box);
+    const voxel_shading shading(options, shape, colors);
+    const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
+    const std::string n = glsl.prefix + glsl.name;
+    const auto integer = [](auto i) { return std::to_string(i); };
 
     std::string s = "// hypertree volume marcher '" + n + "' (hypertree/render/glsl.hpp): the loop of volume_marcher.\n";
-    s += "// " + n + "_volume: RG8UI 3D texture of pack_volume(store), r = density, g = level.\n";
-    s += "uniform usampler3D " + n + "_volume;\n";
+    s += "// " + n + "_bricks: R32UI buffer texture of pack_bricks (voxel_bricks' arrays, word for word).\n";
+    s += (glsl.binding >= 0 ? "layout(binding = " + integer(glsl.binding) + ") " : std::string()) + "uniform usamplerBuffer " + n + "_bricks;\n";
     // The grid, as the marcher's floats.
     s += "const vec3 " + n + "_box_lo = " + vec3_literal(krs::vec3f(shape.box.lo)) + ";\n";
     s += "const vec3 " + n + "_box_hi = " + vec3_literal(krs::vec3f(shape.box.hi)) + ";\n";
     s += "const vec3 " + n + "_origin = " + vec3_literal(krs::vec3f(v.origin())) + ";\n";
-    s += "const vec3 " + n + "_cells_per_unit = " +
-         vec3_literal(krs::vec3f(v.cells_per_unit())) + ";\n";
-    s += "const ivec3 " + n + "_grid = ivec3(" + std::to_string(v.grid().x) + ", " + std::to_string(v.grid().y) + ", " +
-         std::to_string(v.grid().z) + ");\n";
-    s += "const float " + n + "_step = " + float_literal(marcher.step()) + ";\n";
+    s += "const vec3 " + n + "_cells_per_unit = " + vec3_literal(krs::vec3f(v.cells_per_unit())) + ";\n";
+    s += "const ivec3 " + n + "_grid = ivec3(" + integer(v.grid().x) + ", " + integer(v.grid().y) + ", " + integer(v.grid().z) + ");\n";
+    // The bricks' table (voxel_bricks::view).
+    s += "const int " + n + "_bricks_x = " + integer(bricks.grid_bricks[0]) + ";\n";
+    s += "const int " + n + "_bricks_xy = " + integer(bricks.grid_bricks[0] * bricks.grid_bricks[1]) + ";\n";
+    s += "const int " + n + "_blocks_x = " + integer(bricks.grid_blocks[0]) + ";\n";
+    s += "const int " + n + "_blocks_xy = " + integer(bricks.grid_blocks[0] * bricks.grid_blocks[1]) + ";\n";
+    s += "const int " + n + "_rank_offset = " + integer(bricks.rank_offset) + ";\n";
+    s += "const int " + n + "_block_offset = " + integer(bricks.block_offset) + ";\n";
+    s += "const int " + n + "_density_offset = " + integer(bricks.density_offset) + ";\n";
+    s += "const int " + n + "_level_offset = " + integer(bricks.level_offset) + ";\n";
+    s += "const float " + n + "_step = " + float_literal(walk.step()) + ";\n";
     s += "const float " + n + "_min_transmittance = " + float_literal(options.min_transmittance) + ";\n";
-    // Opacity of one step per density byte: alpha = 1 - (1 - mu)^(k ds / side), the marcher's table.
-    {
-        const double exponent = double(options.density_scale) * double(options.step_factor);
-        std::vector<float> alpha(256);
-        for (int d = 0; d < 256; ++d) alpha[std::size_t(d)] = d == 255 ? 1.0f : float(1.0 - std::pow(1.0 - d / 255.0, exponent));
-        s += detail::glsl_float_array(n + "_alpha", alpha);
-    }
-    {
-        std::vector<krs::vec3f> level_colors;
-        for (int l = 0; l < level_count; ++l) {
-            const rgb c = colors.at(l);
-            level_colors.push_back({c.r, c.g, c.b});
-        }
-        s += "const int " + n + "_level_count = " + std::to_string(level_count) + ";\n";
-        s += detail::glsl_vec3_array(n + "_level_color", level_colors);
-    }
+    s += shading.glsl_constants(n, bricks.level_count);
     // Voxel centers per axis: origin + (c + 1/2) side in double, then float, as the marcher's
     // per-voxel shading point.
     if (options.shade_per_voxel) {
@@ -177,14 +184,14 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
         for (int a = 0; a < 3; ++a) {
             std::vector<float> centers(static_cast<std::size_t>(counts[a]));
             for (int c = 0; c < counts[a]; ++c) centers[std::size_t(c)] = float(origins[a] + (c + 0.5) * sides[a]);
-            s += detail::glsl_float_array(n + "_center_" + axes[a], centers);
+            s += detail::glsl_float_array(n + "_center_" + axes[a], centers.data(), centers.size());
         }
     }
     const bool spheres = options.use_spheres && !shape.spheres.empty();
     if (spheres) {
         // center and radius^2 (the float product the marcher compares with)
         const std::size_t count = shape.spheres.size();
-        s += "const vec4 " + n + "_spheres[" + std::to_string(count) + "] = vec4[" + std::to_string(count) + "](";
+        s += "const vec4 " + n + "_spheres[" + integer(count) + "] = vec4[" + integer(count) + "](";
         for (std::size_t i = 0; i < count; ++i) {
             const krs::bounding_sphere& b = shape.spheres[i];
             s += (i ? ",\n    vec4(" : "vec4(") + float_literal(b.center.x) + ", " + float_literal(b.center.y) + ", " +
@@ -202,29 +209,8 @@ std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_
         }
         s += detail::glsl_vec3_array(n + "_flow_centroid", centroids);
         s += detail::glsl_vec3_array(n + "_flow_axis", axes);
-        s += detail::glsl_float_array(n + "_flow_soft", soft);
+        s += detail::glsl_float_array(n + "_flow_soft", soft.data(), soft.size());
     }
-    s += "const vec3 " + n + "_crown_center = " + vec3_literal(shape.crown.center) + ";\n";
-    s += "const float " + n + "_crown_radius = " + float_literal(shape.crown.radius) + ";\n";
-    {
-        std::vector<krs::vec3f> directions, light_colors;
-        for (const directional_light& l : options.lights) {
-            const krs::vec3d d(l.direction);
-            const krs::vec3d u = d / krs::length(d);
-            directions.push_back({float(u.x), float(u.y), float(u.z)});
-            light_colors.push_back({l.color.r, l.color.g, l.color.b});
-        }
-        s += "const int " + n + "_light_count = " + std::to_string(directions.size()) + ";\n";
-        if (!directions.empty()) {
-            s += detail::glsl_vec3_array(n + "_light_direction", directions);
-            s += detail::glsl_vec3_array(n + "_light_color", light_colors);
-        }
-    }
-    s += "const float " + n + "_ambient = " + float_literal(options.ambient) + ";\n";
-    s += "const float " + n + "_ambient_falloff = " + float_literal(options.ambient_falloff) + ";\n";
-    s += "const float " + n + "_diffuse = " + float_literal(options.diffuse) + ";\n";
-    s += "const float " + n + "_specular = " + float_literal(options.specular) + ";\n";
-    s += "const float " + n + "_shininess = " + float_literal(options.shininess) + ";\n";
 
     // Functions. Each mirrors the marcher member of the same name; sums are spelled out where
     // GLSL's dot or length might associate differently from krs::dot (x, then y, then z).
@@ -244,18 +230,19 @@ void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
     }
 }
 
-// The marcher's probe: the cell of p, false outside the grid (and outside every part sphere).
+)", n);
+    s += detail::with_name(R"(// The cell of p, false outside the grid (and outside every part sphere): a lookup by point;
+// the marches walk with $_probe.
 bool $_cell(vec3 p, out ivec3 cell) {
     cell = ivec3(0);
     float fx = (p.x - $_origin.x) * $_cells_per_unit.x, fy = (p.y - $_origin.y) * $_cells_per_unit.y,
           fz = (p.z - $_origin.z) * $_cells_per_unit.z;
     if (!(fx >= 0.0 && fy >= 0.0 && fz >= 0.0 && fx < float($_grid.x) && fy < float($_grid.y) && fz < float($_grid.z)))
         return false;
-)",
-                           n);
+)", n);
     if (spheres) {
         s += "    bool inside = false;\n";
-        s += "    for (int i = 0; i < " + std::to_string(shape.spheres.size()) + "; ++i) {\n";
+        s += "    for (int i = 0; i < " + integer(shape.spheres.size()) + "; ++i) {\n";
         s += detail::with_name(R"(        vec3 d = p - $_spheres[i].xyz;
         if ($_dot(d, d) <= $_spheres[i].w) {
             inside = true;
@@ -270,38 +257,79 @@ bool $_cell(vec3 p, out ivec3 cell) {
     return true;
 }
 
-// The voxel of a cell: x = density, y = level.
-uvec2 $_voxel(ivec3 cell) { return texelFetch($_volume, cell, 0).xy; }
-
-// fetch: the density at p, 0 outside the grid and the spheres.
-int $_density_at(vec3 p) {
-    ivec3 cell;
-    return $_cell(p, cell) ? int($_voxel(cell).x) : 0;
+// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), in [-64, -1]
+// when its brick is empty, below -64 when its 16^3 block is (>> of a negative int is arithmetic).
+int $_place(ivec3 c) {
+    int brick = (c.x >> 2) + (c.y >> 2) * $_bricks_x + (c.z >> 2) * $_bricks_xy;
+    int block = (c.x >> 4) + (c.y >> 4) * $_blocks_x + (c.z >> 4) * $_blocks_xy;
+    int rank = int(texelFetch($_bricks, $_rank_offset + brick).r);
+    int code = int(texelFetch($_bricks, $_block_offset + block).r);
+    return ((rank << 6) | (c.x & 3) | ((c.y & 3) << 2) | ((c.z & 3) << 4)) + ((rank >> 31) & code);
 }
 
-// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
-// out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's step and
-// early exit.
+// The voxel at a place >= 0: x = density, y = level. Byte k of word w is place 4 w + k.
+uvec2 $_voxel_at(int place) {
+    uint shift = uint(8 * (place & 3));
+    uint density = (texelFetch($_bricks, $_density_offset + (place >> 2)).r >> shift) & 255u;
+    uint level = (texelFetch($_bricks, $_level_offset + (place >> 2)).r >> shift) & 255u;
+    return uvec2(density, level);
+}
+
+// The voxel of a cell; (0, 0) in an empty brick.
+uvec2 $_voxel(ivec3 cell) {
+    int place = $_place(cell);
+    return place < 0 ? uvec2(0u) : $_voxel_at(place);
+}
+
+)",
+                           n);
+    s += walk.glsl(n);
+    s += "// Whether p lies in a part sphere (use_spheres; else always).\n";
+    if (spheres) {
+        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
+             detail::with_name(R"(; ++i) {
+        vec3 d = p - $_spheres[i].xyz;
+        if ($_dot(d, d) <= $_spheres[i].w) return true;
+    }
+    return false;
+}
+
+)",
+                               n);
+    } else {
+        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    return true;\n}\n\n", n);
+    }
+    s += detail::with_name(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
+// out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's brick walk
+// and early exit.
 float $_shadow_transmittance(vec3 p, vec3 l) {
     float t0, t1;
     $_enter_box(p, l, t0, t1);
     float transmittance = 1.0;
     float base = max(t0, 0.0);
-    for (int j = 1;; ++j) {
-        float t = base + float(j) * $_step;
+    vec3 slope = $_slopes(l);
+    float margin0 = $_margin_at_origin(p);
+    for (float j = 1.0;;) {
+        float t = base + j * $_step;
         if (!(t < t1 && transmittance >= $_min_transmittance)) break;
-        transmittance *= 1.0 - $_alpha[$_density_at(p + l * t)];
+        vec3 q = p + l * t;
+        ivec3 cell;
+        float advance;
+        int place = $_probe(q, slope, margin0 + t * $_rounding_per_step, cell, advance);
+        if (place >= 0 && $_in_spheres(q)) transmittance *= 1.0 - $_alpha[int($_voxel_at(place).x)];
+        j += advance;
     }
     return transmittance;
 }
 
-// tree_shape::normal_at: the structure-flow normal (zero without flows).
-vec3 $_normal(vec3 p) {
-    vec3 n = vec3(0.0);
 )",
                            n);
+    s += detail::with_name(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
+vec3 $_normal(vec3 p) {
+    vec3 n = vec3(0.0);
+)", n);
     if (!shape.flows.empty()) {
-        s += "    for (int i = 0; i < " + std::to_string(shape.flows.size()) + "; ++i) {\n";
+        s += "    for (int i = 0; i < " + integer(shape.flows.size()) + "; ++i) {\n";
         s += detail::with_name(R"(        vec3 d = p - $_flow_centroid[i];
         vec3 radial = d - $_flow_axis[i] * $_dot(d, $_flow_axis[i]);
         float w = 1.0 / ($_dot(d, d) + $_flow_soft[i]);
@@ -315,74 +343,41 @@ vec3 $_normal(vec3 p) {
     return len > 0.0 ? n / len : vec3(0.0);
 }
 
-// shade: Reeves' ambient falloff below the crown sphere, Lambert (and Blinn-Phong) with the flow
-// normal, each light attenuated by its shadow ray.
-vec3 $_shade(vec3 p, ivec3 cell, int level, vec3 view) {
-    vec3 base = $_level_color[min(level, $_level_count - 1)];
-    float depth = max(0.0, $_crown_radius - sqrt($_dot(p - $_crown_center, p - $_crown_center))) / max($_crown_radius, 1e-30);
-    float ambient = $_ambient * exp(-$_ambient_falloff * depth);
-    vec3 light = vec3(ambient), specular = vec3(0.0);
-    vec3 n = $_normal(p);
-    bool has_normal = n.x != 0.0 || n.y != 0.0 || n.z != 0.0;
 )",
                            n);
-    // (No lights: ambient only, and no loop over arrays GLSL could not declare with size 0.)
-    if (!options.lights.empty()) {
-        if (options.shadows) s += "    vec3 shadow_origin = p;\n";
-        s += "    for (int i = 0; i < " + n + "_light_count; ++i) {\n";
-        s += detail::with_name("        vec3 l = $_light_direction[i];\n", n);
-        s += options.shadows ? detail::with_name("        float shadow = $_shadow_transmittance(shadow_origin, l);\n", n)
-                             : "        float shadow = 1.0;\n";
-        s += detail::with_name(R"(        float lambert = has_normal ? max(0.0, $_dot(n, l)) * 0.75 + 0.25 : 1.0;
-        vec3 lc = $_light_color[i];
-        float d = $_diffuse * lambert * shadow;
-        light += d * lc;
-)",
-                               n);
-        // GLSL leaves pow(0, 0) undefined where C gives 1: a shininess of 0 is emitted as the 1.
-        const std::string highlight = options.shininess == 0 ? "1.0" : "pow(max(0.0, $_dot(n, h)), $_shininess)";
-        if (options.specular > 0)
-            s += detail::with_name(R"(        if (has_normal) {
-            vec3 h = l + view;
-            h = h / sqrt($_dot(h, h));
-            float s = $_specular * )" + highlight + R"( * shadow;
-            specular += s * lc;
-        }
-)",
-                                   n);
-        s += "    }\n";
-    }
-    s += detail::with_name(R"(    return base * light + specular;
-}
-
-)", n);
+    s += shading.glsl_shade(n);
     // The shading point: the voxel's center with shade_per_voxel (the marcher's per-voxel shading),
     // else the sample itself.
     s += detail::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
                                                    : "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return p;\n}\n\n",
                            n);
-    s += detail::with_name(R"(// march: samples at t0 + (k + 1/2) ds (computed from k, as the marcher does), front to back, until the ray leaves the box or the
-// transmittance falls below the minimum. Returns (premultiplied rgb, transmittance).
-vec4 march_$(vec3 origin, vec3 direction) {
-    float t0, t1;
+    s += "// march: samples at t0 + (k + 1/2) ds (computed from k, as the marcher does), front to back, until the ray leaves the box or the\n"
+         "// transmittance falls below the minimum. Returns (premultiplied rgb, transmittance).\n";
+    s += "vec4 " + glsl.prefix + "march_" + glsl.name + "(vec3 origin, vec3 direction) {\n";
+    s += detail::with_name(R"(    float t0, t1;
     $_enter_box(origin, direction, t0, t1);
     float ds = $_step;
     vec3 color = vec3(0.0);
     float transmittance = 1.0;
-    for (int k = 0;; ++k) {
-        float t = t0 + (float(k) + 0.5) * ds;
+    vec3 slope = $_slopes(direction);
+    float margin0 = $_margin_at_origin(origin);
+    for (float k = 0.0;;) {
+        float t = t0 + (k + 0.5) * ds;
         if (!(t < t1)) break;
         vec3 p = origin + direction * t;
         ivec3 cell;
-        if ($_cell(p, cell)) {
-            uvec2 v = $_voxel(cell);
+        float advance;
+        int place = $_probe(p, slope, margin0 + t * $_rounding_per_step, cell, advance);
+        if (place >= 0 && $_in_spheres(p)) {
+            uvec2 v = $_voxel_at(place);
             if (v.x != 0u) {
                 float a = $_alpha[int(v.x)];
-                vec3 c = $_shade($_shading_point(p, cell), cell, int(v.y), -direction);
+                vec3 c = $_shade($_shading_point(p, cell), int(v.y), -direction);
                 color = color + transmittance * a * c;
                 transmittance = transmittance * (1.0 - a);
             }
         }
+        k += advance;
         if (!(transmittance >= $_min_transmittance)) break;
     }
     return vec4(color, transmittance);
@@ -390,6 +385,14 @@ vec4 march_$(vec3 origin, vec3 direction) {
 )",
                            n);
     return s;
+}
+
+// The same for a store: its bricks packed as pack_bricks(store) packs them.
+template <voxel_store S>
+std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_colors& colors, const march_options& options,
+                           const hypertree_glsl_options& glsl = {})
+{
+    return hypertree_glsl(store.volume(), pack_bricks(store), shape, colors, options, glsl);
 }
 
 } // namespace hypertree

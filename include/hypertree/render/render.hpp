@@ -104,8 +104,8 @@ inline float jitter(std::uint32_t x, std::uint32_t y, std::uint32_t sample, std:
 // Rows per task of a render (see the end of render()).
 inline constexpr std::size_t rows_per_band = 8;
 
-template <class T = float, voxel_store S>
-image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera, const render_settings& settings = {})
+template <class T = float>
+image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, const render_settings& settings = {})
 {
     if (settings.supersampling < 1 || settings.supersampling > 16)
         throw krs::invalid_parameter("render_settings.supersampling", "must be in [1, 16]", std::to_string(settings.supersampling));
@@ -150,7 +150,7 @@ image render(const volume_marcher<S>& marcher, const krs::pinhole_camera& camera
             }
         std::vector<float> cr(count), cg(count), cb(count);
         // Packets go to the marcher `group` at a time (marching several at once hides the latency
-        // of each one's lookups: volume_marcher::march_shaded); the last ones repeat the last ray.
+        // of each one's lookups: volume_marcher::march_shaded_ahead); the last ones repeat the last ray.
         constexpr std::size_t group = 2, rays_per_group = group * lanes;
         for (std::size_t first = 0; first < count; first += rays_per_group) {
             std::array<krs::ray<T>, group> rays;

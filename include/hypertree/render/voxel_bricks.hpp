@@ -35,6 +35,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <new>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -155,6 +156,17 @@ public:
     {
         return {origin[0] + int(offset & 3), origin[1] + int((offset >> 2) & 3), origin[2] + int((offset >> 4) & 3)};
     }
+
+    // The arrays as they lie in memory, for a copy that must read as the marcher reads
+    // (pack_bricks, glsl.hpp): per 4^3 brick of the grid its rank or -1, x fastest; per 16^3 block
+    // its code; per place (rank * 64 + offset) the densities and the levels.
+    std::span<const std::int32_t> brick_ranks() const { return brick_rank_; }
+    std::span<const std::int32_t> block_codes() const { return block_code_; }
+    std::span<const std::uint8_t> densities() const { return {density_.data(), density_.size()}; }
+    std::span<const std::uint8_t> levels() const { return {level_.data(), level_.size()}; }
+    // Bricks and blocks per axis of the grid (the last ones may reach past it).
+    const std::array<std::size_t, 3>& grid_bricks() const { return brick_count_; }
+    const std::array<std::size_t, 3>& grid_blocks() const { return block_count_; }
 
     std::size_t voxel_count() const { return voxel_count_; }
     std::size_t brick_count() const { return mask_.size(); }

@@ -1,0 +1,213 @@
+#pragma once
+// The walk of a ray's samples through the bricks of voxel_bricks.hpp (like NanoVDB's HDDA, a
+// hierarchical walk that steps over empty nodes): one sample at a time, what the sample finds,
+// and how far the ray may jump when it lies in an empty brick or an empty 16^3 block.
+//
+// A ray's samples sit at t_k = t_0 + (k + 1/2) ds. `probe` maps a sample's position to its cell
+// ((p - origin) x cells per unit, truncated: the float operations the GLSL marcher repeats) and
+// its place in the bricks, and says whether the sample reads a voxel (`looks`: in the grid and in
+// a non-empty brick) and how many samples to advance: 1, or in an empty brick the steps to the
+// exit of the largest empty brick or block along the ray, less a margin for rounding (below) and
+// rounded up. The invariant: the samples a walk looks at are exactly the samples that plain
+// stepping (advance 1 always) finds in non-empty bricks, in the same order; only the empty ones
+// between are not computed (tested against such stepping and against a fine walk along the ray).
+//
+// Why the margin. The exit is predicted from this sample's position, but each sample's position
+// is computed anew in floats, p = o + d t then (p - origin) x cells per unit, with an error of a
+// few ulps of |o| + t + |origin|: 2^-21 of that in all, both samples' errors counted, in steps.
+// Close to the tree it is the 1e-3 of the exit's own rounding; from a camera 1000 units away it
+// grows to several steps, and skips stop short rather than jump over a voxel. `skip_margin`
+// gives it at t from `margin_at_origin(o)`, the part computed once per ray.
+//
+// The slopes are the t it takes to cross one cell along each axis (0 for an axis the ray does not
+// move along), so an empty brick costs multiplications. When all lanes of a packet leave a brick
+// by the same face along an axis (rays of neighbouring pixels nearly always do, shadow rays toward
+// one light always: `faces_of`), the exit is one product per axis instead of two and a choice per
+// lane; the same exit either way. One template serves a scalar ray (T = float) and a packet of
+// rays, one per lane (T = krs::packet_f); glsl() writes the same walk for the GPU marcher.
+
+#include "hypertree/render/voxel_bricks.hpp"
+#include "hypertree/volume.hpp"
+#include "krs/core/lanes.hpp"
+#include "krs/glsl/literal.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <string_view>
+
+namespace hypertree {
+
+class brick_walk {
+public:
+    // The directions of a packet's rays, per axis: all toward +, all toward -, all still, or mixed.
+    struct exit_faces {
+        enum face : int { low, high, none, per_lane };
+        face along[3] = {per_lane, per_lane, per_lane};
+    };
+
+    // What a sample finds, lane by lane: its cell (0 outside the grid), its place in the bricks
+    // (negative in an empty brick, below -64 in an empty block), whether it reads a voxel, and how
+    // many samples to advance.
+    template <class T>
+    struct probe_result {
+        krs::index_lanes<T> place;
+        krs::mask_t<T> looks;
+        T advance;
+        krs::index_lanes<T> cell[3];
+    };
+
+    brick_walk() = default;
+    // Samples `step` apart (world units) through the grid of `volume`.
+    brick_walk(const hypervolume& volume, float step)
+        : origin_(volume.origin()), cells_per_unit_(volume.cells_per_unit()), grid_{volume.grid().x, volume.grid().y, volume.grid().z},
+          step_(step), rounding_per_step_(float(0x1.0p-21 / double(step))),
+          grid_reach_(std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)}))
+    {
+    }
+
+    float step() const { return step_; }
+    const std::array<int, 3>& grid() const { return grid_; }
+
+    // The slopes of the lanes of a unit direction: 1 / (d * cells per unit) per axis, or 0.
+    template <class T>
+    void slopes_of(const krs::vec3<T>& d, T (&slope)[3]) const
+    {
+        using krs::select;
+        const T zero(0.0f), dir[3] = {d.x * T(cells_per_unit_.x), d.y * T(cells_per_unit_.y), d.z * T(cells_per_unit_.z)};
+        for (int a = 0; a < 3; ++a) slope[a] = select(dir[a] != zero, T(1.0f) / dir[a], zero);
+    }
+    template <class T>
+    static exit_faces faces_of(const T (&slope)[3])
+    {
+        using krs::all; // (unqualified below: packets take xsimd's, found by argument)
+        exit_faces faces;
+        const T zero(0.0f);
+        for (int a = 0; a < 3; ++a) {
+            if (all(slope[a] > zero)) faces.along[a] = exit_faces::high;
+            else if (all(slope[a] < zero)) faces.along[a] = exit_faces::low;
+            else if (all(slope[a] == zero)) faces.along[a] = exit_faces::none;
+        }
+        return faces;
+    }
+
+    // The sample at p of rays with these slopes and faces; lanes not `running` look at nothing.
+    // `margin` is skip_margin at the sample's t.
+    // `bricks` is the bricks' view_of(), best copied into a local before the loop (see there).
+    template <class T>
+    [[gnu::always_inline]] probe_result<T> probe(const voxel_bricks::view& bricks, const krs::vec3<T>& p, const T (&slope)[3],
+                                                 const krs::mask_t<T>& running, const T& margin, const exit_faces& faces) const
+    {
+        using I = krs::index_lanes<T>;
+        using krs::select, krs::min, krs::ceil, krs::index_to_float, krs::truncate_to_index;
+        const T zero(0.0f), one(1.0f);
+        const T f[3] = {(p.x - T(origin_.x)) * T(cells_per_unit_.x), (p.y - T(origin_.y)) * T(cells_per_unit_.y),
+                        (p.z - T(origin_.z)) * T(cells_per_unit_.z)};
+        auto inside = running;
+        for (int a = 0; a < 3; ++a) inside = inside & (f[a] >= zero) & (f[a] < T(float(grid_[std::size_t(a)])));
+        // Lanes outside the grid look up cell 0 (their result is not used): a float to int
+        // conversion outside int's range would be undefined.
+        I c[3];
+        for (int a = 0; a < 3; ++a) c[a] = krs::index_min(truncate_to_index(select(inside, f[a], zero)), I(grid_[std::size_t(a)] - 1));
+        const I place = bricks.place(c[0], c[1], c[2]);
+        const T found = index_to_float(place); // >= 0: a voxel; < -64: an empty 16^3 block
+        const krs::mask_t<T> looks = inside & (found >= zero);
+        const auto in_block = found < T(-64.5f);
+        T exit(3.0e38f);
+        for (int a = 0; a < 3; ++a) {
+            const T lo = select(in_block, index_to_float(c[a] & I(~15)), index_to_float(c[a] & I(~3)));
+            const T hi = lo + select(in_block, T(16.0f), T(4.0f));
+            switch (faces.along[a]) {
+            case exit_faces::high: exit = min(exit, (hi - f[a]) * slope[a]); break;
+            case exit_faces::low: exit = min(exit, (lo - f[a]) * slope[a]); break;
+            case exit_faces::none: break;
+            default: // lanes going different ways
+                exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
+            }
+        }
+        const T steps = ceil(exit / T(step_) - margin);
+        const T advance = select(inside & (found < zero), select(steps > one, min(steps, T(1.0e6f)), one), one);
+        return {place, looks, advance, {c[0], c[1], c[2]}};
+    }
+
+    // How many steps short of an empty brick's exit a skip must stop, for a ray from `from` at t:
+    // skip_margin(margin_at_origin(from), t).
+    template <class T>
+    T margin_at_origin(const krs::vec3<T>& from) const
+    {
+        using krs::abs, krs::max;
+        const T reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + T(grid_reach_);
+        return T(1e-3f) + reach * T(rounding_per_step_);
+    }
+    template <class T>
+    T skip_margin(const T& at_origin, const T& t) const
+    {
+        return at_origin + t * T(rounding_per_step_);
+    }
+
+    // The same walk as GLSL, for the marcher of glsl.hpp: constants $_grid_reach and
+    // $_rounding_per_step (this walk's floats), `float $_margin_at_origin(vec3 from)`,
+    // `vec3 $_slopes(vec3 d)` and `int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell,
+    // out float advance)`, which returns the sample's place (< 0: nothing to look at) and how many
+    // samples to advance, as probe() does for one lane. Every `$` is `name`; the caller emits
+    // $_origin, $_cells_per_unit, $_grid, $_step and `int $_place(ivec3)`
+    // (voxel_bricks::view::place) before it.
+    std::string glsl(const std::string& name) const
+    {
+        std::string s = "const float " + name + "_grid_reach = " + krs::glsl::float_literal(grid_reach_) + ";\n";
+        s += "const float " + name + "_rounding_per_step = " + krs::glsl::float_literal(rounding_per_step_) + ";\n";
+        for (char c : std::string_view(R"(
+// brick_walk::margin_at_origin: steps a skip stops short of an empty brick's exit, but for t.
+float $_margin_at_origin(vec3 from) {
+    float reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + $_grid_reach;
+    return 1e-3 + reach * $_rounding_per_step;
+}
+
+// brick_walk::probe for one ray: the place of the sample at p (< 0: none to look at), its cell,
+// and the samples to advance (1, or in an empty brick or block the whole steps to its exit).
+int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance) {
+    advance = 1.0;
+    cell = ivec3(0);
+    vec3 f = vec3((p.x - $_origin.x) * $_cells_per_unit.x, (p.y - $_origin.y) * $_cells_per_unit.y,
+                  (p.z - $_origin.z) * $_cells_per_unit.z);
+    if (!(f.x >= 0.0 && f.y >= 0.0 && f.z >= 0.0 && f.x < float($_grid.x) && f.y < float($_grid.y) && f.z < float($_grid.z)))
+        return -1;
+    cell = ivec3(min(int(f.x), $_grid.x - 1), min(int(f.y), $_grid.y - 1), min(int(f.z), $_grid.z - 1));
+    int place = $_place(cell);
+    if (place >= 0) return place;
+    bool in_block = place < -64;
+    float exit = 3.0e38;
+    for (int a = 0; a < 3; ++a) {
+        float lo = float(in_block ? (cell[a] & ~15) : (cell[a] & ~3));
+        float hi = lo + (in_block ? 16.0 : 4.0);
+        if (slope[a] > 0.0) exit = min(exit, (hi - f[a]) * slope[a]);
+        else if (slope[a] < 0.0) exit = min(exit, (lo - f[a]) * slope[a]);
+    }
+    float steps = ceil(exit / $_step - margin);
+    advance = steps > 1.0 ? min(steps, 1.0e6) : 1.0;
+    return -1;
+}
+
+// brick_walk::slopes_of: the t to cross one cell along each axis, 0 for an axis not moved along.
+vec3 $_slopes(vec3 d) {
+    vec3 s = vec3(d.x * $_cells_per_unit.x, d.y * $_cells_per_unit.y, d.z * $_cells_per_unit.z);
+    return vec3(s.x != 0.0 ? 1.0 / s.x : 0.0, s.y != 0.0 ? 1.0 / s.y : 0.0, s.z != 0.0 ? 1.0 / s.z : 0.0);
+}
+
+)"))
+            if (c == '$')
+                s += name;
+            else
+                s += c;
+        return s;
+    }
+
+private:
+    krs::vec3f origin_{}, cells_per_unit_{};
+    std::array<int, 3> grid_{};
+    float step_ = 1;
+    float rounding_per_step_ = 0, grid_reach_ = 0; // skip_margin's: 2^-21 / step, and max |origin|
+};
+
+} // namespace hypertree

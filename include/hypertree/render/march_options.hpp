@@ -1,0 +1,102 @@
+#pragma once
+// What a march of a hypertree is asked to do (paper section 8): the step, the opacity law's
+// scale, the early exit, the part spheres, and the shading weights and lights of section 8.3.
+//
+// `validate()` checks the options alone and names the first bad field; `validate(volume, box)`
+// adds the one bound that depends on the tree: how many samples a ray may take across its box.
+// The CPU marcher (marcher.hpp) and the GLSL emitter (glsl.hpp) both call it, so an option is
+// accepted or refused, with the same message, whichever of them is asked, and neither needs the
+// other to find out.
+
+#include "hypertree/render/transfer.hpp"
+#include "hypertree/store/store.hpp"
+#include "krs/core/validate.hpp"
+#include "krs/core/vec3.hpp"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace hypertree {
+
+struct directional_light {
+    krs::vec3f direction{0.4f, 0.8f, 0.45f}; // toward the light; normalized by the marcher
+    rgb color{1.0f, 0.97f, 0.9f};
+};
+
+struct march_options {
+    float step_factor = 1.0f;           // ds = step_factor * smallest voxel side
+    float density_scale = 1.0f;         // k of alpha = 1 - (1 - mu)^(k ds / side)
+    float min_transmittance = 1.0f / 256.0f;
+    // Skip lookups outside the secondary bounding spheres (8.2). Off by default: the brick
+    // occupancy bits already skip empty space, and testing every sphere at every sample then costs
+    // more than it saves (bench_hypertree_render: ~20% slower with them on tree A). The paper saw
+    // the same spread, "from 40% faster to twice slower".
+    bool use_spheres = false;
+    bool shadows = true;
+    // Shade at the voxel's center instead of the sample (the voxel is a homogeneous region, as in
+    // section 9), so one voxel's ambient, normal and shadow rays serve every sample in it
+    // (memoized for all threads of a render: see shade_memo.hpp). Off: everything per sample,
+    // shadow rays included: the reference the benchmark measures the difference against.
+    bool shade_per_voxel = true;
+    float ambient = 0.3f;
+    float ambient_falloff = 2.5f;       // per crown radius of depth below the crown sphere
+    float diffuse = 0.85f;
+    float specular = 0.0f;
+    float shininess = 24.0f;
+    std::vector<directional_light> lights{directional_light{}};
+
+    // A shading entry holds one shadow per light (shade_memo.hpp) in a fixed-size buffer.
+    static constexpr std::size_t max_lights = 8;
+
+    // Throws invalid_parameter naming the first field out of range.
+    void validate() const
+    {
+        krs::require_positive("march_options.step_factor", step_factor);
+        krs::require_positive("march_options.density_scale", density_scale);
+        krs::require_non_negative("march_options.min_transmittance", min_transmittance);
+        // Every shading term finite and non-negative: a NaN or infinite one made covered pixels
+        // NaN, a negative ambient made them negative; a transmittance floor above 1 stopped every
+        // ray after its first sample.
+        if (!(min_transmittance <= 1.0f))
+            throw krs::invalid_parameter("march_options.min_transmittance", "must be in [0, 1]", krs::detail::to_text(min_transmittance));
+        krs::require_non_negative("march_options.ambient", ambient);
+        krs::require_non_negative("march_options.ambient_falloff", ambient_falloff);
+        krs::require_non_negative("march_options.diffuse", diffuse);
+        krs::require_non_negative("march_options.specular", specular);
+        krs::require_non_negative("march_options.shininess", shininess);
+        for (const auto& light : lights) require_color("march_options.lights.color", light.color);
+        if (lights.size() > max_lights)
+            throw krs::invalid_parameter("march_options.lights", "may hold at most " + std::to_string(max_lights) + " lights",
+                                         std::to_string(lights.size()));
+        (void)light_directions();
+    }
+
+    // ... and for a tree: rays count their samples in floats, exact to 2^24, and a skip adds up to
+    // 10^6 at once, so a ray may take at most 2^23 samples across the box, or its count would stop
+    // growing. (The same float step and box corners the marcher uses.)
+    void validate(const hypervolume& volume, const world_box& box) const
+    {
+        validate();
+        const float step = step_factor * float(volume.smallest_voxel_side());
+        const krs::vec3f lo(box.lo), hi(box.hi);
+        const double samples = krs::length(krs::vec3d(hi - lo)) / double(step);
+        if (!(samples < double(1 << 23)))
+            throw krs::invalid_parameter("march_options.step_factor",
+                                         "must leave at most 2^23 samples across the tree's box (its diagonal / (step_factor x the smallest "
+                                         "voxel side) is " + std::to_string(samples) + ")",
+                                         std::to_string(step_factor));
+    }
+
+    // The lights' directions made unit. Finite and non-zero: an infinite component normalized to
+    // NaN, and every shadow ray then took a span of 1e31 that its float sample count never crossed.
+    std::vector<krs::vec3f> light_directions() const
+    {
+        std::vector<krs::vec3f> out;
+        out.reserve(lights.size());
+        for (const auto& light : lights) out.push_back(krs::require_direction("march_options.lights.direction", light.direction));
+        return out;
+    }
+};
+
+} // namespace hypertree
