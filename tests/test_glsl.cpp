@@ -8,10 +8,12 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <set>
 #include <string>
@@ -52,7 +54,7 @@ TEST_CASE("glsl folder is up to date with the emitter")
             ++files;
         }
     });
-    CHECK(files == 20);
+    CHECK(files == int(5 * ex::scene_names().size()));
 }
 
 TEST_CASE("glsl float literals read back as the same float")
@@ -81,23 +83,40 @@ TEST_CASE("shadertoy clips primary rays to a bounded scene's box without changin
     int bounded = 0;
     const auto check = [&](const auto& s) {
         INFO(s.name);
-        const bool is_bounded = s.field.bound_box().is_bounded();
-        const std::string text = krs::glsl::shadertoy(s.field, s.camera, s.name);
+        const bool is_bounded = krs::field_box(s.field).is_bounded();
+        REQUIRE(ex::files[4].target == krs::glsl::target::shadertoy);
+        const std::string text = ex::file_text(s, ex::files[4]);
         CHECK(occurrences(text, is_bounded ? "const bool KRS_CLIP = true;" : "const bool KRS_CLIP = false;") == 1);
         if (!is_bounded) return;
         ++bounded;
         const int width = 96, height = 72;
-        const std::vector<float> clipped = krs::glsl::render_reference(s.field, s.camera, width, height);
-        const std::vector<float> plain = krs::glsl::render_reference(s.field, s.camera, width, height, false);
+        const auto render = [&](const krs::glsl::view& camera, bool clip) {
+            if constexpr (krs::glsl::kernel_shaded<std::remove_cvref_t<decltype(s.field)>>)
+                return krs::glsl::render_reference(s.field, camera, width, height, clip);
+            else
+                return krs::glsl::render_reference(s.field, camera, s.albedo, width, height, clip);
+        };
+        const std::vector<float> clipped = render(s.camera, true);
+        const std::vector<float> plain = render(s.camera, false);
+        // Alpha is 1 everywhere: a pixel shows the scene where it differs from the sky alone (the
+        // same view with nothing in reach).
+        krs::glsl::view empty = s.camera;
+        empty.max_distance = 1e-6f;
+        const std::vector<float> sky = render(empty, false);
+        const auto hit = [&](const std::vector<float>& frame, std::size_t i) {
+            return frame[i] != sky[i] || frame[i + 1] != sky[i + 1] || frame[i + 2] != sky[i + 2];
+        };
         // A clipped ray starts elsewhere, so its samples, and the point inside the hit threshold
         // where it stops, differ: the shading at that point moves a little (and a shadow ray
         // from it may flip), but what is hit does not.
-        std::size_t hit_differs = 0;
+        std::size_t hit_differs = 0, hits = 0;
         double difference = 0;
-        for (std::size_t i = 0; i < clipped.size(); ++i) {
-            if (i % 4 == 3) hit_differs += clipped[i] != plain[i];
-            difference += std::abs(clipped[i] - plain[i]);
+        for (std::size_t i = 0; i < clipped.size(); i += 4) {
+            hit_differs += hit(clipped, i) != hit(plain, i);
+            hits += hit(plain, i);
+            for (std::size_t c = 0; c < 4; ++c) difference += std::abs(clipped[i + c] - plain[i + c]);
         }
+        CHECK(hits > std::size_t(width * height / 20));
         MESSAGE(s.name << ": hit/miss differs on " << hit_differs << " pixels, mean |difference| "
                        << difference / double(clipped.size()));
         CHECK(hit_differs <= std::size_t(width * height / 500));
@@ -360,4 +379,66 @@ TEST_CASE("glsl fractals: KIFS and similar shells emit by recursion, pack agrees
     CHECK(occurrences(adjacent, "for (int j = -1; j <= 1; ++j)") == 1);
     CHECK(occurrences(adjacent, "float krs_box_distance(") == 1);
     CHECK(adjacent.find("inf") == std::string::npos);
+}
+
+TEST_CASE("shadertoy_view: at rest the baked camera, an orbit about the pivot's vertical, a rigid basis")
+{
+    const krs::glsl::view v = ex::tree().camera;
+    const auto equal = [](const krs::vec3f& a, const krs::vec3f& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+    const auto same = [&](const krs::glsl::view& a, const krs::glsl::view& b) {
+        return equal(a.eye, b.eye) && equal(a.forward, b.forward) && equal(a.right, b.right) && equal(a.up, b.up);
+    };
+    // No time, no drag, or the pointer at the frame's centre: the baked camera, bit for bit (the
+    // program's frame at rest is held against render_reference of this very camera).
+    CHECK(same(krs::glsl::shadertoy_view(v, 0.0f, 0.0f, 0.0f, 160.0f, 120.0f), v));
+    CHECK(same(krs::glsl::shadertoy_view(v, 0.0f, 80.0f, 60.0f, 160.0f, 120.0f), v));
+    const float radius = krs::length(v.eye - v.pivot);
+    for (const float time : {7.0f, 0.5f * v.orbit_seconds, v.orbit_seconds}) {
+        const krs::glsl::view o = krs::glsl::shadertoy_view(v, time, 0.0f, 0.0f, 160.0f, 120.0f);
+        INFO("time " << time);
+        // About the vertical through the pivot: height and distance kept, the angle turned is
+        // 2 pi time / orbit_seconds (measured in the horizontal plane, in double).
+        CHECK(o.eye.y == doctest::Approx(v.eye.y).epsilon(1e-5));
+        CHECK(krs::length(o.eye - v.pivot) == doctest::Approx(radius).epsilon(1e-5));
+        const double a0 = std::atan2(double(v.eye.z - v.pivot.z), double(v.eye.x - v.pivot.x));
+        const double a1 = std::atan2(double(o.eye.z - v.pivot.z), double(o.eye.x - v.pivot.x));
+        const double turned = std::remainder(a0 - a1, 2.0 * std::numbers::pi); // x toward z is negative yaw
+        const double expected = std::remainder(2.0 * std::numbers::pi * double(time) / double(v.orbit_seconds),
+                                               2.0 * std::numbers::pi);
+        CHECK(std::abs(std::remainder(turned - expected, 2.0 * std::numbers::pi)) <= 1e-4);
+        // Still an orthonormal basis, and still looking at the pivot.
+        CHECK(krs::length(o.forward) == doctest::Approx(1.0f).epsilon(1e-5));
+        CHECK(std::abs(krs::dot(o.forward, o.right)) <= 1e-5f);
+        CHECK(std::abs(krs::dot(o.forward, o.up)) <= 1e-5f);
+        CHECK(std::abs(krs::dot(o.right, o.up)) <= 1e-5f);
+        CHECK(krs::length(krs::cross(o.forward, krs::normalize(v.pivot - o.eye))) <= 1e-5f);
+    }
+    // A vertical drag tilts about the right axis: the right axis stays, the eye's height changes.
+    const krs::glsl::view tilted = krs::glsl::shadertoy_view(v, 0.0f, 80.0f, 100.0f, 160.0f, 120.0f);
+    CHECK(krs::length(tilted.right - v.right) <= 1e-6f);
+    CHECK(std::abs(tilted.eye.y - v.eye.y) > 0.1f * radius);
+    CHECK(krs::length(tilted.eye - v.pivot) == doctest::Approx(radius).epsilon(1e-5));
+    // orbit_seconds 0 keeps the camera still.
+    krs::glsl::view still = v;
+    still.orbit_seconds = 0.0f;
+    CHECK(same(krs::glsl::shadertoy_view(still, 12.0f, 0.0f, 0.0f, 160.0f, 120.0f), still));
+}
+
+TEST_CASE("shadertoy refuses bad orbits and frame sizes by name")
+{
+    const auto s = ex::kifs_koch();
+    krs::glsl::view v = s.camera;
+    v.orbit_seconds = -1.0f;
+    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, v, s.name, s.albedo), doctest::Contains("view.orbit_seconds"),
+                         krs::invalid_parameter);
+    for (const int bad : {0, -3, 16385}) {
+        INFO(bad);
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.albedo, bad, 8),
+                             doctest::Contains("glsl.render_reference.width"), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.albedo, 8, bad),
+                             doctest::Contains("glsl.render_reference.height"), krs::invalid_parameter);
+    }
+    // Alpha 1 everywhere, the sky too (premultiplied-alpha pages would show through a 0).
+    const std::vector<float> frame = krs::glsl::render_reference(s.field, s.camera, s.albedo, 16, 12);
+    for (std::size_t i = 3; i < frame.size(); i += 4) CHECK(frame[i] == 1.0f);
 }
