@@ -22,12 +22,16 @@ inline int thread_count(int requested)
 }
 
 // Writes linear RGB floats (row-major, top row first) as an 8-bit sRGB-ish PNG (gamma 2.2),
-// creating the folder. Returns false after printing OpenImageIO's reason.
-inline bool write_png(const std::string& path, int width, int height, const std::vector<float>& rgb)
+// creating the folder. Returns false after printing OpenImageIO's reason. `gamma` 1 writes values
+// that are already encoded for display (a shader's output) as they are: round(255 v), as a GL
+// framebuffer of 8-bit channels stores them.
+inline bool write_png(const std::string& path, int width, int height, const std::vector<float>& rgb, float gamma = 2.2f)
 {
     std::vector<unsigned char> bytes(rgb.size());
-    for (std::size_t i = 0; i < rgb.size(); ++i)
-        bytes[i] = (unsigned char)std::lround(255.0f * std::pow(std::clamp(rgb[i], 0.0f, 1.0f), 1.0f / 2.2f));
+    for (std::size_t i = 0; i < rgb.size(); ++i) {
+        const float v = std::clamp(rgb[i], 0.0f, 1.0f);
+        bytes[i] = (unsigned char)std::lround(255.0f * (gamma == 1.0f ? v : std::pow(v, 1.0f / gamma)));
+    }
     const std::filesystem::path folder = std::filesystem::path(path).parent_path();
     std::error_code made;
     if (!folder.empty()) std::filesystem::create_directories(folder, made);
