@@ -54,7 +54,18 @@ TEST_CASE("glsl folder is up to date with the emitter")
             ++files;
         }
     });
-    CHECK(files == int(5 * ex::scene_names().size()));
+    CHECK(files == 5 * 14);
+}
+
+TEST_CASE("glsl example scenes: one per scene of the examples")
+{
+    // The list of issue 22: krs_tree's tree; krs_scenes' forest, terrain, rock, coral, grass and
+    // sponge; krs_fractals' five KIFS presets and cube singularity; the log-spherical lotus.
+    const std::vector<std::string> expected{"tree",        "forest",    "terrain",     "rock",
+                                            "coral",       "grass",     "sponge",      "kifs_square",
+                                            "kifs_cube",   "kifs_menger", "kifs_sierpinski", "kifs_koch",
+                                            "lotus",       "cube_singularity"};
+    CHECK(ex::scene_names() == expected);
 }
 
 TEST_CASE("glsl float literals read back as the same float")

@@ -27,6 +27,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace {
@@ -459,7 +460,7 @@ TEST_CASE("Every Shadertoy program in glsl/ on llvmpipe matches its CPU referenc
         check_frame(s);
         ++programs;
     });
-    CHECK(programs == int(ex::scene_names().size()));
+    CHECK(programs == 14); // tests/test_glsl.cpp checks the names
 }
 
 TEST_CASE("Shadertoy programs orbit with iTime and iMouse as shadertoy_view says")
@@ -695,4 +696,39 @@ TEST_CASE("GLSL log-spherical presets match the C++ field on llvmpipe")
         CHECK(worst <= 1e-5);
         CHECK(near_seam <= points.size() / 100);
     });
+}
+
+TEST_CASE("GLSL field scenes (not sequences) match the C++ field on llvmpipe")
+{
+    // The sequences' distances, locate and shade are checked above (check_scene); here the other
+    // example scenes, in both data modes, at points of the box the scene's tests sample. The
+    // log-spherical shells scale with r = |p|, so their error is relative, as for the presets
+    // above: |d_gpu - d_cpu| / max(|d_cpu|, 1e-3 r).
+    int scenes = 0;
+    ex::for_each_scene([&](const auto& s) {
+        using F = std::remove_cvref_t<decltype(s.field)>;
+        if constexpr (!krs::glsl::kernel_shaded<F>) {
+            ++scenes;
+            constexpr bool shell = std::is_same_v<F, krs::recursive_lotus> || std::is_same_v<F, krs::cube_singularity>;
+            const std::vector<vec3f> points = sample_points(s, 16384);
+            for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
+                const std::vector<float> gpu = gpu_distances(s.field, s.name, points, mode);
+                double worst = 0;
+                std::size_t exact = 0;
+                for (std::size_t i = 0; i < points.size(); ++i) {
+                    const float d = s.field.distance(points[i]);
+                    const double e = std::abs(double(gpu[i]) - double(d));
+                    worst = std::max(worst, shell ? e / std::max(std::abs(double(d)), 1e-3 * double(krs::length(points[i])))
+                                                  : e / double(s.extent()));
+                    exact += gpu[i] == d;
+                }
+                std::printf("%-16s %-9s points %zu  max |d_gpu - d_cpu| %s %.3g  bit-equal %zu\n", s.name.c_str(),
+                            mode == krs::glsl::data_mode::buffer ? "buffer" : "constants", points.size(),
+                            shell ? "/ max(|d|, 1e-3 r)" : "/ extent", worst, exact);
+                INFO(s.name);
+                CHECK(worst <= 1e-5);
+            }
+        }
+    });
+    CHECK(scenes == 8); // coral, the five KIFS presets, the lotus and the cube singularity
 }
