@@ -12,33 +12,48 @@
 // target writes the whole program for Shadertoy's Image tab. --reference renders that program's
 // math in C++ (krs::glsl::render_reference) at W x H (default 640 x 360) as the program shows it
 // at iTime = 0 with no mouse drag: hold a GPU frame of the program at the same size against it
-// (8-bit values, as a framebuffer stores them). With --output as well, both files are written.
+// (8-bit values, as a framebuffer stores them). With --output as well, both files are written, or
+// neither: both are made in memory first, and a file whose writing fails is removed.
 
 #include "krs/glsl/example_scenes.hpp"
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
 
 namespace {
 
+bool to_stdout(const std::string& path) { return path.empty() || path == "-"; }
+
+// Writes text to path (empty or -: stdout); a file half written is removed.
 bool write(const std::string& path, const std::string& text)
 {
-    if (path.empty() || path == "-") {
+    if (to_stdout(path)) {
         std::cout << text;
         return bool(std::cout);
     }
     std::ofstream out(path, std::ios::binary);
+    const bool opened = out.is_open();
     out << text;
-    if (!out) {
-        std::fprintf(stderr, "glsl_export: cannot write %s\n", path.c_str());
-        return false;
-    }
-    return true;
+    out.close(); // flushes: a full disk shows here
+    if (opened && !out.fail()) return true;
+    std::fprintf(stderr, "glsl_export: cannot write %s\n", path.c_str());
+    std::error_code ignored;
+    if (opened) std::filesystem::remove(path, ignored); // only what this call created or truncated
+    return false;
+}
+
+bool ends_with_png(std::string path)
+{
+    std::transform(path.begin(), path.end(), path.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return path.size() > 4 && path.ends_with(".png");
 }
 
 // RGBA rows bottom-up (as the GPU reads them back) to an RGB PNG, top row first. The values are
@@ -96,6 +111,9 @@ int main(int argc, char** argv)
     if (reference.empty() && (args.app().count("--width") > 0 || args.app().count("--height") > 0))
         args.fail("--width, --height: apply to the reference frame: give --reference FILE.png");
     if (!reference.empty() && !all.empty()) args.fail("--reference: writes one scene's frame, not with --all");
+    // OpenImageIO picks the format by the extension: a .jpg would be lossy, not the 8-bit values.
+    if (args.app().count("--reference") > 0 && !ends_with_png(reference))
+        args.fail("--reference: '" + reference + "' is not a .png file (the frame is written as PNG only)");
     try {
         if (!all.empty()) {
             bool ok = true;
@@ -121,10 +139,18 @@ int main(int argc, char** argv)
         bool ok = false;
         ex::for_each_scene([&](const auto& s) {
             if (s.name != scene) return;
-            ok = true;
-            if (reference.empty() || !output.empty()) ok = write(output, ex::file_text(s, kind, prefix));
-            if (!reference.empty()) ok = write_reference(reference, ex::reference_frame(s, s.camera, width, height),
-                                                         width, height) && ok;
+            // Both made in memory first (either may throw), then written; a failed PNG takes the
+            // text file written just before it away too, so the command leaves both or neither.
+            const bool text_wanted = reference.empty() || !output.empty();
+            const std::string text = text_wanted ? ex::file_text(s, kind, prefix) : std::string();
+            const std::vector<float> frame =
+                reference.empty() ? std::vector<float>() : ex::reference_frame(s, s.camera, width, height);
+            ok = !text_wanted || write(output, text);
+            if (ok && !reference.empty()) {
+                ok = write_reference(reference, frame, width, height);
+                std::error_code ignored;
+                if (!ok && text_wanted && !to_stdout(output)) std::filesystem::remove(output, ignored);
+            }
         });
         return ok ? 0 : 1;
     } catch (const std::exception& e) {
