@@ -31,7 +31,11 @@
 #include "krs/model/terrain.hpp"
 #include "krs/model/tree.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <numbers>
+#include <type_traits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -46,6 +50,7 @@ struct scene {
     vec3f sample_center{}; // tests sample points in the box center +- sample_half
     vec3f sample_half{1, 1, 1};
     vec3f albedo{0.7f, 0.68f, 0.64f}; // of a field shaded by its gradient (sequences: by kernel type)
+    std::vector<vec3f> palette{};      // a sequence's albedo per kernel type (glsl::palette_of; empty: by type)
     float extent() const { return length(sample_half); }
 };
 
@@ -71,10 +76,12 @@ inline scene<model::tree_sequence> forest()
     const bounding_sphere b = built.bound;
     const vec3f look = b.center;
     const vec3f eye = look + vec3f{0.35f, 0.45f, -1.0f} * (1.1f * b.radius);
-    return {"forest", built.sequence,
-            view::look_at(eye, look - vec3f{0, 0.15f * b.radius, 0}, {0, 1, 0}, 45.0f, {0.4f, 0.85f, -0.3f},
-                          6.0f * b.radius),
-            b.center, vec3f{b.radius, 0.5f * b.radius, b.radius}};
+    scene<model::tree_sequence> s{"forest", built.sequence,
+                                  view::look_at(eye, look - vec3f{0, 0.15f * b.radius, 0}, {0, 1, 0}, 45.0f,
+                                                {0.4f, 0.85f, -0.3f}, 6.0f * b.radius),
+                                  b.center, vec3f{b.radius, 0.5f * b.radius, b.radius}};
+    s.camera.min_elevation = 8.0f; // the trees' crowns reach the orbit's circle below 4 degrees
+    return s;
 }
 
 inline scene<model::plane_sequence> terrain()
@@ -82,9 +89,12 @@ inline scene<model::plane_sequence> terrain()
     model::terrain_parameters t;
     t.levels = 28;
     model::plane_sequence s = model::build_terrain(t);
-    return {"terrain", s, view::look_at({-4.0f, 7.0f, -16.0f}, {6.0f, -1.0f, 10.0f}, {0, 1, 0}, 55.0f,
-                                        {-0.6f, 0.45f, 0.4f}, 120.0f),
-            {5.0f, 0.0f, 10.0f}, {15.0f, 4.0f, 15.0f}};
+    scene<model::plane_sequence> built{"terrain", s,
+                                       view::look_at({-4.0f, 7.0f, -16.0f}, {6.0f, -1.0f, 10.0f}, {0, 1, 0}, 55.0f,
+                                                     {-0.6f, 0.45f, 0.4f}, 120.0f),
+                                       {5.0f, 0.0f, 10.0f}, {15.0f, 4.0f, 15.0f}};
+    built.camera.min_elevation = 14.0f; // hills cross the orbit's circle up to 11 degrees
+    return built;
 }
 
 inline scene<model::sponge_sequence> sponge()
@@ -138,9 +148,14 @@ inline scene<model::grass_sequence> grass()
     into.y = 0;
     into = length(into) > 1e-3f ? normalize(into) : vec3f{0, 0, 1};
     const vec3f eye = vec3f{0, p.ground_height + 0.7f, 0} - into * 0.8f;
-    return {"grass", built.sequence,
-            view::look_at(eye, eye + into * 3.0f - vec3f{0, 0.9f, 0}, {0, 1, 0}, 50.0f, scenes_sun, 40.0f),
-            eye + into * 3.0f, {2.0f, 0.5f, 2.0f}};
+    // Blades green (the middle of krs_scenes' blade colours), the ground its soil.
+    static_assert(std::is_same_v<model::grass_sequence, sequence<torus_capsule, plane>>);
+    scene<model::grass_sequence> s{
+        "grass", built.sequence,
+        view::look_at(eye, eye + into * 3.0f - vec3f{0, 0.9f, 0}, {0, 1, 0}, 50.0f, scenes_sun, 40.0f),
+        eye + into * 3.0f, {2.0f, 0.5f, 2.0f}, {}, {{0.26f, 0.385f, 0.115f}, {0.30f, 0.26f, 0.16f}}};
+    s.camera.min_elevation = 10.0f; // blades reach the orbit's circle below 6 degrees
+    return s;
 }
 
 // A KIFS gallery frame of krs_fractals: its preset, eye and target, 40 degrees, its albedo.
@@ -180,17 +195,27 @@ inline scene<koch_curve> kifs_koch()
 // free of the shell's cubes at every scale.
 inline scene<cube_singularity> cube_singularity_scene()
 {
-    return {"cube_singularity", make_cube_singularity(1.0f),
-            view::look_at({-2.2f, 0.35f, -2.2f}, {0, 0, 0}, {0, 1, 0}, 50.0f, fractals_light, 20.0f), {0, 0, 0},
-            {2.0f, 2.0f, 2.0f}, {0.75f, 0.50f, 0.85f}};
+    scene<cube_singularity> s{"cube_singularity", make_cube_singularity(1.0f),
+                              view::look_at({-2.2f, 0.35f, -2.2f}, {0, 0, 0}, {0, 1, 0}, 50.0f, fractals_light, 20.0f),
+                              {0, 0, 0}, {2.0f, 2.0f, 2.0f}, {0.75f, 0.50f, 0.85f}};
+    s.camera.max_elevation = 30.0f; // the diagonal's cubes (35.3 degrees) hold the eye's radius near 36
+    return s;
 }
 
-// The recursive lotus (8 petals a shell, one shell per e-fold of radius), seen from above its side.
+// The recursive lotus (8 petals a shell, one shell per e-fold of radius), looking down its axis z
+// (the view's vertical, so iTime orbits about it) from 75 degrees above the petals' plane. Petals
+// rise at 15 to 55 degrees (58.7 with their radius) at every scale, so the cone above 60 degrees
+// is empty at every radius: the eye, orbiting and tilted within [65, 85] degrees, is outside
+// every shell's petals.
 inline scene<recursive_lotus> lotus()
 {
-    return {"lotus", make_recursive_lotus(1.0f, 8),
-            view::look_at({1.4f, 1.9f, -2.4f}, {0, 0, 0}, {0, 1, 0}, 50.0f, fractals_light, 20.0f), {0, 0, 0},
-            {2.0f, 2.0f, 2.0f}, {0.90f, 0.55f, 0.65f}};
+    const double elevation = 75.0 * std::numbers::pi / 180.0, radius = 3.3;
+    const vec3f eye = vec3f(vec3d{0.0, -std::cos(elevation), std::sin(elevation)} * radius);
+    scene<recursive_lotus> s{"lotus", make_recursive_lotus(1.0f, 8),
+                             view::look_at(eye, {0, 0, 0}, {0, 0, 1}, 50.0f, {0.35f, -0.45f, 0.82f}, 20.0f),
+                             {0, 0, 0}, {2.0f, 2.0f, 2.0f}, {0.90f, 0.55f, 0.65f}};
+    s.camera.min_elevation = 65.0f;
+    return s;
 }
 
 // Calls fn(scene) for each example scene, in the order of the names below.
@@ -235,6 +260,8 @@ inline constexpr std::array<file_kind, 5> files{{
     {".buffer450.glsl", target::glsl450, data_mode::buffer},
     {".shadertoy.glsl", target::shadertoy, data_mode::constants},
 }};
+// The kind of the whole Shadertoy program among them.
+inline constexpr file_kind shadertoy_file = *std::ranges::find(files, target::shadertoy, &file_kind::target);
 
 // The text of one file for one scene (a snippet's names start with `prefix`; a Shadertoy program
 // is a whole program and keeps krs_).
@@ -242,7 +269,7 @@ template <class S>
 std::string file_text(const scene<S>& s, const file_kind& kind, const std::string& prefix = "krs_")
 {
     if (kind.target == target::shadertoy) {
-        if constexpr (kernel_shaded<S>) return shadertoy(s.field, s.camera, s.name);
+        if constexpr (kernel_shaded<S>) return shadertoy(s.field, s.camera, s.name, s.palette);
         else return shadertoy(s.field, s.camera, s.name, s.albedo);
     }
     emitter e({kind.target, kind.mode, s.name + "_data", 0, prefix});
@@ -252,12 +279,23 @@ std::string file_text(const scene<S>& s, const file_kind& kind, const std::strin
 
 // The CPU reference of the scene's Shadertoy program (krs::glsl::render_reference) seen through
 // `camera` (s.camera is the program's at iTime = 0 and no drag; shadertoy_view gives the others):
-// RGBA floats, rows bottom-up.
+// RGBA floats, rows bottom-up. `clip_to_box` false traces primary rays unclipped.
 template <class S>
-std::vector<float> reference_frame(const scene<S>& s, const view& camera, int width, int height)
+std::vector<float> reference_frame(const scene<S>& s, const view& camera, int width, int height,
+                                   bool clip_to_box = true)
 {
-    if constexpr (kernel_shaded<S>) return render_reference(s.field, camera, width, height);
-    else return render_reference(s.field, camera, s.albedo, width, height);
+    if constexpr (kernel_shaded<S>) return render_reference(s.field, camera, width, height, clip_to_box, s.palette);
+    else return render_reference(s.field, camera, s.albedo, width, height, clip_to_box);
+}
+
+// The sky alone through the scene's camera (the same view with nothing in reach): a pixel shows
+// the scene where reference_frame differs from this.
+template <class S>
+std::vector<float> sky_frame(const scene<S>& s, int width, int height)
+{
+    view empty = s.camera;
+    empty.max_distance = 1e-6f;
+    return reference_frame(s, empty, width, height, false);
 }
 
 } // namespace krs::glsl::examples
