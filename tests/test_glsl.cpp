@@ -557,6 +557,39 @@ TEST_CASE("shadertoy grass: blades green, ground soil (the scene's palette, not 
     CHECK(occurrences(text, "if (kind == 0u) return " + krs::glsl::vec3_literal(palette[0]) + ";") == 1);
 }
 
+TEST_CASE("glsl distance_only: no locate, shade or their structs; a gradient-shaded program has none")
+{
+    // The coral's warp holds a sequence: without distance_only its program carried the sequence's
+    // _locate and _shade and the krs_location structs, none of which it calls.
+    int fields = 0;
+    ex::for_each_scene([&](const auto& s) {
+        INFO(s.name);
+        const std::string text = ex::file_text(s, ex::shadertoy_file);
+        if constexpr (krs::glsl::kernel_shaded<std::remove_cvref_t<decltype(s.field)>>) {
+            CHECK(occurrences(text, "krs_" + s.name + "_shade(") == 2); // defined, called
+        } else {
+            ++fields;
+            CHECK(occurrences(text, "krs_location") == 0);
+            CHECK(occurrences(text, "krs_kernel_shading") == 0);
+            CHECK(occurrences(text, "_locate(") == 0);
+            CHECK(occurrences(text, "_shade(") == 0);
+            CHECK(occurrences(text, "float krs_" + s.name + "(vec3 ") == 1);
+        }
+    });
+    CHECK(fields == 8);
+    // A snippet keeps them unless asked.
+    const auto sponge = ex::sponge();
+    krs::glsl::options o;
+    const std::string full = krs::glsl::emit(sponge.field, "sponge", o);
+    o.distance_only = true;
+    const std::string lean = krs::glsl::emit(sponge.field, "sponge", o);
+    CHECK(occurrences(full, "krs_sponge_locate(") == 1);
+    CHECK(occurrences(lean, "krs_sponge_locate(") == 0);
+    CHECK(occurrences(lean, "krs_sponge_shade(") == 0);
+    CHECK(occurrences(lean, "struct krs_location") == 0);
+    CHECK(occurrences(lean, "float krs_sponge(vec3 p)") == 1);
+}
+
 TEST_CASE("shadertoy refuses bad orbits and frame sizes by name")
 {
     const auto s = ex::kifs_koch();

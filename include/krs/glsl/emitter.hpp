@@ -80,6 +80,8 @@ struct options {
     std::string data_name = "data";     // the vec4 array is prefix + data_name; its block + "_block"
     int binding = 0;                    // the block's binding for glsl450 buffers
     std::string prefix = "krs_";        // of every global name the text declares
+    bool distance_only = false;         // no _locate / _shade, no krs_location structs (a program
+                                        // that shades by the gradient needs only the distance)
 };
 
 // A letter, digit or _: what GLSL names are made of.
@@ -445,8 +447,8 @@ private:
     // Everything after the version and precision lines, before renaming.
     std::string internal_text() const
     {
-        return guarded("KRS_GLSL_COMMON", common_library) + library_ + data_declaration() + constants_comments_ +
-               functions_;
+        return (options_.distance_only ? std::string() : guarded("KRS_GLSL_COMMON", common_library)) + library_ +
+               data_declaration() + constants_comments_ + functions_;
     }
 
     // ---- data -----------------------------------------------------------------------------

@@ -427,7 +427,9 @@ template <field F>
     requires(!kernel_shaded<F>)
 std::string shadertoy(const F& f, const view& v, const std::string& name, const vec3f& albedo)
 {
-    emitter e({target::shadertoy, data_mode::constants, name + "_data", 0});
+    // Shaded by the gradient: the distance is all the program calls (a sequence inside a warp would
+    // bring its _locate and _shade, and the krs_location structs, otherwise).
+    emitter e({target::shadertoy, data_mode::constants, name + "_data", 0, "krs_", true});
     v.validate();
     e.add(f, name);
     std::string library = e.source();
