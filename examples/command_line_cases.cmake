@@ -77,7 +77,8 @@ krs_case(krs_fractals      0 "--width;--output-dir"                             
 krs_case(krs_fractals      0 "total:;12 frames"                                    --width 4 --height 4 --threads 1 --output-dir <out>)
 
 # glsl_export
-krs_case(glsl_export       2 "--scene;'sky';one of tree|forest|terrain|sponge"     --scene sky)
+krs_case(glsl_export       2 "--scene;'sky';one of tree|forest|"                   --scene sky) # the list: test_glsl.cpp
+krs_case(glsl_export       2 "--scene;'kifs'"                                      --scene kifs)
 krs_case(glsl_export       2 "--target;'460';one of 330|450|es300|shadertoy"       --target 460)
 krs_case(glsl_export       2 "--mode;'texture';one of constants|buffer"            --mode texture)
 krs_case(glsl_export       2 "--output;missing"                                    --output)
@@ -90,9 +91,24 @@ krs_case(glsl_export       2 "--prefix;'app'"                                   
 krs_case(glsl_export       2 "--prefix;Shadertoy"                                  --target shadertoy --prefix app_)
 krs_case(glsl_export       2 "--all;'--scene'"                                     --all --scene tree)
 krs_case(glsl_export       2 "--version"                                           --version)
+krs_case(glsl_export       2 "--width;'0';an integer in [1, 16384]"                --reference <out>/r.png --width 0)
+krs_case(glsl_export       2 "--width;'16385';[1, 16384]"                          --reference <out>/r.png --width 16385)
+krs_case(glsl_export       2 "--height;'0';[1, 16384]"                             --reference <out>/r.png --height 0)
+krs_case(glsl_export       2 "--height;'16385';[1, 16384]"                         --reference <out>/r.png --height 16385)
+krs_case(glsl_export       2 "--height;'12x'"                                      --reference <out>/r.png --height 12x)
+krs_case(glsl_export       2 "--width;--reference"                                 --width 64)
+krs_case(glsl_export       2 "--reference;--all"                                   --reference <out>/r.png --all <out>)
+krs_case(glsl_export       2 "--reference;missing"                                 --reference)
+krs_case(glsl_export       2 "--reference;'k.jpg';.png"                            --reference k.jpg)
+krs_case(glsl_export       2 "--reference;'k.png.exr';.png"                        --reference k.png.exr)
 krs_case(glsl_export       0 "--scene;--target;--mode"                             --help)
 krs_case(glsl_export       0 ""                                                    --scene sponge --target 330 --output <out>/sponge.glsl)
 krs_case(glsl_export       0 ""                                                    --scene tree --target 450 --mode uniform-buffer
                                                                                    --output <out>/tree.ubo450.glsl)
 krs_case(glsl_export       0 ""                                                    --scene forest --prefix forest_gen_
                                                                                    --output <out>/forest.prefixed.glsl)
+krs_case(glsl_export       0 ""                                                    --scene kifs_koch --reference <out>/kifs_koch.png
+                                                                                   --width 16 --height 9)
+# What the PNG holds and what a failed write leaves: cmake/check_glsl_reference.cmake.
+krs_case(glsl_export       0 ""                                                    --scene lotus --target shadertoy --output <out>/lotus.shadertoy.glsl
+                                                                                   --reference <out>/lotus.png --width 8 --height 8)

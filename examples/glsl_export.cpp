@@ -1,35 +1,74 @@
-// glsl_export: writes an example scene's GLSL (krs::glsl) to a file or stdout.
+// glsl_export: writes an example scene's GLSL (krs::glsl) to a file or stdout, or the CPU
+// reference frame of its Shadertoy program to a PNG file.
 //
-//   glsl_export --scene tree|forest|terrain|sponge --target 330|450|es300|shadertoy
-//               --mode constants|buffer [--output FILE]
+//   glsl_export --scene NAME --target 330|450|es300|shadertoy --mode constants|buffer|uniform-buffer
+//               [--output FILE]
+//   glsl_export --scene NAME --reference FILE.png [--width W] [--height H]
 //   glsl_export --all DIR      regenerates every file of the repository's glsl/ folder
 //
-// Snippets have no #version line (paste them after your own); a shadertoy target writes the
-// whole program for Shadertoy's Image tab.
+// NAME is one of the scenes of krs/glsl/example_scenes.hpp (tree, forest, terrain, rock, coral,
+// grass, sponge, kifs_square, kifs_cube, kifs_menger, kifs_sierpinski, kifs_koch, lotus,
+// cube_singularity). Snippets have no #version line (paste them after your own); a shadertoy
+// target writes the whole program for Shadertoy's Image tab. --reference renders that program's
+// math in C++ (krs::glsl::render_reference) at W x H (default 640 x 360) as the program shows it
+// at iTime = 0 with no mouse drag: hold a GPU frame of the program at the same size against it
+// (8-bit values, as a framebuffer stores them). With --output as well, both files are written, or
+// neither: both are made in memory first, and a file whose writing fails is removed.
 
 #include "krs/glsl/example_scenes.hpp"
 
 #include "support/command_line.hpp"
+#include "support/example_io.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
 
 namespace {
 
+bool to_stdout(const std::string& path) { return path.empty() || path == "-"; }
+
+// Writes text to path (empty or -: stdout); a file half written is removed.
 bool write(const std::string& path, const std::string& text)
 {
-    if (path.empty() || path == "-") {
+    if (to_stdout(path)) {
         std::cout << text;
         return bool(std::cout);
     }
     std::ofstream out(path, std::ios::binary);
+    const bool opened = out.is_open();
     out << text;
-    if (!out) {
-        std::fprintf(stderr, "glsl_export: cannot write %s\n", path.c_str());
-        return false;
-    }
+    out.close(); // flushes: a full disk shows here
+    if (opened && !out.fail()) return true;
+    std::fprintf(stderr, "glsl_export: cannot write %s\n", path.c_str());
+    std::error_code ignored;
+    if (opened) std::filesystem::remove(path, ignored); // only what this call created or truncated
+    return false;
+}
+
+bool ends_with_png(std::string path)
+{
+    std::transform(path.begin(), path.end(), path.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return path.size() > 4 && path.ends_with(".png");
+}
+
+// RGBA rows bottom-up (as the GPU reads them back) to an RGB PNG, top row first. The values are
+// already encoded for display (the program takes sqrt of the colour), so no gamma is applied;
+// alpha is 1 everywhere and left out.
+bool write_reference(const std::string& path, const std::vector<float>& rgba, int width, int height)
+{
+    std::vector<float> rgb(std::size_t(width) * std::size_t(height) * 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            for (int c = 0; c < 3; ++c)
+                rgb[(std::size_t(height - 1 - y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(c)] =
+                    rgba[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 4 + std::size_t(c)];
+    if (!example::write_png(path, width, height, rgb, 1.0f)) return false;
+    std::fprintf(stderr, "glsl_export: wrote the %dx%d reference frame to %s\n", width, height, path.c_str());
     return true;
 }
 
@@ -41,7 +80,7 @@ int main(int argc, char** argv)
     std::string scene = "tree", target = "450", mode = "constants", output, all;
     example::command_line args("glsl_export", "Writes an example scene's GLSL to a file or stdout; --all DIR "
                                               "regenerates every file of the repository's glsl/ folder.");
-    args.choice("--scene", scene, {"tree", "forest", "terrain", "sponge"}, "the scene");
+    args.choice("--scene", scene, ex::scene_names(), "the scene");
     args.choice("--target", target, {"330", "450", "es300", "shadertoy"}, "the GLSL dialect");
     args.choice("--mode", mode, {"constants", "buffer", "uniform-buffer"},
                 "the scene's data as constants, in a buffer (UBO for 330 and ES, SSBO for 450), or in a "
@@ -59,9 +98,22 @@ int main(int argc, char** argv)
             },
             "", "prefix"));
     args.text("--all", all, "write every scene in every target and mode into this folder", "DIR");
+    std::string reference;
+    int width = 640, height = 360;
+    args.text("--reference", reference, "write the CPU reference frame of the scene's Shadertoy program to this PNG file",
+              "FILE.png");
+    // As large as a GL framebuffer may be (GL_MAX_RENDERBUFFER_SIZE is 16384 on llvmpipe).
+    args.integer("--width", width, 1, 16384, "the reference frame's width in pixels (with --reference)");
+    args.integer("--height", height, 1, 16384, "the reference frame's height in pixels (with --reference)");
     args.parse(argc, argv);
     if (prefix != "krs_" && (target == "shadertoy" || !all.empty()))
         args.fail("--prefix: applies to snippets, not to a Shadertoy program or the glsl/ folder (--all)");
+    if (reference.empty() && (args.app().count("--width") > 0 || args.app().count("--height") > 0))
+        args.fail("--width, --height: apply to the reference frame: give --reference FILE.png");
+    if (!reference.empty() && !all.empty()) args.fail("--reference: writes one scene's frame, not with --all");
+    // OpenImageIO picks the format by the extension: a .jpg would be lossy, not the 8-bit values.
+    if (args.app().count("--reference") > 0 && !ends_with_png(reference))
+        args.fail("--reference: '" + reference + "' is not a .png file (the frame is written as PNG only)");
     try {
         if (!all.empty()) {
             bool ok = true;
@@ -86,7 +138,19 @@ int main(int argc, char** argv)
         else kind.mode = krs::glsl::data_mode::uniform_buffer; // the only word left: --mode checked it
         bool ok = false;
         ex::for_each_scene([&](const auto& s) {
-            if (s.name == scene) ok = write(output, ex::file_text(s, kind, prefix));
+            if (s.name != scene) return;
+            // Both made in memory first (either may throw), then written; a failed PNG takes the
+            // text file written just before it away too, so the command leaves both or neither.
+            const bool text_wanted = reference.empty() || !output.empty();
+            const std::string text = text_wanted ? ex::file_text(s, kind, prefix) : std::string();
+            const std::vector<float> frame =
+                reference.empty() ? std::vector<float>() : ex::reference_frame(s, s.camera, width, height);
+            ok = !text_wanted || write(output, text);
+            if (ok && !reference.empty()) {
+                ok = write_reference(reference, frame, width, height);
+                std::error_code ignored;
+                if (!ok && text_wanted && !to_stdout(output)) std::filesystem::remove(output, ignored);
+            }
         });
         return ok ? 0 : 1;
     } catch (const std::exception& e) {

@@ -8,10 +8,13 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
+#include <numbers>
 #include <sstream>
 #include <set>
 #include <string>
@@ -52,7 +55,18 @@ TEST_CASE("glsl folder is up to date with the emitter")
             ++files;
         }
     });
-    CHECK(files == 20);
+    CHECK(files == 5 * 14);
+}
+
+TEST_CASE("glsl example scenes: one per scene of the examples")
+{
+    // The list of issue 22: krs_tree's tree; krs_scenes' forest, terrain, rock, coral, grass and
+    // sponge; krs_fractals' five KIFS presets and cube singularity; the log-spherical lotus.
+    const std::vector<std::string> expected{"tree",        "forest",    "terrain",     "rock",
+                                            "coral",       "grass",     "sponge",      "kifs_square",
+                                            "kifs_cube",   "kifs_menger", "kifs_sierpinski", "kifs_koch",
+                                            "lotus",       "cube_singularity"};
+    CHECK(ex::scene_names() == expected);
 }
 
 TEST_CASE("glsl float literals read back as the same float")
@@ -81,23 +95,30 @@ TEST_CASE("shadertoy clips primary rays to a bounded scene's box without changin
     int bounded = 0;
     const auto check = [&](const auto& s) {
         INFO(s.name);
-        const bool is_bounded = s.field.bound_box().is_bounded();
-        const std::string text = krs::glsl::shadertoy(s.field, s.camera, s.name);
+        const bool is_bounded = krs::field_box(s.field).is_bounded();
+        const std::string text = ex::file_text(s, ex::shadertoy_file);
         CHECK(occurrences(text, is_bounded ? "const bool KRS_CLIP = true;" : "const bool KRS_CLIP = false;") == 1);
         if (!is_bounded) return;
         ++bounded;
         const int width = 96, height = 72;
-        const std::vector<float> clipped = krs::glsl::render_reference(s.field, s.camera, width, height);
-        const std::vector<float> plain = krs::glsl::render_reference(s.field, s.camera, width, height, false);
+        const std::vector<float> clipped = ex::reference_frame(s, s.camera, width, height, true);
+        const std::vector<float> plain = ex::reference_frame(s, s.camera, width, height, false);
+        // Alpha is 1 everywhere: a pixel shows the scene where it differs from the sky alone.
+        const std::vector<float> sky = ex::sky_frame(s, width, height);
+        const auto hit = [&](const std::vector<float>& frame, std::size_t i) {
+            return frame[i] != sky[i] || frame[i + 1] != sky[i + 1] || frame[i + 2] != sky[i + 2];
+        };
         // A clipped ray starts elsewhere, so its samples, and the point inside the hit threshold
         // where it stops, differ: the shading at that point moves a little (and a shadow ray
         // from it may flip), but what is hit does not.
-        std::size_t hit_differs = 0;
+        std::size_t hit_differs = 0, hits = 0;
         double difference = 0;
-        for (std::size_t i = 0; i < clipped.size(); ++i) {
-            if (i % 4 == 3) hit_differs += clipped[i] != plain[i];
-            difference += std::abs(clipped[i] - plain[i]);
+        for (std::size_t i = 0; i < clipped.size(); i += 4) {
+            hit_differs += hit(clipped, i) != hit(plain, i);
+            hits += hit(plain, i);
+            for (std::size_t c = 0; c < 4; ++c) difference += std::abs(clipped[i + c] - plain[i + c]);
         }
+        CHECK(hits > std::size_t(width * height / 20));
         MESSAGE(s.name << ": hit/miss differs on " << hit_differs << " pixels, mean |difference| "
                        << difference / double(clipped.size()));
         CHECK(hit_differs <= std::size_t(width * height / 500));
@@ -360,4 +381,230 @@ TEST_CASE("glsl fractals: KIFS and similar shells emit by recursion, pack agrees
     CHECK(occurrences(adjacent, "for (int j = -1; j <= 1; ++j)") == 1);
     CHECK(occurrences(adjacent, "float krs_box_distance(") == 1);
     CHECK(adjacent.find("inf") == std::string::npos);
+}
+
+TEST_CASE("shadertoy_view: at rest the baked camera, an orbit about the pivot's vertical, a rigid basis")
+{
+    const krs::glsl::view v = ex::tree().camera;
+    const auto equal = [](const krs::vec3f& a, const krs::vec3f& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+    const auto same = [&](const krs::glsl::view& a, const krs::glsl::view& b) {
+        return equal(a.eye, b.eye) && equal(a.forward, b.forward) && equal(a.right, b.right) && equal(a.up, b.up);
+    };
+    // No time, no drag, or the pointer at the frame's centre: the baked camera, bit for bit (the
+    // program's frame at rest is held against render_reference of this very camera).
+    CHECK(same(krs::glsl::shadertoy_view(v, 0.0f, 0.0f, 0.0f, 160.0f, 120.0f), v));
+    CHECK(same(krs::glsl::shadertoy_view(v, 0.0f, 80.0f, 60.0f, 160.0f, 120.0f), v));
+    const float radius = krs::length(v.eye - v.pivot);
+    for (const float time : {7.0f, 0.5f * v.orbit_seconds, v.orbit_seconds}) {
+        const krs::glsl::view o = krs::glsl::shadertoy_view(v, time, 0.0f, 0.0f, 160.0f, 120.0f);
+        INFO("time " << time);
+        // About the vertical through the pivot: height and distance kept, the angle turned is
+        // 2 pi time / orbit_seconds (measured in the horizontal plane, in double).
+        CHECK(o.eye.y == doctest::Approx(v.eye.y).epsilon(1e-5));
+        CHECK(krs::length(o.eye - v.pivot) == doctest::Approx(radius).epsilon(1e-5));
+        const double a0 = std::atan2(double(v.eye.z - v.pivot.z), double(v.eye.x - v.pivot.x));
+        const double a1 = std::atan2(double(o.eye.z - v.pivot.z), double(o.eye.x - v.pivot.x));
+        const double turned = std::remainder(a0 - a1, 2.0 * std::numbers::pi); // x toward z is negative yaw
+        const double expected = std::remainder(2.0 * std::numbers::pi * double(time) / double(v.orbit_seconds),
+                                               2.0 * std::numbers::pi);
+        CHECK(std::abs(std::remainder(turned - expected, 2.0 * std::numbers::pi)) <= 1e-4);
+        // Still an orthonormal basis, and still looking at the pivot.
+        CHECK(krs::length(o.forward) == doctest::Approx(1.0f).epsilon(1e-5));
+        CHECK(std::abs(krs::dot(o.forward, o.right)) <= 1e-5f);
+        CHECK(std::abs(krs::dot(o.forward, o.up)) <= 1e-5f);
+        CHECK(std::abs(krs::dot(o.right, o.up)) <= 1e-5f);
+        CHECK(krs::length(krs::cross(o.forward, krs::normalize(v.pivot - o.eye))) <= 1e-5f);
+    }
+    // The pointer above the centre tilts about the right axis and raises the eye.
+    const krs::glsl::view tilted = krs::glsl::shadertoy_view(v, 0.0f, 80.0f, 100.0f, 160.0f, 120.0f);
+    CHECK(krs::length(tilted.right - v.right) <= 1e-6f);
+    CHECK(tilted.eye.y - v.eye.y > 0.1f * radius);
+    CHECK(krs::length(tilted.eye - v.pivot) == doctest::Approx(radius).epsilon(1e-5));
+    // orbit_seconds 0 keeps the camera still.
+    krs::glsl::view still = v;
+    still.orbit_seconds = 0.0f;
+    CHECK(same(krs::glsl::shadertoy_view(still, 12.0f, 0.0f, 0.0f, 160.0f, 120.0f), still));
+}
+
+TEST_CASE("shadertoy_view: pointer up raises the eye, the elevation stays in range, the eye outside the scene")
+{
+    // Elevation of the eye seen from the pivot, in degrees above the plane across the vertical,
+    // measured from the eye's position (the code clamps an angle read from the forward axis).
+    const auto elevation = [](const krs::glsl::view& v, const krs::glsl::view& o) {
+        const krs::vec3d offset = krs::vec3d(o.eye - v.pivot);
+        return std::asin(krs::dot(offset, krs::normalize(krs::vec3d(v.vertical))) / krs::length(offset)) * 180.0 /
+               std::numbers::pi;
+    };
+    constexpr float width = 160, height = 120;
+    int scenes = 0;
+    ex::for_each_scene([&](const auto& s) {
+        INFO(s.name);
+        const krs::glsl::view& v = s.camera;
+        const double rest = elevation(v, v);
+        const double lowest = std::min(rest, double(v.min_elevation)) - 1e-3;
+        const double highest = std::max(rest, double(v.max_elevation)) + 1e-3;
+        // Straight up and down from the centre (no turn about the vertical): up raises, down lowers
+        // (or stays, where the baked elevation is already the lowest allowed).
+        const double up = elevation(v, krs::glsl::shadertoy_view(v, 0.0f, 0.5f * width, 0.9f * height, width, height));
+        const double down = elevation(v, krs::glsl::shadertoy_view(v, 0.0f, 0.5f * width, 0.1f * height, width, height));
+        CHECK(up > rest + 1.0);
+        CHECK(down <= rest + 1e-3);
+        // Anywhere the pointer goes, at any time, the elevation is within the range and the eye
+        // outside the scene (above the ground, never past the pole).
+        for (const float time : {0.0f, 17.0f, 1e5f})
+            for (int column = 0; column < 24; ++column) // every 15 degrees of turn
+                for (const float y : {1.0f, 0.25f * height, 0.5f * height, 0.75f * height, height}) {
+                    const float x = 1.0f + float(column) * (width - 1.0f) / 23.0f;
+                    const krs::glsl::view o = krs::glsl::shadertoy_view(v, time, x, y, width, height);
+                    INFO("time " << time << " pointer " << x << ", " << y);
+                    const double e = elevation(v, o);
+                    CHECK(e >= lowest);
+                    CHECK(e <= highest);
+                    CHECK(s.field.distance(o.eye) > 0.0f);
+                    CHECK(krs::dot(o.up, v.vertical) > 0.0f); // not flipped over the pole
+                }
+        ++scenes;
+    });
+    CHECK(scenes == 14);
+    // The turn is reduced to one turn: a day of iTime gives the camera of the same phase.
+    const krs::glsl::view v = ex::tree().camera;
+    const krs::glsl::view late = krs::glsl::shadertoy_view(v, 86400.0f + 15.0f, 0.0f, 0.0f, width, height);
+    const krs::glsl::view early = krs::glsl::shadertoy_view(v, 15.0f, 0.0f, 0.0f, width, height);
+    CHECK(krs::length(late.eye - early.eye) <= 1e-3f * krs::length(v.eye - v.pivot));
+    // The angle handed to sin and cos is within [-pi, pi] (plus rounding), and the same angle.
+    CHECK(krs::glsl::detail::one_turn(0.0f) == 0.0f);
+    for (const float x : {3.0f, -3.0f, 3.2f, -3.2f, 100.0f, -7000.5f, 86400.0f * 0.10471976f}) {
+        INFO(x);
+        const float r = krs::glsl::detail::one_turn(x);
+        CHECK(std::abs(double(r)) <= std::numbers::pi * (1.0 + 1e-6));
+        const double whole_turns = (double(x) - double(r)) / (2.0 * std::numbers::pi);
+        CHECK(std::abs(whole_turns - std::round(whole_turns)) <= 1e-3);
+    }
+}
+
+TEST_CASE("view::validate refuses what would draw NaN or nothing, by name")
+{
+    const auto s = ex::kifs_koch();
+    const auto refused = [&](const krs::glsl::view& v, const char* name) {
+        INFO(name);
+        CHECK_THROWS_WITH_AS(v.validate(), doctest::Contains(name), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, v, s.name, s.albedo), doctest::Contains(name),
+                             krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, v, s.albedo, 4, 4), doctest::Contains(name),
+                             krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy_view(v, 1.0f, 0.0f, 0.0f, 4.0f, 4.0f), doctest::Contains(name),
+                             krs::invalid_parameter);
+    };
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    CHECK_NOTHROW(s.camera.validate());
+    for (const float bad : {0.0f, -0.5f, nan, inf}) {
+        krs::glsl::view v = s.camera;
+        v.normal_step = bad;
+        refused(v, "view.normal_step");
+        v = s.camera;
+        v.band_pixels = bad;
+        refused(v, "view.band_pixels");
+        v = s.camera;
+        v.tan_half_fov = bad;
+        refused(v, "view.tan_half_fov");
+        v = s.camera;
+        v.max_distance = bad;
+        refused(v, "view.max_distance");
+        v = s.camera;
+        v.threshold_floor = bad;
+        refused(v, "view.threshold_floor");
+    }
+    for (const float bad : {-1.0f, nan, inf}) {
+        krs::glsl::view v = s.camera;
+        v.orbit_seconds = bad;
+        refused(v, "view.orbit_seconds");
+        v = s.camera;
+        v.footprint_scale = bad;
+        refused(v, "view.footprint_scale");
+    }
+    krs::glsl::view v = s.camera;
+    v.max_steps = 0;
+    refused(v, "view.max_steps");
+    v = s.camera;
+    v.vertical = {0, 2, 0};
+    refused(v, "view.vertical");
+    v = s.camera;
+    v.forward = {nan, 0, 1};
+    refused(v, "view.forward");
+    for (const auto& [lo, hi] : {std::pair{50.0f, 40.0f}, std::pair{-90.0f, 10.0f}, std::pair{5.0f, 90.0f},
+                                 std::pair{nan, 10.0f}}) {
+        v = s.camera;
+        v.min_elevation = lo;
+        v.max_elevation = hi;
+        refused(v, "view.m");
+    }
+    // A palette must hold one finite colour per kernel type.
+    const auto grass = ex::grass();
+    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(grass.field, grass.camera, "g", {{0.1f, 0.2f, 0.3f}}),
+                         doctest::Contains("glsl.palette"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(grass.field, grass.camera, "g", {{0.1f, nan, 0.3f}, {0.1f, 0.2f, 0.3f}}),
+                         doctest::Contains("glsl.palette"), krs::invalid_parameter);
+}
+
+TEST_CASE("shadertoy grass: blades green, ground soil (the scene's palette, not bark by kernel type)")
+{
+    const auto s = ex::grass();
+    const std::vector<krs::vec3f> palette = krs::glsl::palette_of(s.field, s.palette);
+    REQUIRE(palette.size() == 2);
+    CHECK(palette[0].y > palette[0].x + 0.05f); // torus_capsule blades: green dominates
+    CHECK(palette[0].y > palette[0].z + 0.05f);
+    const std::string text = ex::file_text(s, ex::shadertoy_file);
+    CHECK(occurrences(text, "if (kind == 0u) return " + krs::glsl::vec3_literal(palette[0]) + ";") == 1);
+}
+
+TEST_CASE("glsl distance_only: no locate, shade or their structs; a gradient-shaded program has none")
+{
+    // The coral's warp holds a sequence: without distance_only its program carried the sequence's
+    // _locate and _shade and the krs_location structs, none of which it calls.
+    int fields = 0;
+    ex::for_each_scene([&](const auto& s) {
+        INFO(s.name);
+        const std::string text = ex::file_text(s, ex::shadertoy_file);
+        if constexpr (krs::glsl::kernel_shaded<std::remove_cvref_t<decltype(s.field)>>) {
+            CHECK(occurrences(text, "krs_" + s.name + "_shade(") == 2); // defined, called
+        } else {
+            ++fields;
+            CHECK(occurrences(text, "krs_location") == 0);
+            CHECK(occurrences(text, "krs_kernel_shading") == 0);
+            CHECK(occurrences(text, "_locate(") == 0);
+            CHECK(occurrences(text, "_shade(") == 0);
+            CHECK(occurrences(text, "float krs_" + s.name + "(vec3 ") == 1);
+        }
+    });
+    CHECK(fields == 8);
+    // A snippet keeps them unless asked.
+    const auto sponge = ex::sponge();
+    krs::glsl::options o;
+    const std::string full = krs::glsl::emit(sponge.field, "sponge", o);
+    o.distance_only = true;
+    const std::string lean = krs::glsl::emit(sponge.field, "sponge", o);
+    CHECK(occurrences(full, "krs_sponge_locate(") == 1);
+    CHECK(occurrences(lean, "krs_sponge_locate(") == 0);
+    CHECK(occurrences(lean, "krs_sponge_shade(") == 0);
+    CHECK(occurrences(lean, "struct krs_location") == 0);
+    CHECK(occurrences(lean, "float krs_sponge(vec3 p)") == 1);
+}
+
+TEST_CASE("shadertoy refuses bad orbits and frame sizes by name")
+{
+    const auto s = ex::kifs_koch();
+    krs::glsl::view v = s.camera;
+    v.orbit_seconds = -1.0f;
+    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, v, s.name, s.albedo), doctest::Contains("view.orbit_seconds"),
+                         krs::invalid_parameter);
+    for (const int bad : {0, -3, 16385}) {
+        INFO(bad);
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.albedo, bad, 8),
+                             doctest::Contains("glsl.render_reference.width"), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.albedo, 8, bad),
+                             doctest::Contains("glsl.render_reference.height"), krs::invalid_parameter);
+    }
+    // Alpha 1 everywhere, the sky too (premultiplied-alpha pages would show through a 0).
+    const std::vector<float> frame = krs::glsl::render_reference(s.field, s.camera, s.albedo, 16, 12);
+    for (std::size_t i = 3; i < frame.size(); i += 4) CHECK(frame[i] == 1.0f);
 }

@@ -27,6 +27,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace {
@@ -126,45 +127,94 @@ void check_scene(const ex::scene<S>& s)
     }
 }
 
-// Renders the Shadertoy program of a scene through the fragment path; RGBA floats, bottom-up rows.
-std::vector<float> render_gpu(const std::string& shadertoy, int width, int height)
+// Renders a Shadertoy program through the fragment path at iTime = time with the mouse at
+// mouse (iMouse); RGBA floats, bottom-up rows.
+std::vector<float> render_gpu(const std::string& shadertoy, int width, int height, float time = 0.0f,
+                              const std::array<float, 4>& mouse = {})
 {
     require_context();
-    const std::string fragment = "#version 430 core\nuniform vec3 iResolution;\nuniform float iTime;\n"
+    const std::string fragment = "#version 430 core\nuniform vec3 iResolution;\nuniform float iTime;\nuniform vec4 iMouse;\n"
                                  "out vec4 krs_frag_color;\n" +
                                  shadertoy + "void main() { mainImage(krs_frag_color, gl_FragCoord.xy); }\n";
     const GLuint program = link({compile(GL_VERTEX_SHADER, krs_test::fullscreen_vertex_shader), compile(GL_FRAGMENT_SHADER, fragment)});
     const std::vector<float> pixels = krs_test::draw_fullscreen(program, width, height, [&] {
         glUniform3f(glGetUniformLocation(program, "iResolution"), float(width), float(height), 1.0f);
+        glUniform1f(glGetUniformLocation(program, "iTime"), time);
+        glUniform4f(glGetUniformLocation(program, "iMouse"), mouse[0], mouse[1], mouse[2], mouse[3]);
     });
     glDeleteProgram(program);
     return pixels;
 }
 
+std::string read_text(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    REQUIRE(in.good());
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// How a GPU frame compares with its CPU reference, over the colour channels.
+struct frame_match {
+    std::size_t pixels = 0, close = 0, exact = 0, bytes_equal = 0, opaque = 0;
+    float worst = 0;
+    double close_percent() const { return 100.0 * double(close) / double(pixels); }
+    double exact_percent() const { return 100.0 * double(exact) / double(pixels); }
+    double bytes_equal_percent() const { return 100.0 * double(bytes_equal) / double(pixels); }
+};
+frame_match match(const std::vector<float>& gpu, const std::vector<float>& cpu)
+{
+    REQUIRE(gpu.size() == cpu.size());
+    frame_match m;
+    m.pixels = cpu.size() / 4;
+    for (std::size_t i = 0; i < cpu.size(); i += 4) {
+        float diff = 0;
+        for (std::size_t c = 0; c < 3; ++c) diff = std::max(diff, std::abs(gpu[i + c] - cpu[i + c]));
+        m.worst = std::max(m.worst, diff);
+        m.close += diff <= 2.0f / 255.0f;
+        m.exact += diff == 0.0f;
+        // As an 8-bit framebuffer (and glsl_export --reference's PNG) would store the pixel.
+        bool same_bytes = true;
+        for (std::size_t c = 0; c < 3; ++c)
+            same_bytes = same_bytes && std::lround(255.0f * gpu[i + c]) == std::lround(255.0f * cpu[i + c]);
+        m.bytes_equal += same_bytes;
+        m.opaque += gpu[i + 3] == 1.0f;
+    }
+    return m;
+}
+
+// Pixels where the scene is seen: where the reference differs from the sky alone.
+template <class S>
+std::size_t scene_pixels(const ex::scene<S>& s, const std::vector<float>& cpu, int width, int height)
+{
+    const std::vector<float> sky = ex::sky_frame(s, width, height);
+    std::size_t seen = 0;
+    for (std::size_t i = 0; i < cpu.size(); i += 4)
+        seen += cpu[i] != sky[i] || cpu[i + 1] != sky[i + 1] || cpu[i + 2] != sky[i + 2];
+    return seen;
+}
+
+// The scene's Shadertoy program as shipped in glsl/ (equal to the emitter's text: tests/test_glsl.cpp)
+// at iTime = 0 with no mouse, against the CPU reference of the baked camera: every pixel within
+// 2/255 (not bit-equal: the kernels' normals and lengths use GLSL builtins 1-2 ulp off C++).
 template <class S>
 void check_frame(const ex::scene<S>& s)
 {
     constexpr int width = 160, height = 120;
-    const std::string text = krs::glsl::shadertoy(s.field, s.camera, s.name);
+    const std::string text = read_text(std::string(KRS_SOURCE_DIR) + "/glsl/" + s.name + ".shadertoy.glsl");
     const std::vector<float> gpu = render_gpu(text, width, height);
-    const std::vector<float> cpu = krs::glsl::render_reference(s.field, s.camera, width, height);
-    std::size_t close = 0, geometry = 0;
-    float worst = 0;
-    for (std::size_t i = 0; i < cpu.size(); i += 4) {
-        float diff = 0;
-        for (int c = 0; c < 3; ++c) diff = std::max(diff, std::abs(gpu[i + std::size_t(c)] - cpu[i + std::size_t(c)]));
-        worst = std::max(worst, diff);
-        close += diff <= 2.0f / 255.0f;
-        geometry += cpu[i + 3] == 1.0f; // alpha 1: the ray hit the scene
-    }
-    const std::size_t total = cpu.size() / 4;
-    std::printf("%-8s shadertoy frame %dx%d: %zu/%zu pixels within 2/255 (%.3f%%), worst %.3f, %zu object pixels\n",
-                s.name.c_str(), width, height, close, total, 100.0 * double(close) / double(total), double(worst),
-                geometry);
-    CHECK(double(close) >= 0.995 * double(total));
-    CHECK(geometry > total / 20); // the camera sees the scene
+    const std::vector<float> cpu = ex::reference_frame(s, s.camera, width, height);
+    const frame_match m = match(gpu, cpu);
+    const std::size_t seen = scene_pixels(s, cpu, width, height);
+    std::printf("%-16s shadertoy frame %dx%d: %.3f%% of pixels within 2/255, %.3f%% exact, %.3f%% equal in 8 bits, "
+                "max difference %.4g (%.3f/255), scene on %zu pixels\n",
+                s.name.c_str(), width, height, m.close_percent(), m.exact_percent(), m.bytes_equal_percent(),
+                double(m.worst), double(m.worst) * 255.0, seen);
+    INFO(s.name);
+    CHECK(m.close == m.pixels);
+    CHECK(m.opaque == m.pixels); // alpha 1 on the sky too
+    CHECK(seen > m.pixels / 20);                        // the camera sees the scene
+    CHECK(s.field.distance(s.camera.eye) > 0.0f);       // from outside it
 }
-
 
 std::string wrapper_main(const std::string& name)
 {
@@ -179,6 +229,22 @@ std::string vulkan_main(const std::string& name)
     return "layout(location = 0) out vec4 krs_out;\nvoid main() {\n    krs_location w = " + name + "_locate(vec3(0.5));\n"
            "    krs_kernel_shading s = " + name + "_shade(vec3(0.5), vec3(0.0, 1.0, 0.0), vec3(1.0, 0.0, 0.0), 0.01);\n"
            "    krs_out = vec4(" + name + "(vec3(1.0)), w.kernel_point.x + float(w.reflections.x), s.normal.x, 1.0);\n}\n";
+}
+
+// A main for a scene's snippet: a sequence's three functions, or a field's distance.
+template <class S>
+std::string scene_main(const ex::scene<S>&, const std::string& name)
+{
+    if constexpr (krs::glsl::kernel_shaded<S>) return wrapper_main(name);
+    else return "out vec4 krs_out;\nvoid main() { krs_out = vec4(" + name + "(vec3(0.5, 0.25, 0.125)), 0.0, 0.0, 1.0); }\n";
+}
+template <class S>
+std::string scene_vulkan_main(const ex::scene<S>&, const std::string& name)
+{
+    if constexpr (krs::glsl::kernel_shaded<S>) return vulkan_main(name);
+    else
+        return "layout(location = 0) out vec4 krs_out;\nvoid main() { krs_out = vec4(" + name +
+               "(vec3(0.5, 0.25, 0.125)), 0.0, 0.0, 1.0); }\n";
 }
 
 } // namespace
@@ -196,15 +262,17 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
             if (kind.target == krs::glsl::target::shadertoy) {
                 // As Shadertoy (WebGL 2) compiles it: ES 3.00 with its uniforms and a main.
                 validate_with_glslang(path + ".frag", "#version 300 es\nprecision highp float;\nprecision highp int;\n"
-                                         "uniform vec3 iResolution;\nuniform float iTime;\nout vec4 krs_out;\n" +
+                                         "uniform vec3 iResolution;\nuniform float iTime;\nuniform vec4 iMouse;\n"
+                                         "out vec4 krs_out;\n" +
                                              text + "void main() { mainImage(krs_out, gl_FragCoord.xy); }\n");
                 // And as desktop GLSL, where the tests run it.
-                validate_with_glslang(path + ".330.frag", "#version 330 core\nuniform vec3 iResolution;\nout vec4 krs_out;\n" + text +
+                validate_with_glslang(path + ".330.frag", "#version 330 core\nuniform vec3 iResolution;\nuniform float iTime;\n"
+                                                 "uniform vec4 iMouse;\nout vec4 krs_out;\n" + text +
                                                  "void main() { mainImage(krs_out, gl_FragCoord.xy); }\n");
                 files += 2;
                 continue;
             }
-            const std::string body = text + wrapper_main("krs_" + s.name);
+            const std::string body = text + scene_main(s, "krs_" + s.name);
             if (kind.target == krs::glsl::target::glsl330 && kind.mode == krs::glsl::data_mode::constants) {
                 // The constants snippet serves 330 and 450 alike.
                 validate_with_glslang(path + ".450.frag", "#version 450 core\n" + body);
@@ -221,7 +289,7 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
             const std::string fn = e.add(s.field, s.name);
             validate_with_glslang(dir + "/" + s.name + "." + std::string(krs::glsl::target_name(t)) + "." +
                                       std::to_string(int(m)) + ".extra.frag",
-                                  e.source(true) + wrapper_main(fn));
+                                  e.source(true) + scene_main(s, fn));
             ++files;
         }
         // Vulkan: the 450 code of every data mode (the shipped buffer450 file among them) to SPIR-V.
@@ -232,7 +300,7 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
             if (m == krs::glsl::data_mode::buffer)
                 CHECK(e.source() == ex::file_text(s, ex::files[3])); // what glsl/NAME.buffer450.glsl holds
             validate_spirv(dir + "/" + s.name + ".vulkan." + std::to_string(int(m)) + ".frag",
-                           e.source(true) + vulkan_main(fn));
+                           e.source(true) + scene_vulkan_main(s, fn));
             ++spirv_files;
         }
     });
@@ -280,6 +348,11 @@ TEST_CASE("GLSL terrain scene matches the C++ field on llvmpipe")
 TEST_CASE("GLSL sponge scene matches the C++ field on llvmpipe")
 {
     check_scene(ex::sponge());
+}
+TEST_CASE("GLSL rock and grass scenes match the C++ field on llvmpipe")
+{
+    check_scene(ex::rock());
+    check_scene(ex::grass());
 }
 
 TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field on llvmpipe")
@@ -369,21 +442,54 @@ TEST_CASE("GLSL buffer mode animates a sequence without recompiling")
     CHECK(r.bits_equal == r.points - r.near_mirror);
 }
 
-TEST_CASE("Shadertoy tree frame on llvmpipe matches the CPU render")
+TEST_CASE("Every Shadertoy program in glsl/ on llvmpipe matches its CPU reference")
 {
-    check_frame(ex::tree());
+    int programs = 0;
+    ex::for_each_scene([&](const auto& s) {
+        check_frame(s);
+        ++programs;
+    });
+    CHECK(programs == 14); // tests/test_glsl.cpp checks the names
 }
-TEST_CASE("Shadertoy forest frame on llvmpipe matches the CPU render")
+
+TEST_CASE("Shadertoy programs orbit with iTime and iMouse as shadertoy_view says")
 {
-    check_frame(ex::forest());
-}
-TEST_CASE("Shadertoy terrain frame on llvmpipe matches the CPU render")
-{
-    check_frame(ex::terrain());
-}
-TEST_CASE("Shadertoy sponge frame on llvmpipe matches the CPU render")
-{
-    check_frame(ex::sponge());
+    // A quarter turn of the orbit and the pointer right and up (raising the eye), for a sequence and a field: the
+    // GPU frame against the CPU reference seen through shadertoy_view's camera, and far from the
+    // frame at rest (the camera moved).
+    constexpr int width = 160, height = 120;
+    const auto check = [&](const auto& s) {
+        const std::string text = ex::file_text(s, ex::shadertoy_file);
+        const float time = 0.25f * s.camera.orbit_seconds;
+        const std::array<float, 4> mouse{0.7f * width, 0.75f * height, 0.0f, 0.0f}; // right and up
+        for (const auto& [t, m] : {std::pair{time, std::array<float, 4>{}}, std::pair{0.0f, mouse}}) {
+            const krs::glsl::view moved = krs::glsl::shadertoy_view(s.camera, t, m[0], m[1], width, height);
+            const std::vector<float> gpu = render_gpu(text, width, height, t, m);
+            const frame_match turned = match(gpu, ex::reference_frame(s, moved, width, height));
+            const frame_match rest = match(gpu, ex::reference_frame(s, s.camera, width, height));
+            std::printf("%-16s iTime %g, iMouse (%g, %g): %.3f%% of pixels within 2/255 of the turned reference "
+                        "(%.3f%% exact, max %.4g), %.3f%% of the one at rest\n",
+                        s.name.c_str(), double(t), double(m[0]), double(m[1]), turned.close_percent(),
+                        turned.exact_percent(), double(turned.worst), rest.close_percent());
+            INFO(s.name << " iTime " << t << " iMouse " << m[0] << ", " << m[1]);
+            CHECK(double(turned.close) >= 0.999 * double(turned.pixels));
+            CHECK(double(rest.pixels - rest.close) >= 0.1 * double(rest.pixels));
+            // A quarter turn about the vertical through the pivot keeps the eye's height along the
+            // vertical and its distance from the pivot, and turns its horizontal part square.
+            if (t != 0.0f) {
+                const vec3f up = s.camera.vertical;
+                const vec3f before = s.camera.eye - s.camera.pivot, after = moved.eye - s.camera.pivot;
+                const float radius = krs::length(before);
+                CHECK(std::abs(krs::dot(after, up) - krs::dot(before, up)) <= 1e-5f * radius);
+                CHECK(krs::length(after) == doctest::Approx(radius).epsilon(1e-5));
+                const vec3f level_before = before - up * krs::dot(before, up), level_after = after - up * krs::dot(after, up);
+                CHECK(std::abs(krs::dot(level_before, level_after)) <= 1e-4f * radius * radius);
+            }
+        }
+    };
+    check(ex::tree());
+    check(ex::kifs_menger());
+    check(ex::lotus()); // vertical z: the orbit about the lotus axis
 }
 
 // ---- fractal fields (krs/fractal) ---------------------------------------------------------------
@@ -581,4 +687,39 @@ TEST_CASE("GLSL log-spherical presets match the C++ field on llvmpipe")
         CHECK(worst <= 1e-5);
         CHECK(near_seam <= points.size() / 100);
     });
+}
+
+TEST_CASE("GLSL field scenes (not sequences) match the C++ field on llvmpipe")
+{
+    // The sequences' distances, locate and shade are checked above (check_scene); here the other
+    // example scenes, in both data modes, at points of the box the scene's tests sample. The
+    // log-spherical shells scale with r = |p|, so their error is relative, as for the presets
+    // above: |d_gpu - d_cpu| / max(|d_cpu|, 1e-3 r).
+    int scenes = 0;
+    ex::for_each_scene([&](const auto& s) {
+        using F = std::remove_cvref_t<decltype(s.field)>;
+        if constexpr (!krs::glsl::kernel_shaded<F>) {
+            ++scenes;
+            constexpr bool shell = std::is_same_v<F, krs::recursive_lotus> || std::is_same_v<F, krs::cube_singularity>;
+            const std::vector<vec3f> points = sample_points(s, 16384);
+            for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
+                const std::vector<float> gpu = gpu_distances(s.field, s.name, points, mode);
+                double worst = 0;
+                std::size_t exact = 0;
+                for (std::size_t i = 0; i < points.size(); ++i) {
+                    const float d = s.field.distance(points[i]);
+                    const double e = std::abs(double(gpu[i]) - double(d));
+                    worst = std::max(worst, shell ? e / std::max(std::abs(double(d)), 1e-3 * double(krs::length(points[i])))
+                                                  : e / double(s.extent()));
+                    exact += gpu[i] == d;
+                }
+                std::printf("%-16s %-9s points %zu  max |d_gpu - d_cpu| %s %.3g  bit-equal %zu\n", s.name.c_str(),
+                            mode == krs::glsl::data_mode::buffer ? "buffer" : "constants", points.size(),
+                            shell ? "/ max(|d|, 1e-3 r)" : "/ extent", worst, exact);
+                INFO(s.name);
+                CHECK(worst <= 1e-5);
+            }
+        }
+    });
+    CHECK(scenes == 8); // coral, the five KIFS presets, the lotus and the cube singularity
 }

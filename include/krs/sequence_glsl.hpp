@@ -108,6 +108,7 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
             body += "    d = min(d, " + kernel_call(k, "distance", "p") + ");\n";
     }
     out.function(body + "    return d;\n}\n");
+    if (out.settings().distance_only) return;
 
     // Algorithm 1 with the location (locate).
     body = "krs_location " + name + "_locate(vec3 p) {\n"

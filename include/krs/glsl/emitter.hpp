@@ -91,6 +91,8 @@ struct options {
     // A sequence's distance leaves its unrolled walk at the C++'s per-level early exit (same value,
     // less work far from the finer levels). Off writes the full walk: only for timing the exit.
     bool level_early_exit = true;
+    bool distance_only = false;         // no _locate / _shade, no krs_location structs (a program
+                                        // that shades by the gradient needs only the distance)
 };
 
 // Whether `p` can start every global name of the text: lower-case letters, digits and _, starting
@@ -549,8 +551,8 @@ private:
     // Everything after the version and precision lines, before renaming.
     std::string internal_text() const
     {
-        return guarded("KRS_GLSL_COMMON", common_library) + library_ + data_declaration() + constants_comments_ +
-               functions_;
+        return (options_.distance_only ? std::string() : guarded("KRS_GLSL_COMMON", common_library)) + library_ +
+               data_declaration() + constants_comments_ + functions_;
     }
 
     // ---- data -----------------------------------------------------------------------------
