@@ -5,6 +5,7 @@
 
 #include "hypertree/compact.hpp"
 #include "hypertree/density.hpp"
+#include "hypertree/huge_pages.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/scratch.hpp"
 #include "hypertree/store/bit_array_store.hpp"
@@ -19,6 +20,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <iterator>
@@ -825,6 +827,55 @@ TEST_CASE("zeroed arrays start zero and copy deeply; copied stores answer like t
     dense.reset(), bits.reset(); // the copies own their memory
     CHECK(count_differences(grid_of_store(dense_copy), reference) == 0);
     CHECK(count_differences(grid_of_store(bits_copy), reference) == 0);
+}
+
+TEST_CASE("huge-page blocks are zero, writable to their end and aligned as promised, with huge pages asked or not")
+{
+    for (const bool wanted : {true, false}) {
+        hypertree::huge_pages_wanted = wanted;
+        // Under, at and over half a huge page (where blocks start to be mapped on Linux), a whole
+        // huge page, an odd size over several, and the 54 MB of a dense store at 300.
+        for (const std::size_t bytes : {std::size_t(100), (std::size_t(1) << 20) - 8, std::size_t(1) << 20,
+                                        std::size_t(2) << 20, (std::size_t(7) << 20) + 24, std::size_t(54000000)}) {
+            INFO(bytes << " bytes, huge pages wanted " << wanted);
+            auto* p = static_cast<unsigned char*>(hypertree::pages::allocate_zeroed(bytes));
+            REQUIRE(p != nullptr);
+            const auto address = reinterpret_cast<std::uintptr_t>(p);
+            CHECK(address % alignof(std::max_align_t) == 0);
+            CHECK(address % hypertree::pages::alignment(bytes) == 0);
+#ifdef __linux__
+            // The promise in numbers: from 1 MiB on, a block starts on a 2 MiB boundary.
+            if (bytes >= (std::size_t(1) << 20)) CHECK(address % (std::size_t(2) << 20) == 0);
+            else CHECK(hypertree::pages::alignment(bytes) == alignof(std::max_align_t));
+#endif
+            CHECK(std::all_of(p, p + bytes, [](unsigned char b) { return b == 0; }));
+            std::fill(p, p + bytes, 0xab); // every byte is ours: no fault past the end
+            CHECK(p[bytes - 1] == 0xab);
+            hypertree::pages::release(p, bytes);
+        }
+    }
+    hypertree::huge_pages_wanted = true;
+    CHECK_THROWS_AS((void)hypertree::pages::allocate_zeroed(0), std::bad_alloc);
+}
+
+TEST_CASE("zeroed arrays reuse their block for the same size or up to half of it, and only then")
+{
+    hypertree::zeroed_array<std::uint64_t> a(1 << 18); // 2 MiB: a mapped block on Linux
+    const std::uint64_t* block = a.data();
+    CHECK(a.reusable_for(1 << 18));
+    CHECK(a.reusable_for(1 << 17));
+    CHECK(!a.reusable_for((1 << 17) - 1)); // would pin a block more than twice as large
+    CHECK(!a.reusable_for((1 << 18) + 1));
+    CHECK(!a.reusable_for(0));
+    a[5] = 3;
+    a[5] = 0; // the caller's part: what it wrote is zero again
+    a.reuse(1 << 17);
+    CHECK(a.data() == block);
+    CHECK(a.size() == std::size_t(1) << 17);
+    CHECK(a.capacity() == std::size_t(1) << 18);
+    a.reuse((1 << 18) + 1); // too large: a new, zeroed block
+    CHECK(a.size() == (std::size_t(1) << 18) + 1);
+    CHECK(std::all_of(a.data(), a.data() + a.size(), [](std::uint64_t w) { return w == 0; }));
 }
 
 TEST_CASE("stores: all four kinds match the reference on a sparse 300 cubed tree")
