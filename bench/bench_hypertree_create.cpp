@@ -19,7 +19,8 @@
 //   no scratch  fresh, without the caller's scratch memory: build_tree keeps one for the call.
 // Beside each time, the minor page faults per call (getrusage's ru_minflt over the R calls,
 // divided by R): what makes creation depend on the system's cost of a fault. Each step is also
-// timed alone (a fresh store for build) to show where the time goes.
+// timed alone to show where the time goes, the store's build twice: into a fresh store ("build")
+// and into the store the last call built ("rebuild").
 //
 // The whole sweep runs N times (default 2): every time printed is the worst of the N runs' best
 // calls, the figure the targets are held to, and "spread" is how far the runs' recycled
@@ -119,6 +120,7 @@ struct row {
     int resolution = 0;
     double generate_s = 0, compact_s = 0, classify_s = 0; // each step alone
     timed build;                                          // Store::build alone, a fresh store
+    timed rebuild;                                        // Store::build alone in the last store built
     timed recycled, fresh, small_pages, no_scratch;       // one build_tree call, the four ways
     double recycled_best = 0;                             // the best run's recycled time, for the spread
     std::size_t voxels = 0, hits = 0;
@@ -223,6 +225,8 @@ int main(int argc, char** argv)
                         std::size_t bytes = 0;
                         r.build = best_with_faults(reps, [&] { bytes = Store::build(tree.volume, voxels, generation.budget).memory_bytes(); });
                         r.bytes = bytes;
+                        Store last = Store::build(tree.volume, voxels, generation.budget);
+                        r.rebuild = best_with_faults(reps, [&] { last = Store::build(tree.volume, voxels, generation.budget, std::move(last)); });
                         Store kept = build_tree<Store>(tree, 1, with_scratch); // the first store, to recycle
                         r.recycled = best_with_faults(reps, [&] { kept = build_tree<Store>(tree, 1, with_scratch, std::move(kept)); });
                         r.fresh = best_with_faults(reps, [&] { bytes = build_tree<Store>(tree, 1, with_scratch).memory_bytes(); });
@@ -249,6 +253,7 @@ int main(int argc, char** argv)
                         w.compact_s = std::max(w.compact_s, r.compact_s);
                         w.classify_s = std::max(w.classify_s, r.classify_s);
                         keep_worst(w.build, r.build);
+                        keep_worst(w.rebuild, r.rebuild);
                         w.recycled_best = std::min(w.recycled_best, r.recycled.seconds);
                         keep_worst(w.recycled, r.recycled);
                         keep_worst(w.fresh, r.fresh);
@@ -269,8 +274,8 @@ int main(int argc, char** argv)
 
     std::printf("\nworst of %d runs; creation = one build_tree call, best of %d; (faults) = minor page faults per call\n\n", runs,
                 repeat);
-    std::printf("%-4s %5s %-11s %8s %8s %8s %17s | %17s %17s %17s %9s %6s | %8s %8s | %8s %6s %6s %6s %6s\n", "tree", "res", "store",
-                "generate", "compact", "classify", "build (faults)", "recycled (faults)", "fresh (faults)", "4K pages (faults)",
+    std::printf("%-4s %5s %-11s %8s %8s %8s %17s %17s | %17s %17s %17s %9s %6s | %8s %8s | %8s %6s %6s %6s %6s\n", "tree", "res",
+                "store", "generate", "compact", "classify", "build (faults)", "rebuild (faults)", "recycled (faults)", "fresh (faults)", "4K pages (faults)",
                 "no scratch", "spread", "voxels", "memory", "paper CT", "recyc", "fresh", "4K", "no scr");
     int last_resolution = 0;
     for (const row& r : rows) {
@@ -287,9 +292,9 @@ int main(int argc, char** argv)
             const timed* ways[4] = {&r.recycled, &r.fresh, &r.small_pages, &r.no_scratch};
             for (int k = 0; k < 4; ++k) ratios[k] = bench::format("%.0fx", r.paper_seconds() / ways[k]->seconds);
         }
-        std::printf("%-4s %5d %-11s %6.2fms %6.2fms %6.2fms %17s | %17s %17s %17s %7.2fms %5.0f%% | %8zu %8s | %8s %6s %6s %6s %6s\n",
+        std::printf("%-4s %5d %-11s %6.2fms %6.2fms %6.2fms %17s %17s | %17s %17s %17s %7.2fms %5.0f%% | %8zu %8s | %8s %6s %6s %6s %6s\n",
                     r.tree.c_str(), r.resolution, r.store.c_str(), r.generate_s * 1e3, r.compact_s * 1e3, r.classify_s * 1e3,
-                    time_faults(r.build).c_str(), time_faults(r.recycled).c_str(), time_faults(r.fresh).c_str(),
+                    time_faults(r.build).c_str(), time_faults(r.rebuild).c_str(), time_faults(r.recycled).c_str(), time_faults(r.fresh).c_str(),
                     time_faults(r.small_pages).c_str(), r.no_scratch.seconds * 1e3, 100 * (r.recycled.seconds / r.recycled_best - 1),
                     r.voxels, bytes_text(double(*r.bytes)).c_str(), paper_ct.c_str(), ratios[0].c_str(), ratios[1].c_str(),
                     ratios[2].c_str(), ratios[3].c_str());
@@ -331,12 +336,13 @@ int main(int argc, char** argv)
 
     if (csv_path.empty()) csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(csv_path);
-    csv << "tree,resolution,store,generate_s,compact_s,classify_s,build_s,build_faults,creation_s,creation_faults,fresh_s,fresh_faults,"
+    csv << "tree,resolution,store,generate_s,compact_s,classify_s,build_s,build_faults,rebuild_s,rebuild_faults,creation_s,creation_faults,fresh_s,fresh_faults,"
            "small_pages_s,small_pages_faults,no_scratch_s,no_scratch_faults,creation_spread,runs,hits,voxels,memory_bytes,"
            "paper_creation_s,paper_memory_bytes,load_before,load_after\n";
     for (const row& r : rows) {
         csv << r.tree << ',' << r.resolution << ',' << r.store << ',' << r.generate_s << ',' << r.compact_s << ',' << r.classify_s << ','
-            << r.build.seconds << ',' << r.build.faults << ',' << r.recycled.seconds << ',' << r.recycled.faults << ','
+            << r.build.seconds << ',' << r.build.faults << ',' << r.rebuild.seconds << ',' << r.rebuild.faults << ','
+            << r.recycled.seconds << ',' << r.recycled.faults << ','
             << r.fresh.seconds << ',' << r.fresh.faults << ',' << r.small_pages.seconds << ',' << r.small_pages.faults << ','
             << r.no_scratch.seconds << ',' << r.no_scratch.faults << ',' << (r.bytes ? r.recycled.seconds / r.recycled_best - 1 : 0)
             << ',' << runs << ',' << r.hits << ',' << r.voxels << ',' << (r.bytes ? std::to_string(*r.bytes) : "refused") << ',';

@@ -358,9 +358,11 @@ def create_section(path, md):
         spread = num(r.get("creation_spread"))
         if r.get("memory_bytes", "").strip() == "refused":
             body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), "refused: over the memory budget"]
-                        + ["-"] * 11)
+                        + ["-"] * 12)
             continue
-        body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), ms(c), faults(num(r.get("creation_faults"))),
+        build = "%s (%s) / %s (%s)" % (ms(num(r.get("build_s"))), faults(num(r.get("build_faults"))), ms(num(r.get("rebuild_s"))),
+                                       faults(num(r.get("rebuild_faults"))))
+        body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), build, ms(c), faults(num(r.get("creation_faults"))),
                      ms(f), faults(num(r.get("fresh_faults"))), ms(k4), faults(num(r.get("small_pages_faults"))),
                      "%.0f%%" % (100 * spread) if spread is not None else "-", "%.1f s" % pc if pc else "-", ratio(pc, c),
                      ratio(pc, k4), size_text(m), size_text(pm) if pm else "-"])
@@ -370,10 +372,11 @@ def create_section(path, md):
               "calls, with a `scratch_memory` kept across calls as an application creating many trees keeps it. \"recycled\": each "
               "call builds in the store the last one returned; \"fresh\": a new store each call, on huge pages where offered; "
               "\"4K pages\": fresh with `hypertree::huge_pages_wanted` off, the way creation paid before. Faults are minor page "
-              "faults per call (`getrusage`). Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
+              "faults per call (`getrusage`). \"store build\" is the last step alone, into a fresh store / into the last one built "
+              "(faults in brackets). Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
               "recycled times lie apart. Load average before the runs: %s; after: %s.\n"
               % (first.get("runs", "?"), first.get("load_before", "?"), first.get("load_after", "?")))
-    md.append(table(["tree", "res", "store", "voxels", "creation (recycled)", "faults", "fresh", "faults", "4K pages", "faults", "spread",
+    md.append(table(["tree", "res", "store", "voxels", "store build: fresh / rebuilt", "creation (recycled)", "faults", "fresh", "faults", "4K pages", "faults", "spread",
                      "paper", "speedup", "4K pages speedup", "memory", "paper memory"], body))
 
 
