@@ -15,7 +15,8 @@
 //               the headline figure;
 //   fresh       each call makes a new store (the last one freed), on huge pages where offered;
 //   4K pages    fresh, with huge pages not asked for (hypertree::huge_pages_wanted off, and a
-//               scratch_memory of its own): what creation cost before, page by page;
+//               scratch_memory of its own): blocks of 1 MiB and more mapped on 4 KiB pages, as
+//               the dense array (and every block glibc maps) was before, page by page;
 //   no scratch  fresh, without the caller's scratch memory: build_tree keeps one for the call.
 // Beside each time, the minor page faults per call (getrusage's ru_minflt over the R calls,
 // divided by R): what makes creation depend on the system's cost of a fault. Each step is also

@@ -371,7 +371,7 @@ def create_section(path, md):
               "store. Creation is one `build_tree` call (generate + validate + density classes + build, on 2 threads), best of 5 "
               "calls, with a `scratch_memory` kept across calls as an application creating many trees keeps it. \"recycled\": each "
               "call builds in the store the last one returned; \"fresh\": a new store each call, on huge pages where offered; "
-              "\"4K pages\": fresh with `hypertree::huge_pages_wanted` off, the way creation paid before. Faults are minor page "
+              "\"4K pages\": fresh with `hypertree::huge_pages_wanted` off, so blocks of 1 MiB and more are mapped on 4 KiB pages as the dense array was before. Faults are minor page "
               "faults per call (`getrusage`). \"store build\" is the last step alone, into a fresh store / into the last one built "
               "(faults in brackets). Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
               "recycled times lie apart. Load average before the runs: %s; after: %s.\n"

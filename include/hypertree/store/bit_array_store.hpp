@@ -61,6 +61,7 @@ public:
                                           " 8-byte words of occupancy bits over the non-empty index range + " +
                                           "a 4-byte count per " + std::to_string(words_per_block) + " words");
         bit_array_store store = std::move(recycled);
+        // Its old list names every word with a set bit: clearing those makes the block all zero.
         for (const voxel_index i : store.indices_) store.bits_[(i - store.first_) >> 6] = 0;
         store.volume_ = volume;
         store.first_ = 0, store.span_ = 0;
@@ -71,8 +72,8 @@ public:
             store.span_ = std::uint64_t(voxels.back().index) - store.first_ + 1;
         }
         // The bits start zero without being written (zeroed_array.hpp), or were set back to zero
-        // above: only the pages holding a set bit are touched. The block counts come from the list, not from reading the bits
-        // back: block b's count is the number of voxels whose offset lies below b's first bit,
+        // above: only the pages holding a set bit are touched. The block counts come from the
+        // list, not from reading the bits back: block b's count is the number of voxels whose offset lies below b's first bit,
         // which a walk in list order gives because build's check made the list sorted and unique
         // (store.hpp); word_count rounds the bits up to whole blocks, so every block gets one.
         store.bits_.reuse(word_count(voxels));

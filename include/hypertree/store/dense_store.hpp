@@ -47,9 +47,9 @@ public:
         store.fill(volume, voxels);
         return store;
     }
-    // The same store, built in `recycled`'s memory (which it consumes): when its grid has the
-    // same voxel count (or up to twice as many), the array is kept and only the voxels recycled
-    // held are set back to zero, so no page is mapped again. An application that makes tree after
+    // The same store, built in `recycled`'s memory (which it consumes): when recycled's grid has
+    // as many voxels as the new one, or up to twice as many, its array is kept and only the runs
+    // it wrote are set back to zero, so no page is mapped again. An application that makes tree after
     // tree at one resolution passes its last store. Refused as build refuses, before recycled is
     // touched.
     static dense_store build(const hypervolume& volume, std::span<const stored_voxel> voxels, memory_budget budget,
