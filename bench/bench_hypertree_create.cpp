@@ -116,6 +116,15 @@ std::string load_average()
     return bench::format("%.2f %.2f %.2f", load[0], load[1], load[2]);
 }
 
+// The system's transparent huge page setting, which decides what asking for huge pages does
+// (Linux; "not offered" elsewhere or where the file is absent).
+std::string transparent_huge_pages()
+{
+    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string setting;
+    return std::getline(in, setting) ? setting : std::string("not offered");
+}
+
 struct row {
     std::string tree, store;
     int resolution = 0;
@@ -183,7 +192,7 @@ int main(int argc, char** argv)
     const std::string load_before = load_average();
     std::printf("hypertree creation (paper Table 1): %u thread(s), best of %d calls, worst of %d runs, budget %zu MiB\n", threads,
                 repeat, runs, budget_mib);
-    std::printf("load average before: %s\n", load_before.c_str());
+    std::printf("load average before: %s; transparent huge pages: %s\n", load_before.c_str(), transparent_huge_pages().c_str());
 
     const std::array makers{presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d};
     std::vector<row> rows; // the worst of the runs so far, in sweep order
