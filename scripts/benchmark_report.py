@@ -348,22 +348,36 @@ def create_section(path, md):
         return
     rows = read_rows(path)
     body = []
+    ms = lambda v: "%.1f ms" % (1e3 * v) if v is not None else "-"
+    faults = lambda v: "%.0f" % v if v is not None else "-"
+    ratio = lambda p, t: ("%.0fx" % (p / t)) if p and t else "-"
     for r in rows:
         c, pc = num(r.get("creation_s")), num(r.get("paper_creation_s"))
-        ns = num(r.get("no_scratch_s"))
+        f, k4 = num(r.get("fresh_s")), num(r.get("small_pages_s"))
         m, pm = num(r.get("memory_bytes")), num(r.get("paper_memory_bytes"))
-        refused = r.get("memory_bytes", "").strip() == "refused"
-        ms = lambda v: "%.1f ms" % (1e3 * v) if v is not None else "-"
-        body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"),
-                     "refused: over the memory budget" if refused else ms(c), "-" if refused else ms(ns), "%.1f s" % pc if pc else "-",
-                     ("%.0fx" % (pc / c)) if pc and c else "-", ("%.0fx" % (pc / ns)) if pc and ns else "-", size_text(m),
-                     size_text(pm) if pm else "-"])
+        spread = num(r.get("creation_spread"))
+        if r.get("memory_bytes", "").strip() == "refused":
+            body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), "refused: over the memory budget"]
+                        + ["-"] * 12)
+            continue
+        build = "%s (%s) / %s (%s)" % (ms(num(r.get("build_s"))), faults(num(r.get("build_faults"))), ms(num(r.get("rebuild_s"))),
+                                       faults(num(r.get("rebuild_faults"))))
+        body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), build, ms(c), faults(num(r.get("creation_faults"))),
+                     ms(f), faults(num(r.get("fresh_faults"))), ms(k4), faults(num(r.get("small_pages_faults"))),
+                     "%.0f%%" % (100 * spread) if spread is not None else "-", "%.1f s" % pc if pc else "-", ratio(pc, c),
+                     ratio(pc, k4), size_text(m), size_text(pm) if pm else "-"])
+    first = rows[0] if rows else {}
     md.append("The paper's figures (an Athlon at 1.4 GHz) stand next to ours; its \"3D array + bit array\" column against the dense "
-              "store. Creation is one `build_tree` call (generate + validate + density classes + build, on 2 threads), best of 5, "
-              "with a `scratch_memory` kept across calls as an application creating many trees keeps it; \"no scratch\" is the "
-              "same call without it, where each call maps its temporaries afresh.\n")
-    md.append(table(["tree", "res", "store", "voxels", "creation", "no scratch", "paper", "speedup", "no scratch speedup", "memory",
-                     "paper memory"], body))
+              "store. Creation is one `build_tree` call (generate + validate + density classes + build, on 2 threads), best of 5 "
+              "calls, with a `scratch_memory` kept across calls as an application creating many trees keeps it. \"recycled\": each "
+              "call builds in the store the last one returned; \"fresh\": a new store each call, on huge pages where offered; "
+              "\"4K pages\": fresh with `hypertree::huge_pages_wanted` off, so blocks of 1 MiB and more are mapped on 4 KiB pages as the dense array was before. Faults are minor page "
+              "faults per call (`getrusage`). \"store build\" is the last step alone, into a fresh store / into the last one built "
+              "(faults in brackets). Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
+              "recycled times lie apart. Load average before the runs: %s; after: %s.\n"
+              % (first.get("runs", "?"), first.get("load_before", "?"), first.get("load_after", "?")))
+    md.append(table(["tree", "res", "store", "voxels", "store build: fresh / rebuilt", "creation (recycled)", "faults", "fresh", "faults", "4K pages", "faults", "spread",
+                     "paper", "speedup", "4K pages speedup", "memory", "paper memory"], body))
 
 
 def render_section(path, images, md):

@@ -5,6 +5,7 @@
 
 #include "hypertree/compact.hpp"
 #include "hypertree/density.hpp"
+#include "hypertree/huge_pages.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/scratch.hpp"
 #include "hypertree/store/bit_array_store.hpp"
@@ -19,6 +20,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <iterator>
@@ -827,6 +829,134 @@ TEST_CASE("zeroed arrays start zero and copy deeply; copied stores answer like t
     CHECK(count_differences(grid_of_store(bits_copy), reference) == 0);
 }
 
+TEST_CASE("huge-page blocks are zero, writable to their end and aligned as promised, with huge pages asked or not")
+{
+    for (const bool wanted : {true, false}) {
+        hypertree::huge_pages_wanted = wanted;
+        // Under, at and over half a huge page (where blocks start to be mapped on Linux), a whole
+        // huge page, an odd size over several, and the 54 MB of a dense store at 300.
+        for (const std::size_t bytes : {std::size_t(100), (std::size_t(1) << 20) - 8, std::size_t(1) << 20,
+                                        std::size_t(2) << 20, (std::size_t(7) << 20) + 24, std::size_t(54000000)}) {
+            INFO(bytes << " bytes, huge pages wanted " << wanted);
+            auto* p = static_cast<unsigned char*>(hypertree::pages::allocate_zeroed(bytes));
+            REQUIRE(p != nullptr);
+            const auto address = reinterpret_cast<std::uintptr_t>(p);
+            CHECK(address % alignof(std::max_align_t) == 0);
+            CHECK(address % hypertree::pages::alignment(bytes) == 0);
+#ifdef __linux__
+            // The promise in numbers: from 1 MiB on, a block starts on a 2 MiB boundary.
+            if (bytes >= (std::size_t(1) << 20)) CHECK(address % (std::size_t(2) << 20) == 0);
+            else CHECK(hypertree::pages::alignment(bytes) == alignof(std::max_align_t));
+#endif
+            CHECK(std::all_of(p, p + bytes, [](unsigned char b) { return b == 0; }));
+            std::fill(p, p + bytes, 0xab); // every byte is ours: no fault past the end
+            CHECK(p[bytes - 1] == 0xab);
+            hypertree::pages::release(p, bytes);
+        }
+    }
+    hypertree::huge_pages_wanted = true;
+    CHECK_THROWS_AS((void)hypertree::pages::allocate_zeroed(0), std::bad_alloc);
+}
+
+TEST_CASE("zeroed arrays reuse their block for the same size or up to half of it, and only then")
+{
+    hypertree::zeroed_array<std::uint64_t> a(1 << 18); // 2 MiB: a mapped block on Linux
+    const std::uint64_t* block = a.data();
+    CHECK(a.reusable_for(1 << 18));
+    CHECK(a.reusable_for(1 << 17));
+    CHECK(!a.reusable_for((1 << 17) - 1)); // would pin a block more than twice as large
+    CHECK(!a.reusable_for((1 << 18) + 1));
+    CHECK(!a.reusable_for(0));
+    a[5] = 3;
+    a[5] = 0; // the caller's part: what it wrote is zero again
+    a.reuse(1 << 17);
+    CHECK(a.data() == block);
+    CHECK(a.size() == std::size_t(1) << 17);
+    CHECK(a.capacity() == std::size_t(1) << 18);
+    a.reuse((1 << 18) + 1); // too large: a new, zeroed block
+    CHECK(a.size() == (std::size_t(1) << 18) + 1);
+    CHECK(std::all_of(a.data(), a.data() + a.size(), [](std::uint64_t w) { return w == 0; }));
+}
+
+// A store built again in a recycled store, against one built fresh from the same list and against
+// the plain grid of the list: every voxel, the visit order, the count and the bounds.
+template <class S>
+void check_rebuilt_like_fresh(const hypervolume& volume, const std::vector<stored_voxel>& before,
+                              const std::vector<stored_voxel>& after)
+{
+    S old = S::build(volume, before);
+    const S rebuilt = S::build(volume, after, {}, std::move(old));
+    const S fresh = S::build(volume, after);
+    const auto reference = grid_of(volume, after);
+    CHECK(count_differences(grid_of_store(rebuilt), reference) == 0);
+    CHECK(count_differences(grid_of_store(rebuilt), grid_of_store(fresh)) == 0);
+    check_visits_the_list(rebuilt, after);
+    CHECK(rebuilt.bounds() == bounds_by_hand(volume, after));
+    CHECK(rebuilt.bounds() == fresh.bounds());
+}
+
+TEST_CASE_TEMPLATE("stores: a store rebuilt in a recycled one answers every voxel as one built fresh", S,
+                   hypertree::dense_store, hypertree::index_list_store, hypertree::bit_array_store,
+                   hypertree::partitioned_store)
+{
+    std::mt19937_64 g(27);
+    const auto many = random_voxels(g, small_volume, 0.3);
+    const auto few = random_voxels(g, small_volume, 0.02);
+    const std::vector<stored_voxel> none;
+    SUBCASE("the same size, more voxels than before") { check_rebuilt_like_fresh<S>(small_volume, few, many); }
+    SUBCASE("the same size, fewer voxels: the old ones are gone") { check_rebuilt_like_fresh<S>(small_volume, many, few); }
+    SUBCASE("to and from an empty list") {
+        check_rebuilt_like_fresh<S>(small_volume, many, none);
+        check_rebuilt_like_fresh<S>(small_volume, none, many);
+    }
+    SUBCASE("another grid, larger and then smaller")
+    {
+        const hypervolume larger({0, 0, 0}, {1, 1, 1}, {64, 64, 64});
+        const auto big = random_voxels(g, larger, 0.1);
+        S old = S::build(small_volume, many);
+        S grown = S::build(larger, big, {}, std::move(old));
+        CHECK(count_differences(grid_of_store(grown), grid_of(larger, big)) == 0);
+        const S shrunk = S::build(small_volume, few, {}, std::move(grown));
+        CHECK(count_differences(grid_of_store(shrunk), grid_of(small_volume, few)) == 0);
+        check_visits_the_list(shrunk, few);
+    }
+    SUBCASE("a refused rebuild leaves the recycled store as it was")
+    {
+        S old = S::build(small_volume, many);
+        std::vector<stored_voxel> unsorted = few;
+        REQUIRE(unsorted.size() > 1);
+        std::swap(unsorted.front(), unsorted.back());
+        CHECK_THROWS_AS((void)S::build(small_volume, unsorted, {}, std::move(old)), krs::invalid_parameter);
+        CHECK(count_differences(grid_of_store(old), grid_of(small_volume, many)) == 0);
+    }
+}
+
+TEST_CASE("a dense store rebuilt at the same size keeps its memory and clears what it wrote, at 300 cubed")
+{
+    std::mt19937_64 g(28);
+    const hypervolume volume({-5, 0, -5}, {10, 12, 10}, hypertree::resolution::cube(300));
+    const auto first = tree_like_voxels(g, volume, 6, 20000);
+    const auto second = tree_like_voxels(g, volume, 4, 20000);
+    hypertree::dense_store old = hypertree::dense_store::build(volume, first);
+    const std::size_t bytes = old.memory_bytes();
+    const hypertree::dense_store rebuilt = hypertree::dense_store::build(volume, second, {}, std::move(old));
+    CHECK(rebuilt.memory_bytes() == bytes);
+    // Every voxel of the first list that is not in the second reads empty; every voxel of the
+    // second reads its value; and a scan of the whole grid finds exactly the second list.
+    std::size_t wrong = 0;
+    for (const stored_voxel& v : first) {
+        const auto it = std::lower_bound(second.begin(), second.end(), v.index,
+                                         [](const stored_voxel& s, voxel_index k) { return s.index < k; });
+        const voxel expected = it != second.end() && it->index == v.index ? it->value : voxel{};
+        wrong += !(rebuilt.at(v.index) == expected);
+    }
+    for (const stored_voxel& v : second) wrong += !(rebuilt.at(v.index) == v.value);
+    CHECK(wrong == 0);
+    std::size_t nonempty = 0;
+    for (voxel_index i = 0; i < volume.voxel_count(); ++i) nonempty += rebuilt.at(i).density != 0;
+    CHECK(nonempty == second.size());
+}
+
 TEST_CASE("stores: all four kinds match the reference on a sparse 300 cubed tree")
 {
     std::mt19937_64 g(9);
@@ -871,7 +1001,10 @@ TEST_CASE("stores: all four kinds match the reference on a sparse 300 cubed tree
     // Memory follows the paper's costs.
     {
         const std::size_t n = voxels.size();
-        CHECK(dense.memory_bytes() == 2 * std::size_t(volume.voxel_count()));
+        // 2 bytes per voxel and a bit per 32 voxels (which runs a rebuild clears), in 8-byte words.
+        const std::size_t runs = (std::size_t(volume.voxel_count()) + 31) / 32;
+        CHECK(dense.memory_bytes() == 2 * std::size_t(volume.voxel_count()) + 8 * ((runs + 63) / 64));
+        CHECK(dense.memory_bytes() == hypertree::dense_store::bytes_needed(volume));
         // The list and its directory: at most one 4-byte position per two voxels, and two more.
         CHECK(list.memory_bytes() > 6 * n);
         CHECK(list.memory_bytes() <= 8 * n + 8);
@@ -1049,17 +1182,18 @@ TEST_CASE("stores: index directory positions are the counts of smaller indices, 
 
 TEST_CASE("stores: the memory budget is checked before anything is allocated")
 {
-    // 1000^3 voxels: a dense store needs 2 GB. The refusal must come from the budget check, since
-    // an allocation first would succeed (or fail with bad_alloc) instead of throwing this.
+    // 1000^3 voxels: a dense store needs 2 GB, and a bit per 32 voxels (488282 words: 3.9 MB).
+    // The refusal must come from the budget check, since an allocation first would succeed (or
+    // fail with bad_alloc) instead of throwing this.
     const hypervolume big({0, 0, 0}, {1, 1, 1}, hypertree::resolution::cube(1000));
-    CHECK(hypertree::dense_store::bytes_needed(big) == 2000000000u);
+    CHECK(hypertree::dense_store::bytes_needed(big) == 2000000000u + 8 * 488282u);
     try {
         (void)hypertree::dense_store::build(big, {}, hypertree::memory_budget{std::size_t(1) << 30});
         FAIL("a 2 GB dense store fit a 1 GiB budget");
     } catch (const krs::invalid_parameter& e) {
         const std::string what = e.what();
         CHECK(what.find("dense_store") != std::string::npos);
-        CHECK(what.find("2000000000") != std::string::npos);
+        CHECK(what.find("2003906256") != std::string::npos);
         CHECK(what.find("1073741824") != std::string::npos);
     }
     // The default budget (4 GiB) refuses 1600^3 (8 GB dense) too.

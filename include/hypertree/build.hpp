@@ -5,7 +5,9 @@
 //     auto tree = hypertree::build_tree<hypertree::bit_array_store>(presets::tree_a(300), seed);
 //
 // An application that builds many trees keeps one scratch_memory (scratch.hpp) in
-// options.generation.scratch: each build then reuses the pages of the last one's temporaries.
+// options.generation.scratch: each build then reuses the pages of the last one's temporaries;
+// passing its last store as `recycled` builds the new one in that store's memory too (the stores'
+// build with a recycled store), so a tree of the same size maps no new page at all.
 //
 // Each step stays public for callers that want to keep the hit list (to build several stores, or
 // to unite trees before classifying).
@@ -17,6 +19,7 @@
 #include "hypertree/store/store.hpp"
 
 #include <optional>
+#include <utility>
 
 namespace hypertree {
 
@@ -63,11 +66,17 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
 template <class Store, transform_pipeline P>
 Store build_tree(const ifs<P>& definition, std::uint64_t seed, const build_options& options = {})
 {
+    return build_tree<Store>(definition, seed, options, Store());
+}
+// The same, built in `recycled`'s memory (which it consumes): see the store kinds' build.
+template <class Store, transform_pipeline P>
+Store build_tree(const ifs<P>& definition, std::uint64_t seed, const build_options& options, Store&& recycled)
+{
     std::optional<scratch_memory> own;
     if (!options.generation.scratch) own.emplace();
     const std::pmr::vector<stored_voxel> voxels = detail::stored_voxels_of(
         definition, seed, options.density_class_count, options.generation, options.generation.scratch ? options.generation.scratch : &*own);
-    return Store::build(definition.volume, voxels, options.generation.budget);
+    return Store::build(definition.volume, voxels, options.generation.budget, std::move(recycled));
 }
 
 } // namespace hypertree

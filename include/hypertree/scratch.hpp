@@ -13,9 +13,14 @@
 //
 // A request takes the smallest kept block that fits it, unless that block is more than twice as
 // large (a small request should not pin a large block), else a new block from the system.
-// Blocks go back to the system only when the scratch_memory is destroyed or released. Requests
+// Blocks go back to the system only when the scratch_memory is destroyed or released. Blocks of
+// half a huge page or more are mapped on huge pages where the system offers them
+// (huge_pages.hpp), so even a first build, or one without a kept scratch, pays one fault per
+// 2 MiB instead of one per 4 KiB. Requests
 // are few (two per generator chunk and a few more: 50 to 200 per build) and come from the
 // caller's worker threads: a mutex guards the lists.
+
+#include "hypertree/huge_pages.hpp"
 
 #include <algorithm>
 #include <cstddef>
@@ -55,7 +60,7 @@ public:
     void release()
     {
         const std::lock_guard lock(mutex_);
-        for (const block& b : kept_) ::operator delete(b.address, std::align_val_t(block_alignment));
+        for (const block& b : kept_) give_back(b);
         kept_.clear();
     }
 
@@ -67,6 +72,19 @@ private:
         void* address;
         std::size_t bytes;
     };
+
+    // A large block is mapped on huge pages, 2 MiB-aligned (its zeros are free and unused); a
+    // smaller one comes from operator new, cache-line aligned.
+    static void* obtain(std::size_t bytes)
+    {
+        if (pages::mapped(bytes)) return pages::allocate_zeroed(bytes);
+        return ::operator new(bytes, std::align_val_t(block_alignment));
+    }
+    static void give_back(const block& b)
+    {
+        if (pages::mapped(b.bytes)) pages::release(b.address, b.bytes);
+        else ::operator delete(b.address, std::align_val_t(block_alignment));
+    }
 
     void* do_allocate(std::size_t bytes, std::size_t alignment) override
     {
@@ -83,7 +101,7 @@ private:
             lent = *best;
             kept_.erase(best);
         } else {
-            lent = {::operator new(bytes, std::align_val_t(block_alignment)), bytes};
+            lent = {obtain(bytes), bytes};
             ++system_allocations_;
         }
         lent_.push_back(lent);

@@ -13,6 +13,10 @@
 // before each 512-bit block (4 bytes per 64 bytes of bits, +6.25%) leaves at most eight words to
 // count, all in the cache lines the bit test has just read: a non-empty voxel costs the bit test
 // and one load of its value, at any list length.
+//
+// Built again in a recycled store (build's last parameter), it keeps its lists' capacity and its
+// bit array when the new bits fit it (at most twice as many words): the old list says exactly
+// which words hold a set bit, and only those are cleared.
 
 #include "hypertree/store/store.hpp"
 #include "hypertree/store/zeroed_array.hpp"
@@ -22,6 +26,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hypertree {
@@ -42,26 +47,36 @@ public:
     static bit_array_store build(const hypervolume& volume, std::span<const stored_voxel> voxels,
                                  memory_budget budget = {})
     {
+        return build(volume, voxels, budget, bit_array_store());
+    }
+    // The same store, built in `recycled`'s memory, which it consumes (see above). Refused as build
+    // refuses, before recycled is touched.
+    static bit_array_store build(const hypervolume& volume, std::span<const stored_voxel> voxels, memory_budget budget,
+                                 bit_array_store&& recycled)
+    {
         detail::require_storable("bit_array_store", volume, voxels);
         detail::require_within_budget("bit_array_store", bytes_needed(volume, voxels), budget,
                                       std::to_string(bytes_per_voxel) + " bytes x " + std::to_string(voxels.size()) +
                                           " non-empty voxels + " + std::to_string(word_count(voxels)) +
                                           " 8-byte words of occupancy bits over the non-empty index range + " +
                                           "a 4-byte count per " + std::to_string(words_per_block) + " words");
-        bit_array_store store;
+        bit_array_store store = std::move(recycled);
+        // Its old list names every word with a set bit: clearing those makes the block all zero.
+        for (const voxel_index i : store.indices_) store.bits_[(i - store.first_) >> 6] = 0;
         store.volume_ = volume;
+        store.first_ = 0, store.span_ = 0;
         detail::split_voxels(voxels, store.indices_, store.values_);
         store.bounds_ = detail::bounds_of(volume, voxels);
         if (!voxels.empty()) {
             store.first_ = voxels.front().index;
             store.span_ = std::uint64_t(voxels.back().index) - store.first_ + 1;
         }
-        // The bits start zero without being written (zeroed_array.hpp): only the pages holding a
-        // set bit are touched. The block counts come from the list, not from reading the bits
-        // back: block b's count is the number of voxels whose offset lies below b's first bit,
+        // The bits start zero without being written (zeroed_array.hpp), or were set back to zero
+        // above: only the pages holding a set bit are touched. The block counts come from the
+        // list, not from reading the bits back: block b's count is the number of voxels whose offset lies below b's first bit,
         // which a walk in list order gives because build's check made the list sorted and unique
         // (store.hpp); word_count rounds the bits up to whole blocks, so every block gets one.
-        store.bits_ = zeroed_array<std::uint64_t>(word_count(voxels));
+        store.bits_.reuse(word_count(voxels));
         store.ranks_.resize(store.bits_.size() / words_per_block);
         std::size_t block = 0;
         std::uint32_t before = 0;
@@ -106,7 +121,7 @@ public:
     std::size_t memory_bytes() const
     {
         return indices_.capacity() * sizeof(voxel_index) + values_.capacity() * sizeof(voxel) +
-               bits_.size() * sizeof(std::uint64_t) + ranks_.capacity() * sizeof(std::uint32_t);
+               bits_.capacity() * sizeof(std::uint64_t) + ranks_.capacity() * sizeof(std::uint32_t);
     }
     std::size_t nonempty_count() const { return indices_.size(); }
     index_box bounds() const { return bounds_; }

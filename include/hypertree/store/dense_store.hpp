@@ -4,19 +4,27 @@
 // The fastest lookup, one load, at the price of memory for every voxel of the grid whether hit or
 // not: 2 bytes per voxel (density and level), 54 MB at 300^3 and 2 GB at 1000^3 (reported and
 // budgeted in full, as the paper counts it; the pages no voxel is written to stay untouched zero
-// pages until read, see zeroed_array.hpp). The paper keeps this form for resolutions up to about
-// 300. Density and level sit side by side in one 2-byte `voxel`, so a lookup touches one cache
-// line, not two arrays.
+// pages until read, and the array lies on huge pages where the system offers them, see
+// zeroed_array.hpp). The paper keeps this form for resolutions up to about 300. Density and level
+// sit side by side in one 2-byte `voxel`, so a lookup touches one cache line, not two arrays.
+//
+// Built again at the same size (build with a recycled store), the store keeps its array: it sets
+// back to zero only the runs of 32 voxels (64 bytes, a cache line) it wrote, which one bit each
+// records (1/256 byte per voxel), instead of mapping 54 MB afresh or clearing all of it.
 
 #include "hypertree/store/store.hpp"
 #include "hypertree/store/zeroed_array.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace hypertree {
 
@@ -29,20 +37,29 @@ public:
 
     static std::size_t bytes_needed(const hypervolume& volume, std::span<const stored_voxel> = {})
     {
-        return bytes_per_voxel * std::size_t(volume.voxel_count());
+        return bytes_per_voxel * std::size_t(volume.voxel_count()) + sizeof(std::uint64_t) * run_words(volume);
     }
 
     static dense_store build(const hypervolume& volume, std::span<const stored_voxel> voxels, memory_budget budget = {})
     {
-        detail::require_storable("dense_store", volume, voxels);
-        detail::require_within_budget("dense_store", bytes_needed(volume), budget,
-                                      std::to_string(bytes_per_voxel) + " bytes x " +
-                                          std::to_string(volume.voxel_count()) + " voxels of the grid");
+        require_buildable(volume, voxels, budget);
         dense_store store(volume);
-        for (const stored_voxel& v : voxels) store.voxels_[v.index] = v.value;
-        store.count_ = voxels.size();
-        store.bounds_ = detail::bounds_of(volume, voxels);
-        if (!voxels.empty()) store.first_ = voxels.front().index, store.last_ = voxels.back().index;
+        store.fill(volume, voxels);
+        return store;
+    }
+    // The same store, built in `recycled`'s memory (which it consumes): when recycled's grid has
+    // as many voxels as the new one, or up to twice as many, its array is kept and only the runs
+    // it wrote are set back to zero, so no page is mapped again. An application that makes tree after
+    // tree at one resolution passes its last store. Refused as build refuses, before recycled is
+    // touched.
+    static dense_store build(const hypervolume& volume, std::span<const stored_voxel> voxels, memory_budget budget,
+                             dense_store&& recycled)
+    {
+        require_buildable(volume, voxels, budget);
+        dense_store store = std::move(recycled);
+        store.clear_written();
+        store.voxels_.reuse(std::size_t(volume.voxel_count()));
+        store.fill(volume, voxels);
         return store;
     }
 
@@ -53,7 +70,10 @@ public:
         assert(i < voxels_.size());
         return voxels_[i];
     }
-    std::size_t memory_bytes() const { return voxels_.size() * sizeof(voxel); }
+    std::size_t memory_bytes() const
+    {
+        return voxels_.capacity() * sizeof(voxel) + written_.capacity() * sizeof(std::uint64_t);
+    }
     std::size_t nonempty_count() const { return count_; }
     index_box bounds() const { return bounds_; }
 
@@ -78,10 +98,53 @@ public:
     }
 
 private:
+    static constexpr std::size_t voxels_per_run = 32; // 64 bytes: one bit of written_ each
+
     explicit dense_store(const hypervolume& volume) : volume_(volume), voxels_(std::size_t(volume.voxel_count())) {}
+
+    static std::size_t run_words(const hypervolume& volume)
+    {
+        const std::size_t runs = (std::size_t(volume.voxel_count()) + voxels_per_run - 1) / voxels_per_run;
+        return (runs + 63) / 64;
+    }
+    static void require_buildable(const hypervolume& volume, std::span<const stored_voxel> voxels, memory_budget budget)
+    {
+        detail::require_storable("dense_store", volume, voxels);
+        detail::require_within_budget("dense_store", bytes_needed(volume), budget,
+                                      std::to_string(bytes_per_voxel) + " bytes x " +
+                                          std::to_string(volume.voxel_count()) + " voxels of the grid + a bit per " +
+                                          std::to_string(voxels_per_run) + " voxels written");
+    }
+
+    // Writes the voxels into an all-zero array of the volume's voxel count.
+    void fill(const hypervolume& volume, std::span<const stored_voxel> voxels)
+    {
+        volume_ = volume;
+        written_.assign(run_words(volume), 0); // keeps its capacity when rebuilt
+        for (const stored_voxel& v : voxels) {
+            voxels_[v.index] = v.value;
+            const std::size_t run = v.index / voxels_per_run;
+            written_[run / 64] |= std::uint64_t(1) << (run % 64);
+        }
+        count_ = voxels.size();
+        bounds_ = detail::bounds_of(volume, voxels);
+        first_ = last_ = 0;
+        if (!voxels.empty()) first_ = voxels.front().index, last_ = voxels.back().index;
+    }
+    // Sets back to zero the runs the last fill wrote: afterwards the whole block is zero.
+    void clear_written()
+    {
+        for (std::size_t w = 0; w < written_.size(); ++w)
+            for (std::uint64_t bits = written_[w]; bits; bits &= bits - 1) {
+                const std::size_t start = (w * 64 + std::size_t(std::countr_zero(bits))) * voxels_per_run;
+                std::fill_n(voxels_.data() + start, std::min(voxels_per_run, voxels_.size() - start), voxel{});
+            }
+        std::fill(written_.begin(), written_.end(), 0);
+    }
 
     hypervolume volume_{};
     zeroed_array<voxel> voxels_; // the empty voxels cost nothing until written (zeroed_array.hpp)
+    std::vector<std::uint64_t> written_; // bit r: voxels [32 r, 32 r + 32) hold some voxel written
     std::size_t count_ = 0;
     index_box bounds_{};
     voxel_index first_ = 0, last_ = 0;

@@ -10,6 +10,9 @@
 // 0.25-3 M voxels of a tree. A directory over the list (detail::index_directory: one list position
 // per bucket of consecutive indices, at most 2 bytes per non-empty voxel) narrows the bisection
 // to a bucket's few entries first, so a lookup costs a few cache misses at any list length.
+//
+// Built again in a recycled store (build's last parameter), it keeps its lists' capacity: a tree
+// of the same size or smaller maps no new page.
 
 #include "hypertree/store/store.hpp"
 
@@ -17,6 +20,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hypertree {
@@ -35,12 +39,19 @@ public:
     static index_list_store build(const hypervolume& volume, std::span<const stored_voxel> voxels,
                                   memory_budget budget = {})
     {
+        return build(volume, voxels, budget, index_list_store());
+    }
+    // The same store, built in `recycled`'s memory, which it consumes. Refused as build refuses,
+    // before recycled is touched.
+    static index_list_store build(const hypervolume& volume, std::span<const stored_voxel> voxels, memory_budget budget,
+                                  index_list_store&& recycled)
+    {
         detail::require_storable("index_list_store", volume, voxels);
         detail::require_within_budget("index_list_store", bytes_needed(volume, voxels), budget,
                                       std::to_string(bytes_per_voxel) + " bytes x " + std::to_string(voxels.size()) +
                                           " non-empty voxels + " + std::to_string(directory_of(voxels).bytes()) +
                                           " bytes of list directory");
-        index_list_store store;
+        index_list_store store = std::move(recycled);
         store.volume_ = volume;
         detail::split_voxels(voxels, store.indices_, store.values_);
         store.directory_ = directory_of(voxels);

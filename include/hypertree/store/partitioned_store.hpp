@@ -17,6 +17,9 @@
 // Storage is the index list's 6 bytes per non-empty voxel (the parts' lists lie back to back in
 // one index array and one value array), the directory (at most 2 bytes per non-empty voxel) and
 // one small record per part.
+//
+// Built again in a recycled store (build's last parameter), it keeps its lists' capacity: a tree
+// of the same size or smaller maps no new page.
 
 #include "hypertree/store/store.hpp"
 
@@ -60,6 +63,13 @@ public:
     static partitioned_store build(const hypervolume& volume, std::span<const stored_voxel> voxels,
                                    memory_budget budget = {})
     {
+        return build(volume, voxels, budget, partitioned_store());
+    }
+    // The same store, built in `recycled`'s memory, which it consumes. Refused as build refuses,
+    // before recycled is touched.
+    static partitioned_store build(const hypervolume& volume, std::span<const stored_voxel> voxels, memory_budget budget,
+                                   partitioned_store&& recycled)
+    {
         detail::require_storable("partitioned_store", volume, voxels);
         detail::require_within_budget("partitioned_store", bytes_needed(volume, voxels), budget,
                                       std::to_string(bytes_per_voxel) + " bytes x " + std::to_string(voxels.size()) +
@@ -67,7 +77,8 @@ public:
                                           " bytes per part + " +
                                           std::to_string(directory_of(voxels, part_count(voxels)).bytes()) +
                                           " bytes of list directory");
-        partitioned_store store;
+        partitioned_store store = std::move(recycled);
+        store.parts_.clear();
         store.volume_ = volume;
         store.bounds_ = detail::bounds_of(volume, voxels);
 

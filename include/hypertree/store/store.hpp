@@ -4,6 +4,7 @@
 // The paper weighs memory against lookup time and describes four organizations, which are the
 // four store kinds here, one header each:
 //   dense_store        a plain 3D array: fastest lookup, 2 bytes per voxel of the whole grid
+//                      and a bit per 32 voxels saying which it wrote, for rebuilding
 //                      (the paper's choice up to resolution ~300);
 //   index_list_store   sorted voxel indices with their densities and levels: 6 bytes per non-empty
 //                      voxel, lookup by bisection (resolutions over 1000 fit in memory);
@@ -24,7 +25,9 @@
 //
 // `build` checks the list (sorted, unique, inside the volume, no empty voxel) and refuses, before
 // allocating anything, a store whose memory would exceed the budget; `S::bytes_needed` tells in
-// advance, so a caller can pick the fastest kind that fits.
+// advance, so a caller can pick the fastest kind that fits. `S::build(volume, voxels, budget,
+// std::move(old))` builds in the memory of a store `old` the caller is done with: a tree of the
+// same size then maps no new page (huge_pages.hpp says why pages cost).
 
 #include "hypertree/voxel.hpp"
 #include "krs/core/bounds.hpp"
