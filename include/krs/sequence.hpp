@@ -301,8 +301,10 @@ private:
 // in O(kernels + levels) without expanding the 2^n instances: the box B_{i+1} of
 // L_{i+1} = K_{i+1} u L_i u R_i L_i is that of B_i, of R_i B_i and of the kernel boxes of level
 // i + 1, with R_i B_i bounded by the box of B_i's eight reflected corners (R_i is affine, so the
-// image of a box is the hull of its reflected corners: exact for an axis mirror, for a turned one
-// up to the rotated box's own corners sticking out). Computed in double, then grown by a relative
+// image of B_i is the hull of its reflected corners and this is that image's box). For an axis
+// mirror the image of a box is a box, and with exact kernel boxes the result is the exact box of
+// the 2^n instances; a turned mirror makes B_i's image a turned box, whose box may reach past the
+// instances by the corners it turns out. Computed in double, then grown by a relative
 // 1e-6 of the largest coordinate for the float rounding of the walk's folds (a float mirror normal
 // is unit to about 1e-7), rounded outward to float, and cut to the box of the sequence's bounding
 // sphere, which holds every instance too. `kernel_box(k)` gives each kernel's box: the sequence's
