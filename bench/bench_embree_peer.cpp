@@ -5,6 +5,7 @@
 //
 //     bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] [--tolerance T]
 //                       [--repeat R] [--csv FILE] [--scene grid|unaligned|both] [--krs-floor F]
+//     bench_embree_peer --boxes [--size N] [--max-n N] [--repeat R] [--scene ...]
 //
 // Scenes: a ring (a krs::torus) around a sphere, copied 2^n times by n
 // vertical mirrors (krs::sequence, so krs::expand applies): `grid` with x- and z-normal mirrors,
@@ -29,6 +30,13 @@
 // (pixel_footprint = 0, a fixed floor well under the tessellation tolerance, max_steps 4096). The
 // pixel-footprint threshold (0.5 px) is timed separately, with its coverage error against the
 // faithful render.
+//
+// --boxes (issue 23, item 2) runs no Embree: per n it traces the tuned KRS render twice, with
+// rays clipped to the sequence's box (its kernels' exact boxes through the mirrors) and to the
+// box the kernels' bounding spheres give through the same mirrors (the box before issue 23),
+// alternately within each of the R repeats (the first of the two swapping every repeat), and
+// prints the share of rays that enter each box, field evaluations per ray and Mrays/s (best of
+// R) side by side.
 
 #include "support/text.hpp"
 #include "krs/expansion.hpp"
@@ -85,6 +93,7 @@ struct settings {
     std::string csv_path;
     std::string scene = "both";
     float krs_floor = 1e-3f; // the faithful KRS threshold's floor, in scene units
+    bool boxes = false;      // compare the clip boxes instead of running Embree
 };
 
 // ---- scene -------------------------------------------------------------------------------------
@@ -379,14 +388,16 @@ std::optional<grid_sequence> axis_copy(const scene_sequence& s)
 // One stream per thread over all of its tiles, so lanes are refilled across tile borders; four
 // packets step together (the sequence walks their points in lockstep: on this scene 4 beat 2 by
 // about 5% with axis mirrors and 30% with general ones). With `clipped`, every ray is clipped to
-// the sequence's bounding box (krs/trace/box_clip.hpp). (The tile prepass is not used: once rays
-// start at the box, it saved no evaluation on these scenes and cost 12% of the time at n = 22.)
+// the sequence's bounding box (krs/trace/box_clip.hpp), or to `clip_box` when given. (The tile
+// prepass is not used: once rays start at the box, it saved no evaluation on these scenes and cost
+// 12% of the time at n = 22.)
 template <class Field>
 frame render_krs(const Field& s, const krs::pinhole_camera& camera, const krs::trace_options& o, int repeats,
-                 bool clipped = false)
+                 bool clipped = false, const std::optional<krs::bounding_box>& clip_box = std::nullopt)
 {
     const int size = camera.width();
-    const krs::box_clip clip = clipped ? krs::box_clip(krs::field_box(s), camera.eye(), o) : krs::box_clip();
+    const krs::box_clip clip =
+        clipped ? krs::box_clip(clip_box ? *clip_box : krs::field_box(s), camera.eye(), o) : krs::box_clip();
     std::atomic<long long> evaluations{0};
     frame out = render_tiles(size, repeats, [&](auto& take_tile, std::uint8_t* hit) {
         int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
@@ -454,6 +465,21 @@ frame render_embree(RTCScene scene, const krs::pinhole_camera& camera, float far
         int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
         while (take_tile(x0, y0, x1, y1)) embree_tile(scene, camera, far, packets, x0, y0, x1, y1, hit);
     });
+}
+
+// The share of the camera's primary rays that enter `box` as box_clip grows it for `o`.
+double share_in_box(const krs::bounding_box& box, const krs::pinhole_camera& camera, const krs::trace_options& o)
+{
+    const krs::box_clip clip(box, camera.eye(), o);
+    std::size_t entering = 0;
+    for (int py = 0; py < camera.height(); ++py)
+        for (int px = 0; px < camera.width(); ++px) {
+            const krs::ray<float> r = camera.primary_ray(float(px) + 0.5f, float(py) + 0.5f);
+            float t0 = o.min_distance, t1 = o.max_distance;
+            clip.apply(r, t0, t1);
+            entering += t0 <= t1;
+        }
+    return double(entering) / (double(camera.width()) * double(camera.height()));
 }
 
 double hit_share(const frame& a)
@@ -620,6 +646,53 @@ std::string cell(const embree_result& r, double value, const char* f)
     return format(f, value);
 }
 
+// --boxes: the tuned KRS render clipped to the sequence's box and to its kernels' spheres' box.
+int compare_boxes(const settings& opt)
+{
+    std::printf("bench_embree_peer --boxes: %dx%d primary rays, %d threads, %zu float lanes, best of %d "
+                "(the two boxes alternate, the first swapping every repeat)\n",
+                opt.size, opt.size, thread_count, krs::lane_count<krs::packet_f>, opt.repeats);
+    std::printf("tight = the sequence's box (kernels' exact boxes through the mirrors); spheres = the kernels' "
+                "bounding spheres' boxes through the same mirrors (before issue 23)\n");
+    for (const bool unaligned : {false, true}) {
+        if ((unaligned && opt.scene == "grid") || (!unaligned && opt.scene == "unaligned")) continue;
+        std::printf("\n== %s ==\n", unaligned ? "unaligned (+-10 degrees)" : "grid (axis-normal)");
+        std::printf("%3s %7s | %-17s | %-15s | %-17s %7s | %s\n", "n", "hits", "in box: spheres", "tight",
+                    "Mr/s: spheres", "tight", "speedup", "evals/ray spheres / tight");
+        for (int n = 8; n <= opt.max_n; n += 2) {
+            framing v;
+            const scene_sequence s = ring_scene(n, unaligned, v);
+            const krs::pinhole_camera camera = camera_for(v, opt.size);
+            const krs::trace_options faithful = faithful_options(v, opt.krs_floor);
+            const std::optional<grid_sequence> grid = axis_copy(s);
+            const auto spheres_of = [](const auto& f) {
+                return krs::box_through_mirrors(f, [](const auto& k) { return krs::box_around(k.bound()); });
+            };
+            const krs::bounding_box tight = grid ? grid->bound_box() : s.bound_box();
+            const krs::bounding_box spheres = grid ? spheres_of(*grid) : spheres_of(s);
+            frame best[2];
+            // The order swaps every repeat, so neither box always runs first after the other.
+            for (int r = 0; r < opt.repeats; ++r)
+                for (int k = 0; k < 2; ++k) {
+                    const int which = (k + r) % 2;
+                    const krs::bounding_box& box = which == 0 ? spheres : tight;
+                    frame f = grid ? render_krs(*grid, camera, faithful, 1, true, box)
+                                   : render_krs(s, camera, faithful, 1, true, box);
+                    if (r == 0 || f.seconds < best[which].seconds) best[which] = std::move(f);
+                }
+            const double rays = double(best[0].hit.size());
+            std::printf("%3d %6.1f%% | %16.1f%% | %14.1f%% | %17.2f %7.2f | %6.3fx | %.1f / %.1f%s\n", n,
+                        100 * hit_share(best[1]), 100 * share_in_box(spheres, camera, faithful),
+                        100 * share_in_box(tight, camera, faithful), best[0].mrays(), best[1].mrays(),
+                        best[1].mrays() / best[0].mrays(), double(best[0].evaluations) / rays,
+                        double(best[1].evaluations) / rays,
+                        agreement(best[0], best[1]) < 1 ? " (hit/miss differ)" : "");
+            std::fflush(stdout);
+        }
+    }
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -637,13 +710,15 @@ int main(int argc, char** argv)
         else if (a == "--csv") opt.csv_path = value();
         else if (a == "--scene") opt.scene = value();
         else if (a == "--krs-floor") opt.krs_floor = float(std::max(1e-6, std::atof(value())));
+        else if (a == "--boxes") opt.boxes = true;
         else {
             std::fprintf(stderr, "usage: bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] "
                                  "[--tolerance T] [--repeat R] [--csv FILE] [--scene grid|unaligned|both] "
-                                 "[--krs-floor F]\n");
+                                 "[--krs-floor F] [--boxes]\n");
             return 2;
         }
     }
+    if (opt.boxes) return compare_boxes(opt);
     if (opt.csv_path.empty()) opt.csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(opt.csv_path);
     if (!csv) {

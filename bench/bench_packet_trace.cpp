@@ -1,9 +1,9 @@
 // bench_packet_trace: scalar against packet tracing, the paper's section 8 table (time per ray
 // against expansion level), and speed against error for the tracer's settings.
 //
-//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error]
+//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes]
 //
-// Prints three tables and writes them to one CSV (default: <executable>.csv next to the
+// Prints four tables and writes them to one CSV (default: <executable>.csv next to the
 // binary), with a `table` column. Rays are camera rays over N x N pixels (default 256), rendered
 // in 8 x 8 tiles taken from a shared counter by 1 or 2 threads. The scalar path traces each pixel
 // with sphere_trace<float>; the packet path streams every ray of a thread's tiles through
@@ -30,6 +30,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
@@ -52,6 +53,7 @@ struct render_settings {
     int threads = 1;
     bool prepass = false;
     bool clip = true; // rays clipped to the field's bounding box (both paths)
+    std::optional<krs::bounding_box> clip_box; // the box to clip to instead of the field's
     int tile = 8;
     krs::trace_options options;
 };
@@ -116,7 +118,8 @@ frame render_once(const F& f, const krs::pinhole_camera& camera, const render_se
     std::atomic<int> next_tile{0};
     std::atomic<long long> evaluations{0}, prepass_evaluations{0}, packet_steps{0}, busy{0};
     const krs::trace_options& o = s.options;
-    const krs::box_clip clip = s.clip ? krs::box_clip(krs::field_box(f), camera.eye(), o) : krs::box_clip();
+    const krs::box_clip clip =
+        s.clip ? krs::box_clip(s.clip_box ? *s.clip_box : krs::field_box(f), camera.eye(), o) : krs::box_clip();
 
     auto worker = [&] {
         long long my_evaluations = 0, my_prepass = 0;
@@ -184,8 +187,9 @@ struct framing {
     float far;
 };
 
-// A tree of `levels` branches on its route (levels - 1 mirrors), framed from the side.
-krs::model::tree_sequence tree_scene(int levels, framing& view)
+// A tree of `levels` branches on its route (levels - 1 mirrors), framed from the side; on a
+// ground plane unless `ground` is false (a plane makes the box unbounded: nothing is clipped).
+krs::model::tree_sequence tree_scene(int levels, framing& view, bool ground = true)
 {
     krs::model::tree_style style;
     style.levels = levels;
@@ -193,7 +197,7 @@ krs::model::tree_sequence tree_scene(int levels, framing& view)
     krs::model::tree_parameters p = krs::model::grow_tree(style);
     p.ground_height.reset();
     const krs::bounding_sphere crown = krs::model::build_tree(p).bound();
-    p.ground_height = 0.0f;
+    if (ground) p.ground_height = 0.0f;
     const float away = 1.1f * crown.radius / std::sin(0.5f * 40.0f * 3.14159265f / 180.0f);
     view = {crown.center + krs::normalize(vec3f{0.8f, 0.25f, -0.6f}) * away, crown.center, 4 * away};
     return krs::model::build_tree(p);
@@ -201,7 +205,7 @@ krs::model::tree_sequence tree_scene(int levels, framing& view)
 
 // The tree (`levels` branches) replicated on a 2^g x 2^g grid by 2g more mirrors with empty kernel
 // sets (paper section 7.3), then the ground as the top level's kernel.
-krs::model::tree_sequence forest_scene(int levels, int g, framing& view)
+krs::model::tree_sequence forest_scene(int levels, int g, framing& view, bool ground = true)
 {
     krs::model::tree_style style;
     style.levels = levels;
@@ -223,7 +227,7 @@ krs::model::tree_sequence forest_scene(int levels, int g, framing& view)
         b.mirror(krs::mirror({1, 0, 0}, c.x + at));
         b.mirror(krs::mirror({0, 0, 1}, c.z + at));
     }
-    b.kernel(krs::plane({0, 1, 0}, 0.0f));
+    if (ground) b.kernel(krs::plane({0, 1, 0}, 0.0f));
     const float extent = float(1 << g) * spacing;
     const vec3f middle{c.x + 0.5f * (extent - spacing), c.y * 0.5f, c.z + 0.5f * (extent - spacing)};
     view = {middle + vec3f{-0.55f * extent, 0.45f * extent, -0.85f * extent}, middle, 4 * extent};
@@ -331,6 +335,68 @@ void throughput_table(int size, csv_writer& csv)
                     packet_width, worst, verdict(worst >= target));
     else
         std::printf("packet/scalar worst %.2fx (no target for %zu lanes)\n", worst, packet_width);
+}
+
+// ---- table 4: clip boxes -----------------------------------------------------------------------
+
+// Issue 23, item 2: rays clipped to the sequence's box (its kernels' exact boxes through the
+// mirrors) and to the box its kernels' bounding spheres give through the same mirrors (the box
+// before issue 23): the share of rays entering each and the packet path's speed, the two boxes
+// alternating within each repeat, best of R.
+template <class F>
+void boxes_row(const char* name, const F& f, const framing& v, int size, csv_writer& csv)
+{
+    const krs::pinhole_camera camera = camera_for(v, size);
+    const krs::bounding_box tight = f.bound_box();
+    const krs::bounding_box spheres =
+        krs::box_through_mirrors(f, [](const auto& k) { return krs::box_around(k.bound()); });
+    render_settings s;
+    s.options = options_for(camera, v);
+    s.threads = 2;
+    const auto in_box = [&](const krs::bounding_box& box) {
+        const krs::box_clip clip(box, camera.eye(), s.options);
+        std::size_t entering = 0;
+        for (int py = 0; py < camera.height(); ++py)
+            for (int px = 0; px < camera.width(); ++px) {
+                const krs::ray<float> r = camera.primary_ray(float(px) + 0.5f, float(py) + 0.5f);
+                float t0 = s.options.min_distance, t1 = s.options.max_distance;
+                clip.apply(r, t0, t1);
+                entering += t0 <= t1;
+            }
+        return double(entering) / (double(camera.width()) * double(camera.height()));
+    };
+    frame best[2];
+    for (int r = 0; r < repeats; ++r)
+        for (int k = 0; k < 2; ++k) {
+            const int which = (k + r) % 2; // the first of the two swaps every repeat
+            s.clip_box = which == 0 ? spheres : tight;
+            frame fr = render_once(f, camera, s);
+            if (r == 0 || fr.seconds < best[which].seconds) best[which] = std::move(fr);
+        }
+    const auto mrays = [](const frame& fr) { return double(fr.rays()) / fr.seconds * 1e-6; };
+    const auto evals = [](const frame& fr) { return double(fr.evaluations) / double(fr.rays()); };
+    int differ = 0;
+    for (std::size_t i = 0; i < best[0].rays(); ++i) differ += std::isinf(best[0].depth[i]) != std::isinf(best[1].depth[i]);
+    std::printf("%-22s %9.1f%% %9.1f%% %10.2f %10.2f %8.3fx %8.1f %8.1f %8d\n", name, 100 * in_box(spheres),
+                100 * in_box(tight), mrays(best[0]), mrays(best[1]), mrays(best[1]) / mrays(best[0]), evals(best[0]),
+                evals(best[1]), differ);
+    csv.row(format("boxes,%s,%.6f,%.6f,%.4f,%.4f,%.3f,%.3f,%d", name, in_box(spheres), in_box(tight), mrays(best[0]),
+                   mrays(best[1]), evals(best[0]), evals(best[1]), differ));
+}
+
+void boxes_table(int size, csv_writer& csv)
+{
+    std::printf("\n== clip boxes: kernels' spheres' box vs the tight box (packet path, 2 threads, %dx%d) ==\n", size,
+                size);
+    std::printf("%-22s %10s %10s %10s %10s %9s %8s %8s %8s\n", "scene", "in spheres", "in tight", "spheres Mr/s",
+                "tight Mr/s", "speedup", "evals s", "evals t", "hit diff");
+    csv.row("table,scene,in_spheres_box,in_tight_box,spheres_mrays_s,tight_mrays_s,spheres_evals_per_ray,"
+            "tight_evals_per_ray,hit_miss_differ");
+    framing v;
+    // Without their ground: a plane makes the box unbounded, and nothing would be clipped.
+    boxes_row("tree, no ground", tree_scene(15, v, false), v, size, csv);
+    framing fv;
+    boxes_row("forest, no ground", forest_scene(12, 3, fv, false), fv, size, csv);
 }
 
 // ---- table 2: time per ray against expansion level ---------------------------------------------
@@ -504,7 +570,7 @@ int main(int argc, char** argv)
         else if (a == "--repeat" && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
         else if (a == "--only" && i + 1 < argc) only = argv[++i];
         else {
-            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error]\n");
+            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes]\n");
             return 2;
         }
     }
@@ -521,5 +587,6 @@ int main(int argc, char** argv)
     if (only.empty() || only == "throughput") throughput_table(size, csv);
     if (only.empty() || only == "levels") levels_table(size, csv);
     if (only.empty() || only == "error") error_table(size, csv);
+    if (only.empty() || only == "boxes") boxes_table(size, csv);
     return 0;
 }

@@ -301,8 +301,8 @@ const int KRS_MAX_STEPS = 256;
 const float KRS_THRESHOLD_FLOOR = 1e-05;
 const float KRS_FOOTPRINT_SCALE = 0.5;
 const bool KRS_CLIP = true;
-const vec3 KRS_BOX_LO = vec3(-1.0271153, -0.027115243, -1.0271153);
-const vec3 KRS_BOX_HI = vec3(1.0271153, 2.0271153, 1.0271153);
+const vec3 KRS_BOX_LO = vec3(-1.0000025, -2.418028e-06, -1.0000025);
+const vec3 KRS_BOX_HI = vec3(1.0000025, 2.0000026, 1.0000025);
 float krs_scene(vec3 p) { return krs_sponge(p); }
 struct krs_view {
     vec3 eye;

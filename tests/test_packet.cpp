@@ -622,7 +622,10 @@ TEST_CASE("box clip: a clipped ray starts before its first possible stop, ends a
         }
     MESSAGE("rays ", rays, ": missed the box ", missed_box, ", started later ", later_start, ", ended earlier ",
             earlier_end, ", hits ", hits, ", near misses that differ ", differ);
-    CHECK(differ <= rays / 200);
+    // Grazing rays sample differently from another start: with the boxes from the kernels' exact
+    // boxes (tighter, so rays start later) 90 of these 15252 rays differ, against 65 with the
+    // boxes from the kernels' spheres; each is checked above to be a near miss.
+    CHECK(differ <= rays / 100);
     CHECK(missed_box > rays / 40);
     CHECK(later_start > rays / 4);
     CHECK(earlier_end > rays / 4);

@@ -11,6 +11,7 @@
 #include "support/grid.hpp"
 
 #include "support/parity.hpp"
+#include "support/swept_samples.hpp"
 
 #include <doctest/doctest.h>
 
@@ -213,19 +214,23 @@ TEST_CASE("a sequence holding a plane above bounded levels equals Algorithm 1 wi
 
 TEST_CASE("the bounding box holds every instance of the expansion, and is flat for a flat grid")
 {
-    // Every instance's bounding sphere, placed by the expansion's isometries (in double, not by
-    // the box's corner reflections), lies inside the box.
+    // Every instance's extreme points (the kernel's spine moved by its radius along each axis,
+    // from its construction parameters), placed by the expansion's isometries (in double, not by
+    // the box's corner reflections), lie inside the box. (The box is now tighter than an
+    // instance's bounding sphere: tests/test_bounds.cpp.)
     const auto holds_all = [](const auto& s) {
         const auto e = krs::expand(s);
         const krs::bounding_box box = s.bound_box();
         REQUIRE(box.is_bounded());
         int outside = 0;
         for (const auto& in : e.instances) {
-            const krs::bounding_sphere b = std::visit([](const auto& k) { return k.bound(); }, s.kernels()[in.kernel]);
-            const vec3d c = in.to_world.apply(vec3d(b.center));
-            const double r = b.radius;
-            outside += !(c.x - r >= box.lo.x && c.y - r >= box.lo.y && c.z - r >= box.lo.z && c.x + r <= box.hi.x &&
-                         c.y + r <= box.hi.y && c.z + r <= box.hi.z);
+            const std::vector<vec3d> points =
+                std::visit([](const auto& k) { return krs_test::reference_points(k, 64); }, s.kernels()[in.kernel]);
+            for (const vec3d& p : points) {
+                const vec3d c = in.to_world.apply(p);
+                outside += !(c.x >= box.lo.x && c.y >= box.lo.y && c.z >= box.lo.z && c.x <= box.hi.x &&
+                             c.y <= box.hi.y && c.z <= box.hi.z);
+            }
         }
         CHECK(outside == 0);
         return box;

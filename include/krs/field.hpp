@@ -6,8 +6,10 @@
 // divides by its declared bound). Tracers, shading, GLSL emission and tests accept any field.
 //
 // A *kernel* is a field that is also a primitive a KRS can hold: besides its distance it reports a
-// bounding sphere (for expansion, tiling and tests) and the outward unit normal at a point (for
-// shading in kernel space, paper section 6.1). Kernel parameters are validated at construction.
+// bounding sphere (for expansion, tiling and tests), an axis-aligned bounding box no larger than
+// that sphere's on any axis (exact where it has a closed form; a sequence's box and ray clipping
+// are built from it) and the outward unit normal at a point (for shading in kernel space, paper
+// section 6.1). Kernel parameters are validated at construction.
 //
 // A *lockstep field* also evaluates K points of lane type T in one call, `distances<T, K>`, equal
 // to K calls of `distance` but interleaved so that their dependent operations overlap (a KRS walks
@@ -43,6 +45,7 @@ concept lockstep_field = field<F> && requires(const F& f, const std::array<vec3<
 template <class K>
 concept kernel = field<K> && requires(const K& k, const vec3f& p) {
     { k.bound() } -> std::same_as<bounding_sphere>;
+    { k.bound_box() } -> std::same_as<bounding_box>;
     { k.normal(p) } -> std::same_as<vec3f>;
 };
 

@@ -88,7 +88,9 @@ public:
     // A sphere holding every instance (infinite if any kernel is unbounded).
     const bounding_sphere& bound() const { return bound_; }
     // An axis-aligned box holding every instance (infinite if any kernel is unbounded): much
-    // tighter than the sphere for flat scenes, for clipping rays (krs/trace/box_clip.hpp).
+    // tighter than the sphere for flat scenes, for clipping rays (krs/trace/box_clip.hpp). It is
+    // box_through_mirrors (below) of the kernels' own boxes: exact for axis mirrors up to the
+    // float rounding margins, never larger than the sphere's box on any axis.
     const bounding_box& bound_box() const { return box_; }
     // The sequence's memory: the object plus what its vectors hold (allocator overhead aside). It
     // grows with n and the kernel count, never with the 2^n instances it stands for.
@@ -295,6 +297,50 @@ private:
     std::array<std::vector<axis_fold>, 3> axis_prefix_;
 };
 
+// A box holding every instance of a sequence, from a box per kernel carried through the mirrors
+// in O(kernels + levels) without expanding the 2^n instances: the box B_{i+1} of
+// L_{i+1} = K_{i+1} u L_i u R_i L_i is that of B_i, of R_i B_i and of the kernel boxes of level
+// i + 1, with R_i B_i bounded by the box of B_i's eight reflected corners (R_i is affine, so the
+// image of B_i is the hull of its reflected corners and this is that image's box). For an axis
+// mirror the image of a box is a box, and with exact kernel boxes the result is the exact box of
+// the 2^n instances; a turned mirror makes B_i's image a turned box, whose box may reach past the
+// instances by the corners it turns out. Computed in double, then grown by a relative
+// 1e-6 of the largest coordinate for the float rounding of the walk's folds (a float mirror normal
+// is unit to about 1e-7), rounded outward to float, and cut to the box of the sequence's bounding
+// sphere, which holds every instance too. `kernel_box(k)` gives each kernel's box: the sequence's
+// own bound_box() passes the kernels' bound_box(), exact where they have a closed form; passing
+// box_around(k.bound()) gives the looser box of their bounding spheres (the one before issue 23,
+// kept for comparison: bench_embree_peer). The result only grows with the kernel boxes (each step
+// is monotone), so the first is never larger than the second on any axis. An unbounded kernel box
+// makes the result unbounded.
+template <mirror_kind Mirror, kernel... Kinds, class KernelBox>
+bounding_box box_through_mirrors(const basic_sequence<Mirror, Kinds...>& s, KernelBox&& kernel_box)
+{
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+    const auto add = [&](const vec3d& p) {
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    };
+    for (std::size_t i = 0; i <= s.mirror_count(); ++i) {
+        if (i > 0 && lo.x <= hi.x) {
+            const Mirror& m = s.mirrors()[i - 1];
+            const vec3d a = lo, b = hi;
+            for (int corner = 0; corner < 8; ++corner)
+                add(m.reflect(vec3d{corner & 1 ? b.x : a.x, corner & 2 ? b.y : a.y, corner & 4 ? b.z : a.z}));
+        }
+        for (std::uint32_t k = s.level_begin(i); k < s.level_begin(i + 1); ++k) {
+            const bounding_box kb = std::visit([&](const auto& kernel) -> bounding_box { return kernel_box(kernel); },
+                                               s.kernels()[k]);
+            if (!kb.is_bounded()) return bounding_box::unbounded();
+            add(vec3d(kb.lo)), add(vec3d(kb.hi));
+        }
+    }
+    const double margin = 1e-6 * std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x),
+                                            std::abs(hi.y), std::abs(hi.z), 1e-30});
+    return intersect(box_around(lo, hi, margin), box_around(s.bound()));
+}
+
 // Builds a sequence bottom-up, as the paper writes it: kernels of level 0, then a mirror, then the
 // kernels of level 1, and so on. `build()` validates and returns the immutable sequence.
 template <mirror_kind Mirror, kernel... Kinds>
@@ -351,7 +397,7 @@ public:
                 s.bound_tests_below_ = std::min(s.bound_tests_below_, i);
                 break;
             }
-        s.box_ = expansion_box(s);
+        s.box_ = box_through_mirrors(s, [](const auto& kernel) { return kernel.bound_box(); });
         if constexpr (one_axis_folds)
             for (std::size_t i = s.mirrors_.size(); i-- > s.top_kernel_level_;) {
                 const Mirror& m = s.mirrors_[i];
@@ -377,43 +423,6 @@ private:
             }
         }
         return *b;
-    }
-
-    // Box of L_{i+1} = K_{i+1} u L_i u R_i L_i, level by level in double: a kernel's box is its
-    // bounding sphere's, R_i L_i's the box of L_i's reflected corners (exact for axis mirrors,
-    // larger than needed for others). Rounded outward to float, and cut to the bounding sphere's
-    // box, which holds every instance too.
-    static bounding_box expansion_box(const basic_sequence& s)
-    {
-        constexpr double inf = std::numeric_limits<double>::infinity();
-        vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-        const auto add = [&](const vec3d& p) {
-            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-        };
-        for (std::size_t i = 0; i <= s.mirrors_.size(); ++i) {
-            if (i > 0 && lo.x <= hi.x) {
-                const Mirror& m = s.mirrors_[i - 1];
-                const vec3d a = lo, b = hi;
-                for (int corner = 0; corner < 8; ++corner)
-                    add(m.reflect(vec3d{corner & 1 ? b.x : a.x, corner & 2 ? b.y : a.y, corner & 4 ? b.z : a.z}));
-            }
-            for (std::uint32_t k = s.level_begin_[i]; k < s.level_begin_[i + 1]; ++k) {
-                const bounding_sphere kb = std::visit([](const auto& kernel) { return kernel.bound(); }, s.kernels_[k]);
-                if (!kb.is_bounded()) return bounding_box::unbounded();
-                const vec3d c(kb.center), r{kb.radius, kb.radius, kb.radius};
-                add(c - r), add(c + r);
-            }
-        }
-        // Margin for the float rounding the walk's folds make (a float mirror normal is unit to
-        // about 1e-7): a relative 1e-6 of the largest coordinate.
-        const double margin = 1e-6 * std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x),
-                                                std::abs(hi.y), std::abs(hi.z), 1e-30});
-        const vec3d pad{margin, margin, margin};
-        const bounding_box sphere_box = box_around(s.bound_);
-        const bounding_box box = box_around(lo - pad, hi + pad);
-        return {{std::max(box.lo.x, sphere_box.lo.x), std::max(box.lo.y, sphere_box.lo.y), std::max(box.lo.z, sphere_box.lo.z)},
-                {std::min(box.hi.x, sphere_box.hi.x), std::min(box.hi.y, sphere_box.hi.y), std::min(box.hi.z, sphere_box.hi.z)}};
     }
 
     std::vector<Mirror> mirrors_;

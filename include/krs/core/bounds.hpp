@@ -5,6 +5,7 @@
 
 #include "krs/core/vec3.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -42,7 +43,9 @@ inline bounding_sphere enclose(const bounding_sphere& a, const bounding_sphere& 
 
 // Axis-aligned bounding boxes: a flat scene (a grid of 2^n copies, a forest) fills a small part
 // of its bounding sphere, so a ray clipped to the box skips the empty space above and below it
-// (krs/trace/box_clip.hpp). An unbounded field reports infinite extents.
+// (krs/trace/box_clip.hpp). Every kernel reports its own (`bound_box()`): exact where it has a
+// closed form (a ring standing upright is 0.4 deep where its sphere's box is 2.4), and never
+// larger than its sphere's box on any axis. An unbounded field reports infinite extents.
 struct bounding_box {
     vec3f lo{}, hi{};
 
@@ -70,6 +73,22 @@ inline bounding_box box_around(const vec3d& lo, const vec3d& hi)
         return double(f) >= v ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
     };
     return {{down(lo.x), down(lo.y), down(lo.z)}, {up(hi.x), up(hi.y), up(hi.z)}};
+}
+
+// The float box holding the double box [lo, hi] grown by `pad` on every side: a kernel's exact
+// box is computed in double from its float parameters, and the pad covers what the float field
+// may differ from that exact solid by (its stored unit vectors are unit to about 1e-7).
+inline bounding_box box_around(const vec3d& lo, const vec3d& hi, double pad)
+{
+    const vec3d g{pad, pad, pad};
+    return box_around(lo - g, hi + g);
+}
+
+// The common part of two boxes that both hold a set: it holds the set too.
+inline bounding_box intersect(const bounding_box& a, const bounding_box& b)
+{
+    return {{std::max(a.lo.x, b.lo.x), std::max(a.lo.y, b.lo.y), std::max(a.lo.z, b.lo.z)},
+            {std::min(a.hi.x, b.hi.x), std::min(a.hi.y, b.hi.y), std::min(a.hi.z, b.hi.z)}};
 }
 
 // The box around a bounding sphere (infinite for an unbounded one).

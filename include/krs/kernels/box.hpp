@@ -90,6 +90,21 @@ struct box {
     {
         return bound_around(vec3d(center_), length(vec3d(half_extents_)));
     }
+    // Exact: the box of its eight corners center + sum_j (+-h_j) axis_j, whose half extent on
+    // world axis i is sum_j |axis_j[i]| h_j. An oriented box's float axes are orthonormal to about
+    // 1e-7, so the solid the distance describes (|dot(p - c, axis_j)| <= h_j) reaches past those
+    // corners by about 1e-7 of its size: the pad, a relative 1e-6 of sum_j h_j, covers that.
+    bounding_box bound_box() const
+    {
+        const vec3d c(center_), h(half_extents_);
+        if (!oriented_) return box_around(c - h, c + h);
+        const vec3d ax(axes_[0]), ay(axes_[1]), az(axes_[2]);
+        const vec3d reach{std::abs(ax.x) * h.x + std::abs(ay.x) * h.y + std::abs(az.x) * h.z,
+                          std::abs(ax.y) * h.x + std::abs(ay.y) * h.y + std::abs(az.y) * h.z,
+                          std::abs(ax.z) * h.x + std::abs(ay.z) * h.y + std::abs(az.z) * h.z};
+        const double pad = 1e-6 * (h.x + h.y + h.z);
+        return intersect(box_around(c - reach, c + reach, pad), box_around(bound()));
+    }
 
     // GLSL: five vec4s (center, oriented ? 1 : 0), (half extents, 0), (axis x, 0), (axis y, 0),
     // (axis z, 0). The orientation test is uniform, as in C++.

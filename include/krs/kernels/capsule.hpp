@@ -78,6 +78,15 @@ struct capsule {
         const vec3d ad(a), bd(b);
         return bound_around((ad + bd) * 0.5, 0.5 * length(bd - ad) + radius);
     }
+    // The box of the two end balls, exact: a coordinate is linear along the segment, so its
+    // extremes are at the ends. The pad (a relative 1e-6 of the capsule's size) covers the
+    // float b - a the distance clamps against, which may end an ulp of |b - a| short of or past b.
+    bounding_box bound_box() const
+    {
+        const vec3d ad(a), bd(b), r{radius, radius, radius};
+        const double pad = 1e-6 * (length(bd - ad) + double(radius));
+        return intersect(box_around(min(ad, bd) - r, max(ad, bd) + r, pad), box_around(bound()));
+    }
 
     // GLSL: three vec4s (a, radius), (b - a, 1 / |b - a|^2), (perpendicular, 0): the stored float
     // values, so the GPU clamps the same t as the CPU.

@@ -64,6 +64,7 @@ struct plane {
     }
 
     bounding_sphere bound() const { return bounding_sphere::unbounded(); }
+    bounding_box bound_box() const { return bounding_box::unbounded(); }
 
     // GLSL: one vec4 (unit normal, offset).
     static constexpr std::string_view glsl_name = "krs_plane";

@@ -44,6 +44,12 @@ struct sphere {
     }
 
     bounding_sphere bound() const { return {center, radius}; }
+    // Exact: center +- radius on each axis, rounded outward.
+    bounding_box bound_box() const
+    {
+        const vec3d c(center), r{radius, radius, radius};
+        return box_around(c - r, c + r);
+    }
 
     // GLSL (krs/glsl/emitter.hpp): the same distance and normal, parameters packed as one vec4
     // (center, radius).

@@ -93,6 +93,19 @@ public:
     }
 
     bounding_sphere bound() const { return bound_around(vec3d(center_), double(major_) + double(minor_)); }
+    // Exact, in any orientation: the circle's points c + R (cos t e1 + sin t e2) reach
+    // R sqrt(e1_i^2 + e2_i^2) = R sqrt(1 - n_i^2) from c along axis i (e1, e2, n orthonormal),
+    // and the tube adds r. n is the float axis normalized in double; the distance uses the float
+    // axis as stored, unit to about 1e-7, which moves the surface by about 1e-7 of R + r: the pad,
+    // a relative 1e-6 of R + r, covers that.
+    bounding_box bound_box() const
+    {
+        const vec3d n = normalize(vec3d(axis_));
+        const double big = major_, small = minor_;
+        const auto reach = [&](double ni) { return big * std::sqrt(std::max(0.0, 1.0 - ni * ni)) + small; };
+        const vec3d c(center_), e{reach(n.x), reach(n.y), reach(n.z)};
+        return intersect(box_around(c - e, c + e, 1e-6 * (big + small)), box_around(bound()));
+    }
 
     // GLSL: the same distance and normal; three vec4s: (center, R), (axis, r), (in-plane e1, 0).
     static constexpr std::string_view glsl_name = "krs_torus";

@@ -208,6 +208,43 @@ public:
     }
 
     bounding_sphere bound() const { return bound_; }
+    // The arc's box grown by the radius, exact (a ball swept along the arc reaches r past the
+    // arc on every axis, at the arc's extreme points). From the chord's midpoint m, the arc is
+    //     a(t) = m + T sin(t) / kappa + M (cos(t) - cos(alpha)) / kappa,   t in [-alpha, alpha]
+    // (T the chord direction, M toward the control point: a(+-alpha) are the ends, a(0) the
+    // arc's midpoint), so coordinate i is extreme where T_i cos(t) = M_i sin(t), at
+    // t = atan2(T_i, M_i) and that plus or minus pi, when those lie on the arc, or at the ends.
+    // cos(t) - cos(alpha) is taken as 2 sin((alpha + t) / 2) sin((alpha - t) / 2), which does not
+    // cancel on a nearly straight arc; a straight one is its chord. Computed in double from the
+    // stored floats the distance reads; those are rounded from the exact arc by about 1e-7 of its
+    // size, which the pad (a relative 1e-6 of the box's size plus r) covers. The ends enter as
+    // stored too, so the caps' balls are held to the last ulp.
+    bounding_box bound_box() const
+    {
+        const vec3d m(chord_middle_), t(chord_direction_), toward(toward_control_);
+        const vec3d s(start_), e(end_);
+        vec3d lo = min(s, e), hi = max(s, e);
+        if (curvature_ > 0) {
+            const double kappa = curvature_, alpha = std::atan2(double(sin_half_angle_), double(cos_half_angle_));
+            const auto add = [&](double angle) {
+                if (!(std::abs(angle) <= alpha)) return; // not on the arc
+                const double along = std::sin(angle) / kappa;
+                const double bulge = 2 * std::sin(0.5 * (alpha + angle)) * std::sin(0.5 * (alpha - angle)) / kappa;
+                const vec3d p = m + t * along + toward * bulge;
+                lo = min(lo, p), hi = max(hi, p);
+            };
+            add(alpha), add(-alpha);
+            const double ti[3] = {t.x, t.y, t.z}, mi[3] = {toward.x, toward.y, toward.z};
+            for (int i = 0; i < 3; ++i) {
+                const double extreme = std::atan2(ti[i], mi[i]); // in [-pi, pi]
+                add(extreme);
+                add(extreme > 0 ? extreme - std::numbers::pi : extreme + std::numbers::pi);
+            }
+        }
+        const vec3d r{radius_, radius_, radius_};
+        const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+        return intersect(box_around(lo - r, hi + r, 1e-6 * (size + double(radius_))), box_around(bound_));
+    }
 
     // GLSL: the chord-midpoint evaluation above, line for line. Seven vec4s:
     // (chord middle, kappa), (plane normal, cos alpha), (toward control, h sin alpha),
