@@ -245,7 +245,54 @@ TEST_CASE("hypertree pack_bricks holds every voxel where glsl.hpp says the shade
     CHECK(nonempty > 1000);
     CHECK(empty_blocks > 0);
     CHECK(b.level_count == deepest + 1);
-    CHECK_THROWS_AS(pack_bricks(t.dense, memory_budget{1000}), invalid_parameter);
+}
+
+TEST_CASE("hypertree pack_bricks refuses each of its three limits by its own name")
+{
+    const small_tree& t = tree();
+    const std::size_t words = pack_bricks(t.dense).words.size();
+    // The memory budget: 4 bytes a word, exactly enough passes.
+    CHECK_THROWS_WITH_AS(pack_bricks(t.dense, memory_budget{4 * words - 1}), doctest::Contains("pack_bricks.budget"), invalid_parameter);
+    CHECK(pack_bricks(t.dense, memory_budget{4 * words}).words.size() == words);
+    // The texels of a buffer texture as the caller states them (GL_MAX_TEXTURE_BUFFER_SIZE): the
+    // message names the words needed.
+    CHECK_THROWS_WITH_AS(pack_bricks(t.dense, {}, words - 1), doctest::Contains("pack_bricks.max_texels"), invalid_parameter);
+    CHECK_THROWS_WITH_AS(pack_bricks(t.dense, {}, words - 1), doctest::Contains(doctest::String((std::to_string(words) + " words").c_str())), invalid_parameter);
+    CHECK(pack_bricks(t.dense, {}, words).words.size() == words);
+    // 2^31 words (the shader's int offsets) cannot be built here; the check pack_bricks runs before
+    // it allocates is called with the sizes, under a budget that allows them.
+    const memory_budget plenty{std::size_t(1) << 40};
+    CHECK_THROWS_WITH_AS(detail::require_packable(std::size_t(1) << 31, plenty, std::size_t(-1)), doctest::Contains("pack_bricks.bricks"),
+                         invalid_parameter);
+    CHECK_NOTHROW(detail::require_packable((std::size_t(1) << 31) - 1, plenty, std::size_t(-1)));
+    // Over the default budget (4 GiB, 2^30 words) the budget is named, not the offsets.
+    CHECK_THROWS_WITH_AS(detail::require_packable(std::size_t(1) << 31, memory_budget{}, std::size_t(-1)),
+                         doctest::Contains("pack_bricks.budget"), invalid_parameter);
+}
+
+TEST_CASE("hypertree_glsl refuses bricks packed from a grid other than the volume's")
+{
+    const small_tree& t = tree();
+    const hypervolume& hv = t.dense.volume();
+    const packed_bricks bricks = pack_bricks(t.dense);
+    CHECK(bricks.grid == std::array<int, 3>{hv.grid().x, hv.grid().y, hv.grid().z});
+    CHECK_NOTHROW(hypertree_glsl(hv, bricks, t.shape, t.colors, march_options{}));
+    // The same tree at another resolution: its own bricks fit it, the small tree's do not.
+    auto smaller = presets::tree_d(24);
+    smaller.iterations = 20000;
+    const dense_store other = build_tree<dense_store>(smaller, 2);
+    REQUIRE(other.volume().grid().x != hv.grid().x);
+    const tree_shape other_shape = tree_shape::of(other);
+    CHECK_NOTHROW(hypertree_glsl(other.volume(), pack_bricks(other), other_shape, t.colors, march_options{}));
+    CHECK_THROWS_WITH_AS(hypertree_glsl(other.volume(), bricks, other_shape, t.colors, march_options{}),
+                         doctest::Contains("hypertree_glsl.bricks"), invalid_parameter);
+    CHECK_THROWS_WITH_AS(hypertree_glsl(hv, pack_bricks(other), t.shape, t.colors, march_options{}), doctest::Contains("hypertree_glsl.bricks"),
+                         invalid_parameter);
+    // Strides that do not follow from the grid (a hand-made or altered table) are refused too.
+    packed_bricks altered = bricks;
+    altered.grid_blocks[1] += 1;
+    CHECK_THROWS_WITH_AS(hypertree_glsl(hv, altered, t.shape, t.colors, march_options{}), doctest::Contains("hypertree_glsl.bricks"),
+                         invalid_parameter);
 }
 
 TEST_CASE("hypertree GLSL reads back every voxel of the texture at its cell")

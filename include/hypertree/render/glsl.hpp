@@ -72,6 +72,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -82,20 +83,43 @@ namespace hypertree {
 struct packed_bricks {
     std::vector<std::uint32_t> words;
     std::uint32_t rank_offset = 0, block_offset = 0, density_offset = 0, level_offset = 0; // in words
-    std::array<std::uint32_t, 3> grid_bricks{}, grid_blocks{};
+    std::array<int, 3> grid{};                                     // the volume's, in voxels
+    std::array<std::uint32_t, 3> grid_bricks{}, grid_blocks{};     // (grid + 3) / 4 and (grid + 15) / 16
     int level_count = 1; // 1 + the deepest level stored: the length of the shader's color table
 };
 
-// Refuses bricks whose buffer would exceed `budget`, or 2^31 words (the shader's int offsets).
-inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budget = {})
+namespace detail {
+// pack_bricks' three limits on a buffer of `words` words, each refused by its own name: the memory
+// budget (4 bytes a word), the shader's int offsets (below 2^31 words), and the texels the GL
+// says a buffer texture holds (GL_MAX_TEXTURE_BUFFER_SIZE, stated by the caller).
+inline void require_packable(std::size_t words, memory_budget budget, std::size_t max_texels)
+{
+    const std::string needed = std::to_string(words) + " words (" + std::to_string(words * 4) + " bytes)";
+    if (words > budget.bytes / 4)
+        throw krs::invalid_parameter("pack_bricks.budget",
+                                     "must hold the buffer: 4 bytes per brick and per block of the grid, 1 per density and per level "
+                                     "of each voxel of the non-empty bricks (budget " + std::to_string(budget.bytes) + " bytes)",
+                                     needed);
+    if (words >= (std::size_t(1) << 31))
+        throw krs::invalid_parameter("pack_bricks.bricks", "must pack into fewer than 2^31 words (the shader's int offsets)", needed);
+    if (words > max_texels)
+        throw krs::invalid_parameter("pack_bricks.max_texels",
+                                     "must be at least the words of the buffer, one R32UI texel each (GL_MAX_TEXTURE_BUFFER_SIZE is "
+                                     "the GL's limit; " + std::to_string(max_texels) + " stated)",
+                                     needed);
+}
+} // namespace detail
+
+// Refuses bricks whose buffer would exceed `budget` (pack_bricks.budget), 2^31 words
+// (pack_bricks.bricks: the shader's int offsets) or `max_texels` (pack_bricks.max_texels): pass
+// the GL_MAX_TEXTURE_BUFFER_SIZE the context reports, since the GL itself would only fail at draw.
+inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budget = {},
+                                 std::size_t max_texels = std::numeric_limits<std::size_t>::max())
 {
     const auto ranks = bricks.brick_ranks(), codes = bricks.block_codes();
     const auto density = bricks.densities(), level = bricks.levels();
     const std::size_t words = ranks.size() + codes.size() + (density.size() + 3) / 4 + (level.size() + 3) / 4;
-    if (words * 4 > budget.bytes || words >= (std::size_t(1) << 31))
-        throw krs::invalid_parameter("pack_bricks.bricks", "the buffer (4 bytes per brick and per block of the grid, 2 per voxel of "
-                                                          "the non-empty bricks) must fit the memory budget and 2^31 words",
-                                     std::to_string(words * 4) + " bytes");
+    detail::require_packable(words, budget, max_texels);
     packed_bricks out;
     out.words.reserve(words);
     for (std::int32_t r : ranks) out.words.push_back(std::uint32_t(r));
@@ -112,15 +136,16 @@ inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budge
     bytes(density);
     out.level_offset = std::uint32_t(out.words.size());
     bytes(level);
+    out.grid = bricks.grid();
     for (std::size_t a = 0; a < 3; ++a)
         out.grid_bricks[a] = std::uint32_t(bricks.grid_bricks()[a]), out.grid_blocks[a] = std::uint32_t(bricks.grid_blocks()[a]);
     out.level_count = level_count(bricks);
     return out;
 }
 template <voxel_store S>
-packed_bricks pack_bricks(const S& store, memory_budget budget = {})
+packed_bricks pack_bricks(const S& store, memory_budget budget = {}, std::size_t max_texels = std::numeric_limits<std::size_t>::max())
 {
-    return pack_bricks(voxel_bricks(store), budget);
+    return pack_bricks(voxel_bricks(store), budget, max_texels);
 }
 
 struct hypertree_glsl_options {
@@ -132,7 +157,8 @@ struct hypertree_glsl_options {
 };
 
 // The GLSL of the marcher that volume_marcher(store, shape, colors, options) is, for the bricks
-// `bricks` = pack_bricks(store) of a store of `volume`: constants, the sampler uniform and
+// `bricks` = pack_bricks(store) of a store of the volume `v` (refused, as hypertree_glsl.bricks,
+// when they were packed from a grid of another size): constants, the sampler uniform and
 // `vec4 <prefix>march_<name>(vec3 origin, vec3 direction)` returning the premultiplied color (rgb)
 // and the remaining transmittance (a) of a ray with a unit direction, as march_result.
 inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bricks, const tree_shape& shape, const depth_colors& colors,
@@ -147,6 +173,17 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
     if (!krs::glsl::is_name_part(glsl.name))
         throw krs::invalid_parameter("hypertree_glsl_options.name",
                                      "must be letters, digits and _, not starting with _ and without __ (it follows the prefix)", glsl.name);
+    // The strides, offsets and level count below come from the bricks, the mapping from v: bricks
+    // of another grid would read wrong or out-of-range texels without any GL error.
+    const std::array<int, 3> grid{v.grid().x, v.grid().y, v.grid().z};
+    bool matches = bricks.grid == grid;
+    for (std::size_t a = 0; a < 3; ++a)
+        matches = matches && bricks.grid_bricks[a] == std::uint32_t((grid[a] + 3) / 4) && bricks.grid_blocks[a] == std::uint32_t((grid[a] + 15) / 16);
+    if (!matches)
+        throw krs::invalid_parameter("hypertree_glsl.bricks", "must be pack_bricks of a store of this volume",
+                                     "bricks of a " + std::to_string(bricks.grid[0]) + "x" + std::to_string(bricks.grid[1]) + "x" +
+                                         std::to_string(bricks.grid[2]) + " grid, volume " + std::to_string(grid[0]) + "x" +
+                                         std::to_string(grid[1]) + "x" + std::to_string(grid[2]));
     options.validate(v, shape.box);
     const voxel_shading shading(options, shape, colors);
     const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
