@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
+#include <limits>
 #include <set>
 #include <tuple>
 #include <vector>
@@ -250,4 +251,12 @@ TEST_CASE("brick walk: a packet's lanes walk as the scalar walk, and known exit 
     CHECK(lanes_compared == 200 * n);
     CHECK(skipping > 1000); // the skips were compared
     CHECK(agreed > 100);    // and the packets' faces were known
+}
+
+TEST_CASE("brick walk refuses a step that is not finite and > 0, by name")
+{
+    const hypervolume v{{0, 0, 0}, {1, 1, 1}, resolution{8, 8, 8}};
+    for (float bad : {0.0f, -0.1f, std::nanf(""), std::numeric_limits<float>::infinity()})
+        CHECK_THROWS_WITH_AS(brick_walk(v, bad), doctest::Contains("brick_walk.step"), krs::invalid_parameter);
+    CHECK(brick_walk(v, 0.125f).step() == 0.125f);
 }

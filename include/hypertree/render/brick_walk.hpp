@@ -29,6 +29,7 @@
 #include "hypertree/render/voxel_bricks.hpp"
 #include "hypertree/volume.hpp"
 #include "krs/core/lanes.hpp"
+#include "krs/core/validate.hpp"
 #include "krs/glsl/literal.hpp"
 
 #include <algorithm>
@@ -59,10 +60,11 @@ public:
     };
 
     brick_walk() = default;
-    // Samples `step` apart (world units) through the grid of `volume`.
+    // Samples `step` apart (world units) through the grid of `volume`. A step that is not finite
+    // and > 0 is refused (brick_walk.step): it would give an infinite or NaN skip, a walk without end.
     brick_walk(const hypervolume& volume, float step)
         : origin_(volume.origin()), cells_per_unit_(volume.cells_per_unit()), grid_{volume.grid().x, volume.grid().y, volume.grid().z},
-          step_(step), rounding_per_step_(float(0x1.0p-21 / double(step))),
+          step_(krs::require_positive("brick_walk.step", step)), rounding_per_step_(float(0x1.0p-21 / double(step_))),
           grid_reach_(std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)}))
     {
     }
