@@ -117,6 +117,31 @@ inline std::vector<looked_at> walked(const scattered& s, const brick_walk& w, co
     return out;
 }
 
+// Every probe of the scalar walk of one ray, in order: its sample k, and the index of the cell it
+// looks at (x fastest), or -1 when it looks at nothing. Equal lists mean equal samples and equal
+// skips, which the looked-at samples alone do not show (a short skip changes none of them).
+struct probe_record {
+    float k;
+    int cell;
+    friend bool operator==(const probe_record&, const probe_record&) = default;
+};
+inline std::vector<probe_record> probes_of(const scattered& s, const brick_walk& w, const krs::vec3f& o, const krs::vec3f& d, float t0, int count)
+{
+    std::vector<probe_record> out;
+    float slope[3];
+    w.slopes_of(d, slope);
+    const brick_walk::exit_faces faces = brick_walk::faces_of(slope);
+    const float m0 = w.margin_at_origin(o);
+    const int nx = s.volume.grid().x, ny = s.volume.grid().y;
+    for (float k = 0; k < float(count);) {
+        const float t = t0 + (k + 0.5f) * w.step();
+        const auto found = w.probe<float>(s.bricks.view_of(), o + d * t, slope, true, w.skip_margin(m0, t), faces);
+        out.push_back({k, found.looks ? found.cell[0] + nx * (found.cell[1] + ny * found.cell[2]) : -1});
+        k += found.advance;
+    }
+    return out;
+}
+
 // A ray toward a random point of the grid: from outside at `distance` (world units from the
 // grid's center), or from inside; every 5th along an axis.
 inline void random_ray(lcg& r, const hypervolume& v, float distance, int i, krs::vec3f& o, krs::vec3f& d)

@@ -53,7 +53,11 @@
 //
 // Precision. Sample positions, the slab test, cell indices, opacities and the front-to-back sums
 // are the same float operations in the same order as the C++ (bit for bit on llvmpipe when the
-// C++ is built with -ffp-contract=off). The shading differs in its last bits: the CPU computes
+// C++ is built with -ffp-contract=off, for rays from near the tree). From far away (a ray origin
+// some 500 units out) a sample's position can differ in its last bits on a few rays, enough to
+// cross a cell face or a skip's rounding: the walk then takes a skip one sample longer or shorter
+// than the CPU's, and the skip margin keeps either from passing a voxel (the brick-walk test in
+// tests/test_hypertree_glsl_gpu.cpp measures both). The shading differs in its last bits: the CPU computes
 // the crown depth and the flow normal in double, the GLSL in float (GLSL has no double exp, and
 // doubles are slow on many GPUs), and GLSL's exp and pow are a few ulp from the C library's.
 //
