@@ -578,17 +578,22 @@ TEST_CASE("hypertree GLSL: every global name starts with the chosen prefix; bad 
     }
 }
 
-TEST_CASE("hypertree GLSL constants read on the GPU equal the C++ shading's")
+TEST_CASE("hypertree GLSL constants read on the GPU equal the options, colors and shape they came from")
 {
     // As NanoVDB's tests check the GPU side's constants against the C++ ones: a compute shader
-    // copies out the opacity table, the Lambert wrap and the level colors the code declares.
+    // copies out the opacity table, the Lambert wrap, the level colors, the lights (direction and
+    // color), the ambient, diffuse and specular weights and the crown the code declares. Expected
+    // values come from the inputs (the options' lights normalized here, the colors' at(), the
+    // shape's crown), not from voxel_shading, except the opacity table (the law in one place).
     const small_tree& t = tree();
     const march_options o = varied_options();
     const packed_bricks bricks = pack_bricks(t.dense);
     const std::string code = hypertree_glsl(t.dense.volume(), bricks, t.shape, t.colors, o);
     const voxel_shading cpu(o, t.shape, t.colors);
     require_context();
-    const std::size_t levels = std::size_t(bricks.level_count), count = 256 + 2 + 3 * levels;
+    const std::size_t levels = std::size_t(bricks.level_count), lights = o.lights.size();
+    REQUIRE(lights == 2);
+    const std::size_t at_levels = 258, at_lights = at_levels + 3 * levels, at_weights = at_lights + 6 * lights, count = at_weights + 9;
     const std::string text = "#version 430 core\nlayout(local_size_x = 1) in;\n" + code +
                              "layout(std430, binding = 2) writeonly buffer results_block { float results[]; };\n"
                              "void main() {\n"
@@ -596,7 +601,20 @@ TEST_CASE("hypertree GLSL constants read on the GPU equal the C++ shading's")
                              "    results[256] = krs_hypertree_lambert_slope;\n"
                              "    results[257] = krs_hypertree_lambert_floor;\n"
                              "    for (int l = 0; l < krs_hypertree_level_count; ++l)\n"
-                             "        for (int c = 0; c < 3; ++c) results[258 + 3 * l + c] = krs_hypertree_level_color[l][c];\n"
+                             "        for (int c = 0; c < 3; ++c) results[" + std::to_string(at_levels) + " + 3 * l + c] = krs_hypertree_level_color[l][c];\n"
+                             "    for (int i = 0; i < krs_hypertree_light_count; ++i)\n"
+                             "        for (int c = 0; c < 3; ++c) {\n"
+                             "            results[" + std::to_string(at_lights) + " + 6 * i + c] = krs_hypertree_light_direction[i][c];\n"
+                             "            results[" + std::to_string(at_lights) + " + 6 * i + 3 + c] = krs_hypertree_light_color[i][c];\n"
+                             "        }\n"
+                             "    int w = " + std::to_string(at_weights) + ";\n"
+                             "    results[w] = krs_hypertree_ambient;\n"
+                             "    results[w + 1] = krs_hypertree_ambient_falloff;\n"
+                             "    results[w + 2] = krs_hypertree_diffuse;\n"
+                             "    results[w + 3] = krs_hypertree_specular;\n"
+                             "    results[w + 4] = krs_hypertree_shininess;\n"
+                             "    for (int c = 0; c < 3; ++c) results[w + 5 + c] = krs_hypertree_crown_center[c];\n"
+                             "    results[w + 8] = krs_hypertree_crown_radius;\n"
                              "}\n";
     const GLuint program = link({compile(GL_COMPUTE_SHADER, text)});
     const GLuint out = buffer(GL_SHADER_STORAGE_BUFFER, nullptr, count * sizeof(float), GL_DYNAMIC_READ);
@@ -614,11 +632,31 @@ TEST_CASE("hypertree GLSL constants read on the GPU equal the C++ shading's")
     CHECK(got[256] == lambert_wrap::slope);
     CHECK(got[257] == lambert_wrap::floor);
     for (std::size_t l = 0; l < levels; ++l) {
-        const rgb c = cpu.level_color(int(l));
-        CHECK(got[258 + 3 * l] == c.r);
-        CHECK(got[259 + 3 * l] == c.g);
-        CHECK(got[260 + 3 * l] == c.b);
+        const rgb c = t.colors.at(int(l));
+        CHECK(got[at_levels + 3 * l] == c.r);
+        CHECK(got[at_levels + 3 * l + 1] == c.g);
+        CHECK(got[at_levels + 3 * l + 2] == c.b);
     }
+    for (std::size_t i = 0; i < lights; ++i) {
+        // The direction normalized here in double: the float the library normalizes to is within
+        // an ulp or two of it.
+        const krs::vec3f dir = o.lights[i].direction;
+        const double length = std::sqrt(double(dir.x) * dir.x + double(dir.y) * dir.y + double(dir.z) * dir.z);
+        const double unit[3] = {dir.x / length, dir.y / length, dir.z / length};
+        for (std::size_t c = 0; c < 3; ++c) CHECK(std::abs(double(got[at_lights + 6 * i + c]) - unit[c]) <= 2.5e-7);
+        CHECK(got[at_lights + 6 * i + 3] == o.lights[i].color.r);
+        CHECK(got[at_lights + 6 * i + 4] == o.lights[i].color.g);
+        CHECK(got[at_lights + 6 * i + 5] == o.lights[i].color.b);
+    }
+    CHECK(got[at_weights] == o.ambient);
+    CHECK(got[at_weights + 1] == o.ambient_falloff);
+    CHECK(got[at_weights + 2] == o.diffuse);
+    CHECK(got[at_weights + 3] == o.specular);
+    CHECK(got[at_weights + 4] == o.shininess);
+    CHECK(got[at_weights + 5] == t.shape.crown.center.x);
+    CHECK(got[at_weights + 6] == t.shape.crown.center.y);
+    CHECK(got[at_weights + 7] == t.shape.crown.center.z);
+    CHECK(got[at_weights + 8] == t.shape.crown.radius);
 }
 
 TEST_CASE("hypertree GLSL frame on llvmpipe matches the CPU marcher (default options)")
