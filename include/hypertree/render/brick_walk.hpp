@@ -36,7 +36,6 @@
 #include <array>
 #include <cmath>
 #include <string>
-#include <string_view>
 
 namespace hypertree {
 
@@ -159,7 +158,7 @@ public:
     {
         std::string s = "const float " + name + "_grid_reach = " + krs::glsl::float_literal(grid_reach_) + ";\n";
         s += "const float " + name + "_rounding_per_step = " + krs::glsl::float_literal(rounding_per_step_) + ";\n";
-        for (char c : std::string_view(R"(
+        s += krs::glsl::with_name(R"(
 // brick_walk::margin_at_origin: steps a skip stops short of an empty brick's exit, but for t.
 float $_margin_at_origin(vec3 from) {
     float reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + $_grid_reach;
@@ -197,11 +196,8 @@ vec3 $_slopes(vec3 d) {
     return vec3(s.x != 0.0 ? 1.0 / s.x : 0.0, s.y != 0.0 ? 1.0 / s.y : 0.0, s.z != 0.0 ? 1.0 / s.z : 0.0);
 }
 
-)"))
-            if (c == '$')
-                s += name;
-            else
-                s += c;
+)",
+                                  name);
         return s;
     }
 

@@ -225,7 +225,7 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
         for (int a = 0; a < 3; ++a) {
             std::vector<float> centers(static_cast<std::size_t>(counts[a]));
             for (int c = 0; c < counts[a]; ++c) centers[std::size_t(c)] = float(origins[a] + (c + 0.5) * sides[a]);
-            s += detail::glsl_float_array(n + "_center_" + axes[a], centers.data(), centers.size());
+            s += krs::glsl::float_array(n + "_center_" + axes[a], centers.data(), centers.size());
         }
     }
     const bool spheres = options.use_spheres && !shape.spheres.empty();
@@ -248,14 +248,14 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
             axes.push_back({float(f.axis.x), float(f.axis.y), float(f.axis.z)});
             soft.push_back(float(f.weight_radius * f.weight_radius * 0.05));
         }
-        s += detail::glsl_vec3_array(n + "_flow_centroid", centroids);
-        s += detail::glsl_vec3_array(n + "_flow_axis", axes);
-        s += detail::glsl_float_array(n + "_flow_soft", soft.data(), soft.size());
+        s += krs::glsl::vec3_array(n + "_flow_centroid", centroids);
+        s += krs::glsl::vec3_array(n + "_flow_axis", axes);
+        s += krs::glsl::float_array(n + "_flow_soft", soft.data(), soft.size());
     }
 
     // Functions. Each mirrors the marcher member of the same name; sums are spelled out where
     // GLSL's dot or length might associate differently from krs::dot (x, then y, then z).
-    s += detail::with_name(R"(float $_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+    s += krs::glsl::with_name(R"(float $_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 // enter_box: the slab test, t0 >= 0; a ray that misses gets t0 >= t1. A zero direction component
 // becomes tiny so the division gives a huge finite slope instead of inf * 0 = NaN.
@@ -272,7 +272,7 @@ void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
 }
 
 )", n);
-    s += detail::with_name(R"(// The cell of p, false outside the grid (and outside every part sphere): a lookup by point;
+    s += krs::glsl::with_name(R"(// The cell of p, false outside the grid (and outside every part sphere): a lookup by point;
 // the marches walk with $_probe.
 bool $_cell(vec3 p, out ivec3 cell) {
     cell = ivec3(0);
@@ -284,7 +284,7 @@ bool $_cell(vec3 p, out ivec3 cell) {
     if (spheres) {
         s += "    bool inside = false;\n";
         s += "    for (int i = 0; i < " + integer(shape.spheres.size()) + "; ++i) {\n";
-        s += detail::with_name(R"(        vec3 d = p - $_spheres[i].xyz;
+        s += krs::glsl::with_name(R"(        vec3 d = p - $_spheres[i].xyz;
         if ($_dot(d, d) <= $_spheres[i].w) {
             inside = true;
             break;
@@ -294,7 +294,7 @@ bool $_cell(vec3 p, out ivec3 cell) {
 )",
                                n);
     }
-    s += detail::with_name(R"(    cell = ivec3(min(int(fx), $_grid.x - 1), min(int(fy), $_grid.y - 1), min(int(fz), $_grid.z - 1));
+    s += krs::glsl::with_name(R"(    cell = ivec3(min(int(fx), $_grid.x - 1), min(int(fy), $_grid.y - 1), min(int(fz), $_grid.z - 1));
     return true;
 }
 
@@ -327,8 +327,8 @@ uvec2 $_voxel(ivec3 cell) {
     s += walk.glsl(n);
     s += "// Whether p lies in a part sphere (use_spheres; else always).\n";
     if (spheres) {
-        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
-             detail::with_name(R"(; ++i) {
+        s += krs::glsl::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
+             krs::glsl::with_name(R"(; ++i) {
         vec3 d = p - $_spheres[i].xyz;
         if ($_dot(d, d) <= $_spheres[i].w) return true;
     }
@@ -338,9 +338,9 @@ uvec2 $_voxel(ivec3 cell) {
 )",
                                n);
     } else {
-        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    return true;\n}\n\n", n);
+        s += krs::glsl::with_name("bool $_in_spheres(vec3 p) {\n    return true;\n}\n\n", n);
     }
-    s += detail::with_name(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
+    s += krs::glsl::with_name(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
 // out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's brick walk
 // and early exit.
 float $_shadow_transmittance(vec3 p, vec3 l) {
@@ -365,13 +365,13 @@ float $_shadow_transmittance(vec3 p, vec3 l) {
 
 )",
                            n);
-    s += detail::with_name(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
+    s += krs::glsl::with_name(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
 vec3 $_normal(vec3 p) {
     vec3 n = vec3(0.0);
 )", n);
     if (!shape.flows.empty()) {
         s += "    for (int i = 0; i < " + integer(shape.flows.size()) + "; ++i) {\n";
-        s += detail::with_name(R"(        vec3 d = p - $_flow_centroid[i];
+        s += krs::glsl::with_name(R"(        vec3 d = p - $_flow_centroid[i];
         vec3 radial = d - $_flow_axis[i] * $_dot(d, $_flow_axis[i]);
         float w = 1.0 / ($_dot(d, d) + $_flow_soft[i]);
         float len = sqrt($_dot(radial, radial));
@@ -380,7 +380,7 @@ vec3 $_normal(vec3 p) {
 )",
                                n);
     }
-    s += detail::with_name(R"(    float len = sqrt($_dot(n, n));
+    s += krs::glsl::with_name(R"(    float len = sqrt($_dot(n, n));
     return len > 0.0 ? n / len : vec3(0.0);
 }
 
@@ -389,13 +389,13 @@ vec3 $_normal(vec3 p) {
     s += shading.glsl_shade(n);
     // The shading point: the voxel's center with shade_per_voxel (the marcher's per-voxel shading),
     // else the sample itself.
-    s += detail::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
+    s += krs::glsl::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
                                                    : "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return p;\n}\n\n",
                            n);
     s += "// march: samples at t0 + (k + 1/2) ds (computed from k, as the marcher does), front to back, until the ray leaves the box or the\n"
          "// transmittance falls below the minimum. Returns (premultiplied rgb, transmittance).\n";
     s += "vec4 " + glsl.prefix + "march_" + glsl.name + "(vec3 origin, vec3 direction) {\n";
-    s += detail::with_name(R"(    float t0, t1;
+    s += krs::glsl::with_name(R"(    float t0, t1;
     $_enter_box(origin, direction, t0, t1);
     float ds = $_step;
     vec3 color = vec3(0.0);
