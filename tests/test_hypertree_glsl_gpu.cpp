@@ -296,12 +296,13 @@ TEST_CASE("hypertree_glsl refuses bricks packed from a grid other than the volum
 
 TEST_CASE("hypertree GLSL reads back every voxel of the texture at its cell")
 {
-    // A compute shader asks <name>_cell for each voxel's center and <name>_voxel for what the
-    // texture holds there: the GPU's mapping and texel layout against the store's index order.
+    // A compute shader asks the marcher's own <name>_probe for the cell and place of each voxel's
+    // center and <name>_voxel_at for what the texture holds there: the GPU's mapping and texel
+    // layout against the store's index order.
     const small_tree& t = tree();
     const hypervolume& hv = t.dense.volume();
     march_options o;
-    o.use_spheres = false; // every cell, empty or not, must map
+    o.use_spheres = false;
     const packed_bricks bricks = pack_bricks(t.dense);
     const std::string code = hypertree_glsl(hv, bricks, t.shape, t.colors, o);
     require_context();
@@ -313,10 +314,10 @@ TEST_CASE("hypertree GLSL reads back every voxel of the texture at its cell")
                              "    uint i = gl_GlobalInvocationID.x;\n"
                              "    if (i >= count) return;\n"
                              "    ivec3 cell;\n"
-                             "    bool inside = krs_hypertree_cell(vec3(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]), cell);\n"
-                             "    uvec2 v = krs_hypertree_voxel(cell);\n"
-                             "    results[i] = inside ? uint(cell.x + krs_hypertree_grid.x * (cell.y + krs_hypertree_grid.y * cell.z)) | "
-                             "(v.x << 20u) | (v.y << 28u) : 0xffffffffu;\n"
+                             "    float advance;\n"
+                             "    int place = krs_hypertree_probe(vec3(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]), vec3(0.0), 0.0, cell, advance);\n"
+                             "    uvec2 v = place >= 0 ? krs_hypertree_voxel_at(place) : uvec2(0u);\n"
+                             "    results[i] = uint(cell.x + krs_hypertree_grid.x * (cell.y + krs_hypertree_grid.y * cell.z)) | (v.x << 20u) | (v.y << 28u);\n"
                              "}\n";
     const GLuint program = link({compile(GL_COMPUTE_SHADER, text)});
     REQUIRE(hv.voxel_count() < (1u << 20));

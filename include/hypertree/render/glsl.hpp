@@ -272,33 +272,7 @@ void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
 }
 
 )", n);
-    s += krs::glsl::with_name(R"(// The cell of p, false outside the grid (and outside every part sphere): a lookup by point;
-// the marches walk with $_probe.
-bool $_cell(vec3 p, out ivec3 cell) {
-    cell = ivec3(0);
-    float fx = (p.x - $_origin.x) * $_cells_per_unit.x, fy = (p.y - $_origin.y) * $_cells_per_unit.y,
-          fz = (p.z - $_origin.z) * $_cells_per_unit.z;
-    if (!(fx >= 0.0 && fy >= 0.0 && fz >= 0.0 && fx < float($_grid.x) && fy < float($_grid.y) && fz < float($_grid.z)))
-        return false;
-)", n);
-    if (spheres) {
-        s += "    bool inside = false;\n";
-        s += "    for (int i = 0; i < " + integer(shape.spheres.size()) + "; ++i) {\n";
-        s += krs::glsl::with_name(R"(        vec3 d = p - $_spheres[i].xyz;
-        if ($_dot(d, d) <= $_spheres[i].w) {
-            inside = true;
-            break;
-        }
-    }
-    if (!inside) return false;
-)",
-                               n);
-    }
-    s += krs::glsl::with_name(R"(    cell = ivec3(min(int(fx), $_grid.x - 1), min(int(fy), $_grid.y - 1), min(int(fz), $_grid.z - 1));
-    return true;
-}
-
-// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), in [-64, -1]
+    s += krs::glsl::with_name(R"(// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), in [-64, -1]
 // when its brick is empty, below -64 when its 16^3 block is (>> of a negative int is arithmetic).
 int $_place(ivec3 c) {
     int brick = (c.x >> 2) + (c.y >> 2) * $_bricks_x + (c.z >> 2) * $_bricks_xy;
@@ -314,12 +288,6 @@ uvec2 $_voxel_at(int place) {
     uint density = (texelFetch($_bricks, $_density_offset + (place >> 2)).r >> shift) & 255u;
     uint level = (texelFetch($_bricks, $_level_offset + (place >> 2)).r >> shift) & 255u;
     return uvec2(density, level);
-}
-
-// The voxel of a cell; (0, 0) in an empty brick.
-uvec2 $_voxel(ivec3 cell) {
-    int place = $_place(cell);
-    return place < 0 ? uvec2(0u) : $_voxel_at(place);
 }
 
 )",
