@@ -396,7 +396,9 @@ vec3 $_normal(vec3 p) {
     return s;
 }
 
-// The same for a store: its bricks packed as pack_bricks(store) packs them.
+// The same for a store. It packs the store's bricks itself (a voxel_bricks copy of the store, then
+// the buffer) only to read their sizes and offsets: a caller that uploads the bricks has packed them
+// already and should pass those to the overload above rather than pack twice.
 template <voxel_store S>
 std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_colors& colors, const march_options& options,
                            const hypertree_glsl_options& glsl = {})
