@@ -5,7 +5,9 @@
 // (voxel_shading.hpp), so a GPU image of a tree equals the CPU image up to the last bits of exp,
 // pow and the float (not double) shading geometry.
 //
-//     const packed_bricks bricks = pack_bricks(marcher.bricks());  // or pack_bricks(store)
+//     GLint max_texels;  // the context's limit, see below
+//     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+//     const packed_bricks bricks = pack_bricks(marcher.bricks(), {}, std::size_t(max_texels));
 //     const std::string code = hypertree_glsl(store.volume(), bricks, shape, colors, options);
 //     // in the shader: vec4 m = krs_march_hypertree(origin, unit_direction);
 //     //                color = m.rgb + m.a * background;             // as render() composites
@@ -29,7 +31,9 @@
 // read with texelFetch. The shader finds a voxel as voxel_bricks::view::place does (two reads, one
 // per level, then a byte of a word). A buffer texture holds GL_MAX_TEXTURE_BUFFER_SIZE texels, a
 // limit to query: GL guarantees only 65536, and tree A at resolution 300 takes about 1.2 million
-// words (75^3 brick ranks, and 25 000 non-empty bricks of 32 words).
+// words (75^3 brick ranks, and 25 000 non-empty bricks of 32 words). Pass the queried limit to
+// pack_bricks as max_texels: it refuses a larger buffer (pack_bricks.max_texels, naming the words
+// needed), where the GL would only draw wrong.
 //
 // Everything else is constants in the code: the box, the grid and its mapping, the brick table's
 // sizes and offsets, the step, the opacity per density byte, the color per level, the lights and
