@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <thread>
 
 using namespace hypertree;
@@ -323,6 +324,28 @@ TEST_CASE("hypertree render bounding spheres and the ray cache change no pixel")
     render_settings cached;
     cached.ray_cache = true;
     CHECK(max_difference(render<float>(a, camera, cached), with_spheres) == 0.0);
+}
+
+TEST_CASE("hypertree render: a marcher outlives the store it was made from")
+{
+    // Issue 26: the marcher keeps its own volume and bricks, no pointer into the store. Its store
+    // is destroyed and another store built in the same place before the march: a read through a
+    // dangling pointer would see the other store (or, in the suite's ASan build, freed memory).
+    const auto definition = small_tree();
+    const index_list_store alive = build_tree<index_list_store>(definition, 2);
+    const auto shape = tree_shape::of(alive);
+    const depth_colors colors = depth_colors::tree(3, 6);
+    std::optional<index_list_store> gone(build_tree<index_list_store>(definition, 2));
+    const volume_marcher survivor(*gone, shape, colors, march_options{});
+    gone.emplace(slab(230, 8)); // the tree's store destroyed, a slab in its place
+    const volume_marcher reference(alive, shape, colors, march_options{});
+    const krs::pinhole_camera camera({0.0f, 0.7f, -2.2f}, {0, 0.6f, 0}, {0, 1, 0}, 45, 48, 40);
+    render_settings settings;
+    const image after = render<float>(survivor, camera, settings), expected = render<float>(reference, camera, settings);
+    CHECK(max_difference(after, expected) == 0.0);
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < expected.rgb.size(); i += 3) covered += std::abs(expected.rgb[i + 2] - settings.background.b) > 0.2f;
+    CHECK(covered > 50); // the tree is in view, so a wrong store would show
 }
 
 TEST_CASE("hypertree render supersampling factor follows the projected voxel size")

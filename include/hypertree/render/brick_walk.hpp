@@ -29,18 +29,24 @@
 #include "hypertree/render/voxel_bricks.hpp"
 #include "hypertree/volume.hpp"
 #include "krs/core/lanes.hpp"
+#include "krs/core/validate.hpp"
 #include "krs/glsl/literal.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
-#include <string_view>
 
 namespace hypertree {
 
 class brick_walk {
 public:
+    // The bricks' geometry, from voxel_bricks: bricks of 4^3 voxels in blocks of 16^3. A place in
+    // [-64, -1] lies in an empty brick (rank -1), below -64 in an empty block (code -64 added).
+    static constexpr int brick_side = 1 << voxel_bricks::fine_shift, block_side = 1 << voxel_bricks::coarse_shift;
+    static constexpr int brick_voxels = int(voxel_bricks::brick_voxels);
+    static_assert(brick_voxels == brick_side * brick_side * brick_side && block_side % brick_side == 0);
+
     // The directions of a packet's rays, per axis: all toward +, all toward -, all still, or mixed.
     struct exit_faces {
         enum face : int { low, high, none, per_lane };
@@ -59,10 +65,11 @@ public:
     };
 
     brick_walk() = default;
-    // Samples `step` apart (world units) through the grid of `volume`.
+    // Samples `step` apart (world units) through the grid of `volume`. A step that is not finite
+    // and > 0 is refused (brick_walk.step): it would give an infinite or NaN skip, a walk without end.
     brick_walk(const hypervolume& volume, float step)
         : origin_(volume.origin()), cells_per_unit_(volume.cells_per_unit()), grid_{volume.grid().x, volume.grid().y, volume.grid().z},
-          step_(step), rounding_per_step_(float(0x1.0p-21 / double(step))),
+          step_(krs::require_positive("brick_walk.step", step)), rounding_per_step_(float(0x1.0p-21 / double(step_))),
           grid_reach_(std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)}))
     {
     }
@@ -113,11 +120,11 @@ public:
         const I place = bricks.place(c[0], c[1], c[2]);
         const T found = index_to_float(place); // >= 0: a voxel; < -64: an empty 16^3 block
         const krs::mask_t<T> looks = inside & (found >= zero);
-        const auto in_block = found < T(-64.5f);
+        const auto in_block = found < T(-float(brick_voxels) - 0.5f); // (places are whole: halfway to the next)
         T exit(3.0e38f);
         for (int a = 0; a < 3; ++a) {
-            const T lo = select(in_block, index_to_float(c[a] & I(~15)), index_to_float(c[a] & I(~3)));
-            const T hi = lo + select(in_block, T(16.0f), T(4.0f));
+            const T lo = select(in_block, index_to_float(c[a] & I(~(block_side - 1))), index_to_float(c[a] & I(~(brick_side - 1))));
+            const T hi = lo + select(in_block, T(float(block_side)), T(float(brick_side)));
             switch (faces.along[a]) {
             case exit_faces::high: exit = min(exit, (hi - f[a]) * slope[a]); break;
             case exit_faces::low: exit = min(exit, (lo - f[a]) * slope[a]); break;
@@ -146,8 +153,9 @@ public:
         return at_origin + t * T(rounding_per_step_);
     }
 
-    // The same walk as GLSL, for the marcher of glsl.hpp: constants $_grid_reach and
-    // $_rounding_per_step (this walk's floats), `float $_margin_at_origin(vec3 from)`,
+    // The same walk as GLSL, for the marcher of glsl.hpp: constants $_brick_side, $_block_side and
+    // $_brick_voxels (the geometry above), $_grid_reach and $_rounding_per_step (this walk's
+    // floats), `float $_margin_at_origin(vec3 from)`,
     // `vec3 $_slopes(vec3 d)` and `int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell,
     // out float advance)`, which returns the sample's place (< 0: nothing to look at) and how many
     // samples to advance, as probe() does for one lane. Every `$` is `name`; the caller emits
@@ -155,9 +163,12 @@ public:
     // (voxel_bricks::view::place) before it.
     std::string glsl(const std::string& name) const
     {
-        std::string s = "const float " + name + "_grid_reach = " + krs::glsl::float_literal(grid_reach_) + ";\n";
+        std::string s = "const int " + name + "_brick_side = " + std::to_string(brick_side) + ";\n";
+        s += "const int " + name + "_block_side = " + std::to_string(block_side) + ";\n";
+        s += "const int " + name + "_brick_voxels = " + std::to_string(brick_voxels) + ";\n";
+        s += "const float " + name + "_grid_reach = " + krs::glsl::float_literal(grid_reach_) + ";\n";
         s += "const float " + name + "_rounding_per_step = " + krs::glsl::float_literal(rounding_per_step_) + ";\n";
-        for (char c : std::string_view(R"(
+        s += krs::glsl::with_name(R"(
 // brick_walk::margin_at_origin: steps a skip stops short of an empty brick's exit, but for t.
 float $_margin_at_origin(vec3 from) {
     float reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + $_grid_reach;
@@ -176,11 +187,12 @@ int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance)
     cell = ivec3(min(int(f.x), $_grid.x - 1), min(int(f.y), $_grid.y - 1), min(int(f.z), $_grid.z - 1));
     int place = $_place(cell);
     if (place >= 0) return place;
-    bool in_block = place < -64;
+    bool in_block = place < -$_brick_voxels;
     float exit = 3.0e38;
     for (int a = 0; a < 3; ++a) {
-        float lo = float(in_block ? (cell[a] & ~15) : (cell[a] & ~3));
-        float hi = lo + (in_block ? 16.0 : 4.0);
+        int side = in_block ? $_block_side : $_brick_side;
+        float lo = float(cell[a] & ~(side - 1));
+        float hi = lo + float(side);
         if (slope[a] > 0.0) exit = min(exit, (hi - f[a]) * slope[a]);
         else if (slope[a] < 0.0) exit = min(exit, (lo - f[a]) * slope[a]);
     }
@@ -195,11 +207,8 @@ vec3 $_slopes(vec3 d) {
     return vec3(s.x != 0.0 ? 1.0 / s.x : 0.0, s.y != 0.0 ? 1.0 / s.y : 0.0, s.z != 0.0 ? 1.0 / s.z : 0.0);
 }
 
-)"))
-            if (c == '$')
-                s += name;
-            else
-                s += c;
+)",
+                                  name);
         return s;
     }
 

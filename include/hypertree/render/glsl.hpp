@@ -5,7 +5,9 @@
 // (voxel_shading.hpp), so a GPU image of a tree equals the CPU image up to the last bits of exp,
 // pow and the float (not double) shading geometry.
 //
-//     const packed_bricks bricks = pack_bricks(marcher.bricks());  // or pack_bricks(store)
+//     GLint max_texels;  // the context's limit, see below
+//     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+//     const packed_bricks bricks = pack_bricks(marcher.bricks(), {}, std::size_t(max_texels));
 //     const std::string code = hypertree_glsl(store.volume(), bricks, shape, colors, options);
 //     // in the shader: vec4 m = krs_march_hypertree(origin, unit_direction);
 //     //                color = m.rgb + m.a * background;             // as render() composites
@@ -29,7 +31,9 @@
 // read with texelFetch. The shader finds a voxel as voxel_bricks::view::place does (two reads, one
 // per level, then a byte of a word). A buffer texture holds GL_MAX_TEXTURE_BUFFER_SIZE texels, a
 // limit to query: GL guarantees only 65536, and tree A at resolution 300 takes about 1.2 million
-// words (75^3 brick ranks, and 25 000 non-empty bricks of 32 words).
+// words (75^3 brick ranks, and 25 000 non-empty bricks of 32 words). Pass the queried limit to
+// pack_bricks as max_texels: it refuses a larger buffer (pack_bricks.max_texels, naming the words
+// needed), where the GL would only draw wrong.
 //
 // Everything else is constants in the code: the box, the grid and its mapping, the brick table's
 // sizes and offsets, the step, the opacity per density byte, the color per level, the lights and
@@ -53,7 +57,11 @@
 //
 // Precision. Sample positions, the slab test, cell indices, opacities and the front-to-back sums
 // are the same float operations in the same order as the C++ (bit for bit on llvmpipe when the
-// C++ is built with -ffp-contract=off). The shading differs in its last bits: the CPU computes
+// C++ is built with -ffp-contract=off, for rays from near the tree). From far away (a ray origin
+// some 500 units out) a sample's position can differ in its last bits on a few rays, enough to
+// cross a cell face or a skip's rounding: the walk then takes a skip one sample longer or shorter
+// than the CPU's, and the skip margin keeps either from passing a voxel (the brick-walk test in
+// tests/test_hypertree_glsl_gpu.cpp measures both). The shading differs in its last bits: the CPU computes
 // the crown depth and the flow normal in double, the GLSL in float (GLSL has no double exp, and
 // doubles are slow on many GPUs), and GLSL's exp and pow are a few ulp from the C library's.
 //
@@ -72,6 +80,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -82,20 +91,43 @@ namespace hypertree {
 struct packed_bricks {
     std::vector<std::uint32_t> words;
     std::uint32_t rank_offset = 0, block_offset = 0, density_offset = 0, level_offset = 0; // in words
-    std::array<std::uint32_t, 3> grid_bricks{}, grid_blocks{};
+    std::array<int, 3> grid{};                                     // the volume's, in voxels
+    std::array<std::uint32_t, 3> grid_bricks{}, grid_blocks{};     // (grid + 3) / 4 and (grid + 15) / 16
     int level_count = 1; // 1 + the deepest level stored: the length of the shader's color table
 };
 
-// Refuses bricks whose buffer would exceed `budget`, or 2^31 words (the shader's int offsets).
-inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budget = {})
+namespace detail {
+// pack_bricks' three limits on a buffer of `words` words, each refused by its own name: the memory
+// budget (4 bytes a word), the shader's int offsets (below 2^31 words), and the texels the GL
+// says a buffer texture holds (GL_MAX_TEXTURE_BUFFER_SIZE, stated by the caller).
+inline void require_packable(std::size_t words, memory_budget budget, std::size_t max_texels)
+{
+    const std::string needed = std::to_string(words) + " words (" + std::to_string(words * 4) + " bytes)";
+    if (words > budget.bytes / 4)
+        throw krs::invalid_parameter("pack_bricks.budget",
+                                     "must hold the buffer: 4 bytes per brick and per block of the grid, 1 per density and per level "
+                                     "of each voxel of the non-empty bricks (budget " + std::to_string(budget.bytes) + " bytes)",
+                                     needed);
+    if (words >= (std::size_t(1) << 31))
+        throw krs::invalid_parameter("pack_bricks.bricks", "must pack into fewer than 2^31 words (the shader's int offsets)", needed);
+    if (words > max_texels)
+        throw krs::invalid_parameter("pack_bricks.max_texels",
+                                     "must be at least the words of the buffer, one R32UI texel each (GL_MAX_TEXTURE_BUFFER_SIZE is "
+                                     "the GL's limit; " + std::to_string(max_texels) + " stated)",
+                                     needed);
+}
+} // namespace detail
+
+// Refuses bricks whose buffer would exceed `budget` (pack_bricks.budget), 2^31 words
+// (pack_bricks.bricks: the shader's int offsets) or `max_texels` (pack_bricks.max_texels): pass
+// the GL_MAX_TEXTURE_BUFFER_SIZE the context reports, since the GL itself would only fail at draw.
+inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budget = {},
+                                 std::size_t max_texels = std::numeric_limits<std::size_t>::max())
 {
     const auto ranks = bricks.brick_ranks(), codes = bricks.block_codes();
     const auto density = bricks.densities(), level = bricks.levels();
     const std::size_t words = ranks.size() + codes.size() + (density.size() + 3) / 4 + (level.size() + 3) / 4;
-    if (words * 4 > budget.bytes || words >= (std::size_t(1) << 31))
-        throw krs::invalid_parameter("pack_bricks.bricks", "the buffer (4 bytes per brick and per block of the grid, 2 per voxel of "
-                                                          "the non-empty bricks) must fit the memory budget and 2^31 words",
-                                     std::to_string(words * 4) + " bytes");
+    detail::require_packable(words, budget, max_texels);
     packed_bricks out;
     out.words.reserve(words);
     for (std::int32_t r : ranks) out.words.push_back(std::uint32_t(r));
@@ -112,15 +144,16 @@ inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budge
     bytes(density);
     out.level_offset = std::uint32_t(out.words.size());
     bytes(level);
+    out.grid = bricks.grid();
     for (std::size_t a = 0; a < 3; ++a)
         out.grid_bricks[a] = std::uint32_t(bricks.grid_bricks()[a]), out.grid_blocks[a] = std::uint32_t(bricks.grid_blocks()[a]);
     out.level_count = level_count(bricks);
     return out;
 }
 template <voxel_store S>
-packed_bricks pack_bricks(const S& store, memory_budget budget = {})
+packed_bricks pack_bricks(const S& store, memory_budget budget = {}, std::size_t max_texels = std::numeric_limits<std::size_t>::max())
 {
-    return pack_bricks(voxel_bricks(store), budget);
+    return pack_bricks(voxel_bricks(store), budget, max_texels);
 }
 
 struct hypertree_glsl_options {
@@ -132,7 +165,8 @@ struct hypertree_glsl_options {
 };
 
 // The GLSL of the marcher that volume_marcher(store, shape, colors, options) is, for the bricks
-// `bricks` = pack_bricks(store) of a store of `volume`: constants, the sampler uniform and
+// `bricks` = pack_bricks(store) of a store of the volume `v` (refused, as hypertree_glsl.bricks,
+// when they were packed from a grid of another size): constants, the sampler uniform and
 // `vec4 <prefix>march_<name>(vec3 origin, vec3 direction)` returning the premultiplied color (rgb)
 // and the remaining transmittance (a) of a ray with a unit direction, as march_result.
 inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bricks, const tree_shape& shape, const depth_colors& colors,
@@ -147,6 +181,17 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
     if (!krs::glsl::is_name_part(glsl.name))
         throw krs::invalid_parameter("hypertree_glsl_options.name",
                                      "must be letters, digits and _, not starting with _ and without __ (it follows the prefix)", glsl.name);
+    // The strides, offsets and level count below come from the bricks, the mapping from v: bricks
+    // of another grid would read wrong or out-of-range texels without any GL error.
+    const std::array<int, 3> grid{v.grid().x, v.grid().y, v.grid().z};
+    bool matches = bricks.grid == grid;
+    for (std::size_t a = 0; a < 3; ++a)
+        matches = matches && bricks.grid_bricks[a] == std::uint32_t((grid[a] + 3) / 4) && bricks.grid_blocks[a] == std::uint32_t((grid[a] + 15) / 16);
+    if (!matches)
+        throw krs::invalid_parameter("hypertree_glsl.bricks", "must be pack_bricks of a store of this volume",
+                                     "bricks of a " + std::to_string(bricks.grid[0]) + "x" + std::to_string(bricks.grid[1]) + "x" +
+                                         std::to_string(bricks.grid[2]) + " grid, volume " + std::to_string(grid[0]) + "x" +
+                                         std::to_string(grid[1]) + "x" + std::to_string(grid[2]));
     options.validate(v, shape.box);
     const voxel_shading shading(options, shape, colors);
     const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
@@ -184,7 +229,7 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
         for (int a = 0; a < 3; ++a) {
             std::vector<float> centers(static_cast<std::size_t>(counts[a]));
             for (int c = 0; c < counts[a]; ++c) centers[std::size_t(c)] = float(origins[a] + (c + 0.5) * sides[a]);
-            s += detail::glsl_float_array(n + "_center_" + axes[a], centers.data(), centers.size());
+            s += krs::glsl::float_array(n + "_center_" + axes[a], centers.data(), centers.size());
         }
     }
     const bool spheres = options.use_spheres && !shape.spheres.empty();
@@ -207,14 +252,14 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
             axes.push_back({float(f.axis.x), float(f.axis.y), float(f.axis.z)});
             soft.push_back(float(f.weight_radius * f.weight_radius * 0.05));
         }
-        s += detail::glsl_vec3_array(n + "_flow_centroid", centroids);
-        s += detail::glsl_vec3_array(n + "_flow_axis", axes);
-        s += detail::glsl_float_array(n + "_flow_soft", soft.data(), soft.size());
+        s += krs::glsl::vec3_array(n + "_flow_centroid", centroids);
+        s += krs::glsl::vec3_array(n + "_flow_axis", axes);
+        s += krs::glsl::float_array(n + "_flow_soft", soft.data(), soft.size());
     }
 
     // Functions. Each mirrors the marcher member of the same name; sums are spelled out where
     // GLSL's dot or length might associate differently from krs::dot (x, then y, then z).
-    s += detail::with_name(R"(float $_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+    s += krs::glsl::with_name(R"(float $_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 // enter_box: the slab test, t0 >= 0; a ray that misses gets t0 >= t1. A zero direction component
 // becomes tiny so the division gives a huge finite slope instead of inf * 0 = NaN.
@@ -231,33 +276,7 @@ void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
 }
 
 )", n);
-    s += detail::with_name(R"(// The cell of p, false outside the grid (and outside every part sphere): a lookup by point;
-// the marches walk with $_probe.
-bool $_cell(vec3 p, out ivec3 cell) {
-    cell = ivec3(0);
-    float fx = (p.x - $_origin.x) * $_cells_per_unit.x, fy = (p.y - $_origin.y) * $_cells_per_unit.y,
-          fz = (p.z - $_origin.z) * $_cells_per_unit.z;
-    if (!(fx >= 0.0 && fy >= 0.0 && fz >= 0.0 && fx < float($_grid.x) && fy < float($_grid.y) && fz < float($_grid.z)))
-        return false;
-)", n);
-    if (spheres) {
-        s += "    bool inside = false;\n";
-        s += "    for (int i = 0; i < " + integer(shape.spheres.size()) + "; ++i) {\n";
-        s += detail::with_name(R"(        vec3 d = p - $_spheres[i].xyz;
-        if ($_dot(d, d) <= $_spheres[i].w) {
-            inside = true;
-            break;
-        }
-    }
-    if (!inside) return false;
-)",
-                               n);
-    }
-    s += detail::with_name(R"(    cell = ivec3(min(int(fx), $_grid.x - 1), min(int(fy), $_grid.y - 1), min(int(fz), $_grid.z - 1));
-    return true;
-}
-
-// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), in [-64, -1]
+    s += krs::glsl::with_name(R"(// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), in [-64, -1]
 // when its brick is empty, below -64 when its 16^3 block is (>> of a negative int is arithmetic).
 int $_place(ivec3 c) {
     int brick = (c.x >> 2) + (c.y >> 2) * $_bricks_x + (c.z >> 2) * $_bricks_xy;
@@ -275,19 +294,13 @@ uvec2 $_voxel_at(int place) {
     return uvec2(density, level);
 }
 
-// The voxel of a cell; (0, 0) in an empty brick.
-uvec2 $_voxel(ivec3 cell) {
-    int place = $_place(cell);
-    return place < 0 ? uvec2(0u) : $_voxel_at(place);
-}
-
 )",
                            n);
     s += walk.glsl(n);
     s += "// Whether p lies in a part sphere (use_spheres; else always).\n";
     if (spheres) {
-        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
-             detail::with_name(R"(; ++i) {
+        s += krs::glsl::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
+             krs::glsl::with_name(R"(; ++i) {
         vec3 d = p - $_spheres[i].xyz;
         if ($_dot(d, d) <= $_spheres[i].w) return true;
     }
@@ -297,9 +310,9 @@ uvec2 $_voxel(ivec3 cell) {
 )",
                                n);
     } else {
-        s += detail::with_name("bool $_in_spheres(vec3 p) {\n    return true;\n}\n\n", n);
+        s += krs::glsl::with_name("bool $_in_spheres(vec3 p) {\n    return true;\n}\n\n", n);
     }
-    s += detail::with_name(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
+    s += krs::glsl::with_name(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
 // out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's brick walk
 // and early exit.
 float $_shadow_transmittance(vec3 p, vec3 l) {
@@ -324,13 +337,13 @@ float $_shadow_transmittance(vec3 p, vec3 l) {
 
 )",
                            n);
-    s += detail::with_name(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
+    s += krs::glsl::with_name(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
 vec3 $_normal(vec3 p) {
     vec3 n = vec3(0.0);
 )", n);
     if (!shape.flows.empty()) {
         s += "    for (int i = 0; i < " + integer(shape.flows.size()) + "; ++i) {\n";
-        s += detail::with_name(R"(        vec3 d = p - $_flow_centroid[i];
+        s += krs::glsl::with_name(R"(        vec3 d = p - $_flow_centroid[i];
         vec3 radial = d - $_flow_axis[i] * $_dot(d, $_flow_axis[i]);
         float w = 1.0 / ($_dot(d, d) + $_flow_soft[i]);
         float len = sqrt($_dot(radial, radial));
@@ -339,7 +352,7 @@ vec3 $_normal(vec3 p) {
 )",
                                n);
     }
-    s += detail::with_name(R"(    float len = sqrt($_dot(n, n));
+    s += krs::glsl::with_name(R"(    float len = sqrt($_dot(n, n));
     return len > 0.0 ? n / len : vec3(0.0);
 }
 
@@ -348,13 +361,13 @@ vec3 $_normal(vec3 p) {
     s += shading.glsl_shade(n);
     // The shading point: the voxel's center with shade_per_voxel (the marcher's per-voxel shading),
     // else the sample itself.
-    s += detail::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
+    s += krs::glsl::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
                                                    : "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return p;\n}\n\n",
                            n);
     s += "// march: samples at t0 + (k + 1/2) ds (computed from k, as the marcher does), front to back, until the ray leaves the box or the\n"
          "// transmittance falls below the minimum. Returns (premultiplied rgb, transmittance).\n";
     s += "vec4 " + glsl.prefix + "march_" + glsl.name + "(vec3 origin, vec3 direction) {\n";
-    s += detail::with_name(R"(    float t0, t1;
+    s += krs::glsl::with_name(R"(    float t0, t1;
     $_enter_box(origin, direction, t0, t1);
     float ds = $_step;
     vec3 color = vec3(0.0);
@@ -387,7 +400,9 @@ vec3 $_normal(vec3 p) {
     return s;
 }
 
-// The same for a store: its bricks packed as pack_bricks(store) packs them.
+// The same for a store. It packs the store's bricks itself (a voxel_bricks copy of the store, then
+// the buffer) only to read their sizes and offsets: a caller that uploads the bricks has packed them
+// already and should pass those to the overload above rather than pack twice.
 template <voxel_store S>
 std::string hypertree_glsl(const S& store, const tree_shape& shape, const depth_colors& colors, const march_options& options,
                            const hypertree_glsl_options& glsl = {})

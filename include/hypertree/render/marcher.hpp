@@ -205,7 +205,6 @@ public:
         return transmittance;
     }
 
-
     // Shades the non-empty voxels of bricks [first, last) into `memo` (shade_per_voxel), their
     // shadow rays marched four packets of voxels at a time, and returns the lookups made. What it
     // stores equals what shade() computes for the same voxel (tested), so a render may shade its
@@ -288,7 +287,6 @@ public:
         return std::uint64_t(lookups);
     }
 
-
 private:
     static const hypervolume& validated(const hypervolume& volume, const tree_shape& shape, const march_options& options)
     {
@@ -360,7 +358,6 @@ private:
         return out;
     }
 
-
     // One sample composited front to back: its color weighted by its opacity and the light still
     // passing, then that light dimmed. Both marches step through this, so their pixels agree.
     template <class T>
@@ -380,8 +377,7 @@ private:
         ray_cache* cache = std::floating_point<T> ? context.rays : nullptr;
         const brick_walk walk = walk_;
         const voxel_bricks::view view = bricks_.view_of();
-        using krs::any;
-        (void)cache;
+        using krs::any; // (unqualified below: packets take xsimd's, found by argument)
         march_result<T> out;
         T t0, t1;
         enter_box(ray, t0, t1);
@@ -442,7 +438,6 @@ private:
         return out;
     }
 
-
     bool inside_a_sphere(const krs::vec3f& p) const
     {
         if (shape_.spheres.empty()) return true;
@@ -473,7 +468,6 @@ private:
         const krs::vec3f e = box_hi_ - box_lo_;
         return std::size_t(std::ceil(krs::length(e) / walk_.step())) + 2;
     }
-
 
     template <class T>
     static constexpr std::size_t lanes = krs::lane_count<T>;
@@ -533,7 +527,6 @@ private:
         ++lookups;
         return bricks_.at_place(place);
     }
-
 
     krs::vec3f center_of(voxel_index index) const
     {

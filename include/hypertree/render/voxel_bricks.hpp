@@ -71,6 +71,7 @@ public:
     explicit voxel_bricks(const S& store)
     {
         const hypervolume& v = store.volume();
+        grid_ = {v.grid().x, v.grid().y, v.grid().z};
         // (In size_t: a side near INT_MAX must not overflow.)
         const std::array<std::size_t, 3> grid{std::size_t(v.grid().x), std::size_t(v.grid().y), std::size_t(v.grid().z)};
         for (std::size_t a = 0; a < 3; ++a) {
@@ -164,7 +165,8 @@ public:
     std::span<const std::int32_t> block_codes() const { return block_code_; }
     std::span<const std::uint8_t> densities() const { return {density_.data(), density_.size()}; }
     std::span<const std::uint8_t> levels() const { return {level_.data(), level_.size()}; }
-    // Bricks and blocks per axis of the grid (the last ones may reach past it).
+    // The store's grid in voxels, and bricks and blocks per axis of it (the last ones may reach past it).
+    const std::array<int, 3>& grid() const { return grid_; }
     const std::array<std::size_t, 3>& grid_bricks() const { return brick_count_; }
     const std::array<std::size_t, 3>& grid_blocks() const { return block_count_; }
 
@@ -199,6 +201,7 @@ private:
                block_count_[0] * (std::size_t(y >> coarse_shift) + block_count_[1] * std::size_t(z >> coarse_shift));
     }
 
+    std::array<int, 3> grid_{};
     std::array<std::size_t, 3> brick_count_{}, block_count_{};
     std::vector<std::int32_t> brick_rank_; // per 4^3 brick of the grid: its rank, or -1
     std::vector<std::int32_t> block_code_; // per 16^3 block: 0 when it holds a voxel, else -64

@@ -28,7 +28,6 @@
 #include <bit>
 #include <cmath>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace hypertree {
@@ -61,33 +60,6 @@ inline int level_count(const voxel_bricks& bricks)
             deepest = std::max(deepest, int(bricks.at_place(b * voxel_bricks::brick_voxels + std::size_t(std::countr_zero(m))).level));
     return deepest + 1;
 }
-
-namespace detail {
-// GLSL text helpers: arrays of literals, and `$` replaced by a name.
-inline std::string glsl_float_array(const std::string& name, const float* values, std::size_t count)
-{
-    std::string s = "const float " + name + "[" + std::to_string(count) + "] = float[" + std::to_string(count) + "](";
-    for (std::size_t i = 0; i < count; ++i) s += (i ? (i % 8 ? ", " : ",\n    ") : "") + krs::glsl::float_literal(values[i]);
-    return s + ");\n";
-}
-inline std::string glsl_vec3_array(const std::string& name, const std::vector<krs::vec3f>& values)
-{
-    std::string s = "const vec3 " + name + "[" + std::to_string(values.size()) + "] = vec3[" + std::to_string(values.size()) + "](";
-    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ",\n    " : "") + krs::glsl::vec3_literal(values[i]);
-    return s + ");\n";
-}
-inline std::string with_name(std::string_view text, const std::string& name)
-{
-    std::string s;
-    s.reserve(text.size() + 64);
-    for (char c : text)
-        if (c == '$')
-            s += name;
-        else
-            s += c;
-    return s;
-}
-} // namespace detail
 
 // The lighting of one tree under one set of options: lit() for the CPU, glsl_constants() and
 // glsl_shade() for the GPU. Built from validated options (march_options::validate).
@@ -145,19 +117,19 @@ public:
     {
         using krs::glsl::float_literal, krs::glsl::vec3_literal;
         std::string s = "// Opacity of one step per density byte: 1 - (1 - d / 255)^(density_scale x step_factor).\n";
-        s += detail::glsl_float_array(name + "_alpha", alpha_.data(), alpha_.size());
+        s += krs::glsl::float_array(name + "_alpha", alpha_.data(), alpha_.size());
         std::vector<krs::vec3f> level_colors;
         for (int l = 0; l < levels; ++l) level_colors.push_back({level_color(l).r, level_color(l).g, level_color(l).b});
         s += "const int " + name + "_level_count = " + std::to_string(levels) + ";\n";
-        s += detail::glsl_vec3_array(name + "_level_color", level_colors);
+        s += krs::glsl::vec3_array(name + "_level_color", level_colors);
         s += "const vec3 " + name + "_crown_center = " + vec3_literal(crown_.center) + ";\n";
         s += "const float " + name + "_crown_radius = " + float_literal(crown_.radius) + ";\n";
         std::vector<krs::vec3f> light_colors;
         for (const directional_light& l : options_.lights) light_colors.push_back({l.color.r, l.color.g, l.color.b});
         s += "const int " + name + "_light_count = " + std::to_string(light_dirs_.size()) + ";\n";
         if (!light_dirs_.empty()) {
-            s += detail::glsl_vec3_array(name + "_light_direction", light_dirs_);
-            s += detail::glsl_vec3_array(name + "_light_color", light_colors);
+            s += krs::glsl::vec3_array(name + "_light_direction", light_dirs_);
+            s += krs::glsl::vec3_array(name + "_light_color", light_colors);
         }
         s += "const float " + name + "_ambient = " + float_literal(options_.ambient) + ";\n";
         s += "const float " + name + "_ambient_falloff = " + float_literal(options_.ambient_falloff) + ";\n";
@@ -174,7 +146,7 @@ public:
     // `vec3 $_normal(vec3 p)`, which the caller emits before it.
     std::string glsl_shade(const std::string& name) const
     {
-        std::string s = detail::with_name(R"(// shade: Reeves' ambient falloff below the crown sphere, wrapped Lambert (and Blinn-Phong) with the flow
+        std::string s = krs::glsl::with_name(R"(// shade: Reeves' ambient falloff below the crown sphere, wrapped Lambert (and Blinn-Phong) with the flow
 // normal, each light attenuated by its shadow ray (voxel_shading::lit and with_specular).
 vec3 $_shade(vec3 p, int level, vec3 view) {
     vec3 base = $_level_color[min(level, $_level_count - 1)];
@@ -188,10 +160,10 @@ vec3 $_shade(vec3 p, int level, vec3 view) {
         // (No lights: ambient only, and no loop over arrays GLSL could not declare with size 0.)
         if (!light_dirs_.empty()) {
             s += "    for (int i = 0; i < " + name + "_light_count; ++i) {\n";
-            s += detail::with_name("        vec3 l = $_light_direction[i];\n", name);
-            s += options_.shadows ? detail::with_name("        float shadow = $_shadow_transmittance(p, l);\n", name)
+            s += krs::glsl::with_name("        vec3 l = $_light_direction[i];\n", name);
+            s += options_.shadows ? krs::glsl::with_name("        float shadow = $_shadow_transmittance(p, l);\n", name)
                                   : "        float shadow = 1.0;\n";
-            s += detail::with_name(R"(        float lambert = has_normal ? max(0.0, $_dot(n, l)) * $_lambert_slope + $_lambert_floor : 1.0;
+            s += krs::glsl::with_name(R"(        float lambert = has_normal ? max(0.0, $_dot(n, l)) * $_lambert_slope + $_lambert_floor : 1.0;
         vec3 lc = $_light_color[i];
         float d = $_diffuse * lambert * shadow;
         light += d * lc;
@@ -200,7 +172,7 @@ vec3 $_shade(vec3 p, int level, vec3 view) {
             // GLSL leaves pow(0, 0) undefined where C gives 1: a shininess of 0 is emitted as the 1.
             const std::string highlight = options_.shininess == 0 ? "1.0" : "pow(max(0.0, $_dot(n, h)), $_shininess)";
             if (options_.specular > 0)
-                s += detail::with_name(R"(        if (has_normal) {
+                s += krs::glsl::with_name(R"(        if (has_normal) {
             vec3 h = l + view;
             h = h / sqrt($_dot(h, h));
             float s = $_specular * )" + highlight + R"( * shadow;

@@ -1,11 +1,15 @@
 #pragma once
 // GLSL literals of C++ values: what every emitter (krs fields, the Shadertoy wrapper, hypertree
-// volumes) writes its constants with, so a constant reads back in GLSL as the same float.
+// volumes) writes its constants with, so a constant reads back in GLSL as the same float; and
+// the text helpers emitters share (constant arrays of them, a template's `$` given a name).
 
 #include "krs/core/vec3.hpp"
 
 #include <charconv>
+#include <cstddef>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace krs::glsl {
 
@@ -23,6 +27,34 @@ inline std::string float_literal(float v)
 inline std::string vec3_literal(const vec3f& v)
 {
     return "vec3(" + float_literal(v.x) + ", " + float_literal(v.y) + ", " + float_literal(v.z) + ")";
+}
+
+// `const float name[count] = float[count](...);`, eight to a line.
+inline std::string float_array(const std::string& name, const float* values, std::size_t count)
+{
+    std::string s = "const float " + name + "[" + std::to_string(count) + "] = float[" + std::to_string(count) + "](";
+    for (std::size_t i = 0; i < count; ++i) s += (i ? (i % 8 ? ", " : ",\n    ") : "") + float_literal(values[i]);
+    return s + ");\n";
+}
+// `const vec3 name[n] = vec3[n](...);`, one to a line.
+inline std::string vec3_array(const std::string& name, const std::vector<vec3f>& values)
+{
+    std::string s = "const vec3 " + name + "[" + std::to_string(values.size()) + "] = vec3[" + std::to_string(values.size()) + "](";
+    for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ",\n    " : "") + vec3_literal(values[i]);
+    return s + ");\n";
+}
+// GLSL text with every `$` replaced by `name`: how an emitter writes a function once for any
+// prefixed name ($_step becomes krs_tree_step). The text must hold no other `$` (GLSL has none).
+inline std::string with_name(std::string_view text, const std::string& name)
+{
+    std::string s;
+    s.reserve(text.size() + 64);
+    for (char c : text)
+        if (c == '$')
+            s += name;
+        else
+            s += c;
+    return s;
 }
 
 } // namespace krs::glsl
