@@ -42,6 +42,7 @@
 // The prototype geometry must lie in the shell 1 <= |p| <= s; what leaves it is clipped by the
 // adjacent-shells fix and repeated overlapping by the others.
 
+#include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 #include "krs/kernels/box.hpp"
@@ -94,13 +95,6 @@ inline T margin_clamped_cell(const Tile& tile, const vec3<T>& u, float margin)
     return max(h, -mu);
 }
 
-// A float no larger than 1 / bound (dividing by a rounded-down bound would overestimate).
-inline float inverse_bound(double bound)
-{
-    float f = float(1.0 / bound);
-    if (double(f) > 1.0 / bound) f = std::nextafter(f, 0.0f);
-    return f;
-}
 // GLSL of a tiling (log_polar_tiling, log_spherical_tiling; krs/glsl/emitter.hpp): the tile as
 // NAME_tile, and NAME(p) = finish(p, u, NAME_tile(u)) at the cell coordinates u = cell(p), with the
 // tiling's own _cell and _finish functions and its one vec4 of parameters.
@@ -142,7 +136,7 @@ public:
         const double sheared = 0.5 * (a + std::sqrt(a * a + 4.0)) + double(margin_) / s;
         const double cone = std::sqrt(1.0 + a * a);
         bound_ = std::max(sheared, cone);
-        inverse_bound_ = detail::inverse_bound(bound_);
+        inverse_bound_ = float_at_most(1.0 / bound_);
     }
     int cells() const { return cells_; }
     // The field's Lipschitz bound before normalization (its distance is already divided by it).
@@ -223,7 +217,7 @@ public:
         const double s = double(cells) / (2.0 * std::numbers::pi);
         scale_ = float(s);
         bound_ = 1.0 / std::sin(1.0 / s) + double(margin_) / s;
-        inverse_bound_ = detail::inverse_bound(bound_);
+        inverse_bound_ = float_at_most(1.0 / bound_);
     }
     int cells() const { return cells_; }
     double lipschitz() const { return bound_; }
@@ -339,8 +333,7 @@ public:
         density_ = detail::require_shell_density("similar_shell.density", density);
         ratio_ = float(std::exp(1.0 / double(density_)));
         const double w = 1.0 - 1.0 / std::exp(1.0 / double(density_));
-        other_shells_ = float(w);
-        if (double(other_shells_) > w) other_shells_ = std::nextafter(other_shells_, 0.0f);
+        other_shells_ = float_at_most(w);
     }
 
     float density() const { return density_; }
