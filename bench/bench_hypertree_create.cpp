@@ -41,10 +41,7 @@
 #include "hypertree/huge_pages.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/scratch.hpp"
-#include "hypertree/store/bit_array_store.hpp"
-#include "hypertree/store/dense_store.hpp"
-#include "hypertree/store/index_list_store.hpp"
-#include "hypertree/store/partitioned_store.hpp"
+#include "hypertree/store/store_kinds.hpp"
 #include "support/text.hpp"
 #include "support/timing.hpp"
 
@@ -79,6 +76,16 @@ const paper_figures paper[4][3] = {
     {{0.4, 0.8, 210 * K, 1.4 * M}, {0.4, 0.9, 332 * K, 4.6 * M}, {0.3, 2.0, 2.9 * M, 80 * M}},
     {{2.1, 1.4, 56 * K, 315 * K}, {2.2, 1.5, 178 * K, 3.5 * M}, {1.0, 2.5, 2.9 * M, 80 * M}},
 };
+
+// The paper's column of a store kind (index list, index list + bit array, 3D array); it has no
+// partitioned store.
+std::optional<std::size_t> paper_column(storage_type s)
+{
+    if (s == storage_type::index_list) return 0;
+    if (s == storage_type::bit_array) return 1;
+    if (s == storage_type::dense) return 2;
+    return std::nullopt;
+}
 
 std::string bytes_text(double b)
 {
@@ -272,10 +279,11 @@ int main(int argc, char** argv)
                     }
                     ++next_row;
                 };
-                measure.template operator()<index_list_store>("index_list", paper[t][0]);
-                measure.template operator()<bit_array_store>("bit_array", paper[t][1]);
-                measure.template operator()<dense_store>("dense", paper[t][2]);
-                measure.template operator()<partitioned_store>("partitioned", std::nullopt);
+                for_each_store_kind([&]<class S>() {
+                    const std::optional<std::size_t> p = paper_column(storage_type_of<S>);
+                    measure.template operator()<S>(store_kind_name<S>.data(),
+                                                   p ? std::optional<paper_figures>(paper[t][*p]) : std::nullopt);
+                });
             }
         }
         worst_ratio_of_run.push_back(worst_ratio);

@@ -50,6 +50,16 @@ const double paper_seconds[4][3][2] = {
     {{0.5, 7.8}, {0.3, 4.1}, {0.3, 4.1}},
 };
 
+// The paper's column of a store kind (index list, index list + bit array, 3D array); it has no
+// partitioned store.
+std::optional<std::size_t> paper_column(storage_type s)
+{
+    if (s == storage_type::index_list) return 0;
+    if (s == storage_type::bit_array) return 1;
+    if (s == storage_type::dense) return 2;
+    return std::nullopt;
+}
+
 double rmse(const image& a, const image& b)
 {
     double sum = 0;
@@ -136,10 +146,11 @@ int main(int argc, char** argv)
                             << img.lookups << ",," << (paper ? std::to_string(*paper) : "") << '\n';
                 };
                 const int column = res == 100 ? 0 : 1;
-                row("index_list", index_list_store::build(tree.volume, voxels), paper_seconds[t][0][column]);
-                row("bit_array", bit_array_store::build(tree.volume, voxels), paper_seconds[t][1][column]);
-                row("dense", dense_store::build(tree.volume, voxels), paper_seconds[t][2][column]);
-                row("partitioned", partitioned_store::build(tree.volume, voxels), std::nullopt);
+                for_each_store_kind([&]<class S>() {
+                    const std::optional<std::size_t> p = paper_column(storage_type_of<S>);
+                    row(store_kind_name<S>.data(), S::build(tree.volume, voxels),
+                        p ? std::optional<double>(paper_seconds[t][*p][column]) : std::nullopt);
+                });
             }
             std::printf("\n");
         }

@@ -329,10 +329,7 @@ int main(int argc, char** argv)
             r.rendered = true;
             rows.push_back(r);
         };
-        library("dense", dense_store::build(volume, voxels));
-        library("index_list", index_list_store::build(volume, voxels));
-        library("bit_array", bit_array_store::build(volume, voxels));
-        library("partitioned", partitioned_store::build(volume, voxels));
+        for_each_store_kind([&]<class S>() { library(store_kind_name<S>.data(), S::build(volume, voxels)); });
 
         // OpenVDB: the same voxels, active with their density.
         openvdb::FloatGrid::Ptr density = openvdb::FloatGrid::create(0.0f);

@@ -155,12 +155,7 @@ int main(int argc, char** argv)
             colors = tree.colors();
         }
         const double creation = seconds_since(t0);
-        switch (o.store) {
-        case storage_type::dense: return render_and_write<dense_store>(volume, voxels, colors, o, creation);
-        case storage_type::index_list: return render_and_write<index_list_store>(volume, voxels, colors, o, creation);
-        case storage_type::bit_array: return render_and_write<bit_array_store>(volume, voxels, colors, o, creation);
-        case storage_type::partitioned: return render_and_write<partitioned_store>(volume, voxels, colors, o, creation);
-        }
+        return with_store(o.store, [&]<class S>() { return render_and_write<S>(volume, voxels, colors, o, creation); });
     } catch (const std::exception& e) {
         std::fprintf(stderr, "%s: %s\n", args.program().c_str(), e.what());
         return 1;

@@ -21,10 +21,7 @@
 
 #include "fuzz_input.hpp"
 #include "hypertree/io/binary.hpp"
-#include "hypertree/store/bit_array_store.hpp"
-#include "hypertree/store/dense_store.hpp"
-#include "hypertree/store/index_list_store.hpp"
-#include "hypertree/store/partitioned_store.hpp"
+#include "hypertree/store/store_kinds.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -97,12 +94,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     if (selector & 8) file.push_back('\x5a');
     try {
-        switch (selector & 3) {
-        case 0: check_load<dense_store>(file); break;
-        case 1: check_load<index_list_store>(file); break;
-        case 2: check_load<bit_array_store>(file); break;
-        default: check_load<partitioned_store>(file); break;
-        }
+        static_assert(std::tuple_size_v<store_kinds> == 4, "two selector bits pick the store kind");
+        with_store(storage_type(selector & 3), [&]<class S>() { check_load<S>(file); });
     } catch (...) {
         fail();
     }

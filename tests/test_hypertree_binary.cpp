@@ -6,10 +6,7 @@
 #include "hypertree/build.hpp"
 #include "hypertree/io/binary.hpp"
 #include "hypertree/presets.hpp"
-#include "hypertree/store/bit_array_store.hpp"
-#include "hypertree/store/dense_store.hpp"
-#include "hypertree/store/index_list_store.hpp"
-#include "hypertree/store/partitioned_store.hpp"
+#include "hypertree/store/store_kinds.hpp"
 
 #include <doctest/doctest.h>
 
@@ -154,8 +151,7 @@ void check_same_voxels(const A& a, const B& b, bool compare_parts)
 
 } // namespace
 
-TEST_CASE_TEMPLATE("hypertree binary round trip of a generated tree", S, hypertree::dense_store,
-                   hypertree::index_list_store, hypertree::bit_array_store, hypertree::partitioned_store)
+TEST_CASE_TEMPLATE_DEFINE("hypertree binary round trip of a generated tree", S, binary_round_trip)
 {
     auto definition = hypertree::presets::tree_a(48);
     definition.iterations = 30000;
@@ -180,6 +176,7 @@ TEST_CASE_TEMPLATE("hypertree binary round trip of a generated tree", S, hypertr
     CHECK(!std::filesystem::exists(dir.path / "tree.htree.partial"));
     check_same_voxels(tree, hypertree::load<S>(file), true);
 }
+TEST_CASE_TEMPLATE_APPLY(binary_round_trip, hypertree::store_kinds);
 
 TEST_CASE("hypertree binary layout is little-endian byte by byte")
 {

@@ -6,10 +6,7 @@
 #include "hypertree/build.hpp"
 #include "hypertree/lod.hpp"
 #include "hypertree/presets.hpp"
-#include "hypertree/store/bit_array_store.hpp"
-#include "hypertree/store/dense_store.hpp"
-#include "hypertree/store/index_list_store.hpp"
-#include "hypertree/store/partitioned_store.hpp"
+#include "hypertree/store/store_kinds.hpp"
 
 #include <doctest/doctest.h>
 
@@ -339,8 +336,7 @@ TEST_CASE("hypertree lod preserves the density integral")
     CHECK(one[0].density == doctest::Approx(sum / double(volume.voxel_count())).epsilon(1e-12));
 }
 
-TEST_CASE_TEMPLATE("hypertree lod identity returns the same voxels", S, hypertree::dense_store, hypertree::index_list_store,
-                   hypertree::bit_array_store, hypertree::partitioned_store)
+TEST_CASE_TEMPLATE_DEFINE("hypertree lod identity returns the same voxels", S, lod_identity)
 {
     const hypervolume volume({0, 0, 0}, {1, 1, 1}, {17, 13, 11});
     const auto voxels = random_voxels(volume, 0.3, 31);
@@ -357,6 +353,7 @@ TEST_CASE_TEMPLATE("hypertree lod identity returns the same voxels", S, hypertre
     CHECK(rebuilt.volume() == volume);
     CHECK(rebuilt.nonempty_count() == store.nonempty_count());
 }
+TEST_CASE_TEMPLATE_APPLY(lod_identity, hypertree::store_kinds);
 
 TEST_CASE("hypertree lod every store kind reduces alike")
 {
@@ -370,9 +367,11 @@ TEST_CASE("hypertree lod every store kind reduces alike")
             ok = got[k].index == expected[k].index && got[k].value.density == expected[k].value.density;
         return ok;
     };
-    CHECK(same_values(hypertree::reduce(hypertree::dense_store::build(volume, voxels), target)));
-    CHECK(same_values(hypertree::reduce(hypertree::index_list_store::build(volume, voxels), target)));
-    CHECK(same_values(hypertree::reduce(hypertree::bit_array_store::build(volume, voxels), target)));
+    // Every kind, the partitioned one included (against itself, built again).
+    hypertree::for_each_store_kind([&]<class S>() {
+        INFO(hypertree::store_kind_name<S>);
+        CHECK(same_values(hypertree::reduce(S::build(volume, voxels), target)));
+    });
     // reduce_store into another kind holds the same voxels over the reduced volume.
     const auto source = hypertree::partitioned_store::build(volume, voxels);
     const auto dense = hypertree::reduce_store<hypertree::dense_store>(source, target);

@@ -8,10 +8,7 @@
 #include "hypertree/huge_pages.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/scratch.hpp"
-#include "hypertree/store/bit_array_store.hpp"
-#include "hypertree/store/dense_store.hpp"
-#include "hypertree/store/index_list_store.hpp"
-#include "hypertree/store/partitioned_store.hpp"
+#include "hypertree/store/store_kinds.hpp"
 
 #include "support/random.hpp"
 
@@ -759,33 +756,35 @@ TEST_CASE("stores: bounds on a large grid, from its first and last voxels and th
 
 // ---- stores ------------------------------------------------------------------------------------------
 
-TEST_CASE("stores: all four kinds return the reference voxel for every voxel of a small grid")
+TEST_CASE_TEMPLATE_DEFINE("stores: every kind returns the reference voxel for every voxel of a small grid", S,
+                          small_grid_reference)
 {
     std::mt19937_64 g(8);
     for (const double fill : {0.0, 0.002, 0.15, 1.0}) {
         INFO("fill " << fill);
         const auto voxels = random_voxels(g, small_volume, fill);
         const auto reference = grid_of(small_volume, voxels);
-        const auto dense = hypertree::dense_store::build(small_volume, voxels);
-        const auto list = hypertree::index_list_store::build(small_volume, voxels);
+        const auto store = S::build(small_volume, voxels);
+        CHECK(count_differences(grid_of_store(store), reference) == 0);
+        check_visits_the_list(store, voxels);
+        const auto box = bounds_by_hand(small_volume, voxels);
+        CHECK(store.bounds() == box);
+        CHECK(box.empty() == voxels.empty());
+    }
+}
+TEST_CASE_TEMPLATE_APPLY(small_grid_reference, hypertree::store_kinds);
+
+TEST_CASE("stores: the bit array's occupancy bits and the partitioned store's parts on a small grid")
+{
+    std::mt19937_64 g(8);
+    for (const double fill : {0.0, 0.002, 0.15, 1.0}) {
+        INFO("fill " << fill);
+        const auto voxels = random_voxels(g, small_volume, fill);
+        const auto reference = grid_of(small_volume, voxels);
         const auto bits = hypertree::bit_array_store::build(small_volume, voxels);
         const auto parts = hypertree::partitioned_store::build(small_volume, voxels);
-        CHECK(count_differences(grid_of_store(dense), reference) == 0);
-        CHECK(count_differences(grid_of_store(list), reference) == 0);
-        CHECK(count_differences(grid_of_store(bits), reference) == 0);
-        CHECK(count_differences(grid_of_store(parts), reference) == 0);
         for (voxel_index i = 0; i < small_volume.voxel_count(); ++i)
             if (bits.occupied(i) != (reference[i].density != 0)) FAIL("occupancy bit of voxel " << i);
-        check_visits_the_list(dense, voxels);
-        check_visits_the_list(list, voxels);
-        check_visits_the_list(bits, voxels);
-        check_visits_the_list(parts, voxels);
-        const auto box = bounds_by_hand(small_volume, voxels);
-        CHECK(dense.bounds() == box);
-        CHECK(list.bounds() == box);
-        CHECK(bits.bounds() == box);
-        CHECK(parts.bounds() == box);
-        CHECK(box.empty() == voxels.empty());
         // The partitioned store gives back each voxel's part, and so the very list it was built from.
         const auto again = hypertree::stored_voxels(parts);
         REQUIRE(again.size() == voxels.size());
@@ -895,9 +894,8 @@ void check_rebuilt_like_fresh(const hypervolume& volume, const std::vector<store
     CHECK(rebuilt.bounds() == fresh.bounds());
 }
 
-TEST_CASE_TEMPLATE("stores: a store rebuilt in a recycled one answers every voxel as one built fresh", S,
-                   hypertree::dense_store, hypertree::index_list_store, hypertree::bit_array_store,
-                   hypertree::partitioned_store)
+TEST_CASE_TEMPLATE_DEFINE("stores: a store rebuilt in a recycled one answers every voxel as one built fresh", S,
+                          rebuilt_in_recycled)
 {
     std::mt19937_64 g(27);
     const auto many = random_voxels(g, small_volume, 0.3);
@@ -930,6 +928,7 @@ TEST_CASE_TEMPLATE("stores: a store rebuilt in a recycled one answers every voxe
         CHECK(count_differences(grid_of_store(old), grid_of(small_volume, many)) == 0);
     }
 }
+TEST_CASE_TEMPLATE_APPLY(rebuilt_in_recycled, hypertree::store_kinds);
 
 TEST_CASE("a dense store rebuilt at the same size keeps its memory and clears what it wrote, at 300 cubed")
 {

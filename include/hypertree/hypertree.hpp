@@ -35,6 +35,7 @@
 #include "hypertree/store/index_list_store.hpp"
 #include "hypertree/store/partitioned_store.hpp"
 #include "hypertree/store/store.hpp"
+#include "hypertree/store/store_kinds.hpp"
 #include "hypertree/transform/condensation.hpp"
 #include "hypertree/transform/pipeline.hpp"
 #include "hypertree/volume.hpp"

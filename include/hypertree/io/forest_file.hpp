@@ -19,6 +19,7 @@
 
 #include "hypertree/io/definition_file.hpp"
 #include "hypertree/io/lexer.hpp"
+#include "hypertree/store/store_kinds.hpp" // storage_type and its names
 
 #include <algorithm>
 #include <array>
@@ -29,12 +30,6 @@
 #include <vector>
 
 namespace hypertree {
-
-// The data structures of section 5 (store/*.hpp), by the names forest files use.
-enum class storage_type { dense, index_list, bit_array, partitioned };
-
-inline constexpr std::array<std::string_view, 4> storage_type_names = {"dense", "index_list", "bit_array", "partitioned"};
-inline std::string_view name_of(storage_type s) { return storage_type_names[std::size_t(s)]; }
 
 struct forest_tree {
     std::filesystem::path file; // resolved against the forest file's directory
@@ -84,7 +79,12 @@ inline parsed_forest parse_forest(std::string_view text, std::string_view file_n
             const auto known = std::find_if(storage_type_names.begin(), storage_type_names.end(), [&](std::string_view name) {
                 return t != nullptr && t->kind == io::token_kind::word && io::same_word(t->text, name);
             });
-            if (known == storage_type_names.end()) s.expected("a storage type (dense, index_list, bit_array or partitioned)");
+            if (known == storage_type_names.end()) {
+                std::string names; // "dense, index_list, bit_array or partitioned"
+                for (std::size_t k = 0; k < storage_type_names.size(); ++k)
+                    names += (k == 0 ? "" : k + 1 == storage_type_names.size() ? " or " : ", ") + std::string(storage_type_names[k]);
+                s.expected("a storage type (" + names + ")");
+            }
             s.take();
             s.finish();
             forest.storage = storage_type(known - storage_type_names.begin());

@@ -18,6 +18,7 @@
 // both terms are <= |x - q|, so g never overestimates.
 
 #include "krs/core/bounds.hpp"
+#include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 #include "krs/shade/texture.hpp"
@@ -180,9 +181,8 @@ public:
         if (!std::isfinite(l) || !(l >= 1.0 && l <= 1e30))
             throw invalid_parameter("lipschitz_warp.lipschitz", "the warp's Lipschitz bound must be in [1, 1e30]",
                                     detail::to_text(l));
-        inverse_bound_ = float(1.0 / l);
         // Rounding 1/L to float must not make it larger than 1/L (that would overestimate).
-        if (double(inverse_bound_) > 1.0 / l) inverse_bound_ = std::nextafter(inverse_bound_, 0.0f);
+        inverse_bound_ = float_at_most(1.0 / l);
         const bounding_sphere d = warp_.domain();
         if (d.is_bounded()) {
             require_finite("lipschitz_warp.domain.center", d.center);

@@ -3,6 +3,7 @@
 // exports and tests can tell where the geometry is. An unbounded kernel (a half-space) reports an
 // infinite radius.
 
+#include "krs/core/rounding.hpp"
 #include "krs/core/vec3.hpp"
 
 #include <algorithm>
@@ -64,15 +65,8 @@ struct bounding_box {
 // The float box holding the double box [lo, hi]: each bound rounded outward.
 inline bounding_box box_around(const vec3d& lo, const vec3d& hi)
 {
-    const auto down = [](double v) {
-        const float f = static_cast<float>(v);
-        return double(f) <= v ? f : std::nextafter(f, -std::numeric_limits<float>::infinity());
-    };
-    const auto up = [](double v) {
-        const float f = static_cast<float>(v);
-        return double(f) >= v ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
-    };
-    return {{down(lo.x), down(lo.y), down(lo.z)}, {up(hi.x), up(hi.y), up(hi.z)}};
+    return {{float_at_most(lo.x), float_at_most(lo.y), float_at_most(lo.z)},
+            {float_at_least(hi.x), float_at_least(hi.y), float_at_least(hi.z)}};
 }
 
 // The float box holding the double box [lo, hi] grown by `pad` on every side: a kernel's exact

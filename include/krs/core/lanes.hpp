@@ -112,6 +112,25 @@ inline T lane_atan2(const T& y, const T& x) noexcept
     if constexpr (std::floating_point<T>) return y == T(0) && x == T(0) ? T(0) : std::atan2(y, x);
     else return xsimd::select(y == T(0) && x == T(0), T(0), xsimd::atan2(y, x));
 }
+// log, exp and floor on any lane type: std:: for scalars, xsimd for packets.
+template <class T>
+inline T lane_log(const T& x)
+{
+    if constexpr (std::floating_point<T>) return std::log(x);
+    else return xsimd::log(x);
+}
+template <class T>
+inline T lane_exp(const T& x)
+{
+    if constexpr (std::floating_point<T>) return std::exp(x);
+    else return xsimd::exp(x);
+}
+template <class T>
+inline T lane_floor(const T& x)
+{
+    if constexpr (std::floating_point<T>) return std::floor(x);
+    else return xsimd::floor(x);
+}
 inline bool any(bool m) noexcept { return m; }
 inline bool all(bool m) noexcept { return m; }
 inline bool none(bool m) noexcept { return !m; }

@@ -15,7 +15,9 @@
 // and so computes each axis's scrambled coordinates once by hand: krs/core/noise.hpp). With
 // contraction off and no fold to prevent, the values are the same with and without the barrier.
 
+#include <cmath>
 #include <concepts>
+#include <limits>
 #include <type_traits>
 
 namespace krs {
@@ -81,6 +83,22 @@ inline T unfused(T x) noexcept
 {
     detail::keep_rounded(x);
     return x;
+}
+
+// The largest float no larger than v, and the smallest float no smaller than v: the one rule for
+// storing a bound computed in double as a float. A factor that divides a distance (1/L, 1/s^i,
+// 1 - 1/s) rounded up would make the field overestimate, so it is stored rounded down (toward
+// zero: those factors are positive); a box is stored rounded outward, so it still holds the
+// solid. The float is kept rounded (`convert_float`) so the comparison sees the stored value.
+inline float float_at_most(double v) noexcept
+{
+    const float f = convert_float<float>(v);
+    return double(f) <= v ? f : std::nextafter(f, -std::numeric_limits<float>::infinity());
+}
+inline float float_at_least(double v) noexcept
+{
+    const float f = convert_float<float>(v);
+    return double(f) >= v ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
 }
 
 }  // namespace krs

@@ -30,6 +30,7 @@
 // Every step is a template over the lane type; the steps are the same for every lane, so a packet
 // runs the loop in lockstep and only min/max/abs/select act per lane.
 
+#include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 #include "krs/kernels/box.hpp"
@@ -363,10 +364,8 @@ public:
         detail::require_kifs_escape("kifs.iterations", program_, iterations, detail::kernel_input_reach(kernel_));
         iterations_ = iterations;
         for (int i = 0; i <= iterations; ++i) {
-            const double inv = std::pow(s, -double(i));
-            float f = float(inv);
             // Rounding 1/s^i up would overestimate the distance.
-            if (double(f) > inv) f = std::nextafter(f, 0.0f);
+            const float f = float_at_most(std::pow(s, -double(i)));
             if (!(f > 0.0f))
                 throw invalid_parameter("kifs.iterations", "program.scale()^iterations overflows float",
                                         std::to_string(iterations));

@@ -42,6 +42,7 @@
 // The prototype geometry must lie in the shell 1 <= |p| <= s; what leaves it is clipped by the
 // adjacent-shells fix and repeated overlapping by the others.
 
+#include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 #include "krs/kernels/box.hpp"
@@ -60,26 +61,6 @@
 namespace krs {
 
 namespace detail {
-// Transcendentals over lanes: std:: for scalars, xsimd for packets.
-template <class T>
-inline T lane_log(const T& x)
-{
-    if constexpr (std::floating_point<T>) return std::log(x);
-    else return xsimd::log(x);
-}
-template <class T>
-inline T lane_exp(const T& x)
-{
-    if constexpr (std::floating_point<T>) return std::exp(x);
-    else return xsimd::exp(x);
-}
-template <class T>
-inline T lane_floor(const T& x)
-{
-    if constexpr (std::floating_point<T>) return std::floor(x);
-    else return xsimd::floor(x);
-}
-
 // The smallest radius the warps take a logarithm of: keeps r = 0 (the singularity) finite; every
 // distance there is multiplied by r or a shell scale of this size, so the result is ~0.
 inline constexpr float smallest_radius = 1e-30f;
@@ -94,13 +75,6 @@ inline T margin_clamped_cell(const Tile& tile, const vec3<T>& u, float margin)
     return max(h, -mu);
 }
 
-// A float no larger than 1 / bound (dividing by a rounded-down bound would overestimate).
-inline float inverse_bound(double bound)
-{
-    float f = float(1.0 / bound);
-    if (double(f) > 1.0 / bound) f = std::nextafter(f, 0.0f);
-    return f;
-}
 // GLSL of a tiling (log_polar_tiling, log_spherical_tiling; krs/glsl/emitter.hpp): the tile as
 // NAME_tile, and NAME(p) = finish(p, u, NAME_tile(u)) at the cell coordinates u = cell(p), with the
 // tiling's own _cell and _finish functions and its one vec4 of parameters.
@@ -142,7 +116,7 @@ public:
         const double sheared = 0.5 * (a + std::sqrt(a * a + 4.0)) + double(margin_) / s;
         const double cone = std::sqrt(1.0 + a * a);
         bound_ = std::max(sheared, cone);
-        inverse_bound_ = detail::inverse_bound(bound_);
+        inverse_bound_ = float_at_most(1.0 / bound_);
     }
     int cells() const { return cells_; }
     // The field's Lipschitz bound before normalization (its distance is already divided by it).
@@ -156,10 +130,10 @@ public:
         const T r = sqrt(p.x * p.x + p.z * p.z);
         const T rs = max(r, T(detail::smallest_radius));
         const T theta = lane_atan2(p.z, select(r > T(0), p.x, T(1)));
-        const T cu = s * detail::lane_log(rs), cv = s * (theta + T(std::numbers::pi_v<float>));
+        const T cu = s * lane_log(rs), cv = s * (theta + T(std::numbers::pi_v<float>));
         const T h(height_);
-        const vec3<T> u{cu - detail::lane_floor(cu) - T(0.5f), clamp(p.y * s / rs, -h, h),
-                        cv - detail::lane_floor(cv) - T(0.5f)};
+        const vec3<T> u{cu - lane_floor(cu) - T(0.5f), clamp(p.y * s / rs, -h, h),
+                        cv - lane_floor(cv) - T(0.5f)};
         const T sheared = detail::margin_clamped_cell(tile_, u, margin_) * r / s;
         const T cone = abs(p.y) - h * r / s; // height limit, |y| <= (Y / S) r
         return max(sheared, cone) * T(inverse_bound_);
@@ -223,7 +197,7 @@ public:
         const double s = double(cells) / (2.0 * std::numbers::pi);
         scale_ = float(s);
         bound_ = 1.0 / std::sin(1.0 / s) + double(margin_) / s;
-        inverse_bound_ = detail::inverse_bound(bound_);
+        inverse_bound_ = float_at_most(1.0 / bound_);
     }
     int cells() const { return cells_; }
     double lipschitz() const { return bound_; }
@@ -238,9 +212,9 @@ public:
         const T rs = max(r, T(detail::smallest_radius));
         const T theta = lane_atan2(planar, select(r > T(0), p.z, T(1)));
         const T phi = lane_atan2(p.y, select(planar > T(0), p.x, T(1)));
-        const T cu = s * detail::lane_log(rs), cv = s * theta, cw = s * (phi + T(std::numbers::pi_v<float>));
-        const T row = detail::lane_floor(cv);
-        const vec3<T> u{cu - detail::lane_floor(cu) - T(0.5f), cv - row - T(0.5f), cw - detail::lane_floor(cw) - T(0.5f)};
+        const T cu = s * lane_log(rs), cv = s * theta, cw = s * (phi + T(std::numbers::pi_v<float>));
+        const T row = lane_floor(cv);
+        const vec3<T> u{cu - lane_floor(cu) - T(0.5f), cv - row - T(0.5f), cw - lane_floor(cw) - T(0.5f)};
         // Cell field with the border clamp in both the polar (y) and azimuth (z) directions.
         const T mu(margin_);
         const T border = T(0.5f) - max(abs(u.x), max(abs(u.y), abs(u.z)));
@@ -339,8 +313,7 @@ public:
         density_ = detail::require_shell_density("similar_shell.density", density);
         ratio_ = float(std::exp(1.0 / double(density_)));
         const double w = 1.0 - 1.0 / std::exp(1.0 / double(density_));
-        other_shells_ = float(w);
-        if (double(other_shells_) > w) other_shells_ = std::nextafter(other_shells_, 0.0f);
+        other_shells_ = float_at_most(w);
     }
 
     float density() const { return density_; }
@@ -355,12 +328,12 @@ public:
         const T r = length(p);
         const T rs = max(r, T(detail::smallest_radius));
         const T inv_density(1.0f / density_);
-        const T k = detail::lane_floor(detail::lane_log(rs) * T(density_));
+        const T k = lane_floor(lane_log(rs) * T(density_));
         T d;
         switch (options_.seams) {
         case shell_seams::none: d = in_shell(p, k, inv_density); break;
         case shell_seams::hidden_boundary: {
-            const T inner = detail::lane_exp(k * inv_density), outer = inner * T(ratio_);
+            const T inner = lane_exp(k * inv_density), outer = inner * T(ratio_);
             const T boundary = max(min(r - inner, outer - r), T(options_.hidden_cutoff) * r);
             d = min(in_shell(p, k, inv_density), boundary);
             break;
@@ -369,7 +342,7 @@ public:
             d = T(other_shells_) * r;
             for (int j = -1; j <= 1; ++j) {
                 const T kj = k + T(float(j));
-                const T inner = detail::lane_exp(kj * inv_density), outer = inner * T(ratio_);
+                const T inner = lane_exp(kj * inv_density), outer = inner * T(ratio_);
                 const T to_shell = max(max(inner - r, r - outer), T(0));
                 d = min(d, max(in_shell(p, kj, inv_density), to_shell));
             }
@@ -405,7 +378,7 @@ public:
         std::size_t first = header + 2; // where the table starts (it has no entry when n is 0)
         for (int i = 0; i < n; i += 4) {
             std::array<float, 4> v{}; // zeros past the table's end
-            for (int j = 0; j < 4 && i + j < n; ++j) v[std::size_t(j)] = detail::lane_exp(float(k0 + i + j) * inv_density);
+            for (int j = 0; j < 4 && i + j < n; ++j) v[std::size_t(j)] = lane_exp(float(k0 + i + j) * inv_density);
             const std::size_t at =
                 out.vec4(v, i == 0 ? name + " shell scales e^(k / density), k = k0.." : name + " shell scales");
             if (i == 0) first = at;
@@ -451,7 +424,7 @@ private:
     template <class T>
     T in_shell(const vec3<T>& p, const T& k, const T& inv_density) const
     {
-        const T scale = detail::lane_exp(k * inv_density);
+        const T scale = lane_exp(k * inv_density);
         return shell_.distance(p / scale) * scale;
     }
 
