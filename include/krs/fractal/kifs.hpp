@@ -72,6 +72,7 @@ struct abs_fold {
                 (Axes & fold_z) ? abs(p.z) : p.z};
     }
     double scale() const { return 1.0; }
+    static constexpr bool counts_as_fold = true; // for colouring (krs/fractal/kifs_colour.hpp)
 
     // GLSL (krs/glsl/emitter.hpp): one vec4, 1 on the folded axes, 0 elsewhere.
     static constexpr std::string_view glsl_name = "krs_abs_fold";
@@ -109,6 +110,7 @@ struct plane_fold {
         return fold_positive_side(-normal, -offset, p);
     }
     double scale() const { return 1.0; }
+    static constexpr bool counts_as_fold = true;
 
     // GLSL: one vec4 (normal, offset); the arithmetic spelled out in the C++ order.
     static constexpr std::string_view glsl_name = "krs_plane_fold";
@@ -131,6 +133,7 @@ struct sort_fold {
         return {max(a, p.z), max(b, c), min(b, c)};
     }
     double scale() const { return 1.0; }
+    static constexpr bool counts_as_fold = true;
 
     // GLSL: no parameters.
     static constexpr std::string_view glsl_name = "krs_sort_fold";
