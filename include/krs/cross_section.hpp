@@ -11,21 +11,32 @@
 //
 //     g_k = (d(p + h e_k) - d(p - h e_k)) / ((p + h e_k)_k - (p - h e_k)_k),   |grad| = |(g_x, g_y, g_z)|
 //
-// (divided by the step the float coordinates really took, not 2h). A difference quotient of a
-// 1-Lipschitz function is at most 1 per axis, and for a convex field such as a sphere the vector of
-// them is at most 1 too; where |grad| > 1 + lipschitz_tolerance the field overestimates somewhere
-// within h of the pixel, and a sphere tracer stepping the full distance may step through the
-// surface there. The tolerance covers the float noise of a difference, about ulp(|d|) / h: keep h
-// (half a pixel by default) well above the ulps of the coordinates.
+// (divided by the step the float coordinates really took, not 2h). Where the field is smooth this
+// is its gradient to O(h^2), and |grad| > 1 means it overestimates. Within h of a crease (a
+// union's seam, a fold plane) it is not: each axis's quotient is taken across the crease on its
+// own side, and the vector of them can be longer than 1 for a 1-Lipschitz field (the Menger
+// sponge, 1-Lipschitz by construction, reads |grad| up to 1.008 along its fold planes; the cube
+// singularity 1.009). So the flag rests on a witness instead: the quotient along the measured
+// gradient's direction u,
+//
+//     slope = |d(p + h u) - d(p - h u)| / |(p + h u) - (p - h u)|,
+//
+// which is the gradient's magnitude where the field is smooth and, being the quotient of one pair
+// of points, can exceed 1 only where the field really does overestimate between them (a crease of
+// a 1-Lipschitz field stays <= 1). A pixel is flagged where slope > 1 + lipschitz_tolerance: a
+// sphere tracer stepping the full distance from there may step through the surface. The tolerance
+// covers the float noise of a difference, about ulp(|d|) / h: keep h (half a pixel by default)
+// well above the ulps of the coordinates. (A field that overestimates only across a direction
+// other than its gradient's, which no field of this library does, goes unflagged.)
 //
 // Two images come out, linear RGB rows top first (an example writes them as PNG):
 //   distance_image   outside orange, inside blue, in bands of iso_spacing (alternate bands darker);
 //                    iso lines where d is within half a line width (line_width pixels, measured in
 //                    world units as pixel_size) of a multiple k of the spacing, dark, and the zero
 //                    line (k = 0) white. Each pixel's class is `kind[i]`.
-//   gradient_image   |grad| <= 1 + tolerance as grey (black 0 .. light 1); above it red, turning
-//                    yellow as |grad| reaches 2. Each pixel's flag is `overestimates(i)`.
-// Sampling costs 7 scalar distance evaluations per pixel; nothing is cached, no thread started.
+//   gradient_image   |grad| as grey (black 0 .. light 1); flagged pixels red, turning yellow as the
+//                    slope reaches 2. Each pixel's flag is `overestimates(i)`.
+// Sampling costs 9 scalar distance evaluations per pixel; nothing is cached, no thread started.
 
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
@@ -111,13 +122,14 @@ struct cross_section_image {
     cross_section_options options;
     double step = 0;                      // the h used for the gradient
     std::vector<float> distance;          // per pixel, rows top first
-    std::vector<float> gradient;          // |grad d| per pixel
+    std::vector<float> gradient;          // |grad d| per pixel (central differences)
+    std::vector<float> slope;             // the quotient along the gradient's direction per pixel
     std::vector<section_pixel> kind;      // the distance image's class per pixel
     std::size_t overestimating = 0;       // pixels with overestimates(i)
-    float max_gradient = 0;
+    float max_gradient = 0, max_slope = 0;
 
     std::size_t pixels() const { return distance.size(); }
-    bool overestimates(std::size_t i) const { return gradient[i] > 1.0f + options.lipschitz_tolerance; }
+    bool overestimates(std::size_t i) const { return slope[i] > 1.0f + options.lipschitz_tolerance; }
 
     // Linear RGB, 3 floats per pixel, rows top first (see the top of this file).
     std::vector<float> distance_image() const
@@ -148,7 +160,7 @@ struct cross_section_image {
         for (std::size_t i = 0; i < pixels(); ++i) {
             const float m = gradient[i];
             if (overestimates(i)) {
-                rgb[3 * i] = 1.0f, rgb[3 * i + 1] = 0.9f * std::clamp(m - 1.0f, 0.0f, 1.0f), rgb[3 * i + 2] = 0.05f;
+                rgb[3 * i] = 1.0f, rgb[3 * i + 1] = 0.9f * std::clamp(slope[i] - 1.0f, 0.0f, 1.0f), rgb[3 * i + 2] = 0.05f;
             } else {
                 const float grey = 0.05f + 0.75f * std::clamp(m, 0.0f, 1.0f);
                 rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = grey;
@@ -171,6 +183,7 @@ cross_section_image cross_section(const F& f, slice_plane plane, const cross_sec
     const std::size_t n = std::size_t(plane.columns) * std::size_t(plane.rows);
     out.distance.resize(n);
     out.gradient.resize(n);
+    out.slope.resize(n);
     out.kind.resize(n);
     const double half_line = 0.5 * double(options.line_width) * plane.pixel_size();
     const double spacing = options.iso_spacing;
@@ -180,7 +193,7 @@ cross_section_image cross_section(const F& f, slice_plane plane, const cross_sec
             const std::size_t i = std::size_t(row) * std::size_t(plane.columns) + std::size_t(column);
             const vec3f p = plane.point(column, row);
             const float d = f.distance(p);
-            double g2 = 0;
+            double g[3] = {0, 0, 0};
             for (int axis = 0; axis < 3; ++axis) {
                 vec3f a = p, b = p;
                 float& ca = axis == 0 ? a.x : axis == 1 ? a.y : a.z;
@@ -189,19 +202,26 @@ cross_section_image cross_section(const F& f, slice_plane plane, const cross_sec
                 cb -= h;
                 const double taken = double(ca) - double(cb);
                 // A step below the coordinate's ulp moves nothing: no slope is measured on that axis.
-                if (taken > 0) {
-                    const double g = (double(f.distance(a)) - double(f.distance(b))) / taken;
-                    g2 += g * g;
-                }
+                if (taken > 0) g[axis] = (double(f.distance(a)) - double(f.distance(b))) / taken;
+            }
+            const double magnitude = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+            double slope = 0;
+            if (magnitude > 0) {
+                const vec3d u = vec3d{g[0], g[1], g[2]} * (double(h) / magnitude);
+                const vec3f a(vec3d(p) + u), b(vec3d(p) - u);
+                const double taken = length(vec3d(a) - vec3d(b));
+                if (taken > 0) slope = std::abs(double(f.distance(a)) - double(f.distance(b))) / taken;
             }
             const double dd = d;
             const double k = std::round(dd / spacing);
             section_pixel kind = dd < 0 ? section_pixel::inside : section_pixel::outside;
             if (std::abs(dd - k * spacing) <= half_line) kind = k == 0 ? section_pixel::zero_line : section_pixel::iso_line;
             out.distance[i] = d;
-            out.gradient[i] = float(std::sqrt(g2));
+            out.gradient[i] = float(magnitude);
+            out.slope[i] = float(slope);
             out.kind[i] = kind;
             out.max_gradient = std::max(out.max_gradient, out.gradient[i]);
+            out.max_slope = std::max(out.max_slope, out.slope[i]);
             out.overestimating += out.overestimates(i);
         }
     return out;

@@ -41,12 +41,6 @@
 
 namespace krs {
 
-// Whether a fold step counts as a fold for fold_count (a step that moves only some points: a
-// reflection taken from one side). scale_about, rotate_step and translate_step move every point
-// and are not counted.
-template <class S>
-inline constexpr bool counts_as_fold = requires { requires S::counts_as_fold; };
-
 // What kifs_colour looks for: up to four traps and the escape radius.
 struct kifs_colouring {
     static constexpr std::size_t max_traps = 4;
@@ -139,9 +133,10 @@ struct kifs_colour_glsl {
 
     void validate() const { colouring.validate(); }
 
-    // The struct, once per shader, then `krs_kifs_colour NAME(vec3 p)`: each step's _apply from
-    // its own GLSL (the steps' parameters appended to the data again: this function may be emitted
-    // without the distance), the traps after every iteration, the escape test as the C++ writes it.
+    // The struct, once per shader, then `krs_kifs_colour NAME(vec3 p)`: the program's iteration
+    // with its fold counts (fold_program::glsl_emit_counted, as NAME_program_folds; its parameters
+    // appended to the data again, so this function may be emitted without the distance), the
+    // traps after every iteration, the escape test as the C++ writes it.
     template <class Out>
     void glsl_shading(Out& out, const std::string& name, const std::string&) const
     {
@@ -167,26 +162,7 @@ struct kifs_colour_glsl {
             }
             return text;
         };
-        std::string steps;
-        std::size_t index = 0;
-        std::apply(
-            [&](const auto&... step) {
-                (
-                    [&](const auto& s) {
-                        using St = std::remove_cvref_t<decltype(s)>;
-                        out.template library<St>();
-                        const std::size_t at = out.parameters(s, name + " step " + std::to_string(index++));
-                        const std::string call = std::string(St::glsl_name) + "_apply(p" + out.template arguments<St>(at) + ")";
-                        if constexpr (counts_as_fold<St>)
-                            steps += "        q = " + call + ";\n"
-                                     "        if (any(notEqual(q, p))) { c.fold_count += 1.0; c.last_fold = float(i); }\n"
-                                     "        p = q;\n";
-                        else
-                            steps += "        p = " + call + ";\n";
-                    }(step),
-                    ...);
-            },
-            fractal.program().steps());
+        fractal.program().glsl_emit_counted(out, name);
         const float r = colouring.escape_radius;
         const std::string outside = "(p.x * p.x + p.y * p.y) + p.z * p.z > escape_r2";
         const int n = fractal.iterations();
@@ -195,8 +171,9 @@ struct kifs_colour_glsl {
                      "    c.fold_count = 0.0;\n    c.last_fold = 0.0;\n    const float escape_r2 = " + out.literal(r * r) +
                      ";\n    c.escape_iteration = " + outside + " ? 0.0 : " + out.literal(float(n + 1)) +
                      ";\n    if (c.escape_iteration != 0.0) {\n        for (int i = 1; i <= " + std::to_string(n) +
-                     "; ++i) {\n        vec3 q;\n" + steps + traps("        ") + "        if (" + outside +
-                     ") {\n            c.escape_iteration = float(i);\n            break;\n        }\n        }\n    }\n"
+                     "; ++i) {\n            p = " + name + "_program_folds(p, float(i), c.fold_count, c.last_fold);\n" +
+                     traps("            ") + "            if (" + outside +
+                     ") {\n                c.escape_iteration = float(i);\n                break;\n            }\n        }\n    }\n"
                      "    return c;\n}\n");
     }
 };
