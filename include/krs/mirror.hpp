@@ -12,10 +12,10 @@
 // where max(e, 0) chains every level's operations behind the previous one (the general-mirror
 // terrain's scalar walk took 20 cycles per level that way, 11 with the branch).
 
+#include "krs/core/oriented_plane.hpp"
 #include "krs/core/validate.hpp"
 
 #include <array>
-#include <algorithm>
 #include <concepts>
 #include <cstdint>
 #include <string>
@@ -49,32 +49,13 @@ struct mirror {
 
     mirror() = default;
     // The plane normal . x = offset; the normal is normalized, and a zero or non-finite one is
-    // rejected (it would make every reflection NaN).
-    mirror(const vec3f& normal_, float offset_)
-        : normal(require_direction("mirror.normal", normal_)), offset(require_magnitude("mirror.offset", offset_))
-    {
-    }
+    // rejected (it would make every reflection NaN). The checks: core/oriented_plane.hpp.
+    mirror(const vec3f& normal_, float offset_) : mirror(oriented_plane::checked("mirror", normal_, offset_)) {}
     // The plane through `point` with the given normal.
-    static mirror through(const vec3f& point, const vec3f& normal_)
-    {
-        // |offset| <= |point| <= max_magnitude (krs/core/validate.hpp's policy), up to the few ulps
-        // by which the float normal's length differs from 1: the clamp absorbs those (it moves
-        // the plane by about float's spacing at that distance, 64 units).
-        require_magnitude("mirror.point", point);
-        const vec3f n = require_direction("mirror.normal", normal_);
-        const double offset = std::clamp(dot(vec3d(n), vec3d(point)), -double(max_magnitude), double(max_magnitude));
-        return mirror(n, float(offset));
-    }
-
+    static mirror through(const vec3f& point, const vec3f& normal_) { return mirror(oriented_plane::through("mirror", point, normal_)); }
     // The same plane through the constructor's checks: the fields are public, and a sequence
     // builder must not trust them (a normal of length 2 doubled every fold).
-    mirror checked() const
-    {
-        mirror m;
-        m.normal = require_direction_kept_if_unit("mirror.normal", normal);
-        m.offset = require_magnitude("mirror.offset", offset);
-        return m;
-    }
+    mirror checked() const { return mirror(oriented_plane::kept("mirror", normal, offset)); }
 
     template <class T>
     T signed_distance(const vec3<T>& p) const
@@ -112,6 +93,9 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 )";
     std::array<float, 4> glsl_parameters() const { return {normal.x, normal.y, normal.z, offset}; }
+
+private:
+    explicit mirror(const oriented_plane& p) : normal(p.normal), offset(p.offset) {}
 };
 
 // Axis-aligned mirror: the plane x_axis = position, normal +e_axis (reflects the side above the

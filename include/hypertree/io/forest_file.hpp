@@ -73,18 +73,14 @@ inline parsed_forest parse_forest(std::string_view text, std::string_view file_n
             detail::forest_once(s, resolution_at);
             forest.grid = io::read_resolution(s);
         } else if (is("STORAGETYPE")) {
-            io::statement s(file_name, line, "STORAGETYPE dense | index_list | bit_array | partitioned");
+            const std::string usage = "STORAGETYPE " + storage_type_choices(" | ", " | "); // outlives s, which keeps a view
+            io::statement s(file_name, line, usage);
             detail::forest_once(s, storage_at);
             const io::token* t = s.peek();
             const auto known = std::find_if(storage_type_names.begin(), storage_type_names.end(), [&](std::string_view name) {
                 return t != nullptr && t->kind == io::token_kind::word && io::same_word(t->text, name);
             });
-            if (known == storage_type_names.end()) {
-                std::string names; // "dense, index_list, bit_array or partitioned"
-                for (std::size_t k = 0; k < storage_type_names.size(); ++k)
-                    names += (k == 0 ? "" : k + 1 == storage_type_names.size() ? " or " : ", ") + std::string(storage_type_names[k]);
-                s.expected("a storage type (" + names + ")");
-            }
+            if (known == storage_type_names.end()) s.expected("a storage type (" + storage_type_choices(", ", " or ") + ")");
             s.take();
             s.finish();
             forest.storage = storage_type(known - storage_type_names.begin());
@@ -108,7 +104,7 @@ inline parsed_forest parse_forest(std::string_view text, std::string_view file_n
     const source_position end = io::end_of_input(text);
     if (!resolution_at) throw definition_error(file_name, end, "expected a RESOLUTION line (the shared volume's resolution)");
     if (!storage_at)
-        throw definition_error(file_name, end, "expected a STORAGETYPE line (dense, index_list, bit_array or partitioned)");
+        throw definition_error(file_name, end, "expected a STORAGETYPE line (" + storage_type_choices(", ", " or ") + ")");
     if (forest.trees.empty()) throw definition_error(file_name, end, "expected at least one TREE line");
     return forest;
 }

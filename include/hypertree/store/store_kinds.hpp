@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstddef>
+#include <string>
 #include <string_view>
 #include <tuple>
 #include <utility>
@@ -29,6 +30,18 @@ using store_kinds = std::tuple<dense_store, index_list_store, bit_array_store, p
 static_assert(std::tuple_size_v<store_kinds> == storage_type_names.size());
 
 inline std::string_view name_of(storage_type s) { return storage_type_names[std::size_t(s)]; }
+
+// The names joined for messages and usage lines: ("dense", ", ", " or ") gives
+// "dense, index_list, bit_array or partitioned", so no text lists the kinds by hand.
+inline std::string storage_type_choices(std::string_view separator, std::string_view last_separator)
+{
+    std::string out;
+    for (std::size_t k = 0; k < storage_type_names.size(); ++k) {
+        if (k > 0) out += k + 1 == storage_type_names.size() ? last_separator : separator;
+        out += storage_type_names[k];
+    }
+    return out;
+}
 
 namespace detail {
 template <class S, std::size_t I = 0>

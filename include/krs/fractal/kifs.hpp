@@ -102,8 +102,10 @@ struct plane_fold {
 
     plane_fold() = default;
     plane_fold(const vec3f& normal_, float offset_)
-        : normal(require_direction("plane_fold.normal", normal_)), offset(require_magnitude("plane_fold.offset", offset_))
     {
+        const oriented_plane p = oriented_plane::checked("plane_fold", normal_, offset_);
+        normal = p.normal;
+        offset = p.offset;
     }
     // The fold of a KRS level: keeps m's negative side (the stored plane is m with both signs
     // flipped, which is exact in floating point).

@@ -8,10 +8,10 @@
 // (the plane's distance from the origin) obeys the magnitude policy of krs/core/validate.hpp.
 
 #include "krs/core/bounds.hpp"
+#include "krs/core/oriented_plane.hpp"
 #include "krs/core/validate.hpp"
 
 #include <array>
-#include <algorithm>
 #include <string_view>
 
 namespace krs {
@@ -21,35 +21,15 @@ struct plane {
     float offset = 0.0f;
 
     plane() = default;
-    plane(const vec3f& normal_, float offset_)
-        : normal_direction(require_direction("plane.normal", normal_)), offset(require_magnitude("plane.offset", offset_))
-    {
-    }
+    plane(const vec3f& normal_, float offset_) : plane(oriented_plane::checked("plane", normal_, offset_)) {}
 
-    // The half-space whose boundary passes through `point` with outward normal `normal`. The
-    // offset is computed in double from the normalized (float) normal, so `point` lies on the
-    // stored plane to within float rounding of the offset.
-    static plane through(const vec3f& point, const vec3f& normal)
-    {
-        const vec3f n = require_direction("plane.normal", normal);
-        // |offset| <= |point| <= max_magnitude: the policy holds for the offset too.
-        const vec3d p(require_magnitude("plane.point", point));
-        plane result;
-        result.normal_direction = n;
-        // The clamp absorbs the few ulps by which |n| differs from 1 (as mirror::through does).
-        result.offset = static_cast<float>(std::clamp(dot(vec3d(n), p), -double(max_magnitude), double(max_magnitude)));
-        return result;
-    }
+    // The half-space whose boundary passes through `point` with outward normal `normal` (the
+    // offset computed in double from the normalized normal: core/oriented_plane.hpp).
+    static plane through(const vec3f& point, const vec3f& normal) { return plane(oriented_plane::through("plane", point, normal)); }
 
     // The same half-space through the constructor's checks (the fields are public: a normal of
     // length 2 doubled the distance, which then overestimated).
-    plane checked() const
-    {
-        plane p;
-        p.normal_direction = require_direction_kept_if_unit("plane.normal", normal_direction);
-        p.offset = require_magnitude("plane.offset", offset);
-        return p;
-    }
+    plane checked() const { return plane(oriented_plane::kept("plane", normal_direction, offset)); }
 
     template <class T>
     T distance(const vec3<T>& p) const
@@ -72,6 +52,9 @@ struct plane {
 vec3 krs_plane_normal(vec3 p, vec4 n) { return n.xyz; }
 )";
     std::array<float, 4> glsl_parameters() const { return {normal_direction.x, normal_direction.y, normal_direction.z, offset}; }
+
+private:
+    explicit plane(const oriented_plane& p) : normal_direction(p.normal), offset(p.offset) {}
 };
 
 } // namespace krs
