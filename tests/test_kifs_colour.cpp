@@ -272,11 +272,9 @@ TEST_CASE("kifs_colour parameters are validated")
     rejects([] { krs::kifs_colouring({krs::orbit_trap{}}, 0.0f); }, "kifs_colouring.escape_radius");
     rejects([&] { krs::kifs_colouring({krs::orbit_trap{}}, nan); }, "kifs_colouring.escape_radius");
     rejects([] { krs::kifs_colouring({krs::orbit_trap{}}, 2e9f); }, "kifs_colouring.escape_radius");
-    rejects(
-        [] {
-            krs::kifs_colouring c;
-            c.trap_count = 0;
-            krs::kifs_colour_glsl{krs::make_menger_sponge(2), c}.validate();
-        },
-        "kifs_colouring.trap_count");
+    // The default colouring: one point trap at the origin, escape radius 100.
+    const krs::kifs_colouring d;
+    CHECK(d.trap_count() == 1);
+    CHECK(d.escape_radius() == 100.0f);
+    CHECK(d.trap(0).kind() == krs::orbit_trap_kind::point);
 }

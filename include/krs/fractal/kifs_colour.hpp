@@ -41,29 +41,32 @@
 
 namespace krs {
 
-// What kifs_colour looks for: up to four traps and the escape radius.
-struct kifs_colouring {
+// What kifs_colour looks for: up to four traps and the escape radius. Immutable and checked when
+// built (docs/design.md#rule-6, docs/design.md#rule-7): kifs_colour, called per hit, checks nothing.
+class kifs_colouring {
+public:
     static constexpr std::size_t max_traps = 4;
-    std::array<orbit_trap, max_traps> traps{};
-    std::size_t trap_count = 1;
-    float escape_radius = 100.0f;
 
+    // One point trap at the origin, escape radius 100.
     kifs_colouring() = default;
-    kifs_colouring(std::initializer_list<orbit_trap> t, float escape_radius_ = 100.0f) : escape_radius(escape_radius_)
-    {
-        if (t.size() < 1 || t.size() > max_traps)
-            throw invalid_parameter("kifs_colouring.traps", "must hold 1 to 4 traps", std::to_string(t.size()));
-        trap_count = 0;
-        for (const orbit_trap& x : t) traps[trap_count++] = x;
-        validate();
-    }
     // R <= 1e9: R^2 (the escape test compares |p|^2) stays far below float's overflow.
-    void validate() const
+    kifs_colouring(std::initializer_list<orbit_trap> traps, float escape_radius = 100.0f)
     {
-        if (trap_count < 1 || trap_count > max_traps)
-            throw invalid_parameter("kifs_colouring.trap_count", "must be in [1, 4]", std::to_string(trap_count));
-        require_positive_length("kifs_colouring.escape_radius", escape_radius);
+        if (traps.size() < 1 || traps.size() > max_traps)
+            throw invalid_parameter("kifs_colouring.traps", "must hold 1 to 4 traps", std::to_string(traps.size()));
+        escape_radius_ = require_positive_length("kifs_colouring.escape_radius", escape_radius);
+        trap_count_ = 0;
+        for (const orbit_trap& t : traps) traps_[trap_count_++] = t;
     }
+
+    std::size_t trap_count() const { return trap_count_; }
+    const orbit_trap& trap(std::size_t k) const { return traps_[k]; }
+    float escape_radius() const { return escape_radius_; }
+
+private:
+    std::array<orbit_trap, max_traps> traps_{};
+    std::size_t trap_count_ = 1;
+    float escape_radius_ = 100.0f;
 };
 
 template <class T>
@@ -101,9 +104,9 @@ kifs_colour_result<T> kifs_colour(const kifs<Program, Kernel>& fractal, const ve
     using S = scalar_t<T>;
     kifs_colour_result<T> r;
     const T none(std::numeric_limits<float>::max());
-    for (std::size_t k = 0; k < c.max_traps; ++k) r.trap[k] = k < c.trap_count ? T(c.traps[k].distance(x)) : none;
+    for (std::size_t k = 0; k < c.max_traps; ++k) r.trap[k] = k < c.trap_count() ? T(c.trap(k).distance(x)) : none;
     const int n = fractal.iterations();
-    const T escape_r2 = T(S(c.escape_radius) * S(c.escape_radius));
+    const T escape_r2 = T(S(c.escape_radius()) * S(c.escape_radius()));
     const auto outside = [&](const vec3<T>& p) { return (p.x * p.x + p.y * p.y) + p.z * p.z > escape_r2; };
     mask_t<T> live = !outside(x);
     r.escape_iteration = select(live, T(S(n + 1)), T(0));
@@ -117,7 +120,7 @@ kifs_colour_result<T> kifs_colour(const kifs<Program, Kernel>& fractal, const ve
                        fractal.program().steps());
         else
             detail::colour_step(fractal.program(), p, live, iteration, r.fold_count, r.last_fold);
-        for (std::size_t k = 0; k < c.trap_count; ++k) r.trap[k] = select(live, min(r.trap[k], c.traps[k].distance(p)), r.trap[k]);
+        for (std::size_t k = 0; k < c.trap_count(); ++k) r.trap[k] = select(live, min(r.trap[k], c.trap(k).distance(p)), r.trap[k]);
         const mask_t<T> escaped = live && outside(p);
         r.escape_iteration = select(escaped, iteration, r.escape_iteration);
         live = live && !escaped;
@@ -131,8 +134,6 @@ struct kifs_colour_glsl {
     Fractal fractal;
     kifs_colouring colouring;
 
-    void validate() const { colouring.validate(); }
-
     // The struct, once per shader, then `krs_kifs_colour NAME(vec3 p)`: the program's iteration
     // with its fold counts (fold_program::glsl_emit_counted, as NAME_program_folds; its parameters
     // appended to the data again, so this function may be emitted without the distance), the
@@ -140,7 +141,6 @@ struct kifs_colour_glsl {
     template <class Out>
     void glsl_shading(Out& out, const std::string& name, const std::string&) const
     {
-        validate();
         out.library_text("krs_kifs_colour", R"(struct krs_kifs_colour {
     vec4 trap;              // min over the orbit of each trap's distance (unused: the largest float)
     float escape_iteration; // first orbit index outside the escape radius, iterations + 1 when none
@@ -150,12 +150,12 @@ struct kifs_colour_glsl {
 )");
         out.template library<orbit_trap>();
         std::size_t trap_at[kifs_colouring::max_traps] = {};
-        for (std::size_t k = 0; k < colouring.trap_count; ++k)
-            trap_at[k] = out.parameters(colouring.traps[k], name + " trap " + std::to_string(k) + " (" +
-                                                                std::string(orbit_trap_kind_name(colouring.traps[k].kind())) + ")");
+        for (std::size_t k = 0; k < colouring.trap_count(); ++k)
+            trap_at[k] = out.parameters(colouring.trap(k), name + " trap " + std::to_string(k) + " (" +
+                                                               std::string(orbit_trap_kind_name(colouring.trap(k).kind())) + ")");
         const auto traps = [&](const std::string& indent) {
             std::string text;
-            for (std::size_t k = 0; k < colouring.trap_count; ++k) {
+            for (std::size_t k = 0; k < colouring.trap_count(); ++k) {
                 const std::string c = std::string("c.trap.") + "xyzw"[k];
                 text += indent + c + " = min(" + c + ", krs_orbit_trap_distance(p" +
                         out.template arguments<orbit_trap>(trap_at[k]) + "));\n";
@@ -163,7 +163,7 @@ struct kifs_colour_glsl {
             return text;
         };
         fractal.program().glsl_emit_counted(out, name);
-        const float r = colouring.escape_radius;
+        const float r = colouring.escape_radius();
         const std::string outside = "(p.x * p.x + p.y * p.y) + p.z * p.z > escape_r2";
         const int n = fractal.iterations();
         out.function("krs_kifs_colour " + name + "(vec3 p) {\n    krs_kifs_colour c;\n    c.trap = vec4(" +
