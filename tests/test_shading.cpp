@@ -397,7 +397,7 @@ void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint6
     krs_test::parity occlusion{"ambient occlusion, packet against scalar, " + scene.name, 1.0};
     int penumbra = 0, dark = 0, lit = 0, left_out = 0, occluded = 0;
     for (int k = 0; k < 60; ++k) {
-        alignas(64) float px[W], py[W], pz[W], nx[W], ny[W], nz[W], lx[W], ly[W], lz[W];
+        alignas(64) float px[W], py[W], pz[W], nx[W], ny[W], nz[W], lx[W], ly[W], lz[W], th[W];
         bool use[W];
         for (std::size_t i = 0; i < W; ++i) {
             vec3f p;
@@ -409,6 +409,7 @@ void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint6
             px[i] = p.x, py[i] = p.y, pz[i] = p.z, nx[i] = n.x, ny[i] = n.y, nz[i] = n.z;
             lx[i] = l.x, ly[i] = l.y, lz[i] = l.z;
             use[i] = g() % 4 != 0;
+            th[i] = float(uniform(g, 1e-6, 1e-4)) * scale; // each lane's own threshold (a primary hit's)
         }
         const krs::vec3<P> p{P::load_aligned(px), P::load_aligned(py), P::load_aligned(pz)};
         const krs::vec3<P> n{P::load_aligned(nx), P::load_aligned(ny), P::load_aligned(nz)};
@@ -417,15 +418,21 @@ void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint6
         const P shadow = krs::soft_shadow(scene.field, p, n, l, so, lanes);
         const P all_lanes_shadow = krs::soft_shadow(scene.field, p, n, l, so);
         const P occ = krs::ambient_occlusion(scene.field, p, n, ao);
+        const P own_threshold = krs::soft_shadow(scene.field, p, n, l, so, lanes, P::load_aligned(th));
         for (std::size_t i = 0; i < W; ++i) {
             const vec3f pi{px[i], py[i], pz[i]}, ni{nx[i], ny[i], nz[i]}, li{lx[i], ly[i], lz[i]};
             const float scalar = krs::soft_shadow(scene.field, pi, ni, li, so);
             CAPTURE(k);
             CAPTURE(i);
             REQUIRE(shadows.agree(krs::lane_at(all_lanes_shadow, i), scalar));
-            if (use[i]) REQUIRE(shadows.agree(krs::lane_at(shadow, i), scalar));
-            else {
+            krs::soft_shadow_options own = so;
+            own.threshold = th[i];
+            if (use[i]) {
+                REQUIRE(shadows.agree(krs::lane_at(shadow, i), scalar));
+                REQUIRE(shadows.agree(krs::lane_at(own_threshold, i), krs::soft_shadow(scene.field, pi, ni, li, own)));
+            } else {
                 REQUIRE(krs::lane_at(shadow, i) == 0.0f);
+                REQUIRE(krs::lane_at(own_threshold, i) == 0.0f);
                 ++left_out;
             }
             const float scalar_ao = krs::ambient_occlusion(scene.field, pi, ni, ao);
@@ -469,6 +476,13 @@ TEST_CASE("soft shadow: lanes with an unusable shadow ray are dark, in packets a
         CHECK(krs::all(krs::soft_shadow(tree.field, pp, np, lp, o) == krs::packet_f(0.0f)));
     }
     CHECK(krs::soft_shadow(tree.field, vec3f{nan, 0, 0}, n, n, o) == 0.0f);
+    // A lane's own threshold must be a threshold where the lane is shaded, and only there.
+    using P = krs::packet_f;
+    const krs::vec3<P> pp(p), np(n);
+    const P bad = krs::select(P(0.0f) == P(0.0f), P(0.0f), P(1e-3f));
+    CHECK_THROWS_WITH_AS(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) == P(0.0f), bad),
+                         doctest::Contains("soft_shadow.threshold"), krs::invalid_parameter);
+    CHECK(krs::all(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) != P(0.0f), bad) == P(0.0f)));
 }
 
 TEST_CASE_TEMPLATE("value noise is bounded and obeys its declared gradient bound", T, float, krs::packet_f)

@@ -1,6 +1,8 @@
 #pragma once
 // Global shading by sphere tracing secondary rays (paper section 6.5): soft shadows and ambient
-// occlusion. Both only need a field's distance, so they work for a KRS, a union, a warp alike.
+// occlusion. Both only need a field's distance, so they work for a KRS, a union, a warp alike, and
+// both take one point or a packet of points (docs/design.md#rule-1): a shading pass lights W
+// pixels at once, each lane the scalar call's arithmetic.
 //
 // Soft shadow (the penumbra estimate popularized for distance fields): march toward the light as a
 // shadow ray would, and keep the smallest ratio k * d(t) / t seen on the way. d(t) / t is the
@@ -51,6 +53,7 @@ struct soft_shadow_options {
     }
 
     // float NAME(vec3 p, vec3 n, vec3 to_light): soft_shadow(FIELD, p, n, to_light, *this).
+    // (A zero light direction returns 0 there, as the C++'s unusable ray does.)
     // (The test is written `d >= threshold` negated, as the C++, so a NaN distance blocks where
     // the implementation keeps NaNs, as llvmpipe does; GLSL lets a compiler assume there are none,
     // so elsewhere a NaN's outcome is the driver's.)
@@ -103,22 +106,30 @@ struct soft_shadow_options {
 // Lanes outside `lanes` are not marched and return 0, as does a lane whose shadow ray is unusable
 // (a non-finite point or normal, a zero or non-finite light direction): no light arrives along a
 // direction that is not one, and a NaN distance blocks as well.
+//
+// `threshold` gives each lane its own hit threshold (and lift), e.g. its primary hit's, in place
+// of o.threshold: a packet of shading points at different depths. It must be > 0 in every lane in
+// `lanes`. It rides in the march state's threshold_bias over a zero floor, so the test is
+// d < 0 * t + 0 + threshold = threshold exactly, as the scalar call with o.threshold makes it.
 template <field F, class T>
 T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_light, const soft_shadow_options& o,
-              const mask_t<T>& lanes)
+              const mask_t<T>& lanes, const T& threshold)
 {
     using S = scalar_t<T>;
     o.validate();
+    if (any(lanes && !(threshold > T(0) && is_finite(threshold))))
+        throw invalid_parameter("soft_shadow.threshold", "must be finite and > 0 in every lane shaded");
     trace_options march;
-    march.pixel_footprint = 0.0f;       // threshold(t) = 0 * t + floor = o.threshold exactly
-    march.threshold_floor = o.threshold;
+    march.pixel_footprint = 0.0f; // threshold(t) = 0 * t + 0, plus the lane's bias: see above
+    march.threshold_floor = 0.0f; // (not a valid floor for a tracer; here the bias is the threshold)
     march.max_distance = o.max_distance;
     march.max_steps = o.max_steps;
-    const T k(S(o.hardness)), threshold(S(o.threshold));
+    const T k(S(o.hardness));
     const ray<T> r{p + n * (T(2) * threshold), to_light};
     // A lane left out starts past its end: start_march rejects it without a step.
     const T start = select(lanes, T(0), T(std::numeric_limits<S>::infinity()));
     march_state<T> m = start_march(r, start, T(S(o.max_distance)), march);
+    m.threshold_bias = threshold;
     T visible(1);
     mask_t<T> blocked = m.active && !m.active; // all false, in the mask's own type
     auto penumbra = [&](const march_state<T>& at, const T& d) {
@@ -131,7 +142,15 @@ T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_
     return select(blocked || m.result.invalid || !lanes, T(0), clamp(visible, T(0), T(1)));
 }
 
-// Every lane (one point: the point itself).
+// The lanes in `lanes`, with o.threshold.
+template <field F, class T>
+T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_light, const soft_shadow_options& o,
+              const mask_t<T>& lanes)
+{
+    return soft_shadow(f, p, n, to_light, o, lanes, T(scalar_t<T>(o.threshold)));
+}
+
+// Every lane (one point: the point itself), with o.threshold.
 template <field F, class T>
 T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_light, const soft_shadow_options& o)
 {
