@@ -395,6 +395,21 @@ void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint6
     };
     krs_test::parity shadows{"soft shadow, packet against scalar, " + scene.name, 1.0};
     krs_test::parity occlusion{"ambient occlusion, packet against scalar, " + scene.name, 1.0};
+    // Under FMA contraction (krs_parity_contract_native, tests/support/parity.hpp) the two paths
+    // round differently, and the soft shadow has no bound of the contraction tolerance's kind: a
+    // march passing within the threshold returns 0 on one side and up to k d / t on the other,
+    // whatever last-bit difference decided it. Away from that, an ulp of a step moves the next
+    // sample by an ulp of t and k d / t by a few ulp. So there, as in the GLSL comparison
+    // (tests/test_glsl_shading.cpp), all but 0.1% of lanes must agree to 1e-3; everywhere else,
+    // every lane bit for bit.
+    long shadow_lanes = 0, shadow_off = 0;
+    const auto same_shadow = [&](float packet, float scalar) {
+        ++shadow_lanes;
+        if (shadows.agree(packet, scalar)) return true;
+        if (!krs_test::contraction) return false;
+        shadow_off += std::abs(packet - scalar) > 1e-3f;
+        return true;
+    };
     int penumbra = 0, dark = 0, lit = 0, left_out = 0, occluded = 0;
     for (int k = 0; k < 60; ++k) {
         alignas(64) float px[W], py[W], pz[W], nx[W], ny[W], nz[W], lx[W], ly[W], lz[W], th[W];
@@ -424,12 +439,12 @@ void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint6
             const float scalar = krs::soft_shadow(scene.field, pi, ni, li, so);
             CAPTURE(k);
             CAPTURE(i);
-            REQUIRE(shadows.agree(krs::lane_at(all_lanes_shadow, i), scalar));
+            REQUIRE(same_shadow(krs::lane_at(all_lanes_shadow, i), scalar));
             krs::soft_shadow_options own = so;
             own.threshold = th[i];
             if (use[i]) {
-                REQUIRE(shadows.agree(krs::lane_at(shadow, i), scalar));
-                REQUIRE(shadows.agree(krs::lane_at(own_threshold, i), krs::soft_shadow(scene.field, pi, ni, li, own)));
+                REQUIRE(same_shadow(krs::lane_at(shadow, i), scalar));
+                REQUIRE(same_shadow(krs::lane_at(own_threshold, i), krs::soft_shadow(scene.field, pi, ni, li, own)));
             } else {
                 REQUIRE(krs::lane_at(shadow, i) == 0.0f);
                 REQUIRE(krs::lane_at(own_threshold, i) == 0.0f);
@@ -445,6 +460,8 @@ void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint6
     }
     shadows.report();
     occlusion.report();
+    if (krs_test::contraction) MESSAGE(shadow_off << " of " << shadow_lanes << " shadow lanes differ by more than 1e-3");
+    CHECK(shadow_off <= shadow_lanes / 1000);
     MESSAGE(scene.name << ": " << penumbra << " penumbra, " << dark << " dark, " << lit << " lit lanes, " << occluded
                        << " occluded");
     // The comparison covers every outcome of the march and of the occlusion sum.
@@ -479,7 +496,7 @@ TEST_CASE("soft shadow: lanes with an unusable shadow ray are dark, in packets a
     // A lane's own threshold must be a threshold where the lane is shaded, and only there.
     using P = krs::packet_f;
     const krs::vec3<P> pp(p), np(n);
-    const P bad = krs::select(P(0.0f) == P(0.0f), P(0.0f), P(1e-3f));
+    const P bad(0.0f);
     CHECK_THROWS_WITH_AS(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) == P(0.0f), bad),
                          doctest::Contains("soft_shadow.threshold"), krs::invalid_parameter);
     CHECK(krs::all(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) != P(0.0f), bad) == P(0.0f)));
