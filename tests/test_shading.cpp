@@ -490,7 +490,7 @@ TEST_CASE("soft shadow: lanes with an unusable shadow ray are dark, in packets a
     for (const vec3f& l : {vec3f{0, 0, 0}, vec3f{nan, 1, 0}, vec3f{0, inf, 0}}) {
         CHECK(krs::soft_shadow(tree.field, p, n, l, o) == 0.0f);
         const krs::vec3<krs::packet_f> pp(p), np(n), lp(l);
-        CHECK(krs::all(krs::soft_shadow(tree.field, pp, np, lp, o) == krs::packet_f(0.0f)));
+        CHECK(xsimd::all(krs::soft_shadow(tree.field, pp, np, lp, o) == krs::packet_f(0.0f)));
     }
     CHECK(krs::soft_shadow(tree.field, vec3f{nan, 0, 0}, n, n, o) == 0.0f);
     // A lane's own threshold must be a threshold where the lane is shaded, and only there.
@@ -499,7 +499,7 @@ TEST_CASE("soft shadow: lanes with an unusable shadow ray are dark, in packets a
     const P bad(0.0f);
     CHECK_THROWS_WITH_AS(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) == P(0.0f), bad),
                          doctest::Contains("soft_shadow.threshold"), krs::invalid_parameter);
-    CHECK(krs::all(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) != P(0.0f), bad) == P(0.0f)));
+    CHECK(xsimd::all(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) != P(0.0f), bad) == P(0.0f)));
 }
 
 TEST_CASE_TEMPLATE("value noise is bounded and obeys its declared gradient bound", T, float, krs::packet_f)
