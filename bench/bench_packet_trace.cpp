@@ -566,7 +566,9 @@ void error_table(int size, csv_writer& csv)
 // camera, in 8 x 8 tile order (neighbouring pixels share a packet, as an example's shading pass
 // has them), each with its kernel's normal; the sun is krs_scenes'. A shadow ray is cast from the
 // points facing the sun, an occlusion probe from every point. One thread; scalar and packet rounds
-// alternate, best of R each. Beside each rate: the largest |packet lane - scalar call| and how many
+// alternate, best of R each; "prev" is the scalar soft shadow's own loop from before it ran on the
+// march step (previous_soft_shadow below), and "vs prev" the rays where the two scalar calls
+// differ. Beside each rate: the largest |packet lane - scalar call| and how many
 // lanes differ at all (this benchmark compiles with g++'s default -ffp-contract=fast, under which
 // the two paths may fuse a * b + c differently; the tests, built with it off, require equality).
 struct shading_points {
@@ -587,6 +589,31 @@ struct shading_points {
     }
 };
 
+// The scalar soft shadow as it was before it ran on the shared march step (its own loop), kept
+// here to show what the march step costs a single ray.
+template <class F>
+float previous_soft_shadow(const F& f, const vec3f& p, const vec3f& n, const vec3f& to_light,
+                           const krs::soft_shadow_options& o)
+{
+    o.validate();
+    const float k = o.hardness, threshold = o.threshold, t_max = o.max_distance;
+    const vec3f origin = p + n * (2.0f * threshold);
+    float visible = 1.0f, t = 0.0f;
+    for (int step = 0; step < o.max_steps; ++step) {
+        const float d = f.distance(origin + to_light * t);
+        if (!(d >= threshold)) return 0.0f;
+        if (t > 0.0f) visible = std::min(visible, k * d / t);
+        t += d;
+        if (t > t_max) break;
+    }
+    return std::clamp(visible, 0.0f, 1.0f);
+}
+template <class F>
+[[gnu::noinline]] void shadows_previous(const F& f, const shading_points& s, const vec3f& sun,
+                                        const krs::soft_shadow_options& o, float* out)
+{
+    for (std::size_t i = 0; i < s.size(); ++i) out[i] = previous_soft_shadow(f, s.p[i], s.n[i], sun, o);
+}
 template <class F>
 [[gnu::noinline]] void shadows_scalar(const F& f, const shading_points& s, const vec3f& sun,
                                       const krs::soft_shadow_options& o, float* out)
@@ -663,10 +690,10 @@ void shadows_row(const char* name, const F& f, const framing& v, int size, csv_w
     so.max_steps = 160;
     krs::ambient_occlusion_options ao;
     ao.step = 0.005f * span;
-    std::vector<float> shadow[2], occlusion[2];
-    for (auto* v2 : {&shadow[0], &shadow[1]}) v2->assign(facing.size(), 0.0f);
+    std::vector<float> shadow[3], occlusion[2]; // shadow[2]: the previous scalar loop
+    for (auto* v2 : {&shadow[0], &shadow[1], &shadow[2]}) v2->assign(facing.size(), 0.0f);
     for (auto* v2 : {&occlusion[0], &occlusion[1]}) v2->assign(all.size(), 0.0f);
-    double best[4] = {1e30, 1e30, 1e30, 1e30}; // seconds: shadow scalar, packet, occlusion scalar, packet
+    double best[5] = {1e30, 1e30, 1e30, 1e30, 1e30}; // seconds: shadow scalar, packet, AO scalar, packet; previous
     const auto time = [](auto&& run) {
         const auto start = std::chrono::steady_clock::now();
         run();
@@ -674,12 +701,14 @@ void shadows_row(const char* name, const F& f, const framing& v, int size, csv_w
     };
     for (int round = 0; round < repeats; ++round) {
         // The first of each pair swaps every round, so neither path always runs on a warm cache.
-        for (int k = 0; k < 2; ++k) {
-            const int which = (k + round) % 2;
-            best[which] = std::min(best[which], time([&] {
-                                       if (which == 0) shadows_scalar(f, facing, sun, so, shadow[0].data());
-                                       else shadows_packet(f, facing, sun, so, shadow[1].data());
-                                   }));
+        for (int k = 0; k < 3; ++k) {
+            const int which = (k + round) % 3;
+            const int slot = which == 2 ? 4 : which;
+            best[slot] = std::min(best[slot], time([&] {
+                                      if (which == 0) shadows_scalar(f, facing, sun, so, shadow[0].data());
+                                      else if (which == 1) shadows_packet(f, facing, sun, so, shadow[1].data());
+                                      else shadows_previous(f, facing, sun, so, shadow[2].data());
+                                  }));
         }
         for (int k = 0; k < 2; ++k) {
             const int which = (k + round) % 2;
@@ -699,19 +728,22 @@ void shadows_row(const char* name, const F& f, const framing& v, int size, csv_w
     double shadow_gap, occlusion_gap;
     long shadow_differ, occlusion_differ;
     compare(shadow[0], shadow[1], shadow_gap, shadow_differ);
+    double previous_gap;
+    long previous_differ;
+    compare(shadow[2], shadow[0], previous_gap, previous_differ);
     compare(occlusion[0], occlusion[1], occlusion_gap, occlusion_differ);
     long penumbra = 0;
     for (float x : shadow[0]) penumbra += x > 0.0f && x < 1.0f;
     const double rays = double(facing.size()), probes = double(all.size());
-    const double ss = rays / best[0] * 1e-6, sp = rays / best[1] * 1e-6;
+    const double ss = rays / best[0] * 1e-6, sp = rays / best[1] * 1e-6, sv = rays / best[4] * 1e-6;
     const double as = probes / best[2] * 1e-6, ap = probes / best[3] * 1e-6;
     worst_shadow = std::min(worst_shadow, sp / ss);
-    std::printf("%-20s %8zu %6.1f%% %9.3f %9.3f %7.2fx %9.2g %7ld | %8zu %9.3f %9.3f %7.2fx %9.2g %7ld\n", name,
-                facing.size(), 100.0 * double(penumbra) / rays, ss, sp, sp / ss, shadow_gap, shadow_differ,
-                all.size(), as, ap, ap / as, occlusion_gap, occlusion_differ);
-    csv.row(format("shadows,%s,%zu,%ld,%.4f,%.4f,%.4f,%.3g,%ld,%zu,%.4f,%.4f,%.4f,%.3g,%ld", name, facing.size(),
+    std::printf("%-20s %8zu %6.1f%% %9.3f %9.3f %9.3f %7.2fx %9.2g %7ld %7ld | %8zu %9.3f %9.3f %7.2fx %9.2g %7ld\n",
+                name, facing.size(), 100.0 * double(penumbra) / rays, sv, ss, sp, sp / ss, shadow_gap, shadow_differ,
+                previous_differ, all.size(), as, ap, ap / as, occlusion_gap, occlusion_differ);
+    csv.row(format("shadows,%s,%zu,%ld,%.4f,%.4f,%.4f,%.3g,%ld,%zu,%.4f,%.4f,%.4f,%.3g,%ld,%.4f,%ld", name, facing.size(),
                    penumbra, ss, sp, sp / ss, shadow_gap, shadow_differ, all.size(), as, ap, ap / as, occlusion_gap,
-                   occlusion_differ));
+                   occlusion_differ, sv, previous_differ));
 }
 
 void shadows_table(int size, csv_writer& csv)
@@ -720,12 +752,12 @@ void shadows_table(int size, csv_writer& csv)
     std::printf("\n== soft shadows and ambient occlusion: scalar vs packet (%zu lanes), 1 thread, primary hits of "
                 "%dx%d, best of %d alternating rounds ==\n", packet_width, size, size, repeats);
     std::printf("load average before: %s\n", load_before.c_str());
-    std::printf("%-20s %8s %7s %9s %9s %8s %9s %7s | %8s %9s %9s %8s %9s %7s\n", "scene", "shadows", "penumb",
-                "scal Mr/s", "pack Mr/s", "ratio", "max diff", "differ", "AO", "scal Mp/s", "pack Mp/s", "ratio",
-                "max diff", "differ");
+    std::printf("%-20s %8s %7s %9s %9s %9s %8s %9s %7s %7s | %8s %9s %9s %8s %9s %7s\n", "scene", "shadows", "penumb",
+                "prev Mr/s", "scal Mr/s", "pack Mr/s", "ratio", "max diff", "differ", "vs prev", "AO", "scal Mp/s",
+                "pack Mp/s", "ratio", "max diff", "differ");
     csv.row("table,scene,shadow_rays,penumbra_rays,shadow_scalar_mrays_s,shadow_packet_mrays_s,shadow_ratio,"
             "shadow_max_lane_difference,shadow_lanes_differ,ao_probes,ao_scalar_mprobes_s,ao_packet_mprobes_s,ao_ratio,"
-            "ao_max_lane_difference,ao_lanes_differ");
+            "ao_max_lane_difference,ao_lanes_differ,shadow_previous_scalar_mrays_s,shadow_previous_differ");
     double worst = 1e30;
     framing v;
     shadows_row("tree (15 levels)", tree_scene(15, v), v, size, csv, worst);

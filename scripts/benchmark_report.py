@@ -294,15 +294,18 @@ def packet_trace_section(path, images, md):
                   "points: the primary hits of each scene's camera in 8 x 8 tile order, with their kernels' normals; "
                   "a shadow ray toward krs_scenes' sun from each point facing it (hardness 12, 160 steps), a 5-sample "
                   "occlusion probe from every point. One thread, scalar and packet rounds alternating, best of R each "
-                  "(`bench_packet_trace --only shadows`). \"max diff\" is the largest |packet lane - scalar call| "
+                  "(`bench_packet_trace --only shadows`). \"previous scalar\" is the soft shadow's own loop from "
+                  "before it ran on the march step, kept in the benchmark (it returns the same value as the scalar "
+                  "call on every ray here). \"max diff\" is the largest |packet lane - scalar call| "
                   "and \"differ\" the lanes not bit-identical; the benchmark is built with g++'s default "
                   "-ffp-contract=fast, under which the two paths may fuse a * b + c differently (the tests, built "
                   "with it off, require every lane bit-identical).\n")
-        md.append(table(["scene", "shadow rays", "penumbra", "scalar Mrays/s", "packet Mrays/s", "packet/scalar",
-                         "max diff", "differ", "AO probes", "scalar Mprobes/s", "packet Mprobes/s", "packet/scalar",
-                         "max diff", "differ"],
+        md.append(table(["scene", "shadow rays", "penumbra", "previous scalar Mrays/s", "scalar Mrays/s",
+                         "packet Mrays/s", "packet/scalar", "max diff", "differ", "AO probes", "scalar Mprobes/s",
+                         "packet Mprobes/s", "packet/scalar", "max diff", "differ"],
                         [[r.get("scene"), r.get("shadow_rays"),
                           "%.1f%%" % (100 * num(r.get("penumbra_rays"), 0) / max(num(r.get("shadow_rays"), 1), 1)),
+                          fmt(num(r.get("shadow_previous_scalar_mrays_s"))),
                           fmt(num(r.get("shadow_scalar_mrays_s"))), fmt(num(r.get("shadow_packet_mrays_s"))),
                           fmt(num(r.get("shadow_ratio"))) + "x", r.get("shadow_max_lane_difference"),
                           r.get("shadow_lanes_differ"), r.get("ao_probes"), fmt(num(r.get("ao_scalar_mprobes_s"))),
