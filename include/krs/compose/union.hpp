@@ -14,7 +14,8 @@
 // current t, component i cannot be the minimum and is not evaluated. Every step advances by the
 // exact minimum over the components (each either evaluated at t, or proven by (*) to be larger),
 // which is the step plain sphere tracing of the union takes: the hits are those of the union
-// field, at a fraction of the evaluations where components' silhouettes do not overlap.
+// field, at a fraction of the evaluations where components' silhouettes do not overlap. The step
+// itself is the tracers' march_advance, and the tracer takes a ray or a packet (below).
 
 #include "krs/field.hpp"
 #include "krs/trace/sphere_trace.hpp"

@@ -30,7 +30,6 @@
 #include "krs/field.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
-#include <limits>
 #include <string>
 #include <string_view>
 
@@ -126,9 +125,11 @@ T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_
     march.max_steps = o.max_steps;
     const T k(S(o.hardness));
     const ray<T> r{p + n * (T(2) * threshold), to_light};
-    // A lane left out starts past its end: start_march rejects it without a step.
-    const T start = select(lanes, T(0), T(std::numeric_limits<S>::infinity()));
-    march_state<T> m = start_march(r, start, T(S(o.max_distance)), march);
+    // A lane left out ends before its start: start_march rejects it without a step, and its
+    // sample point stays the finite origin the caller gave (a field never sees an infinite point
+    // for a lane that was not asked for).
+    const T far = select(lanes, T(S(o.max_distance)), T(-1));
+    march_state<T> m = start_march(r, T(0), far, march);
     m.threshold_bias = threshold;
     T visible(1);
     mask_t<T> blocked = m.active && !m.active; // all false, in the mask's own type
