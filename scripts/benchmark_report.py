@@ -286,6 +286,33 @@ def packet_trace_section(path, images, md):
                                [[r.get("threshold_px"), r.get("omega"), r.get("prepass"), r.get("max_steps"), r.get("ns_per_ray"),
                                  r.get("evals_per_ray"), r.get("mean_relative_depth_error"),
                                  "%.3f%%" % (100 * num(r.get("hit_miss_differ_share"), 0))] for r in error]))
+    shadows = s.get("shadows", [])
+    if shadows:
+        md.append("\n### Soft shadows and ambient occlusion in packets (issue 23, item 3)\n")
+        md.append("`soft_shadow` and `ambient_occlusion` are one template for a ray and a packet (the shadow marches "
+                  "on the tracers' `march_state` / `march_step`, its penumbra ratio in the step's observer). Shading "
+                  "points: the primary hits of each scene's camera in 8 x 8 tile order, with their kernels' normals; "
+                  "a shadow ray toward krs_scenes' sun from each point facing it (hardness 12, 160 steps), a 5-sample "
+                  "occlusion probe from every point. One thread, scalar and packet rounds alternating, best of R each "
+                  "(`bench_packet_trace --only shadows`). \"previous scalar\" is the soft shadow's own loop from "
+                  "before it ran on the march step, kept in the benchmark (it returns the same value as the scalar "
+                  "call on every ray here). \"max diff\" is the largest |packet lane - scalar call| "
+                  "and \"differ\" the lanes not bit-identical; the benchmark is built with g++'s default "
+                  "-ffp-contract=fast, under which the two paths may fuse a * b + c differently (the tests, built "
+                  "with it off, require every lane bit-identical).\n")
+        md.append(table(["scene", "shadow rays", "penumbra", "previous scalar Mrays/s", "scalar Mrays/s",
+                         "packet Mrays/s", "packet/scalar", "max diff", "differ", "AO probes", "scalar Mprobes/s",
+                         "packet Mprobes/s", "packet/scalar", "max diff", "differ"],
+                        [[r.get("scene"), r.get("shadow_rays"),
+                          "%.1f%%" % (100 * num(r.get("penumbra_rays"), 0) / max(num(r.get("shadow_rays"), 1), 1)),
+                          fmt(num(r.get("shadow_previous_scalar_mrays_s"))),
+                          fmt(num(r.get("shadow_scalar_mrays_s"))), fmt(num(r.get("shadow_packet_mrays_s"))),
+                          fmt(num(r.get("shadow_ratio"))) + "x", r.get("shadow_max_lane_difference"),
+                          r.get("shadow_lanes_differ"), r.get("ao_probes"), fmt(num(r.get("ao_scalar_mprobes_s"))),
+                          fmt(num(r.get("ao_packet_mprobes_s"))), fmt(num(r.get("ao_ratio"))) + "x",
+                          r.get("ao_max_lane_difference"), r.get("ao_lanes_differ")] for r in shadows]))
+        for r in s.get("shadows_load", []):
+            md.append("\nLoad average before: %s; after: %s.\n" % (r.get("before"), r.get("after")))
     # Mrays/s against n from the levels table (1 thread): 1 / (us per ray); and the sequences' own
     # memory per n (bytes, as MiB like the Embree side), when the CSV has it.
     krs = series_against_n(levels, (("tree_packet_us", "KRS tree packet (1 thread)"),
