@@ -183,7 +183,7 @@ void bench_preset(const char* preset, const Make& make, const vec3f& eye, int si
         const double depth_rmse = both ? std::sqrt(depth_sq / double(both)) : 0.0;
         std::printf("%-24s %9.3f %9.3f %10.4f | %9.2f %8.1f %6lld %9lld %8.2e\n", settings[i].name, lip_seam, lip_away, over,
                     double(steps) / rays, best[i] * 1e3, hits, differ, depth_rmse);
-        csv << preset << ',' << settings[i].name << ',' << settings[i].options.step_factor << ','
+        csv << preset << ",\"" << settings[i].name << "\"," << settings[i].options.step_factor << ','
             << settings[i].options.seam_band << ',' << lip_seam << ',' << lip_away << ',' << over << ','
             << double(steps) / rays << ',' << best[i] << ',' << hits << ',' << differ << ',' << depth_rmse << ',' << size
             << '\n';
