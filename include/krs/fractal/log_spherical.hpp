@@ -371,20 +371,6 @@ public:
         return d * T(options_.step_factor);
     }
 
-    // The factor the distance is multiplied by at radius r in shell k (the header comment):
-    // step_factor near the seams, 1 from twice the band on; the step factor itself when global.
-    template <class T>
-    T local_step(const T& r, const T& k, const T& inv_density) const
-    {
-        if (!(options_.seam_band > 0.0f)) return T(options_.step_factor);
-        const T inner = lane_exp(k * inv_density), outer = inner * T(ratio_);
-        // r may fall a rounding outside [inner, outer] (k = floor(log r density)): beta < 0
-        // there, which keeps the seam's factor.
-        const T beta = min(r - inner, outer - r) / max(r, T(detail::smallest_radius));
-        const T ramp = clamp((beta - T(options_.seam_band)) * T(inverse_band()), T(0), T(1));
-        return T(options_.step_factor) + T(1.0f - options_.step_factor) * ramp;
-    }
-
     // How much the field may exceed the true distance at radius r, as a multiple of r, for a
     // prototype inside its shell (the header comment): adjacent shells 0, hidden boundary the
     // factor at beta = cutoff times cutoff, none unbounded (infinity).
@@ -407,7 +393,8 @@ public:
     // table, its length); then the scale table e^(k / density) for the shells k = k0 .. k0 + n - 1
     // (as many as the float radii 1e-30 .. 3.4e38 reach, at most glsl_max_table), computed by the
     // C++ expression, so the GPU scales each shell by the very float the CPU does (its own exp is
-    // ~10 ulp off); shells past the table fall back to the GPU's exp.
+    // ~10 ulp off); shells past the table fall back to the GPU's exp. A seam band adds one vec4
+    // after the table (band, 1 / band, 1 - step_factor) and the local factor's code.
     static constexpr std::string_view glsl_name = "krs_similar_shell";
     static constexpr std::string_view glsl_source = "";
     static constexpr int glsl_max_table = 256;
@@ -482,6 +469,20 @@ public:
     }
 
 private:
+    // The factor the distance is multiplied by at radius r in shell k (the header comment):
+    // step_factor near the seams, 1 from twice the band on; the step factor itself when global.
+    template <class T>
+    T local_step(const T& r, const T& k, const T& inv_density) const
+    {
+        if (!(options_.seam_band > 0.0f)) return T(options_.step_factor);
+        const T inner = lane_exp(k * inv_density), outer = inner * T(ratio_);
+        // r may fall a rounding outside [inner, outer] (k = floor(log r density)): beta < 0
+        // there, which keeps the seam's factor.
+        const T beta = min(r - inner, outer - r) / max(r, T(detail::smallest_radius));
+        const T ramp = clamp((beta - T(options_.seam_band)) * T(inverse_band()), T(0), T(1));
+        return T(options_.step_factor) + T(1.0f - options_.step_factor) * ramp;
+    }
+
     // The prototype's distance seen from shell k: f(p / s^k) s^k.
     template <class T>
     T in_shell(const vec3<T>& p, const T& k, const T& inv_density) const
