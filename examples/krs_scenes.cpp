@@ -8,7 +8,9 @@
 //                  triplanar noise texture in world space (6.2)
 //     rock.png     a faceted rock, flat (left) and smooth (right, Algorithm 2) shaded, figure 7;
 //                  inside a procedural bound (4.2)
-//     mirrors.png  512 spheres from 9 mirrors: axis-aligned (left) and unaligned (right), figure 5
+//     mirrors.png  512 spheres from 9 mirrors: axis-aligned (left) and unaligned (right), figure 5;
+//                  with --reflectivity F0 > 0 the spheres are glossy: each hit traces one
+//                  reflected ray (6.5) with the same tracer and mixes in what it sees
 //     coral.png    capsules and spheres, displaced by a Lipschitz noise warp (5.2)
 //     sponge.png   a Menger-like sponge of box kernels and mirrors, with ambient occlusion (6.5)
 //     grass.png    a clump of blades scattered by unaligned mirrors
@@ -20,6 +22,7 @@
 // in core-microseconds) and the mean march steps of a primary ray.
 //
 //     krs_scenes [--width W] [--height H] [--threads N] [--seed S] [--only NAME] [--output-dir DIR]
+//                [--reflectivity F0]
 //
 // Threads render 16x16 tiles taken from a shared counter; the library itself starts no threads.
 
@@ -33,6 +36,7 @@
 #include "krs/shade/global.hpp"
 #include "krs/shade/kernel_light.hpp"
 #include "krs/shade/normal.hpp"
+#include "krs/shade/reflection.hpp"
 #include "krs/shade/texture.hpp"
 #include "krs/trace/camera.hpp"
 
@@ -60,6 +64,7 @@ struct options {
     int width = 480, height = 360, threads = 0;
     unsigned seed = 1;
     std::string only, output_dir = ".";
+    float reflectivity = 0.0f; // mirrors scene: the spheres' reflectivity at normal incidence (0: none)
 };
 
 vec3f sky(const vec3f& d)
@@ -524,6 +529,10 @@ double mirrors_scene(const options& opt)
     complexity c = complexity_of(aligned);
     c += complexity_of(unaligned);
 
+    auto albedo_of = [](const krs::location<float>& where) {
+        const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
+        return mix3(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
+    };
     auto shade = [&](int kind, const auto& cloud, const view& v, const krs::ray<float>& r, ray_counts& counts) -> lit {
         const krs::hit<float> h = krs::sphere_trace(cloud, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
@@ -531,10 +540,32 @@ double mirrors_scene(const options& opt)
         const vec3f p = krs::point_at(r, h.t);
         const krs::location<float> where = cloud.locate(p);
         const vec3f n = cloud.normal(where);
-        const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
-        const vec3f albedo = mix3(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
+        const vec3f albedo = albedo_of(where);
         const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
-        return mul(albedo, light_surface(kind, p, n, diffuse, v.trace.threshold(h.t), counts));
+        const float threshold = v.trace.threshold(h.t);
+        lit here = mul(albedo, light_surface(kind, p, n, diffuse, threshold, counts));
+        if (!(opt.reflectivity > 0.0f)) return here; // no reflected ray: the image without reflections
+        // Section 6.5: one reflected ray, traced by the same sphere tracer from the hit lifted two
+        // thresholds off the sphere; its hit threshold starts at the primary's (the footprint
+        // cone goes on). What it sees is lit by the sun and the sky without shadows (one bounce).
+        const krs::ray<float> bounce = krs::reflection_ray(p, n, r.direction, 2.0f * threshold);
+        krs::trace_options o = v.trace;
+        o.threshold_floor = threshold;
+        const krs::hit<float> hb = krs::sphere_trace(cloud, bounce, o);
+        ++counts.secondary;
+        vec3f seen = sky(bounce.direction);
+        if (hb.found) {
+            const krs::location<float> there = cloud.locate(krs::point_at(bounce, hb.t));
+            const vec3f m = cloud.normal(there);
+            seen = mul(albedo_of(there), sun_color * std::max(krs::dot(m, sun_direction), 0.0f) + sky_light);
+        }
+        // mix_reflection(lit, seen, w) = lit (1 - w) + seen w, and lit's shadow and occlusion terms
+        // are still to come (packets, after the tile): scale them by 1 - w now, fold seen into the base.
+        const float weight = krs::fresnel_schlick(std::abs(krs::dot(n, r.direction)), opt.reflectivity);
+        here.base = krs::mix_reflection(here.base, seen, weight);
+        here.sun = here.sun * (1.0f - weight);
+        here.sky = here.sky * (1.0f - weight);
+        return here;
     };
     return render(opt, "mirrors", c, [&](float x, float y, ray_counts& counts) -> lit {
         if (int(x) == half) return vec3f{1, 1, 1};
@@ -695,6 +726,8 @@ options parse(int argc, char** argv)
     for (const scene_entry& e : scenes) names.emplace_back(e.name);
     args.choice("--only", o.only, names, "render this scene only (default: all)");
     args.text("--output-dir", o.output_dir, "the folder the PNG files go to", "DIR");
+    args.number("--reflectivity", o.reflectivity, 0.0, 1.0, false, "mirrors scene: reflectivity of the spheres at normal incidence "
+                 "(Schlick), each hit tracing one reflected ray; 0: no reflections");
     args.parse(argc, argv);
     o.threads = example::thread_count(o.threads);
     return o;
