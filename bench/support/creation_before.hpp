@@ -1,8 +1,10 @@
 #pragma once
 // Today's creation path as it was before issue 27's rework (commit d69f522), kept callable so
 // bench_hypertree_create can time it side by side with the library's, alternating, in one run.
-// A frozen copy of build.hpp's stored_voxels_of and of compact.hpp's bucket_chunk,
-// direct_merge and merge_bucketed as they were; nothing here is used by the library.
+// A frozen copy of build.hpp's stored_voxels_of, of compact.hpp's bucket_chunk, direct_merge and
+// merge_bucketed and of density.hpp's classify as they were; nothing here is used by the
+// library. The generator (generate_chunks one chunk at a time, as before), density_classes and
+// the stores' build are the library's own, which the rework leaves as they were.
 
 #include "hypertree/build.hpp"
 
@@ -10,6 +12,8 @@
 #include <cstdint>
 #include <memory>
 #include <memory_resource>
+#include <optional>
+#include <string>
 #include <span>
 #include <utility>
 #include <vector>
@@ -100,6 +104,66 @@ void merge_bucketed(std::span<const bucketed_chunk> chunks, const direct_buckets
                                        entries);
 }
 
+// classify as it was (density.hpp), one list split into tasks.
+template <class Voxels = std::vector<stored_voxel>>
+Voxels classify(std::span<const voxel_entry> entries, const density_classes& classes, int branch_depth, Voxels voxels = {},
+                const parallel_for_hook& parallel_for = {})
+{
+    if (branch_depth < no_branch_structure || branch_depth > 255)
+        throw invalid_parameter("classify.branch_depth",
+                                "must be -1 (no branching structure) or a level between 0 and 255",
+                                std::to_string(branch_depth));
+
+    // Hit count -> density as a table over the counts the classes span, so classifying a million
+    // voxels costs a load each instead of a bisection; counts above it take the last class.
+    const auto spanned = classes.classes();
+    const std::uint32_t table_top = spanned.empty() ? 0 : spanned.back().most_hits;
+    std::vector<std::uint8_t> density_by_hits;
+    if (std::size_t(table_top) <= 4 * entries.size() + 1024) {
+        density_by_hits.resize(std::size_t(table_top) + 1);
+        for (std::size_t h = 0; h < density_by_hits.size(); ++h)
+            density_by_hits[h] = classes.density_of(std::uint32_t(h));
+    }
+    const auto density_of = [&](std::uint32_t hits) {
+        return hits < density_by_hits.size() ? density_by_hits[hits] : classes.density_of(hits);
+    };
+
+    // Voxel i comes from entry i; each task checks its entries' order (against the one before
+    // too) and counts those without hits, which a serial pass then removes (compact makes none).
+    // Written through indices into a sized list: push_back's end pointer lives in the vector, and
+    // the byte-sized fields written in between may alias it, so it was reloaded and stored for
+    // every voxel.
+    const std::size_t n = entries.size();
+    voxels.resize(n);
+    const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
+    std::vector<std::size_t> first_unsorted(tasks, n), without_hits(tasks, 0);
+    run_tasks(parallel_for, tasks, [&](std::size_t p) {
+        const std::size_t begin = n * p / tasks, end = n * (p + 1) / tasks;
+        std::size_t unsorted = n, empty = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+            const voxel_entry& e = entries[i];
+            if (i > 0 && !(entries[i - 1].voxel < e.voxel) && unsorted == n) unsorted = i;
+            const std::uint8_t density = int(e.level) <= branch_depth ? std::uint8_t(255) : density_of(e.hits);
+            voxels[i] = {e.voxel, voxel{density, e.level}, e.part};
+            empty += e.hits == 0;
+        }
+        first_unsorted[p] = unsorted, without_hits[p] = empty;
+    });
+    if (const std::size_t i = *std::min_element(first_unsorted.begin(), first_unsorted.end()); i < n)
+        throw invalid_parameter("classify.entries", "must be sorted by voxel without duplicates (as compact returns them)",
+                                "voxel " + std::to_string(entries[i].voxel) + " after " + std::to_string(entries[i - 1].voxel));
+    if (std::find_if(without_hits.begin(), without_hits.end(), [](std::size_t c) { return c != 0; }) != without_hits.end()) {
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            voxels[kept] = voxels[i];
+            kept += entries[i].hits != 0;
+        }
+        voxels.resize(kept);
+    }
+    return voxels;
+}
+
+
 template <transform_pipeline P>
 std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::uint64_t seed, int density_class_count,
                                                 const generation_options& options, std::pmr::memory_resource* scratch)
@@ -120,7 +184,7 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
         hypertree::detail::compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
     }
     const density_classes classes(entries, density_class_count);
-    return classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
+    return bench::before::classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
 }
 
 // build_tree as it was.

@@ -52,11 +52,17 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
             keyed[g] = bucket_chunk({hits.data(), hits.size()}, *plan, scratch);
             hits = {}; // its buffer back to the scratch, for the next group
         }, groups);
-        merge_bucketed(keyed, *plan, options.parallel_for, scratch, entries);
-    } else {
-        const generated_chunks generated = generate_chunks(definition, seed, drawing, observer);
-        compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
+        // The merge's groups are classified where they lie, each on its own task.
+        const std::vector<std::pmr::vector<voxel_entry>> groups_of_entries =
+            merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *plan, options.parallel_for, scratch);
+        keyed.clear(); // the keys back to the scratch
+        std::vector<std::span<const voxel_entry>> pieces(groups_of_entries.begin(), groups_of_entries.end());
+        const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), density_class_count, options.parallel_for);
+        return classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, definition.branch_depth,
+                               std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
     }
+    const generated_chunks generated = generate_chunks(definition, seed, drawing, observer);
+    compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
     const density_classes classes(entries, density_class_count);
     return classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
 }
