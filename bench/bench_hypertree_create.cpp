@@ -32,6 +32,10 @@
 // creations lie apart ((worst - best) / best). The load average before and after is printed: a
 // load above the core count means other work shared the cores.
 //
+// A last table gives build_tree's own steps (generate, bucket, merge, classify, then the store's
+// build) on one thread in CPU time, which the machine's load barely moves: their sum over two is
+// the least two threads could take, the floor the targets are measured against.
+//
 // Memory is the store's own report. The paper's figures (an Athlon at 1.4 GHz) stand next to
 // ours: its "3D array + bit array" column against our dense store (which needs no bit array),
 // and nothing against the partitioned store (the paper gives no figures for it). A store over
@@ -64,6 +68,7 @@
 #include <vector>
 
 #include <sys/resource.h>
+#include <time.h>
 
 namespace {
 
@@ -138,6 +143,73 @@ std::pair<timed, timed> alternating(int repeat, A&& a, B&& b)
     for (int r = 0; r < repeat; ++r) once(a, ta), once(b, tb);
     ta.faults /= repeat, tb.faults /= repeat;
     return {ta, tb};
+}
+
+// This thread's CPU time in seconds: what a step costs on one core, whatever else shares the
+// machine (a step descheduled for a while does not count the wait).
+double thread_seconds()
+{
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+// The floor table: build_tree's own steps (stored_voxels_of's, then two stores' build), each on
+// one thread in CPU time, best of R. Their sum over two is what two ideal threads would take.
+struct step_floor {
+    std::string tree;
+    int resolution = 0;
+    std::size_t hits = 0, voxels = 0;
+    double generate = 1e300, bucket = 1e300, merge = 1e300, classify = 1e300, index_list = 1e300, dense = 1e300;
+};
+step_floor floor_of(const ifs<>& tree, int repeat)
+{
+    step_floor f{tree.name, tree.volume.grid().x};
+    scratch_memory scratch;
+    generation_options g;
+    g.scratch = &scratch;
+    const auto plan = hypertree::detail::direct_buckets::for_grid(tree.volume.voxel_count());
+    if (!plan) return f;
+    index_list_store list;
+    dense_store dense;
+    const auto best = [](double& slot, double start) { slot = std::min(slot, thread_seconds() - start); };
+    for (int r = 0; r < repeat; ++r) {
+        hypertree::detail::no_observer observer;
+        const std::uint64_t chunks = hypertree::detail::planned_chunk_count(tree, g);
+        const std::size_t groups = hypertree::detail::generation_group_count(
+            chunks, double(hypertree::detail::chunk_room(tree, std::min(g.chunk_cycles, hypertree::detail::cycle_count(tree)))));
+        std::size_t hits = 0;
+        double start = thread_seconds();
+        hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) { hits += h.size(), h = {}; }, groups);
+        best(f.generate, start);
+        f.hits = hits;
+        std::vector<hypertree::detail::bucketed_chunk> keyed(groups);
+        start = thread_seconds();
+        hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t k, hypertree::detail::chunk_output& h) {
+            keyed[k] = hypertree::detail::bucket_chunk({h.data(), h.size()}, *plan, &scratch);
+            h = {};
+        }, groups);
+        const double generate_and_bucket = thread_seconds() - start;
+        f.bucket = std::min(f.bucket, std::max(0.0, generate_and_bucket - f.generate));
+        start = thread_seconds();
+        const auto merged = hypertree::detail::merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *plan, {}, &scratch);
+        best(f.merge, start);
+        keyed.clear();
+        const std::vector<std::span<const voxel_entry>> pieces(merged.begin(), merged.end());
+        start = thread_seconds();
+        const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), 32, {});
+        const auto voxels = classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, tree.branch_depth,
+                                            std::pmr::vector<stored_voxel>(&scratch));
+        best(f.classify, start);
+        f.voxels = voxels.size();
+        start = thread_seconds();
+        list = index_list_store::build(tree.volume, voxels, g.budget, std::move(list));
+        best(f.index_list, start);
+        start = thread_seconds();
+        dense = dense_store::build(tree.volume, voxels, g.budget, std::move(dense));
+        best(f.dense, start);
+    }
+    return f;
 }
 
 std::string load_average()
@@ -328,6 +400,11 @@ int main(int argc, char** argv)
         }
         worst_ratio_of_run.push_back(worst_ratio);
     }
+    // Where the time goes: build_tree's steps on one thread, in CPU time (resolutions 100 and 300,
+    // where the paper has figures).
+    std::vector<step_floor> floors;
+    for (int resolution_ : {100, 300})
+        for (const auto& make : makers) floors.push_back(floor_of(make(resolution_), repeat));
     const std::string load_after = load_average();
 
     std::printf("\nworst of %d runs; creation = one build_tree call, best of %d; (faults) = minor page faults per call\n\n", runs,
@@ -357,6 +434,15 @@ int main(int argc, char** argv)
                     time_faults(r.small_pages).c_str(), r.no_scratch.seconds * 1e3, 100 * (r.recycled.seconds / r.recycled_best - 1),
                     r.voxels, bytes_text(double(*r.bytes)).c_str(), paper_ct.c_str(), ratios[0].c_str(), ratios[1].c_str(),
                     ratios[2].c_str(), ratios[3].c_str(), ratios[4].c_str());
+    }
+    std::printf("\nbuild_tree's steps on one thread, CPU time (best of %d): the work two threads share at best\n\n", repeat);
+    std::printf("%-4s %5s %9s %8s | %8s %8s %8s %9s | %9s %8s | %10s %10s\n", "tree", "res", "hits", "voxels", "generate", "bucket",
+                "merge", "classify", "list build", "dense", "sum (list)", "sum / 2");
+    for (const step_floor& f : floors) {
+        const double sum = f.generate + f.bucket + f.merge + f.classify + f.index_list;
+        std::printf("%-4s %5d %9zu %8zu | %6.2fms %6.2fms %6.2fms %7.2fms | %7.2fms %6.2fms | %8.2fms %8.2fms\n", f.tree.c_str(),
+                    f.resolution, f.hits, f.voxels, f.generate * 1e3, f.bucket * 1e3, f.merge * 1e3, f.classify * 1e3,
+                    f.index_list * 1e3, f.dense * 1e3, sum * 1e3, sum * 0.5e3);
     }
     std::printf("\nload average before: %s; after: %s (%u cores)\n\n", load_before.c_str(), load_after.c_str(),
                 std::max(1u, std::thread::hardware_concurrency()));
