@@ -385,14 +385,16 @@ def create_section(path, md):
         spread = num(r.get("creation_spread"))
         if r.get("memory_bytes", "").strip() == "refused":
             body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), "refused: over the memory budget"]
-                        + ["-"] * 12)
+                        + ["-"] * 16)
             continue
         build = "%s (%s) / %s (%s)" % (ms(num(r.get("build_s"))), faults(num(r.get("build_faults"))), ms(num(r.get("rebuild_s"))),
                                        faults(num(r.get("rebuild_faults"))))
+        before = num(r.get("before_s"))
         body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), build, ms(c), faults(num(r.get("creation_faults"))),
+                     ms(before), "%.2fx" % (before / c) if before and c else "-", r.get("same_voxels", "-"),
                      ms(f), faults(num(r.get("fresh_faults"))), ms(k4), faults(num(r.get("small_pages_faults"))),
                      "%.0f%%" % (100 * spread) if spread is not None else "-", "%.1f s" % pc if pc else "-", ratio(pc, c),
-                     ratio(pc, k4), size_text(m), size_text(pm) if pm else "-"])
+                     ratio(pc, before), ratio(pc, k4), size_text(m), size_text(pm) if pm else "-"])
     first = rows[0] if rows else {}
     md.append("The paper's figures (an Athlon at 1.4 GHz) stand next to ours; its \"3D array + bit array\" column against the dense "
               "store. Creation is one `build_tree` call (generate + validate + density classes + build, on 2 threads), best of 5 "
@@ -400,11 +402,14 @@ def create_section(path, md):
               "call builds in the store the last one returned; \"fresh\": a new store each call, on huge pages where offered; "
               "\"4K pages\": fresh with `hypertree::huge_pages_wanted` off, so blocks of 1 MiB and more are mapped on 4 KiB pages as the dense array was before. Faults are minor page "
               "faults per call (`getrusage`). \"store build\" is the last step alone, into a fresh store / into the last one built "
-              "(faults in brackets). Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
+              "(faults in brackets). \"before\": the recycled creation on the path before issue 27's rework "
+              "(bench/support/creation_before.hpp), timed in alternating rounds with \"recycled\"; \"gain\" is before / recycled; "
+              "\"same\": both paths' voxel lists equal. Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
               "recycled times lie apart. Load average before the runs: %s; after: %s.\n"
               % (first.get("runs", "?"), first.get("load_before", "?"), first.get("load_after", "?")))
-    md.append(table(["tree", "res", "store", "voxels", "store build: fresh / rebuilt", "creation (recycled)", "faults", "fresh", "faults", "4K pages", "faults", "spread",
-                     "paper", "speedup", "4K pages speedup", "memory", "paper memory"], body))
+    md.append(table(["tree", "res", "store", "voxels", "store build: fresh / rebuilt", "creation (recycled)", "faults", "before", "gain", "same",
+                     "fresh", "faults", "4K pages", "faults", "spread", "paper", "speedup", "before speedup", "4K pages speedup", "memory",
+                     "paper memory"], body))
 
 
 def render_section(path, images, md):
