@@ -1,7 +1,11 @@
 // bench_packet_trace: scalar against packet tracing, the paper's section 8 table (time per ray
 // against expansion level), and speed against error for the tracer's settings.
 //
-//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes]
+//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|stream]
+//
+// `stream` (issue 23, items 1 and 4; not run by default) times the packet stream before issue 23
+// against today's on the tree, the forest and the terrain with both mirror kinds at n = 16 and
+// 32, in alternating rounds, and prints where the new stream's time goes (support/stream_compare.hpp).
 //
 // Prints four tables and writes them to one CSV (default: <executable>.csv next to the
 // binary), with a `table` column. Rays are camera rays over N x N pixels (default 256), rendered
@@ -10,6 +14,7 @@
 // trace_stream<packet_f, 4> (lane refill, four interleaved packets). Each timing is the best of R
 // runs (default 3). Targets of issue 4 are checked at the end of each table.
 
+#include "support/stream_compare.hpp"
 #include "support/text.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
@@ -557,6 +562,33 @@ void error_table(int size, csv_writer& csv)
                 verdict(met), met ? " (" : "", met ? (best + ")").c_str() : "");
 }
 
+// ---- table 5: the stream before and after issue 23 ---------------------------------------------
+
+void stream_table(int size, csv_writer& csv)
+{
+    std::printf("\n== issue 23: packet stream before (reference) vs now, %dx%d, 8x8 tiles, 0.5 px threshold, %d "
+                "interleaved packets of %zu lanes; Mr/s on 2 threads, best of %d alternating rounds; the rest on 1 "
+                "thread ==\n",
+                size, size, stream_interleave, packet_width, repeats);
+    std::printf("load average before: %s\n", bench::load_average().c_str());
+    bench::print_stream_header();
+    csv.row(bench::stream_csv_header());
+    for (int n : {16, 32}) {
+        auto run = [&](const char* name, const auto& f, const framing& v) {
+            const krs::pinhole_camera camera = camera_for(v, size);
+            const bench::stream_comparison c = bench::compare_streams<krs::packet_f, stream_interleave>(
+                f, camera, options_for(camera, v), 8, 2, repeats, n);
+            csv.row(bench::stream_row(name, n, c));
+        };
+        framing v;
+        run("tree", tree_scene(n + 1, v), v);
+        run("forest (64 trees)", forest_scene(n - 5, 3, v), v);
+        run("terrain (general)", terrain_scene<krs::mirror>(n, v), v);
+        run("terrain (axis mirrors)", terrain_scene<krs::axis_mirror>(n, v), v);
+    }
+    std::printf("load average after: %s\n", bench::load_average().c_str());
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -570,7 +602,7 @@ int main(int argc, char** argv)
         else if (a == "--repeat" && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
         else if (a == "--only" && i + 1 < argc) only = argv[++i];
         else {
-            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes]\n");
+            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|stream]\n");
             return 2;
         }
     }
@@ -588,5 +620,6 @@ int main(int argc, char** argv)
     if (only.empty() || only == "levels") levels_table(size, csv);
     if (only.empty() || only == "error") error_table(size, csv);
     if (only.empty() || only == "boxes") boxes_table(size, csv);
+    if (only == "stream") stream_table(size, csv);
     return 0;
 }

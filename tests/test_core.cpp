@@ -57,6 +57,11 @@ TEST_CASE_TEMPLATE("packet vocabulary equals the scalar one lane by lane", P, kr
         CHECK(any(m) == [&] { for (std::size_t i = 0; i < n; ++i) if (a[i] < b[i]) return true; return false; }());
         CHECK(all(pa == pa));
         CHECK_FALSE(any(pa != pa));
+        // lane_sum: whole numbers, so every order of the additions gives the exact sum.
+        S whole[n], sum = 0;
+        for (std::size_t i = 0; i < n; ++i) whole[i] = std::round(a[i] * 100), sum += whole[i];
+        CHECK(krs::lane_sum(load<P>(whole)) == sum);
+        CHECK(krs::lane_sum(whole[0]) == whole[0]);
     }
 }
 

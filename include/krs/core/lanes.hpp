@@ -237,6 +237,15 @@ inline mask_t<T> mask_from_bits(std::uint64_t bits) noexcept
     }
 }
 
+// The sum of a value's lanes (a scalar is its own sum): a packet's counters added up in one
+// reduction where a loop over its lanes would add one at a time.
+template <lane T>
+inline scalar_t<T> lane_sum(const T& x) noexcept
+{
+    if constexpr (std::floating_point<T>) return x;
+    else return xsimd::hadd(x);
+}
+
 // ---- compress and expand ----------------------------------------------------------------------
 // Moving the lanes a mask selects to the front of memory, and back: what a refilling tracer needs
 // to report its finished lanes and pull new rays into them, a whole register at a time instead of

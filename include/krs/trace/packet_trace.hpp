@@ -288,14 +288,17 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
         id[k] = ids(0);
     }
 
-    // Reports the finished lanes of packet k and refills its idle lanes, when at least refill_at
-    // have finished or (force) none runs.
-    auto harvest = [&](int k, std::uint64_t active, bool force) -> std::uint64_t {
+    // Reports the finished lanes of packet k and refills its idle lanes (the caller calls it when
+    // at least refill_at lanes have finished or none runs). The counters are summed in two
+    // reductions; what is left per ray is `done`.
+    auto harvest = [&](int k, std::uint64_t active) -> std::uint64_t {
         march_state<P>& m = state[k];
         const std::uint64_t finished = live[k] & ~active;
         const int count = std::popcount(finished);
-        if (count < refill_at && !force) return active;
         if (count > 0) {
+            const mask_t<P> gone = mask_from_bits<P>(finished);
+            stats.evaluations += (long long)lane_sum(select(gone, P(m.result.evaluations), P(0.0f)));
+            stats.busy_lanes += (long long)lane_sum(select(gone, P(m.result.steps), P(0.0f)));
             alignas(64) float t[W], found[W], steps[W], evaluations[W];
             alignas(64) std::int32_t who[W];
             compress_store(t, m.result.t, finished);
@@ -307,8 +310,6 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
                 hit<float> h;
                 h.t = t[c], h.found = found[c] != 0.0f;
                 h.steps = int(steps[c]), h.evaluations = int(evaluations[c]);
-                stats.evaluations += h.evaluations;
-                stats.busy_lanes += h.steps;
                 done(std::uint32_t(who[c]), h);
             }
             stats.rays += count;
@@ -316,7 +317,8 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
         // Every lane not running takes the queue's next ray, while there are rays.
         std::uint64_t want = ~active & ((W >= 64) ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1), filled = 0;
         while (want != 0 && refill_queue()) {
-            const std::uint64_t take = detail::lowest_bits(want, queue.size());
+            const std::size_t need = std::size_t(std::popcount(want));
+            const std::uint64_t take = queue.size() >= need ? want : detail::lowest_bits(want, queue.size());
             queue.take(take, m.r, m.t, m.t_max, id[k]);
             if (relaxed) m.accepted_t = select(mask_from_bits<P>(take), m.t, m.accepted_t);
             filled |= take, want &= ~take;
@@ -345,7 +347,7 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
         int first_running = -1;
         for (int k = 0; k < Interleave; ++k) {
             active[k] = mask_bits<P>(state[k].active);
-            active[k] = harvest(k, active[k], active[k] == 0);
+            if (active[k] == 0 || std::popcount(live[k] & ~active[k]) >= refill_at) active[k] = harvest(k, active[k]);
             if (active[k] != 0 && first_running < 0) first_running = k;
         }
         // Nothing runs after every packet was refilled: the queue and `more` are used up.
