@@ -411,16 +411,14 @@ frame render_krs(const Field& s, const krs::pinhole_camera& camera, const krs::t
         int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
         krs::tile_prepass from_near; // every ray from the near distance
         from_near.start = o.min_distance;
-        krs::tile_rays<> rays;
-        auto next = [&](krs::ray_job& job) {
-            while (!rays.pop(job)) {
-                if (!take_tile(x0, y0, x1, y1)) return false;
-                rays.fill(camera, x0, y0, x1, y1, from_near, o.max_distance, clip);
-            }
+        krs::ray_queue<> queue;
+        auto more = [&](krs::ray_queue<>& q) {
+            if (!take_tile(x0, y0, x1, y1)) return false;
+            krs::queue_tile_rays(q, camera, x0, y0, x1, y1, from_near, o.max_distance, clip);
             return true;
         };
         auto done = [&](std::uint32_t id, const krs::hit<float>& h) { hit[id] = h.found ? 1 : 0; };
-        evaluations += krs::trace_stream<krs::packet_f, 4>(s, next, done, o).evaluations;
+        evaluations += krs::trace_queue<krs::packet_f, 4>(s, queue, more, done, o).evaluations;
     });
     out.evaluations = evaluations.load() / repeats;
     return out;

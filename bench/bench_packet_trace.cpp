@@ -11,7 +11,7 @@
 // binary), with a `table` column. Rays are camera rays over N x N pixels (default 256), rendered
 // in 8 x 8 tiles taken from a shared counter by 1 or 2 threads. The scalar path traces each pixel
 // with sphere_trace<float>; the packet path streams every ray of a thread's tiles through
-// trace_stream<packet_f, 4> (lane refill, four interleaved packets). Each timing is the best of R
+// trace_queue<packet_f, 4> (lane refill, four interleaved packets) fed by queue_tile_rays. Each timing is the best of R
 // runs (default 3). Targets of issue 4 are checked at the end of each table.
 
 #include "support/stream_compare.hpp"
@@ -99,18 +99,16 @@ template <class F, class TakeTile>
 [[gnu::noinline]] krs::stream_stats trace_stream_packets(const F& f, const krs::pinhole_camera& camera, TakeTile& take_tile,
                                                          const krs::box_clip& clip, const krs::trace_options& o, float* depth)
 {
-    krs::tile_rays<> rays;
-    auto next = [&](krs::ray_job& job) {
-        while (!rays.pop(job)) {
-            int x0, y0, x1, y1;
-            const krs::tile_prepass* pre = take_tile(x0, y0, x1, y1);
-            if (!pre) return false;
-            rays.fill(camera, x0, y0, x1, y1, *pre, o.max_distance, clip);
-        }
+    krs::ray_queue<> queue;
+    auto more = [&](krs::ray_queue<>& q) {
+        int x0, y0, x1, y1;
+        const krs::tile_prepass* pre = take_tile(x0, y0, x1, y1);
+        if (!pre) return false;
+        krs::queue_tile_rays(q, camera, x0, y0, x1, y1, *pre, o.max_distance, clip);
         return true;
     };
     auto done = [&](std::uint32_t id, const krs::hit<float>& h) { depth[id] = h.found ? h.t : INFINITY; };
-    return krs::trace_stream<krs::packet_f, stream_interleave>(f, next, done, o);
+    return krs::trace_queue<krs::packet_f, stream_interleave>(f, queue, more, done, o);
 }
 
 template <class F>
