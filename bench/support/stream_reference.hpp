@@ -16,31 +16,6 @@ namespace bench::reference {
 using namespace krs;
 
 
-// box_clip::apply as it was (two divisions per axis): the old tile queue clips with it.
-template <class T>
-void clip_reference(const box_clip& clip, const ray<T>& r, T& t_start, T& t_max)
-{
-    if (!clip.clips()) return;
-    using S = scalar_t<T>;
-    const bounding_box& box = clip.box();
-    const T inf(std::numeric_limits<S>::infinity());
-    T enter(-std::numeric_limits<S>::infinity()), leave = inf;
-    const auto slab = [&](const T& o, const T& d, float lo, float hi) {
-        const mask_t<T> parallel = d == T(0);
-        const T safe = select(parallel, T(1), d);
-        const T a = (T(lo) - o) / safe, b = (T(hi) - o) / safe;
-        const mask_t<T> inside = o >= T(lo) && o <= T(hi);
-        enter = max(enter, select(parallel, select(inside, -inf, inf), min(a, b)));
-        leave = min(leave, select(parallel, select(inside, inf, -inf), max(a, b)));
-    };
-    slab(r.origin.x, r.direction.x, box.lo.x, box.hi.x);
-    slab(r.origin.y, r.direction.y, box.lo.y, box.hi.y);
-    slab(r.origin.z, r.direction.z, box.lo.z, box.hi.z);
-    const mask_t<T> misses = !(enter <= leave);
-    t_start = max(t_start, enter);
-    t_max = select(misses, -inf, min(t_max, leave));
-}
-
 namespace old_detail {
 
 // SoA staging of one packet's rays, so single lanes can be replaced between steps. Per-lane
@@ -254,7 +229,7 @@ public:
             r.origin.x.store_aligned(ox), r.origin.y.store_aligned(oy), r.origin.z.store_aligned(oz);
             r.direction.x.store_aligned(dx), r.direction.y.store_aligned(dy), r.direction.z.store_aligned(dz);
             P t0 = prepass.start_for(r), t1(t_max);
-            clip_reference(clip, r, t0, t1);
+            clip.apply(r, t0, t1);
             t0.store_aligned(start), t1.store_aligned(end);
             for (std::size_t i = 0; i < W && first + i < count; ++i) {
                 ray_job& job = jobs_[first + i];

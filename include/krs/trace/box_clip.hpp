@@ -78,11 +78,8 @@ public:
         const auto slab = [&](const T& o, const T& d, float lo, float hi) {
             // Parallel to the slab: inside it, no constraint; outside, no entry.
             const mask_t<T> parallel = d == T(0);
-            // One division per axis, not two (a packet's divisions are its slowest operations:
-            // they were a third of the time a tile's rays took to queue). The product differs from
-            // the quotient by an ulp, which the box's relative 1e-6 margin covers.
-            const T inverse = T(1) / select(parallel, T(1), d);
-            const T a = (T(lo) - o) * inverse, b = (T(hi) - o) * inverse;
+            const T safe = select(parallel, T(1), d);
+            const T a = (T(lo) - o) / safe, b = (T(hi) - o) / safe;
             const mask_t<T> inside = o >= T(lo) && o <= T(hi);
             enter = max(enter, select(parallel, select(inside, -inf, inf), min(a, b)));
             leave = min(leave, select(parallel, select(inside, inf, -inf), max(a, b)));
