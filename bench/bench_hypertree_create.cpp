@@ -212,13 +212,6 @@ step_floor floor_of(const ifs<>& tree, int repeat)
     return f;
 }
 
-std::string load_average()
-{
-    double load[3] = {0, 0, 0};
-    if (getloadavg(load, 3) != 3) return "unknown";
-    return bench::format("%.2f %.2f %.2f", load[0], load[1], load[2]);
-}
-
 // The system's transparent huge page setting, which decides what asking for huge pages does
 // (Linux; "not offered" elsewhere or where the file is absent).
 std::string transparent_huge_pages()
@@ -294,7 +287,7 @@ int main(int argc, char** argv)
     generation.budget.bytes = budget_mib << 20;
     generation.parallel_for = bench::parallel_for(threads);
 
-    const std::string load_before = load_average();
+    const std::string load_before = bench::load_average();
     std::printf("hypertree creation (paper Table 1): %u thread(s), best of %d calls, worst of %d runs, budget %zu MiB\n", threads,
                 repeat, runs, budget_mib);
     std::printf("load average before: %s; transparent huge pages: %s\n", load_before.c_str(), transparent_huge_pages().c_str());
@@ -405,7 +398,7 @@ int main(int argc, char** argv)
     std::vector<step_floor> floors;
     for (int resolution_ : {100, 300})
         for (const auto& make : makers) floors.push_back(floor_of(make(resolution_), repeat));
-    const std::string load_after = load_average();
+    const std::string load_after = bench::load_average();
 
     std::printf("\nworst of %d runs; creation = one build_tree call, best of %d; (faults) = minor page faults per call\n\n", runs,
                 repeat);

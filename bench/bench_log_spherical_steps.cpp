@@ -42,15 +42,6 @@ namespace {
 using krs::vec3d;
 using krs::vec3f;
 
-std::string load_average()
-{
-    double load[3];
-    if (getloadavg(load, 3) != 3) return "unknown";
-    char b[64];
-    std::snprintf(b, sizeof b, "%.2f %.2f %.2f", load[0], load[1], load[2]);
-    return b;
-}
-
 double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
 vec3d direction(std::mt19937_64& g)
 {
@@ -218,7 +209,7 @@ int main(int argc, char** argv)
     std::ofstream csv(csv_path);
     csv << "preset,setting,step_factor,seam_band,lipschitz_near_seams,lipschitz_away,overestimate_over_r,steps_per_ray,"
            "seconds,hits,hit_differences,depth_rmse,size\n";
-    const std::string load_before = load_average();
+    const std::string load_before = bench::load_average();
     std::printf("similar shell step factor, global against local (seam band %.2f), %u thread(s), best of %d rounds\n"
                 "Lip: max |d(p)-d(q)|/|p-q| over close pairs near the seams (beta < %.2f) and away (beta > %.2f); "
                 "over / r: worst (d - D) / r near the seams, D the union of shells (brute force); hit diff: pixels "
@@ -229,7 +220,7 @@ int main(int argc, char** argv)
                  vec3f{1.5f, -1.0f, -3.0f}, size, rounds, threads, csv);
     bench_preset("cube singularity", [](const krs::shell_options& o) { return krs::make_cube_singularity(1.0f, o); },
                  vec3f{3.0f, 1.3f, -0.6f}, size, rounds, threads, csv);
-    std::printf("load average before: %s; after: %s (%u cores)\n", load_before.c_str(), load_average().c_str(),
+    std::printf("load average before: %s; after: %s (%u cores)\n", load_before.c_str(), bench::load_average().c_str(),
                 std::thread::hardware_concurrency());
     return 0;
 }

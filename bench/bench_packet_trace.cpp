@@ -1,17 +1,23 @@
 // bench_packet_trace: scalar against packet tracing, the paper's section 8 table (time per ray
 // against expansion level), and speed against error for the tracer's settings.
 //
-//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|shadows]
+//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|shadows|stream]
+//
+// `stream` (issue 23, items 1 and 4; not run by default) times the packet stream before issue 23
+// against today's on the tree, the forest and the terrain with both mirror kinds at n = 16 and
+// 32, in alternating rounds, and prints where the new stream's time goes (support/stream_compare.hpp).
 //
 // Prints five tables (the fifth: soft shadows and ambient occlusion, scalar against packet, see
 // shadows_table) and writes them to one CSV (default: <executable>.csv next to the
 // binary), with a `table` column. Rays are camera rays over N x N pixels (default 256), rendered
 // in 8 x 8 tiles taken from a shared counter by 1 or 2 threads. The scalar path traces each pixel
 // with sphere_trace<float>; the packet path streams every ray of a thread's tiles through
-// trace_stream<packet_f, 4> (lane refill, four interleaved packets). Each timing is the best of R
+// trace_queue<packet_f, 4> (lane refill, four interleaved packets) fed by queue_tile_rays. Each timing is the best of R
 // runs (default 3). Targets of issue 4 are checked at the end of each table.
 
+#include "support/stream_compare.hpp"
 #include "support/text.hpp"
+#include "support/timing.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
@@ -96,18 +102,16 @@ template <class F, class TakeTile>
 [[gnu::noinline]] krs::stream_stats trace_stream_packets(const F& f, const krs::pinhole_camera& camera, TakeTile& take_tile,
                                                          const krs::box_clip& clip, const krs::trace_options& o, float* depth)
 {
-    krs::tile_rays<> rays;
-    auto next = [&](krs::ray_job& job) {
-        while (!rays.pop(job)) {
-            int x0, y0, x1, y1;
-            const krs::tile_prepass* pre = take_tile(x0, y0, x1, y1);
-            if (!pre) return false;
-            rays.fill(camera, x0, y0, x1, y1, *pre, o.max_distance, clip);
-        }
+    krs::ray_queue<> queue;
+    auto more = [&](krs::ray_queue<>& q) {
+        int x0, y0, x1, y1;
+        const krs::tile_prepass* pre = take_tile(x0, y0, x1, y1);
+        if (!pre) return false;
+        krs::queue_tile_rays(q, camera, x0, y0, x1, y1, *pre, o.max_distance, clip);
         return true;
     };
     auto done = [&](std::uint32_t id, const krs::hit<float>& h) { depth[id] = h.found ? h.t : INFINITY; };
-    return krs::trace_stream<krs::packet_f, stream_interleave>(f, next, done, o);
+    return krs::trace_queue<krs::packet_f, stream_interleave>(f, queue, more, done, o);
 }
 
 template <class F>
@@ -656,13 +660,6 @@ template <class F>
     }
 }
 
-std::string load_average()
-{
-    double load[3];
-    if (getloadavg(load, 3) != 3) return "unknown";
-    return format("%.2f %.2f %.2f", load[0], load[1], load[2]);
-}
-
 template <class F>
 void shadows_row(const char* name, const F& f, const framing& v, int size, csv_writer& csv, double& worst_shadow)
 {
@@ -748,7 +745,7 @@ void shadows_row(const char* name, const F& f, const framing& v, int size, csv_w
 
 void shadows_table(int size, csv_writer& csv)
 {
-    const std::string load_before = load_average();
+    const std::string load_before = bench::load_average();
     std::printf("\n== soft shadows and ambient occlusion: scalar vs packet (%zu lanes), 1 thread, primary hits of "
                 "%dx%d, best of %d alternating rounds ==\n", packet_width, size, size, repeats);
     std::printf("load average before: %s\n", load_before.c_str());
@@ -767,10 +764,37 @@ void shadows_table(int size, csv_writer& csv)
     shadows_row("terrain (general)", terrain_scene<krs::mirror>(20, tv), tv, size, csv, worst);
     std::printf("target packet soft shadow >= 6x scalar with 16 lanes: worst %.2fx -> %s\n", worst,
                 packet_width >= 16 ? verdict(worst >= 6.0) : "(no target for this width)");
-    const std::string load_after = load_average();
+    const std::string load_after = bench::load_average();
     std::printf("load average before: %s; after: %s\n", load_before.c_str(), load_after.c_str());
     csv.row("table,before,after");
     csv.row(format("shadows_load,%s,%s", load_before.c_str(), load_after.c_str()));
+}
+
+// ---- table 6: the stream before and after issue 23 ---------------------------------------------
+
+void stream_table(int size, csv_writer& csv)
+{
+    std::printf("\n== issue 23: packet stream before (reference) vs now, %dx%d, 8x8 tiles, 0.5 px threshold, %d "
+                "interleaved packets of %zu lanes; Mr/s on 2 threads, best of %d alternating rounds; the rest on 1 "
+                "thread ==\n",
+                size, size, stream_interleave, packet_width, repeats);
+    std::printf("load average before: %s\n", bench::load_average().c_str());
+    bench::print_stream_header();
+    csv.row(bench::stream_csv_header());
+    for (int n : {16, 32}) {
+        auto run = [&](const char* name, const auto& f, const framing& v) {
+            const krs::pinhole_camera camera = camera_for(v, size);
+            const bench::stream_comparison c = bench::compare_streams<krs::packet_f, stream_interleave>(
+                f, camera, options_for(camera, v), 8, 2, repeats, n);
+            csv.row(bench::stream_row(name, n, c));
+        };
+        framing v;
+        run("tree", tree_scene(n + 1, v), v);
+        run("forest (64 trees)", forest_scene(n - 5, 3, v), v);
+        run("terrain (general)", terrain_scene<krs::mirror>(n, v), v);
+        run("terrain (axis mirrors)", terrain_scene<krs::axis_mirror>(n, v), v);
+    }
+    std::printf("load average after: %s\n", bench::load_average().c_str());
 }
 
 } // namespace
@@ -786,7 +810,7 @@ int main(int argc, char** argv)
         else if (a == "--repeat" && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
         else if (a == "--only" && i + 1 < argc) only = argv[++i];
         else {
-            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|shadows]\n");
+            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|shadows|stream]\n");
             return 2;
         }
     }
@@ -805,5 +829,6 @@ int main(int argc, char** argv)
     if (only.empty() || only == "error") error_table(size, csv);
     if (only.empty() || only == "boxes") boxes_table(size, csv);
     if (only.empty() || only == "shadows") shadows_table(size, csv);
+    if (only == "stream") stream_table(size, csv);
     return 0;
 }
