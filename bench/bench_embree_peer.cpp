@@ -6,6 +6,7 @@
 //     bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] [--tolerance T]
 //                       [--repeat R] [--csv FILE] [--scene grid|unaligned|both] [--krs-floor F]
 //     bench_embree_peer --boxes [--size N] [--max-n N] [--repeat R] [--scene ...]
+//     bench_embree_peer --stream [--size N] [--repeat R] [--scene ...]
 //
 // Scenes: a ring (a krs::torus) around a sphere, copied 2^n times by n
 // vertical mirrors (krs::sequence, so krs::expand applies): `grid` with x- and z-normal mirrors,
@@ -31,6 +32,11 @@
 // pixel-footprint threshold (0.5 px) is timed separately, with its coverage error against the
 // faithful render.
 //
+// --stream (issue 23, items 1 and 4) runs no Embree: at n = 16 and 32, on the grid (axis mirrors)
+// and the unaligned scene (general mirrors), the 0.5 px render (rays clipped to the box) by the
+// packet stream before issue 23 and by today's, in alternating rounds, and where today's time goes
+// (bench/support/stream_compare.hpp).
+//
 // --boxes (issue 23, item 2) runs no Embree: per n it traces the tuned KRS render twice, with
 // rays clipped to the sequence's box (its kernels' exact boxes through the mirrors) and to the
 // box the kernels' bounding spheres give through the same mirrors (the box before issue 23),
@@ -38,6 +44,7 @@
 // prints the share of rays that enter each box, field evaluations per ray and Mrays/s (best of
 // R) side by side.
 
+#include "support/stream_compare.hpp"
 #include "support/text.hpp"
 #include "krs/expansion.hpp"
 #include "krs/kernels/sphere.hpp"
@@ -94,6 +101,7 @@ struct settings {
     std::string scene = "both";
     float krs_floor = 1e-3f; // the faithful KRS threshold's floor, in scene units
     bool boxes = false;      // compare the clip boxes instead of running Embree
+    bool stream = false;     // compare the packet streams instead of running Embree
 };
 
 // ---- scene -------------------------------------------------------------------------------------
@@ -403,16 +411,14 @@ frame render_krs(const Field& s, const krs::pinhole_camera& camera, const krs::t
         int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
         krs::tile_prepass from_near; // every ray from the near distance
         from_near.start = o.min_distance;
-        krs::tile_rays<> rays;
-        auto next = [&](krs::ray_job& job) {
-            while (!rays.pop(job)) {
-                if (!take_tile(x0, y0, x1, y1)) return false;
-                rays.fill(camera, x0, y0, x1, y1, from_near, o.max_distance, clip);
-            }
+        krs::ray_queue<> queue;
+        auto more = [&](krs::ray_queue<>& q) {
+            if (!take_tile(x0, y0, x1, y1)) return false;
+            krs::queue_tile_rays(q, camera, x0, y0, x1, y1, from_near, o.max_distance, clip);
             return true;
         };
         auto done = [&](std::uint32_t id, const krs::hit<float>& h) { hit[id] = h.found ? 1 : 0; };
-        evaluations += krs::trace_stream<krs::packet_f, 4>(s, next, done, o).evaluations;
+        evaluations += krs::trace_queue<krs::packet_f, 4>(s, queue, more, done, o).evaluations;
     });
     out.evaluations = evaluations.load() / repeats;
     return out;
@@ -646,6 +652,35 @@ std::string cell(const embree_result& r, double value, const char* f)
     return format(f, value);
 }
 
+// --stream: the stream before issue 23 against today's, 0.5 px threshold, rays clipped to the box.
+int compare_streams(const settings& opt)
+{
+    std::printf("bench_embree_peer --stream: %dx%d primary rays, %d x %d tiles, 0.5 px threshold, rays clipped to "
+                "the sequence's box, 4 interleaved packets of %zu lanes; Mr/s on %d threads, best of %d alternating "
+                "rounds; the rest on 1 thread\n",
+                opt.size, opt.size, tile, tile, krs::lane_count<krs::packet_f>, thread_count, opt.repeats);
+    std::printf("load average before: %s\n", bench::load_average().c_str());
+    bench::print_stream_header();
+    std::ofstream csv(opt.csv_path.empty() ? std::string("bench_embree_peer_stream.csv") : opt.csv_path);
+    csv << bench::stream_csv_header() << '\n';
+    for (const bool unaligned : {false, true}) {
+        if ((unaligned && opt.scene == "grid") || (!unaligned && opt.scene == "unaligned")) continue;
+        for (int n : {16, 32}) {
+            framing v;
+            const scene_sequence s = ring_scene(n, unaligned, v);
+            const krs::pinhole_camera camera = camera_for(v, opt.size);
+            const krs::trace_options o = footprint_options(camera, v);
+            const std::optional<grid_sequence> grid = axis_copy(s);
+            const bench::stream_comparison c =
+                grid ? bench::compare_streams<krs::packet_f, 4>(*grid, camera, o, tile, thread_count, opt.repeats, n)
+                     : bench::compare_streams<krs::packet_f, 4>(s, camera, o, tile, thread_count, opt.repeats, n);
+            csv << bench::stream_row(unaligned ? "unaligned (general)" : "grid (axis mirrors)", n, c) << '\n';
+        }
+    }
+    std::printf("load average after: %s\n", bench::load_average().c_str());
+    return 0;
+}
+
 // --boxes: the tuned KRS render clipped to the sequence's box and to its kernels' spheres' box.
 int compare_boxes(const settings& opt)
 {
@@ -711,14 +746,16 @@ int main(int argc, char** argv)
         else if (a == "--scene") opt.scene = value();
         else if (a == "--krs-floor") opt.krs_floor = float(std::max(1e-6, std::atof(value())));
         else if (a == "--boxes") opt.boxes = true;
+        else if (a == "--stream") opt.stream = true;
         else {
             std::fprintf(stderr, "usage: bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] "
                                  "[--tolerance T] [--repeat R] [--csv FILE] [--scene grid|unaligned|both] "
-                                 "[--krs-floor F] [--boxes]\n");
+                                 "[--krs-floor F] [--boxes] [--stream]\n");
             return 2;
         }
     }
     if (opt.boxes) return compare_boxes(opt);
+    if (opt.stream) return compare_streams(opt);
     if (opt.csv_path.empty()) opt.csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(opt.csv_path);
     if (!csv) {

@@ -17,7 +17,11 @@
 //   4K pages    fresh, with huge pages not asked for (hypertree::huge_pages_wanted off, and a
 //               scratch_memory of its own): blocks of 1 MiB and more mapped on 4 KiB pages, as
 //               the dense array (and every block glibc maps) was before, page by page;
-//   no scratch  fresh, without the caller's scratch memory: build_tree keeps one for the call.
+//   no scratch  fresh, without the caller's scratch memory: build_tree keeps one for the call;
+//   before      recycled, on the creation path as it was before issue 27's rework
+//               (bench/support/creation_before.hpp), timed in alternating rounds with
+//               "recycled" (new, old, new, old, ...); "gain" is before / recycled, and "same"
+//               says whether both paths' voxel lists (index, density, level, part) are equal.
 // Beside each time, the minor page faults per call (getrusage's ru_minflt over the R calls,
 // divided by R): what makes creation depend on the system's cost of a fault. Each step is also
 // timed alone to show where the time goes, the store's build twice: into a fresh store ("build")
@@ -27,6 +31,10 @@
 // calls, the figure the targets are held to, and "spread" is how far the runs' recycled
 // creations lie apart ((worst - best) / best). The load average before and after is printed: a
 // load above the core count means other work shared the cores.
+//
+// A last table gives build_tree's own steps (generate, bucket, merge, classify, then the store's
+// build) on one thread in CPU time, which the machine's load barely moves: their sum over two is
+// the least two threads could take, the floor the targets are measured against.
 //
 // Memory is the store's own report. The paper's figures (an Athlon at 1.4 GHz) stand next to
 // ours: its "3D array + bit array" column against our dense store (which needs no bit array),
@@ -42,6 +50,7 @@
 #include "hypertree/presets.hpp"
 #include "hypertree/scratch.hpp"
 #include "hypertree/store/store_kinds.hpp"
+#include "support/creation_before.hpp"
 #include "support/text.hpp"
 #include "support/timing.hpp"
 
@@ -55,9 +64,11 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <sys/resource.h>
+#include <time.h>
 
 namespace {
 
@@ -116,11 +127,89 @@ timed best_with_faults(int repeat, F&& f)
     return {seconds, double(minor_faults() - before) / repeat};
 }
 
-std::string load_average()
+// Two ways timed in alternating rounds (a, b, a, b, ...), so a change of the machine's load
+// between them reaches both alike: the best of R calls of each, and their faults per call.
+template <class A, class B>
+std::pair<timed, timed> alternating(int repeat, A&& a, B&& b)
 {
-    double load[3] = {0, 0, 0};
-    if (getloadavg(load, 3) != 3) return "unknown";
-    return bench::format("%.2f %.2f %.2f", load[0], load[1], load[2]);
+    timed ta{1e300, 0}, tb{1e300, 0};
+    const auto once = [](auto& f, timed& t) {
+        const long before = minor_faults();
+        const auto start = std::chrono::steady_clock::now();
+        f();
+        t.seconds = std::min(t.seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        t.faults += double(minor_faults() - before);
+    };
+    for (int r = 0; r < repeat; ++r) once(a, ta), once(b, tb);
+    ta.faults /= repeat, tb.faults /= repeat;
+    return {ta, tb};
+}
+
+// This thread's CPU time in seconds: what a step costs on one core, whatever else shares the
+// machine (a step descheduled for a while does not count the wait).
+double thread_seconds()
+{
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+// The floor table: build_tree's own steps (stored_voxels_of's, then two stores' build), each on
+// one thread in CPU time, best of R. Their sum over two is what two ideal threads would take.
+struct step_floor {
+    std::string tree;
+    int resolution = 0;
+    std::size_t hits = 0, voxels = 0;
+    double generate = 1e300, bucket = 1e300, merge = 1e300, classify = 1e300, index_list = 1e300, dense = 1e300;
+};
+step_floor floor_of(const ifs<>& tree, int repeat)
+{
+    step_floor f{tree.name, tree.volume.grid().x};
+    scratch_memory scratch;
+    generation_options g;
+    g.scratch = &scratch;
+    const auto plan = hypertree::detail::direct_buckets::for_grid(tree.volume.voxel_count());
+    if (!plan) return f;
+    index_list_store list;
+    dense_store dense;
+    const auto best = [](double& slot, double start) { slot = std::min(slot, thread_seconds() - start); };
+    for (int r = 0; r < repeat; ++r) {
+        hypertree::detail::no_observer observer;
+        const std::uint64_t chunks = hypertree::detail::planned_chunk_count(tree, g);
+        const std::size_t groups = hypertree::detail::generation_group_count(
+            chunks, double(hypertree::detail::chunk_room(tree, std::min(g.chunk_cycles, hypertree::detail::cycle_count(tree)))));
+        std::size_t hits = 0;
+        double start = thread_seconds();
+        hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) { hits += h.size(), h = {}; }, groups);
+        best(f.generate, start);
+        f.hits = hits;
+        std::vector<hypertree::detail::bucketed_chunk> keyed(groups);
+        start = thread_seconds();
+        hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t k, hypertree::detail::chunk_output& h) {
+            keyed[k] = hypertree::detail::bucket_chunk({h.data(), h.size()}, *plan, &scratch);
+            h = {};
+        }, groups);
+        const double generate_and_bucket = thread_seconds() - start;
+        f.bucket = std::min(f.bucket, std::max(0.0, generate_and_bucket - f.generate));
+        start = thread_seconds();
+        const auto merged = hypertree::detail::merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *plan, {}, &scratch);
+        best(f.merge, start);
+        keyed.clear();
+        const std::vector<std::span<const voxel_entry>> pieces(merged.begin(), merged.end());
+        start = thread_seconds();
+        const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), 32, {});
+        const auto voxels = classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, tree.branch_depth,
+                                            std::pmr::vector<stored_voxel>(&scratch));
+        best(f.classify, start);
+        f.voxels = voxels.size();
+        start = thread_seconds();
+        list = index_list_store::build(tree.volume, voxels, g.budget, std::move(list));
+        best(f.index_list, start);
+        start = thread_seconds();
+        dense = dense_store::build(tree.volume, voxels, g.budget, std::move(dense));
+        best(f.dense, start);
+    }
+    return f;
 }
 
 // The system's transparent huge page setting, which decides what asking for huge pages does
@@ -139,6 +228,8 @@ struct row {
     timed build;                                          // Store::build alone, a fresh store
     timed rebuild;                                        // Store::build alone in the last store built
     timed recycled, fresh, small_pages, no_scratch;       // one build_tree call, the four ways
+    timed before;                                         // recycled, on the creation path before issue 27's rework
+    bool same_voxels = true;                              // both paths' voxel lists equal, every run
     double recycled_best = 0;                             // the best run's recycled time, for the spread
     std::size_t voxels = 0, hits = 0;
     std::optional<std::size_t> bytes; // empty: refused by the budget
@@ -196,7 +287,7 @@ int main(int argc, char** argv)
     generation.budget.bytes = budget_mib << 20;
     generation.parallel_for = bench::parallel_for(threads);
 
-    const std::string load_before = load_average();
+    const std::string load_before = bench::load_average();
     std::printf("hypertree creation (paper Table 1): %u thread(s), best of %d calls, worst of %d runs, budget %zu MiB\n", threads,
                 repeat, runs, budget_mib);
     std::printf("load average before: %s; transparent huge pages: %s\n", load_before.c_str(), transparent_huge_pages().c_str());
@@ -232,6 +323,15 @@ int main(int argc, char** argv)
                     voxels = classify(entries, classes, tree.branch_depth);
                 });
                 base.voxels = voxels.size();
+                {
+                    // The reworked path's voxel list against the path it replaces (bench/support/
+                    // creation_before.hpp), element by element: the error beside the speed-up.
+                    const std::pmr::vector<stored_voxel> now = hypertree::detail::stored_voxels_of(tree, 1, 32, with_scratch.generation, &scratch);
+                    const std::pmr::vector<stored_voxel> then = bench::before::stored_voxels_of(tree, 1, 32, with_scratch.generation, &scratch);
+                    base.same_voxels = now.size() == then.size() && std::equal(now.begin(), now.end(), then.begin(), [](const stored_voxel& a, const stored_voxel& b) {
+                        return a.index == b.index && a.value == b.value && a.part == b.part;
+                    });
+                }
                 base.hits = hits.hits.size();
 
                 const auto measure = [&]<class Store>(const char* name, std::optional<paper_figures> figures) {
@@ -245,7 +345,10 @@ int main(int argc, char** argv)
                         Store last = Store::build(tree.volume, voxels, generation.budget);
                         r.rebuild = best_with_faults(reps, [&] { last = Store::build(tree.volume, voxels, generation.budget, std::move(last)); });
                         Store kept = build_tree<Store>(tree, 1, with_scratch); // the first store, to recycle
-                        r.recycled = best_with_faults(reps, [&] { kept = build_tree<Store>(tree, 1, with_scratch, std::move(kept)); });
+                        Store kept_before = bench::before::build_tree<Store>(tree, 1, with_scratch, Store());
+                        std::tie(r.recycled, r.before) = alternating(
+                            reps, [&] { kept = build_tree<Store>(tree, 1, with_scratch, std::move(kept)); },
+                            [&] { kept_before = bench::before::build_tree<Store>(tree, 1, with_scratch, std::move(kept_before)); });
                         r.fresh = best_with_faults(reps, [&] { bytes = build_tree<Store>(tree, 1, with_scratch).memory_bytes(); });
                         r.no_scratch = best_with_faults(reps, [&] { bytes = build_tree<Store>(tree, 1, without_scratch).memory_bytes(); });
                         {
@@ -273,6 +376,8 @@ int main(int argc, char** argv)
                         keep_worst(w.rebuild, r.rebuild);
                         w.recycled_best = std::min(w.recycled_best, r.recycled.seconds);
                         keep_worst(w.recycled, r.recycled);
+                        keep_worst(w.before, r.before);
+                        w.same_voxels = w.same_voxels && r.same_voxels;
                         keep_worst(w.fresh, r.fresh);
                         keep_worst(w.small_pages, r.small_pages);
                         keep_worst(w.no_scratch, r.no_scratch);
@@ -288,13 +393,18 @@ int main(int argc, char** argv)
         }
         worst_ratio_of_run.push_back(worst_ratio);
     }
-    const std::string load_after = load_average();
+    // Where the time goes: build_tree's steps on one thread, in CPU time (resolutions 100 and 300,
+    // where the paper has figures).
+    std::vector<step_floor> floors;
+    for (int resolution_ : {100, 300})
+        for (const auto& make : makers) floors.push_back(floor_of(make(resolution_), repeat));
+    const std::string load_after = bench::load_average();
 
     std::printf("\nworst of %d runs; creation = one build_tree call, best of %d; (faults) = minor page faults per call\n\n", runs,
                 repeat);
-    std::printf("%-4s %5s %-11s %8s %8s %8s %17s %17s | %17s %17s %17s %9s %6s | %8s %8s | %8s %6s %6s %6s %6s\n", "tree", "res",
-                "store", "generate", "compact", "classify", "build (faults)", "rebuild (faults)", "recycled (faults)", "fresh (faults)", "4K pages (faults)",
-                "no scratch", "spread", "voxels", "memory", "paper CT", "recyc", "fresh", "4K", "no scr");
+    std::printf("%-4s %5s %-11s %8s %8s %8s %17s %17s | %17s %17s %5s %4s %17s %17s %9s %6s | %8s %8s | %8s %6s %6s %6s %6s %6s\n", "tree", "res",
+                "store", "generate", "compact", "classify", "build (faults)", "rebuild (faults)", "recycled (faults)", "before (faults)", "gain", "same",
+                "fresh (faults)", "4K pages (faults)", "no scratch", "spread", "voxels", "memory", "paper CT", "recyc", "before", "fresh", "4K", "no scr");
     int last_resolution = 0;
     for (const row& r : rows) {
         if (last_resolution && r.resolution != last_resolution) std::printf("\n");
@@ -304,30 +414,48 @@ int main(int argc, char** argv)
             continue;
         }
         const auto time_faults = [](const timed& t) { return bench::format("%7.2fms (%6.0f)", t.seconds * 1e3, t.faults); };
-        std::string paper_ct = "-", ratios[4] = {"-", "-", "-", "-"};
+        std::string paper_ct = "-", ratios[5] = {"-", "-", "-", "-", "-"};
         if (r.paper) {
             paper_ct = bench::format("%.1f s", r.paper_seconds());
-            const timed* ways[4] = {&r.recycled, &r.fresh, &r.small_pages, &r.no_scratch};
-            for (int k = 0; k < 4; ++k) ratios[k] = bench::format("%.0fx", r.paper_seconds() / ways[k]->seconds);
+            const timed* ways[5] = {&r.recycled, &r.before, &r.fresh, &r.small_pages, &r.no_scratch};
+            for (int k = 0; k < 5; ++k) ratios[k] = bench::format("%.0fx", r.paper_seconds() / ways[k]->seconds);
         }
-        std::printf("%-4s %5d %-11s %6.2fms %6.2fms %6.2fms %17s %17s | %17s %17s %17s %7.2fms %5.0f%% | %8zu %8s | %8s %6s %6s %6s %6s\n",
+        std::printf("%-4s %5d %-11s %6.2fms %6.2fms %6.2fms %17s %17s | %17s %17s %4.2fx %4s %17s %17s %7.2fms %5.0f%% | %8zu %8s | %8s %6s %6s %6s %6s %6s\n",
                     r.tree.c_str(), r.resolution, r.store.c_str(), r.generate_s * 1e3, r.compact_s * 1e3, r.classify_s * 1e3,
-                    time_faults(r.build).c_str(), time_faults(r.rebuild).c_str(), time_faults(r.recycled).c_str(), time_faults(r.fresh).c_str(),
+                    time_faults(r.build).c_str(), time_faults(r.rebuild).c_str(), time_faults(r.recycled).c_str(), time_faults(r.before).c_str(),
+                    r.before.seconds / r.recycled.seconds, r.same_voxels ? "yes" : "NO", time_faults(r.fresh).c_str(),
                     time_faults(r.small_pages).c_str(), r.no_scratch.seconds * 1e3, 100 * (r.recycled.seconds / r.recycled_best - 1),
                     r.voxels, bytes_text(double(*r.bytes)).c_str(), paper_ct.c_str(), ratios[0].c_str(), ratios[1].c_str(),
-                    ratios[2].c_str(), ratios[3].c_str());
+                    ratios[2].c_str(), ratios[3].c_str(), ratios[4].c_str());
+    }
+    std::printf("\nbuild_tree's steps on one thread, CPU time (best of %d): the work two threads share at best\n\n", repeat);
+    std::printf("%-4s %5s %9s %8s | %8s %8s %8s %9s | %9s %8s | %10s %10s\n", "tree", "res", "hits", "voxels", "generate", "bucket",
+                "merge", "classify", "list build", "dense", "sum (list)", "sum / 2");
+    for (const step_floor& f : floors) {
+        const double sum = f.generate + f.bucket + f.merge + f.classify + f.index_list;
+        std::printf("%-4s %5d %9zu %8zu | %6.2fms %6.2fms %6.2fms %7.2fms | %7.2fms %6.2fms | %8.2fms %8.2fms\n", f.tree.c_str(),
+                    f.resolution, f.hits, f.voxels, f.generate * 1e3, f.bucket * 1e3, f.merge * 1e3, f.classify * 1e3,
+                    f.index_list * 1e3, f.dense * 1e3, sum * 1e3, sum * 0.5e3);
     }
     std::printf("\nload average before: %s; after: %s (%u cores)\n\n", load_before.c_str(), load_after.c_str(),
                 std::max(1u, std::thread::hardware_concurrency()));
 
     // Targets, on the worst of the runs.
-    double worst[4] = {1e300, 1e300, 1e300, 1e300}, worst_share = 0, worst_bit_share = 0;
+    double worst[4] = {1e300, 1e300, 1e300, 1e300}, worst_share = 0, worst_bit_share = 0, worst_before = 1e300;
+    double least_gain = 1e300, most_gain = 0;
+    bool all_same = true;
     std::string worst_row;
     for (const row& r : rows) {
         if (r.paper && r.bytes) {
             const timed* ways[4] = {&r.recycled, &r.fresh, &r.small_pages, &r.no_scratch};
             if (r.paper_seconds() / r.recycled.seconds < worst[0]) worst_row = r.tree + " " + std::to_string(r.resolution) + " " + r.store;
             for (int k = 0; k < 4; ++k) worst[k] = std::min(worst[k], r.paper_seconds() / ways[k]->seconds);
+            worst_before = std::min(worst_before, r.paper_seconds() / r.before.seconds);
+        }
+        if (r.bytes) {
+            least_gain = std::min(least_gain, r.before.seconds / r.recycled.seconds);
+            most_gain = std::max(most_gain, r.before.seconds / r.recycled.seconds);
+            all_same = all_same && r.same_voxels;
         }
         if (r.resolution == 300 && r.bytes && (r.store == "index_list" || r.store == "bit_array")) {
             const auto dense = std::find_if(rows.begin(), rows.end(), [&](const row& d) {
@@ -344,6 +472,9 @@ int main(int argc, char** argv)
     std::printf("target: creation >= 150x the paper's (recycled store, worst of %d runs): worst %.0fx (%s) -> %s\n", runs, worst[0],
                 worst_row.c_str(), worst[0] >= 150 ? "met" : "NOT met");
     std::printf("        each run's worst: %s\n", per_run.c_str());
+    std::printf("        the creation path before issue 27's rework, in the same runs (alternating): worst %.0fx; reworked / before: %.2f-%.2fx "
+                "faster; voxel lists %s\n",
+                worst_before, least_gain, most_gain, all_same ? "equal on every tree and resolution" : "DIFFERENT (see the 'same' column)");
     std::printf("        fresh store: worst %.0fx; fresh on 4 KiB pages (before): worst %.0fx; without the caller's scratch: worst %.0fx\n",
                 worst[1], worst[2], worst[3]);
     // The paper's "less than 5% of a three-dimensional array" is its index list; the bit array is
@@ -355,14 +486,15 @@ int main(int argc, char** argv)
     if (csv_path.empty()) csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(csv_path);
     csv << "tree,resolution,store,generate_s,compact_s,classify_s,build_s,build_faults,rebuild_s,rebuild_faults,creation_s,creation_faults,fresh_s,fresh_faults,"
-           "small_pages_s,small_pages_faults,no_scratch_s,no_scratch_faults,creation_spread,runs,hits,voxels,memory_bytes,"
+           "small_pages_s,small_pages_faults,no_scratch_s,no_scratch_faults,before_s,before_faults,same_voxels,creation_spread,runs,hits,voxels,memory_bytes,"
            "paper_creation_s,paper_memory_bytes,load_before,load_after\n";
     for (const row& r : rows) {
         csv << r.tree << ',' << r.resolution << ',' << r.store << ',' << r.generate_s << ',' << r.compact_s << ',' << r.classify_s << ','
             << r.build.seconds << ',' << r.build.faults << ',' << r.rebuild.seconds << ',' << r.rebuild.faults << ','
             << r.recycled.seconds << ',' << r.recycled.faults << ','
             << r.fresh.seconds << ',' << r.fresh.faults << ',' << r.small_pages.seconds << ',' << r.small_pages.faults << ','
-            << r.no_scratch.seconds << ',' << r.no_scratch.faults << ',' << (r.bytes ? r.recycled.seconds / r.recycled_best - 1 : 0)
+            << r.no_scratch.seconds << ',' << r.no_scratch.faults << ',' << r.before.seconds << ',' << r.before.faults << ','
+            << (r.same_voxels ? "yes" : "no") << ',' << (r.bytes ? r.recycled.seconds / r.recycled_best - 1 : 0)
             << ',' << runs << ',' << r.hits << ',' << r.voxels << ',' << (r.bytes ? std::to_string(*r.bytes) : "refused") << ',';
         if (r.paper) csv << r.paper_seconds() << ',' << r.paper_bytes();
         else csv << ',';

@@ -1,20 +1,28 @@
 // bench_packet_trace: scalar against packet tracing, the paper's section 8 table (time per ray
 // against expansion level), and speed against error for the tracer's settings.
 //
-//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes]
+//     bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|shadows|stream]
 //
-// Prints four tables and writes them to one CSV (default: <executable>.csv next to the
+// `stream` (issue 23, items 1 and 4; not run by default) times the packet stream before issue 23
+// against today's on the tree, the forest and the terrain with both mirror kinds at n = 16 and
+// 32, in alternating rounds, and prints where the new stream's time goes (support/stream_compare.hpp).
+//
+// Prints five tables (the fifth: soft shadows and ambient occlusion, scalar against packet, see
+// shadows_table) and writes them to one CSV (default: <executable>.csv next to the
 // binary), with a `table` column. Rays are camera rays over N x N pixels (default 256), rendered
 // in 8 x 8 tiles taken from a shared counter by 1 or 2 threads. The scalar path traces each pixel
 // with sphere_trace<float>; the packet path streams every ray of a thread's tiles through
-// trace_stream<packet_f, 4> (lane refill, four interleaved packets). Each timing is the best of R
+// trace_queue<packet_f, 4> (lane refill, four interleaved packets) fed by queue_tile_rays. Each timing is the best of R
 // runs (default 3). Targets of issue 4 are checked at the end of each table.
 
+#include "support/stream_compare.hpp"
 #include "support/text.hpp"
+#include "support/timing.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
 #include "krs/model/tree.hpp"
+#include "krs/shade/global.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_rays.hpp"
@@ -94,18 +102,16 @@ template <class F, class TakeTile>
 [[gnu::noinline]] krs::stream_stats trace_stream_packets(const F& f, const krs::pinhole_camera& camera, TakeTile& take_tile,
                                                          const krs::box_clip& clip, const krs::trace_options& o, float* depth)
 {
-    krs::tile_rays<> rays;
-    auto next = [&](krs::ray_job& job) {
-        while (!rays.pop(job)) {
-            int x0, y0, x1, y1;
-            const krs::tile_prepass* pre = take_tile(x0, y0, x1, y1);
-            if (!pre) return false;
-            rays.fill(camera, x0, y0, x1, y1, *pre, o.max_distance, clip);
-        }
+    krs::ray_queue<> queue;
+    auto more = [&](krs::ray_queue<>& q) {
+        int x0, y0, x1, y1;
+        const krs::tile_prepass* pre = take_tile(x0, y0, x1, y1);
+        if (!pre) return false;
+        krs::queue_tile_rays(q, camera, x0, y0, x1, y1, *pre, o.max_distance, clip);
         return true;
     };
     auto done = [&](std::uint32_t id, const krs::hit<float>& h) { depth[id] = h.found ? h.t : INFINITY; };
-    return krs::trace_stream<krs::packet_f, stream_interleave>(f, next, done, o);
+    return krs::trace_queue<krs::packet_f, stream_interleave>(f, queue, more, done, o);
 }
 
 template <class F>
@@ -557,6 +563,240 @@ void error_table(int size, csv_writer& csv)
                 verdict(met), met ? " (" : "", met ? (best + ")").c_str() : "");
 }
 
+// ---- table 5: soft shadows and ambient occlusion, scalar against packet ----------------------
+
+// Issue 23, item 3: soft_shadow and ambient_occlusion are one template for a ray and a packet
+// (the shadow on the tracers' march step). The shading points are the primary hits of the scene's
+// camera, in 8 x 8 tile order (neighbouring pixels share a packet, as an example's shading pass
+// has them), each with its kernel's normal; the sun is krs_scenes'. A shadow ray is cast from the
+// points facing the sun, an occlusion probe from every point. One thread; scalar and packet rounds
+// alternate, best of R each; "prev" is the scalar soft shadow's own loop from before it ran on the
+// march step (previous_soft_shadow below), and "vs prev" the rays where the two scalar calls
+// differ. Beside each rate: the largest |packet lane - scalar call| and how many
+// lanes differ at all (this benchmark compiles with g++'s default -ffp-contract=fast, under which
+// the two paths may fuse a * b + c differently; the tests, built with it off, require equality).
+struct shading_points {
+    std::vector<vec3f> p, n; // scalar inputs
+    std::vector<float> px, py, pz, nx, ny, nz; // the same, SoA, padded to whole packets
+    std::size_t size() const { return p.size(); }
+    void add(const vec3f& a, const vec3f& b) { p.push_back(a), n.push_back(b); }
+    void pad()
+    {
+        const auto put = [&](std::vector<float>& v, auto get) {
+            v.clear();
+            for (std::size_t i = 0; i < p.size(); ++i) v.push_back(get(i));
+            while (v.size() % packet_width) v.push_back(v.empty() ? 0.0f : v.back());
+        };
+        put(px, [&](std::size_t i) { return p[i].x; }), put(py, [&](std::size_t i) { return p[i].y; });
+        put(pz, [&](std::size_t i) { return p[i].z; }), put(nx, [&](std::size_t i) { return n[i].x; });
+        put(ny, [&](std::size_t i) { return n[i].y; }), put(nz, [&](std::size_t i) { return n[i].z; });
+    }
+};
+
+// The scalar soft shadow as it was before it ran on the shared march step (its own loop), kept
+// here to show what the march step costs a single ray.
+template <class F>
+float previous_soft_shadow(const F& f, const vec3f& p, const vec3f& n, const vec3f& to_light,
+                           const krs::soft_shadow_options& o)
+{
+    o.validate();
+    const float k = o.hardness, threshold = o.threshold, t_max = o.max_distance;
+    const vec3f origin = p + n * (2.0f * threshold);
+    float visible = 1.0f, t = 0.0f;
+    for (int step = 0; step < o.max_steps; ++step) {
+        const float d = f.distance(origin + to_light * t);
+        if (!(d >= threshold)) return 0.0f;
+        if (t > 0.0f) visible = std::min(visible, k * d / t);
+        t += d;
+        if (t > t_max) break;
+    }
+    return std::clamp(visible, 0.0f, 1.0f);
+}
+template <class F>
+[[gnu::noinline]] void shadows_previous(const F& f, const shading_points& s, const vec3f& sun,
+                                        const krs::soft_shadow_options& o, float* out)
+{
+    for (std::size_t i = 0; i < s.size(); ++i) out[i] = previous_soft_shadow(f, s.p[i], s.n[i], sun, o);
+}
+template <class F>
+[[gnu::noinline]] void shadows_scalar(const F& f, const shading_points& s, const vec3f& sun,
+                                      const krs::soft_shadow_options& o, float* out)
+{
+    for (std::size_t i = 0; i < s.size(); ++i) out[i] = krs::soft_shadow(f, s.p[i], s.n[i], sun, o);
+}
+template <class F>
+[[gnu::noinline]] void shadows_packet(const F& f, const shading_points& s, const vec3f& sun,
+                                      const krs::soft_shadow_options& o, float* out)
+{
+    using P = krs::packet_f;
+    const krs::vec3<P> l(sun);
+    for (std::size_t i = 0; i < s.size(); i += packet_width) {
+        const krs::vec3<P> p{P::load_unaligned(&s.px[i]), P::load_unaligned(&s.py[i]), P::load_unaligned(&s.pz[i])};
+        const krs::vec3<P> n{P::load_unaligned(&s.nx[i]), P::load_unaligned(&s.ny[i]), P::load_unaligned(&s.nz[i])};
+        const std::size_t left = s.size() - i;
+        const auto lanes = krs::mask_from_bits<P>(left >= 64 ? ~0ull : (1ull << left) - 1);
+        alignas(64) float v[packet_width];
+        krs::soft_shadow(f, p, n, l, o, lanes).store_aligned(v);
+        std::copy(v, v + std::min(left, packet_width), out + i);
+    }
+}
+template <class F>
+[[gnu::noinline]] void occlusion_scalar(const F& f, const shading_points& s, const krs::ambient_occlusion_options& o,
+                                        float* out)
+{
+    for (std::size_t i = 0; i < s.size(); ++i) out[i] = krs::ambient_occlusion(f, s.p[i], s.n[i], o);
+}
+template <class F>
+[[gnu::noinline]] void occlusion_packet(const F& f, const shading_points& s, const krs::ambient_occlusion_options& o,
+                                        float* out)
+{
+    using P = krs::packet_f;
+    for (std::size_t i = 0; i < s.size(); i += packet_width) {
+        const krs::vec3<P> p{P::load_unaligned(&s.px[i]), P::load_unaligned(&s.py[i]), P::load_unaligned(&s.pz[i])};
+        const krs::vec3<P> n{P::load_unaligned(&s.nx[i]), P::load_unaligned(&s.ny[i]), P::load_unaligned(&s.nz[i])};
+        alignas(64) float v[packet_width];
+        krs::ambient_occlusion(f, p, n, o).store_aligned(v);
+        std::copy(v, v + std::min(s.size() - i, packet_width), out + i);
+    }
+}
+
+template <class F>
+void shadows_row(const char* name, const F& f, const framing& v, int size, csv_writer& csv, double& worst_shadow)
+{
+    const krs::pinhole_camera camera = camera_for(v, size);
+    const krs::trace_options o = options_for(camera, v);
+    const vec3f sun = krs::normalize(vec3f{0.55f, 0.65f, -0.35f});
+    const float span = krs::length(v.target - v.eye); // the scene's scale: the camera's distance
+    shading_points all, facing;
+    for (int y0 = 0; y0 < size; y0 += 8)
+        for (int x0 = 0; x0 < size; x0 += 8)
+            for (int py = y0; py < std::min(y0 + 8, size); ++py)
+                for (int px = x0; px < std::min(x0 + 8, size); ++px) {
+                    const krs::ray<float> r = camera.primary_ray(float(px) + 0.5f, float(py) + 0.5f);
+                    const krs::hit<float> h = krs::sphere_trace(f, r, o);
+                    if (!h.found) continue;
+                    const vec3f p = krs::point_at(r, h.t), n = f.normal(p);
+                    all.add(p, n);
+                    if (krs::dot(n, sun) > 0.0f) facing.add(p, n);
+                }
+    all.pad(), facing.pad();
+    krs::soft_shadow_options so; // as krs_scenes lights its scenes
+    so.hardness = 12.0f;
+    so.threshold = o.threshold(span);
+    so.max_distance = 0.5f * span;
+    so.max_steps = 160;
+    krs::ambient_occlusion_options ao;
+    ao.step = 0.005f * span;
+    std::vector<float> shadow[3], occlusion[2]; // shadow[2]: the previous scalar loop
+    for (auto* v2 : {&shadow[0], &shadow[1], &shadow[2]}) v2->assign(facing.size(), 0.0f);
+    for (auto* v2 : {&occlusion[0], &occlusion[1]}) v2->assign(all.size(), 0.0f);
+    double best[5] = {1e30, 1e30, 1e30, 1e30, 1e30}; // seconds: shadow scalar, packet, AO scalar, packet; previous
+    const auto time = [](auto&& run) {
+        const auto start = std::chrono::steady_clock::now();
+        run();
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    for (int round = 0; round < repeats; ++round) {
+        // The first of each pair swaps every round, so neither path always runs on a warm cache.
+        for (int k = 0; k < 3; ++k) {
+            const int which = (k + round) % 3;
+            const int slot = which == 2 ? 4 : which;
+            best[slot] = std::min(best[slot], time([&] {
+                                      if (which == 0) shadows_scalar(f, facing, sun, so, shadow[0].data());
+                                      else if (which == 1) shadows_packet(f, facing, sun, so, shadow[1].data());
+                                      else shadows_previous(f, facing, sun, so, shadow[2].data());
+                                  }));
+        }
+        for (int k = 0; k < 2; ++k) {
+            const int which = (k + round) % 2;
+            best[2 + which] = std::min(best[2 + which], time([&] {
+                                           if (which == 0) occlusion_scalar(f, all, ao, occlusion[0].data());
+                                           else occlusion_packet(f, all, ao, occlusion[1].data());
+                                       }));
+        }
+    }
+    const auto compare = [](const std::vector<float>& a, const std::vector<float>& b, double& worst, long& differ) {
+        worst = 0, differ = 0;
+        for (std::size_t i = 0; i < a.size(); ++i) {
+            worst = std::max(worst, double(std::abs(a[i] - b[i])));
+            differ += a[i] != b[i];
+        }
+    };
+    double shadow_gap, occlusion_gap;
+    long shadow_differ, occlusion_differ;
+    compare(shadow[0], shadow[1], shadow_gap, shadow_differ);
+    double previous_gap;
+    long previous_differ;
+    compare(shadow[2], shadow[0], previous_gap, previous_differ);
+    compare(occlusion[0], occlusion[1], occlusion_gap, occlusion_differ);
+    long penumbra = 0;
+    for (float x : shadow[0]) penumbra += x > 0.0f && x < 1.0f;
+    const double rays = double(facing.size()), probes = double(all.size());
+    const double ss = rays / best[0] * 1e-6, sp = rays / best[1] * 1e-6, sv = rays / best[4] * 1e-6;
+    const double as = probes / best[2] * 1e-6, ap = probes / best[3] * 1e-6;
+    worst_shadow = std::min(worst_shadow, sp / ss);
+    std::printf("%-20s %8zu %6.1f%% %9.3f %9.3f %9.3f %7.2fx %9.2g %7ld %7ld | %8zu %9.3f %9.3f %7.2fx %9.2g %7ld\n",
+                name, facing.size(), 100.0 * double(penumbra) / rays, sv, ss, sp, sp / ss, shadow_gap, shadow_differ,
+                previous_differ, all.size(), as, ap, ap / as, occlusion_gap, occlusion_differ);
+    csv.row(format("shadows,%s,%zu,%ld,%.4f,%.4f,%.4f,%.3g,%ld,%zu,%.4f,%.4f,%.4f,%.3g,%ld,%.4f,%ld", name, facing.size(),
+                   penumbra, ss, sp, sp / ss, shadow_gap, shadow_differ, all.size(), as, ap, ap / as, occlusion_gap,
+                   occlusion_differ, sv, previous_differ));
+}
+
+void shadows_table(int size, csv_writer& csv)
+{
+    const std::string load_before = bench::load_average();
+    std::printf("\n== soft shadows and ambient occlusion: scalar vs packet (%zu lanes), 1 thread, primary hits of "
+                "%dx%d, best of %d alternating rounds ==\n", packet_width, size, size, repeats);
+    std::printf("load average before: %s\n", load_before.c_str());
+    std::printf("%-20s %8s %7s %9s %9s %9s %8s %9s %7s %7s | %8s %9s %9s %8s %9s %7s\n", "scene", "shadows", "penumb",
+                "prev Mr/s", "scal Mr/s", "pack Mr/s", "ratio", "max diff", "differ", "vs prev", "AO", "scal Mp/s",
+                "pack Mp/s", "ratio", "max diff", "differ");
+    csv.row("table,scene,shadow_rays,penumbra_rays,shadow_scalar_mrays_s,shadow_packet_mrays_s,shadow_ratio,"
+            "shadow_max_lane_difference,shadow_lanes_differ,ao_probes,ao_scalar_mprobes_s,ao_packet_mprobes_s,ao_ratio,"
+            "ao_max_lane_difference,ao_lanes_differ,shadow_previous_scalar_mrays_s,shadow_previous_differ");
+    double worst = 1e30;
+    framing v;
+    shadows_row("tree (15 levels)", tree_scene(15, v), v, size, csv, worst);
+    framing fv;
+    shadows_row("forest (64 trees)", forest_scene(12, 3, fv), fv, size, csv, worst);
+    framing tv;
+    shadows_row("terrain (general)", terrain_scene<krs::mirror>(20, tv), tv, size, csv, worst);
+    std::printf("target packet soft shadow >= 6x scalar with 16 lanes: worst %.2fx -> %s\n", worst,
+                packet_width >= 16 ? verdict(worst >= 6.0) : "(no target for this width)");
+    const std::string load_after = bench::load_average();
+    std::printf("load average before: %s; after: %s\n", load_before.c_str(), load_after.c_str());
+    csv.row("table,before,after");
+    csv.row(format("shadows_load,%s,%s", load_before.c_str(), load_after.c_str()));
+}
+
+// ---- table 6: the stream before and after issue 23 ---------------------------------------------
+
+void stream_table(int size, csv_writer& csv)
+{
+    std::printf("\n== issue 23: packet stream before (reference) vs now, %dx%d, 8x8 tiles, 0.5 px threshold, %d "
+                "interleaved packets of %zu lanes; Mr/s on 2 threads, best of %d alternating rounds; the rest on 1 "
+                "thread ==\n",
+                size, size, stream_interleave, packet_width, repeats);
+    std::printf("load average before: %s\n", bench::load_average().c_str());
+    bench::print_stream_header();
+    csv.row(bench::stream_csv_header());
+    for (int n : {16, 32}) {
+        auto run = [&](const char* name, const auto& f, const framing& v) {
+            const krs::pinhole_camera camera = camera_for(v, size);
+            const bench::stream_comparison c = bench::compare_streams<krs::packet_f, stream_interleave>(
+                f, camera, options_for(camera, v), 8, 2, repeats, n);
+            csv.row(bench::stream_row(name, n, c));
+        };
+        framing v;
+        run("tree", tree_scene(n + 1, v), v);
+        run("forest (64 trees)", forest_scene(n - 5, 3, v), v);
+        run("terrain (general)", terrain_scene<krs::mirror>(n, v), v);
+        run("terrain (axis mirrors)", terrain_scene<krs::axis_mirror>(n, v), v);
+    }
+    std::printf("load average after: %s\n", bench::load_average().c_str());
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -570,7 +810,7 @@ int main(int argc, char** argv)
         else if (a == "--repeat" && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
         else if (a == "--only" && i + 1 < argc) only = argv[++i];
         else {
-            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes]\n");
+            std::fprintf(stderr, "usage: bench_packet_trace [--size N] [--csv FILE] [--repeat R] [--only throughput|levels|error|boxes|shadows|stream]\n");
             return 2;
         }
     }
@@ -588,5 +828,7 @@ int main(int argc, char** argv)
     if (only.empty() || only == "levels") levels_table(size, csv);
     if (only.empty() || only == "error") error_table(size, csv);
     if (only.empty() || only == "boxes") boxes_table(size, csv);
+    if (only.empty() || only == "shadows") shadows_table(size, csv);
+    if (only == "stream") stream_table(size, csv);
     return 0;
 }

@@ -66,6 +66,9 @@ krs_case(krs_scenes        2 "--scene"                                          
 krs_case(krs_scenes        0 "--only;--output-dir"                                 -h)
 krs_case(krs_scenes        0 "total:;1 scene"                                      --only mirrors --width 8 --height 8 --threads 1
                                                                                    --output-dir <out>)
+krs_case(krs_scenes        2 "--reflectivity;'1.5';[0, 1]"                         --reflectivity 1.5)
+krs_case(krs_scenes        0 "total:;1 scene"                                      --only mirrors --width 8 --height 8 --threads 1
+                                                                                   --reflectivity 0.3 --output-dir <out>)
 
 # krs_fractals
 krs_case(krs_fractals      2 "--width;'3x'"                                        --width 3x)

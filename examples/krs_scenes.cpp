@@ -8,17 +8,21 @@
 //                  triplanar noise texture in world space (6.2)
 //     rock.png     a faceted rock, flat (left) and smooth (right, Algorithm 2) shaded, figure 7;
 //                  inside a procedural bound (4.2)
-//     mirrors.png  512 spheres from 9 mirrors: axis-aligned (left) and unaligned (right), figure 5
+//     mirrors.png  512 spheres from 9 mirrors: axis-aligned (left) and unaligned (right), figure 5;
+//                  with --reflectivity F0 > 0 the spheres are glossy: each hit traces one
+//                  reflected ray (6.5) with the same tracer and mixes in what it sees
 //     coral.png    capsules and spheres, displaced by a Lipschitz noise warp (5.2)
 //     sponge.png   a Menger-like sponge of box kernels and mirrors, with ambient occlusion (6.5)
 //     grass.png    a clump of blades scattered by unaligned mirrors
 //
-// Every scene has soft shadows and ambient occlusion from sphere-traced secondary rays (6.5).
+// Every scene has soft shadows and ambient occlusion from sphere-traced secondary rays (6.5),
+// computed a packet of pixels at a time (krs::packet_f lanes) once a tile's primary rays are traced.
 // Each prints its kernel-instance count and triangle equivalent (the paper's results table; the
 // tessellation assumed is at `complexity` below), its time per ray (primary and secondary rays,
 // in core-microseconds) and the mean march steps of a primary ray.
 //
 //     krs_scenes [--width W] [--height H] [--threads N] [--seed S] [--only NAME] [--output-dir DIR]
+//                [--reflectivity F0]
 //
 // Threads render 16x16 tiles taken from a shared counter; the library itself starts no threads.
 
@@ -32,6 +36,7 @@
 #include "krs/shade/global.hpp"
 #include "krs/shade/kernel_light.hpp"
 #include "krs/shade/normal.hpp"
+#include "krs/shade/reflection.hpp"
 #include "krs/shade/texture.hpp"
 #include "krs/trace/camera.hpp"
 
@@ -59,6 +64,7 @@ struct options {
     int width = 480, height = 360, threads = 0;
     unsigned seed = 1;
     std::string only, output_dir = ".";
+    float reflectivity = 0.0f; // mirrors scene: the spheres' reflectivity at normal incidence (0: none)
 };
 
 vec3f sky(const vec3f& d)
@@ -91,23 +97,72 @@ struct ray_counts {
     void add(const ray_counts& o) { primary += o.primary, secondary += o.secondary, primary_steps += o.primary_steps; }
 };
 
-// Direct sun (diffuse * soft shadow) plus sky light weighted by ambient occlusion.
+// A pixel's color with its light still to come: base + sun * shadow + sky * occlusion. A scene's
+// pixel function returns one; `render` then computes the soft shadows and the ambient occlusion of a
+// tile's pixels in packets (krs::soft_shadow and krs::ambient_occlusion for krs::packet_f: the
+// lanes of a packet are neighbouring pixels, whose secondary rays march alike) and sums. `kind`
+// names the scene's lighting setup (field and options, see `lighting`); -1: no light to compute.
+struct lit {
+    vec3f base{}, sun{}, sky{};
+    int kind = -1;
+    vec3f p{}, n{};
+    float threshold = 0;  // the primary hit's: the shadow ray's own threshold
+    bool shadowed = false; // a shadow ray is cast (the surface faces the sun)
+    lit() = default;
+    lit(const vec3f& color) : base(color) {} // a pixel without light (sky, a divider)
+    vec3f color(float shadow, float occlusion) const { return base + sun * shadow + sky * occlusion; }
+};
+lit mul(const vec3f& a, lit l)
+{
+    l.base = mul(a, l.base), l.sun = mul(a, l.sun), l.sky = mul(a, l.sky);
+    return l;
+}
+lit operator+(lit l, const vec3f& c)
+{
+    l.base = l.base + c;
+    return l;
+}
+lit mix3(const lit& a, const vec3f& b, float t)
+{
+    const float s = std::clamp(t, 0.0f, 1.0f);
+    lit l = a;
+    l.base = a.base * (1.0f - s) + b * s, l.sun = a.sun * (1.0f - s), l.sky = a.sky * (1.0f - s);
+    return l;
+}
+
+// Direct sun (diffuse * soft shadow) plus sky light weighted by ambient occlusion, at p with normal
+// n, lit by the scene's lighting setup `kind` once the tile's packets are done.
+lit light_surface(int kind, const vec3f& p, const vec3f& n, float diffuse, float threshold, ray_counts& counts,
+                  const vec3f& sky_color = sky_light)
+{
+    counts.secondary += 1 + (diffuse > 0.0f);
+    lit l;
+    l.sun = sun_color * diffuse, l.sky = sky_color;
+    l.kind = kind, l.p = p, l.n = n, l.threshold = threshold, l.shadowed = diffuse > 0.0f;
+    return l;
+}
+
+using P = krs::packet_f;
+constexpr std::size_t lanes = krs::lane_count<P>;
+// A scene's lighting: for setup `kind`, the soft shadow (lanes `facing`; each lane's own
+// threshold) and the ambient occlusion of a packet of shading points.
+using lighting = std::function<void(int kind, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& threshold,
+                                    const krs::mask_t<P>& facing, P& shadow, P& occlusion)>;
+
+// The usual setup: sun shadows of hardness 12 searched `reach` far, 5 occlusion samples `ao_step` apart.
 template <class F>
-vec3f light_surface(const F& field, const vec3f& p, const vec3f& n, float diffuse, float threshold, float shadow_reach,
-                    float ao_step, ray_counts& counts)
+void light_packet(const F& field, float reach, float ao_step, const krs::vec3<P>& p, const krs::vec3<P>& n,
+                  const P& threshold, const krs::mask_t<P>& facing, P& shadow, P& occlusion)
 {
     krs::soft_shadow_options s;
     s.hardness = 12.0f;
-    s.threshold = threshold;
-    s.max_distance = shadow_reach;
+    s.max_distance = reach;
     s.max_steps = 160;
-    counts.secondary += 1 + (diffuse > 0.0f);
-    const float shadow = diffuse > 0.0f ? krs::soft_shadow(field, p, n, sun_direction, s) : 0.0f;
+    shadow = krs::soft_shadow(field, p, n, krs::vec3<P>(sun_direction), s, facing, threshold);
     krs::ambient_occlusion_options a;
     a.step = ao_step;
     a.samples = 5;
-    const float ao = krs::ambient_occlusion(field, p, n, a);
-    return sun_color * (diffuse * shadow) + sky_light * ao;
+    occlusion = krs::ambient_occlusion(field, p, n, a);
 }
 
 // Scene complexity as the paper's results table counts it: kernel instances of the full
@@ -146,10 +201,11 @@ krs::trace_options tracing(const krs::pinhole_camera& camera, float max_distance
     return t.validate(), t;
 }
 
-// Renders `pixel(x, y, counts) -> color` into dir/name.png with tiles over threads and reports
-// the scene's complexity, its time per ray and steps per primary ray; returns seconds.
+// Renders `pixel(x, y, counts) -> lit` into dir/name.png with tiles over threads, the light of
+// each tile's pixels computed in packets by `light`, and reports the scene's complexity, its time
+// per ray and steps per primary ray; returns seconds.
 double render(const options& opt, const std::string& name, const complexity& scene,
-              const std::function<vec3f(float, float, ray_counts&)>& pixel)
+              const std::function<lit(float, float, ray_counts&)>& pixel, const lighting& light)
 {
     std::vector<float> pixels(std::size_t(opt.width) * opt.height * 3);
     constexpr int tile = 16;
@@ -158,14 +214,50 @@ double render(const options& opt, const std::string& name, const complexity& sce
     std::atomic<int> next{0};
     std::vector<ray_counts> counts(std::size_t(opt.threads));
     auto worker = [&](ray_counts& mine) {
+        std::vector<lit> shaded;
+        std::vector<float*> out;
         for (int k; (k = next.fetch_add(1)) < tiles;) {
             const int x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
+            shaded.clear(), out.clear();
             for (int y = y0; y < std::min(y0 + tile, opt.height); ++y)
                 for (int x = x0; x < std::min(x0 + tile, opt.width); ++x) {
-                    const vec3f c = pixel(float(x), float(y), mine);
-                    float* out = &pixels[(std::size_t(y) * opt.width + x) * 3];
-                    out[0] = c.x, out[1] = c.y, out[2] = c.z;
+                    shaded.push_back(pixel(float(x), float(y), mine));
+                    out.push_back(&pixels[(std::size_t(y) * opt.width + x) * 3]);
                 }
+            // The tile's lit pixels, by lighting setup, W at a time (the last packet's spare lanes
+            // repeat its first pixel and are not written).
+            for (int kind = 0;; ++kind) {
+                std::vector<std::size_t> todo;
+                bool more = false;
+                for (std::size_t i = 0; i < shaded.size(); ++i) {
+                    if (shaded[i].kind == kind) todo.push_back(i);
+                    more = more || shaded[i].kind > kind;
+                }
+                for (std::size_t first = 0; first < todo.size(); first += lanes) {
+                    alignas(64) float px[lanes], py[lanes], pz[lanes], nx[lanes], ny[lanes], nz[lanes], th[lanes];
+                    alignas(64) float facing[lanes], shadow[lanes], occlusion[lanes];
+                    for (std::size_t j = 0; j < lanes; ++j) {
+                        const lit& l = shaded[todo[first + (first + j < todo.size() ? j : 0)]];
+                        px[j] = l.p.x, py[j] = l.p.y, pz[j] = l.p.z, nx[j] = l.n.x, ny[j] = l.n.y, nz[j] = l.n.z;
+                        th[j] = l.threshold, facing[j] = l.shadowed ? 1.0f : 0.0f;
+                    }
+                    P s, a;
+                    light(kind, {P::load_aligned(px), P::load_aligned(py), P::load_aligned(pz)},
+                          {P::load_aligned(nx), P::load_aligned(ny), P::load_aligned(nz)}, P::load_aligned(th),
+                          P::load_aligned(facing) > P(0.0f), s, a);
+                    s.store_aligned(shadow), a.store_aligned(occlusion);
+                    for (std::size_t j = 0; j < lanes && first + j < todo.size(); ++j) {
+                        lit& l = shaded[todo[first + j]];
+                        l.base = l.color(shadow[j], occlusion[j]);
+                        l.kind = -1;
+                    }
+                }
+                if (!more) break;
+            }
+            for (std::size_t i = 0; i < shaded.size(); ++i) {
+                const vec3f c = shaded[i].base;
+                out[i][0] = c.x, out[i][1] = c.y, out[i][2] = c.z;
+            }
         }
     };
     const auto start = std::chrono::steady_clock::now();
@@ -242,7 +334,7 @@ double forest_scene(const options& opt)
     complexity c = complexity_of(forest.sequence);
     c += complexity_of(ground);
 
-    return render(opt, "forest", c, [&](float x, float y, ray_counts& counts) {
+    return render(opt, "forest", c, [&](float x, float y, ray_counts& counts) -> lit {
         const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const auto h = krs::union_trace(scene, r, trace);
         ++counts.primary, counts.primary_steps += h.steps;
@@ -280,7 +372,9 @@ double forest_scene(const options& opt)
             }
         }
         if (h.nearest != 1) diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
-        return mul(albedo, light_surface(exact, p, n, diffuse, threshold, span, 0.3f, counts));
+        return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts));
+    }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        light_packet(exact, span, 0.3f, p, n, th, facing, s, a);
     });
 }
 
@@ -299,7 +393,7 @@ double terrain_scene(const options& opt)
     const krs::trace_options trace = tracing(camera, 200.0f);
     const krs::fractal_noise detail(5, 0.5f);
 
-    return render(opt, "terrain", complexity_of(terrain), [&](float x, float y, ray_counts& counts) {
+    return render(opt, "terrain", complexity_of(terrain), [&](float x, float y, ray_counts& counts) -> lit {
         const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const krs::hit<float> h = krs::sphere_trace(terrain, r, trace);
         ++counts.primary, counts.primary_steps += h.steps;
@@ -316,9 +410,11 @@ double terrain_scene(const options& opt)
         const float rock = krs::triplanar(pattern, p * 0.8f, n);
         const vec3f grass{0.22f, 0.34f, 0.10f}, stone{0.45f, 0.41f, 0.36f};
         const vec3f albedo = mix3(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
-        const vec3f c = mul(albedo, light_surface(terrain, p, n, diffuse, trace.threshold(h.t), 60.0f, 0.6f, counts));
+        const lit c = mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));
         const float fog = 1.0f - std::exp(-h.t / 400.0f);
         return mix3(c, sky(r.direction), fog);
+    }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        light_packet(terrain, 60.0f, 0.6f, p, n, th, facing, s, a);
     });
 }
 
@@ -347,7 +443,7 @@ double rock_scene(const options& opt)
     complexity c = complexity_of(rock.sequence);
     c.instances += 1, c.triangles += 2;
 
-    return render(opt, "rock", c, [&](float x, float y, ray_counts& counts) {
+    return render(opt, "rock", c, [&](float x, float y, ray_counts& counts) -> lit {
         const bool smooth = x >= float(half);
         const krs::ray<float> r = camera.primary_ray((smooth ? x - float(half) : x) + 0.5f, y + 0.5f);
         if (int(x) == half) return vec3f{1, 1, 1}; // the divider
@@ -357,15 +453,17 @@ double rock_scene(const options& opt)
         const vec3f p = krs::point_at(r, h.t);
         if (h.nearest == 1) {
             const vec3f sand = vec3f{0.55f, 0.50f, 0.40f} * (0.9f + 0.1f * grain(p));
-            return mul(sand, light_surface(exact, p, {0, 1, 0}, sun_direction.y, trace.threshold(h.t), 10.0f, 0.15f, counts));
+            return mul(sand, light_surface(0, p, {0, 1, 0}, sun_direction.y, trace.threshold(h.t), counts));
         }
         const float band = smooth ? krs::smoothing_threshold(h.t, camera.pixel_footprint(), band_pixels) : 0.0f;
         const auto k = krs::shade_in_kernel_space(rock.sequence, p, sun_direction, -r.direction, band);
         const krs::phong_terms ph = krs::phong(k, 24.0f);
         const vec3f n = rock.sequence.normal(p);
         const vec3f albedo = vec3f{0.45f, 0.42f, 0.40f} * (0.75f + 0.25f * grain(p));
-        const vec3f lit = light_surface(exact, p, n, ph.diffuse, trace.threshold(h.t), 10.0f, 0.1f, counts);
-        return mul(albedo, lit) + sun_color * (0.15f * ph.specular);
+        const lit light = light_surface(1, p, n, ph.diffuse, trace.threshold(h.t), counts);
+        return mul(albedo, light) + sun_color * (0.15f * ph.specular);
+    }, [&](int kind, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        light_packet(exact, 10.0f, kind == 0 ? 0.15f : 0.1f, p, n, th, facing, s, a); // 0: the ground, 1: the rock
     });
 }
 
@@ -431,23 +529,51 @@ double mirrors_scene(const options& opt)
     complexity c = complexity_of(aligned);
     c += complexity_of(unaligned);
 
-    auto shade = [&](const auto& cloud, const view& v, const krs::ray<float>& r, ray_counts& counts) {
+    auto albedo_of = [](const krs::location<float>& where) {
+        const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
+        return mix3(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
+    };
+    auto shade = [&](int kind, const auto& cloud, const view& v, const krs::ray<float>& r, ray_counts& counts) -> lit {
         const krs::hit<float> h = krs::sphere_trace(cloud, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         const krs::location<float> where = cloud.locate(p);
         const vec3f n = cloud.normal(where);
-        const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
-        const vec3f albedo = mix3(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
+        const vec3f albedo = albedo_of(where);
         const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
-        return mul(albedo, light_surface(cloud, p, n, diffuse, v.trace.threshold(h.t), 4.0f * cloud.bound().radius,
-                                         0.1f, counts));
+        const float threshold = v.trace.threshold(h.t);
+        lit here = mul(albedo, light_surface(kind, p, n, diffuse, threshold, counts));
+        if (!(opt.reflectivity > 0.0f)) return here; // no reflected ray: the image without reflections
+        // Section 6.5: one reflected ray, traced by the same sphere tracer from the hit lifted two
+        // thresholds off the sphere; its hit threshold starts at the primary's (the footprint
+        // cone goes on). What it sees is lit by the sun and the sky without shadows (one bounce).
+        const krs::ray<float> bounce = krs::reflection_ray(p, n, r.direction, 2.0f * threshold);
+        krs::trace_options o = v.trace;
+        o.threshold_floor = threshold;
+        const krs::hit<float> hb = krs::sphere_trace(cloud, bounce, o);
+        ++counts.secondary;
+        vec3f seen = sky(bounce.direction);
+        if (hb.found) {
+            const krs::location<float> there = cloud.locate(krs::point_at(bounce, hb.t));
+            const vec3f m = cloud.normal(there);
+            seen = mul(albedo_of(there), sun_color * std::max(krs::dot(m, sun_direction), 0.0f) + sky_light);
+        }
+        // mix_reflection(lit, seen, w) = lit (1 - w) + seen w, and lit's shadow and occlusion terms
+        // are still to come (packets, after the tile): scale them by 1 - w now, fold seen into the base.
+        const float weight = krs::fresnel_schlick(std::abs(krs::dot(n, r.direction)), opt.reflectivity);
+        here.base = krs::mix_reflection(here.base, seen, weight);
+        here.sun = here.sun * (1.0f - weight);
+        here.sky = here.sky * (1.0f - weight);
+        return here;
     };
-    return render(opt, "mirrors", c, [&](float x, float y, ray_counts& counts) {
+    return render(opt, "mirrors", c, [&](float x, float y, ray_counts& counts) -> lit {
         if (int(x) == half) return vec3f{1, 1, 1};
-        if (x < float(half)) return shade(aligned, left, left.camera.primary_ray(x + 0.5f, y + 0.5f), counts);
-        return shade(unaligned, right, right.camera.primary_ray(x - float(half) + 0.5f, y + 0.5f), counts);
+        if (x < float(half)) return shade(0, aligned, left, left.camera.primary_ray(x + 0.5f, y + 0.5f), counts);
+        return shade(1, unaligned, right, right.camera.primary_ray(x - float(half) + 0.5f, y + 0.5f), counts);
+    }, [&](int kind, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        if (kind == 0) light_packet(aligned, 4.0f * aligned.bound().radius, 0.1f, p, n, th, facing, s, a);
+        else light_packet(unaligned, 4.0f * unaligned.bound().radius, 0.1f, p, n, th, facing, s, a);
     });
 }
 
@@ -472,7 +598,7 @@ double coral_scene(const options& opt)
     complexity c = complexity_of(coral);
     c.instances += 1, c.triangles += 2;
 
-    return render(opt, "coral", c, [&](float x, float y, ray_counts& counts) {
+    return render(opt, "coral", c, [&](float x, float y, ray_counts& counts) -> lit {
         const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const auto h = krs::union_trace(scene, r, trace);
         ++counts.primary, counts.primary_steps += h.steps;
@@ -485,7 +611,9 @@ double coral_scene(const options& opt)
             albedo = mix3(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
         }
         const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
-        return mul(albedo, light_surface(scene, p, n, diffuse, threshold, 2 * b.radius, 0.04f * b.radius, counts));
+        return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts));
+    }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        light_packet(scene, 2 * b.radius, 0.04f * b.radius, p, n, th, facing, s, a);
     });
 }
 
@@ -509,7 +637,7 @@ double sponge_scene(const options& opt)
     std::printf("sponge: %.0f KRS box instances, %.0f distinct cubes\n", complexity_of(sponge.sequence).instances,
                 sponge.cube_count);
 
-    return render(opt, "sponge", c, [&](float x, float y, ray_counts& counts) {
+    return render(opt, "sponge", c, [&](float x, float y, ray_counts& counts) -> lit {
         const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const auto h = krs::union_trace(scene, r, trace);
         ++counts.primary, counts.primary_steps += h.steps;
@@ -522,18 +650,18 @@ double sponge_scene(const options& opt)
             albedo = {0.75f, 0.62f, 0.45f};
         }
         const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
-        krs::ambient_occlusion_options a;
-        a.step = 0.03f;
-        a.samples = 6;
-        a.strength = 1.4f;
-        const float ao = krs::ambient_occlusion(exact, p, n, a);
-        counts.secondary += 1 + (diffuse > 0);
-        krs::soft_shadow_options s;
-        s.threshold = threshold;
-        s.max_distance = 6.0f;
-        s.hardness = 16.0f;
-        const float shadow = diffuse > 0 ? krs::soft_shadow(exact, p, n, sun_direction, s) : 0.0f;
-        return mul(albedo, sun_color * (diffuse * shadow) + vec3f{0.45f, 0.5f, 0.6f} * ao);
+        return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts, vec3f{0.45f, 0.5f, 0.6f}));
+    }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        // Deeper occlusion than the other scenes: the sponge's cavities are the subject.
+        krs::ambient_occlusion_options ao;
+        ao.step = 0.03f;
+        ao.samples = 6;
+        ao.strength = 1.4f;
+        a = krs::ambient_occlusion(exact, p, n, ao);
+        krs::soft_shadow_options so;
+        so.max_distance = 6.0f;
+        so.hardness = 16.0f;
+        s = krs::soft_shadow(exact, p, n, krs::vec3<P>(sun_direction), so, facing, th);
     });
 }
 
@@ -556,7 +684,7 @@ double grass_scene(const options& opt)
     trace.max_steps = 600;
     const krs::fractal_noise tint(3, 0.8f);
 
-    return render(opt, "grass", complexity_of(grass.sequence), [&](float x, float y, ray_counts& counts) {
+    return render(opt, "grass", complexity_of(grass.sequence), [&](float x, float y, ray_counts& counts) -> lit {
         const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
         const krs::hit<float> h = krs::sphere_trace(grass.sequence, r, trace);
         ++counts.primary, counts.primary_steps += h.steps;
@@ -571,7 +699,9 @@ double grass_scene(const options& opt)
             albedo = mix3(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
         }
         const float diffuse = std::abs(krs::dot(n, sun_direction)); // thin blades pass light through
-        return mul(albedo, light_surface(grass.sequence, p, n, diffuse, trace.threshold(h.t), 3.0f, 0.03f, counts));
+        return mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));
+    }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        light_packet(grass.sequence, 3.0f, 0.03f, p, n, th, facing, s, a);
     });
 }
 
@@ -596,6 +726,8 @@ options parse(int argc, char** argv)
     for (const scene_entry& e : scenes) names.emplace_back(e.name);
     args.choice("--only", o.only, names, "render this scene only (default: all)");
     args.text("--output-dir", o.output_dir, "the folder the PNG files go to", "DIR");
+    args.number("--reflectivity", o.reflectivity, 0.0, 1.0, false, "mirrors scene: reflectivity of the spheres at normal incidence "
+                 "(Schlick), each hit tracing one reflected ray; 0: no reflections");
     args.parse(argc, argv);
     o.threads = example::thread_count(o.threads);
     return o;

@@ -138,6 +138,7 @@ shell_options read_shell_options(reader& in)
     o.seams = seams % 3 == 0 ? shell_seams::none : (seams % 3 == 1 ? shell_seams::adjacent_shells : shell_seams::hidden_boundary);
     o.hidden_cutoff = in.real(0.001f, 0.5f);
     o.step_factor = in.real(0.05f, 1.0f);
+    o.seam_band = in.real(0.0f, 0.5f);
     return o;
 }
 

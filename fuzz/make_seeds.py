@@ -152,8 +152,8 @@ def kifs_general(kernel, kernel_fields, iterations, taps, over=None):
     return bytes([5]) + b"".join(fields) + bytes([kernel]) + kernel_fields + i(iterations, 0) + bytes([taps])
 
 
-def shell_options(seams, cutoff=f(.04), step=f(1)):
-    return bytes([seams]) + cutoff + step
+def shell_options(seams, cutoff=f(.04), step=f(1), band=f(0)):
+    return bytes([seams]) + cutoff + step + band
 
 
 fractal_seeds = {
@@ -184,6 +184,8 @@ fractal_seeds = {
     "lotus_default": bytes([8]) + f(.044) + i(8, 1) + shell_options(1) + points(123),
     "lotus_thinnest_shells": bytes([8]) + f(0) + i(16, 1) + shell_options(0) + points(124),
     "lotus_hidden": bytes([8]) + f(.07) + i(6, 1) + shell_options(2) + points(125),
+    "lotus_hidden_local_step": bytes([8]) + f(.044) + i(8, 1) + shell_options(2, step=f(.47), band=f(.12)) + points(130),
+    "cube_singularity_band_above": bytes([9]) + f(.044) + shell_options(0, band=above()) + points(131),
     "cube_singularity_default": bytes([9]) + f(.044) + shell_options(1) + points(126),
     "cube_singularity_density_below": bytes([9]) + below() + shell_options(1) + points(127),
     "user_shell_sphere": bytes([10]) + f(.02) + vec(.7, .5, .5) + f(.2) + shell_options(1) + points(128),

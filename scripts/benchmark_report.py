@@ -286,6 +286,33 @@ def packet_trace_section(path, images, md):
                                [[r.get("threshold_px"), r.get("omega"), r.get("prepass"), r.get("max_steps"), r.get("ns_per_ray"),
                                  r.get("evals_per_ray"), r.get("mean_relative_depth_error"),
                                  "%.3f%%" % (100 * num(r.get("hit_miss_differ_share"), 0))] for r in error]))
+    shadows = s.get("shadows", [])
+    if shadows:
+        md.append("\n### Soft shadows and ambient occlusion in packets (issue 23, item 3)\n")
+        md.append("`soft_shadow` and `ambient_occlusion` are one template for a ray and a packet (the shadow marches "
+                  "on the tracers' `march_state` / `march_step`, its penumbra ratio in the step's observer). Shading "
+                  "points: the primary hits of each scene's camera in 8 x 8 tile order, with their kernels' normals; "
+                  "a shadow ray toward krs_scenes' sun from each point facing it (hardness 12, 160 steps), a 5-sample "
+                  "occlusion probe from every point. One thread, scalar and packet rounds alternating, best of R each "
+                  "(`bench_packet_trace --only shadows`). \"previous scalar\" is the soft shadow's own loop from "
+                  "before it ran on the march step, kept in the benchmark (it returns the same value as the scalar "
+                  "call on every ray here). \"max diff\" is the largest |packet lane - scalar call| "
+                  "and \"differ\" the lanes not bit-identical; the benchmark is built with g++'s default "
+                  "-ffp-contract=fast, under which the two paths may fuse a * b + c differently (the tests, built "
+                  "with it off, require every lane bit-identical).\n")
+        md.append(table(["scene", "shadow rays", "penumbra", "previous scalar Mrays/s", "scalar Mrays/s",
+                         "packet Mrays/s", "packet/scalar", "max diff", "differ", "AO probes", "scalar Mprobes/s",
+                         "packet Mprobes/s", "packet/scalar", "max diff", "differ"],
+                        [[r.get("scene"), r.get("shadow_rays"),
+                          "%.1f%%" % (100 * num(r.get("penumbra_rays"), 0) / max(num(r.get("shadow_rays"), 1), 1)),
+                          fmt(num(r.get("shadow_previous_scalar_mrays_s"))),
+                          fmt(num(r.get("shadow_scalar_mrays_s"))), fmt(num(r.get("shadow_packet_mrays_s"))),
+                          fmt(num(r.get("shadow_ratio"))) + "x", r.get("shadow_max_lane_difference"),
+                          r.get("shadow_lanes_differ"), r.get("ao_probes"), fmt(num(r.get("ao_scalar_mprobes_s"))),
+                          fmt(num(r.get("ao_packet_mprobes_s"))), fmt(num(r.get("ao_ratio"))) + "x",
+                          r.get("ao_max_lane_difference"), r.get("ao_lanes_differ")] for r in shadows]))
+        for r in s.get("shadows_load", []):
+            md.append("\nLoad average before: %s; after: %s.\n" % (r.get("before"), r.get("after")))
     # Mrays/s against n from the levels table (1 thread): 1 / (us per ray); and the sequences' own
     # memory per n (bytes, as MiB like the Embree side), when the CSV has it.
     krs = series_against_n(levels, (("tree_packet_us", "KRS tree packet (1 thread)"),
@@ -358,14 +385,16 @@ def create_section(path, md):
         spread = num(r.get("creation_spread"))
         if r.get("memory_bytes", "").strip() == "refused":
             body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), "refused: over the memory budget"]
-                        + ["-"] * 12)
+                        + ["-"] * 16)
             continue
         build = "%s (%s) / %s (%s)" % (ms(num(r.get("build_s"))), faults(num(r.get("build_faults"))), ms(num(r.get("rebuild_s"))),
                                        faults(num(r.get("rebuild_faults"))))
+        before = num(r.get("before_s"))
         body.append([r.get("tree"), r.get("resolution"), r.get("store"), r.get("voxels"), build, ms(c), faults(num(r.get("creation_faults"))),
+                     ms(before), "%.2fx" % (before / c) if before and c else "-", r.get("same_voxels", "-"),
                      ms(f), faults(num(r.get("fresh_faults"))), ms(k4), faults(num(r.get("small_pages_faults"))),
                      "%.0f%%" % (100 * spread) if spread is not None else "-", "%.1f s" % pc if pc else "-", ratio(pc, c),
-                     ratio(pc, k4), size_text(m), size_text(pm) if pm else "-"])
+                     ratio(pc, before), ratio(pc, k4), size_text(m), size_text(pm) if pm else "-"])
     first = rows[0] if rows else {}
     md.append("The paper's figures (an Athlon at 1.4 GHz) stand next to ours; its \"3D array + bit array\" column against the dense "
               "store. Creation is one `build_tree` call (generate + validate + density classes + build, on 2 threads), best of 5 "
@@ -373,11 +402,14 @@ def create_section(path, md):
               "call builds in the store the last one returned; \"fresh\": a new store each call, on huge pages where offered; "
               "\"4K pages\": fresh with `hypertree::huge_pages_wanted` off, so blocks of 1 MiB and more are mapped on 4 KiB pages as the dense array was before. Faults are minor page "
               "faults per call (`getrusage`). \"store build\" is the last step alone, into a fresh store / into the last one built "
-              "(faults in brackets). Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
+              "(faults in brackets). \"before\": the recycled creation on the path before issue 27's rework "
+              "(bench/support/creation_before.hpp), timed in alternating rounds with \"recycled\"; \"gain\" is before / recycled; "
+              "\"same\": both paths' voxel lists equal. Each figure is the worst of %s runs of the whole sweep; spread is how far the runs' "
               "recycled times lie apart. Load average before the runs: %s; after: %s.\n"
               % (first.get("runs", "?"), first.get("load_before", "?"), first.get("load_after", "?")))
-    md.append(table(["tree", "res", "store", "voxels", "store build: fresh / rebuilt", "creation (recycled)", "faults", "fresh", "faults", "4K pages", "faults", "spread",
-                     "paper", "speedup", "4K pages speedup", "memory", "paper memory"], body))
+    md.append(table(["tree", "res", "store", "voxels", "store build: fresh / rebuilt", "creation (recycled)", "faults", "before", "gain", "same",
+                     "fresh", "faults", "4K pages", "faults", "spread", "paper", "speedup", "before speedup", "4K pages speedup", "memory",
+                     "paper memory"], body))
 
 
 def render_section(path, images, md):

@@ -15,8 +15,11 @@
 
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <vector>
 
 namespace {
 
@@ -250,6 +253,212 @@ TEST_CASE("the union tracer finds the nearest of the components' own first hits"
     CHECK(by_component[0] > 500);
     CHECK(by_component[1] > 1000);
     CHECK(by_component[2] > 100);
+}
+
+namespace {
+
+// The union tracer as it was before it ran on march_state / march_advance (issue 23): its own
+// loop over one scalar ray. The tracer now shares the tracers' step and runs packets too; this is
+// the reference that shows it still takes the same samples, stops at the same one and evaluates
+// the same components.
+struct previous_union_hit {
+    double t = INFINITY;
+    bool found = false, invalid = false;
+    int steps = 0, evaluations = 0, nearest = -1;
+    std::vector<int> component_evaluations;
+};
+template <class S, class U>
+previous_union_hit previous_union_trace(const U& u, const krs::ray<S>& r, const krs::trace_options& options)
+{
+    constexpr std::size_t N = U::size;
+    previous_union_hit h;
+    h.component_evaluations.assign(N, 0);
+    if (!(krs::is_finite(r.origin) && krs::is_finite(r.direction) && krs::length_squared(r.direction) > S(0))) {
+        h.invalid = true;
+        return h;
+    }
+    std::array<S, N> value{}, at{};
+    std::array<bool, N> known{};
+    constexpr S slack = S(64) * std::numeric_limits<S>::epsilon();
+    S t = S(options.min_distance);
+    const S t_max = S(options.max_distance);
+    for (int step = 0; step < options.max_steps; ++step) {
+        const krs::vec3<S> p = krs::point_at(r, t);
+        S best = std::numeric_limits<S>::infinity();
+        std::size_t best_index = 0;
+        std::array<bool, N> fresh{};
+        for (;;) {
+            std::size_t candidate = N;
+            S candidate_bound = best;
+            for (std::size_t i = 0; i < N; ++i) {
+                if (fresh[i]) continue;
+                const S bound = known[i] ? value[i] - (t - at[i]) - slack * (std::abs(t) + std::abs(value[i]) + S(1))
+                                         : -std::numeric_limits<S>::infinity();
+                if (bound < candidate_bound) candidate_bound = bound, candidate = i;
+            }
+            if (candidate == N) break;
+            const S d = u.component_distance(candidate, p);
+            ++h.evaluations;
+            ++h.component_evaluations[candidate];
+            fresh[candidate] = known[candidate] = true;
+            value[candidate] = d;
+            at[candidate] = t;
+            if (!(d == d)) {
+                best = d;
+                break;
+            }
+            if (d < best) best = d, best_index = candidate;
+        }
+        ++h.steps;
+        if (!(best == best)) return h;
+        if (best < options.threshold(t)) {
+            h.found = true;
+            h.t = double(t);
+            h.nearest = int(best_index);
+            return h;
+        }
+        t += best;
+        if (!(t <= t_max)) return h;
+    }
+    return h;
+}
+
+// Every field of a union hit against the previous tracer's, exactly.
+template <class H>
+void require_same_union_hit(const H& h, const previous_union_hit& old)
+{
+    REQUIRE(bool(h.found) == old.found);
+    REQUIRE(bool(h.invalid) == old.invalid);
+    REQUIRE(double(h.t) == old.t);
+    REQUIRE(int(h.steps) == old.steps);
+    REQUIRE(int(h.evaluations) == old.evaluations);
+    REQUIRE(int(h.nearest) == old.nearest);
+    for (std::size_t i = 0; i < old.component_evaluations.size(); ++i)
+        REQUIRE(int(h.component_evaluations[i]) == old.component_evaluations[i]);
+}
+
+// The forest, its ground and a boulder of the test above, with rays aimed at each.
+struct union_rays_scene {
+    krs::model::forest forest;
+    krs::model::plane_sequence ground;
+    krs::sphere boulder;
+    krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u;
+    krs::trace_options o;
+};
+union_rays_scene union_scene()
+{
+    krs::model::forest_parameters fp;
+    fp.tree.levels = 6;
+    fp.tree.leaves_per_twig = 2;
+    fp.tree.leaf_radius = 0.1f;
+    fp.doublings = 3;
+    fp.ground_height.reset();
+    krs::model::forest forest = krs::model::build_forest(fp);
+    krs::model::terrain_parameters tp;
+    tp.levels = 8;
+    tp.size = 4.0f;
+    tp.slope = 0.3f;
+    krs::model::plane_sequence ground = krs::model::build_forest_ground(fp, forest, tp);
+    const krs::sphere boulder({forest.bound.center.x, 0.3f, forest.bound.center.z - 0.5f * forest.bound.radius}, 0.8f);
+    krs::trace_options o;
+    o.pixel_footprint = 2e-4f;
+    o.threshold_floor = 1e-5f;
+    o.max_steps = 4000;
+    o.max_distance = 6 * forest.bound.radius;
+    krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u(forest.sequence, ground, boulder);
+    return {std::move(forest), std::move(ground), boulder, std::move(u), o};
+}
+krs::ray<double> union_scene_ray(const union_rays_scene& s, std::mt19937_64& g, int k)
+{
+    const vec3d c(s.forest.bound.center);
+    const double radius = s.forest.bound.radius;
+    const vec3d origin = c + vec3d{uniform(g, -1, 1) * radius, uniform(g, 0.2, 1.2) * radius, -1.6 * radius};
+    vec3d target = c + vec3d{uniform(g, -1, 1) * radius, uniform(g, -0.3, 0.2) * radius, uniform(g, -1, 1) * radius};
+    if (k % 3 == 0) {
+        const krs::bounding_sphere& tree = s.forest.trees[std::size_t(g() % s.forest.trees.size())];
+        target = vec3d(tree.center) + random_direction(g) * (0.5 * tree.radius);
+    } else if (k % 3 == 2) {
+        target = vec3d(s.boulder.center) + random_direction(g) * double(s.boulder.radius);
+    }
+    if (k % 5 == 4) target = origin + vec3d{uniform(g, -1, 1), 1, uniform(g, -1, 1)} * radius; // up: a miss
+    return {origin, krs::normalize(target - origin)};
+}
+
+} // namespace
+
+TEST_CASE("the union tracer on the shared march step takes the previous tracer's samples, for float and double")
+{
+    const union_rays_scene s = union_scene();
+    std::mt19937_64 g(34);
+    int hits = 0, skipped = 0;
+    for (int k = 0; k < 1500; ++k) {
+        const krs::ray<double> rd = union_scene_ray(s, g, k);
+        CAPTURE(k);
+        const auto hd = krs::union_trace(s.u, rd, s.o);
+        require_same_union_hit(hd, previous_union_trace(s.u, rd, s.o));
+        const krs::ray<float> rf{vec3f(rd.origin), vec3f(rd.direction)};
+        const auto hf = krs::union_trace(s.u, rf, s.o);
+        require_same_union_hit(hf, previous_union_trace(s.u, rf, s.o));
+        hits += hf.found;
+        skipped += hf.evaluations < 3 * hf.steps;
+        // And where the step budget ends the march.
+        krs::trace_options short_march = s.o;
+        short_march.max_steps = 1 + k % 16;
+        require_same_union_hit(krs::union_trace(s.u, rf, short_march), previous_union_trace(s.u, rf, short_march));
+    }
+    // Both outcomes, and the free distances at work, are covered.
+    CHECK(hits > 300);
+    CHECK(hits < 1400);
+    CHECK(skipped > 1000);
+    // Rays that cannot be marched, and a NaN from a component, end as the previous tracer's did.
+    const krs::ray<float> bad{{0, 0, 0}, {0, 0, 0}};
+    require_same_union_hit(krs::union_trace(s.u, bad, s.o), previous_union_trace(s.u, bad, s.o));
+    const krs::ray<float> nan_ray{{std::numeric_limits<float>::quiet_NaN(), 0, 0}, {0, 0, 1}};
+    require_same_union_hit(krs::union_trace(s.u, nan_ray, s.o), previous_union_trace(s.u, nan_ray, s.o));
+}
+
+TEST_CASE("the union tracer in packets equals the scalar union tracer lane by lane")
+{
+    using P = krs::packet_f;
+    constexpr std::size_t W = krs::lane_count<P>;
+    const union_rays_scene s = union_scene();
+    std::mt19937_64 g(35);
+    int hits = 0, by_component[3] = {0, 0, 0};
+    const int packets = 1920 / int(W); // 1920 rays whatever the width
+    for (int k = 0; k < packets; ++k) {
+        alignas(64) float ox[W], oy[W], oz[W], dx[W], dy[W], dz[W];
+        krs::ray<float> rays[W];
+        for (std::size_t i = 0; i < W; ++i) {
+            const krs::ray<double> rd = union_scene_ray(s, g, int(k * W + i));
+            rays[i] = {vec3f(rd.origin), vec3f(rd.direction)};
+            ox[i] = rays[i].origin.x, oy[i] = rays[i].origin.y, oz[i] = rays[i].origin.z;
+            dx[i] = rays[i].direction.x, dy[i] = rays[i].direction.y, dz[i] = rays[i].direction.z;
+        }
+        if (k == 7) dx[3] = dy[3] = dz[3] = 0.0f, rays[3].direction = {0, 0, 0}; // one unusable lane
+        const krs::ray<P> r{{P::load_aligned(ox), P::load_aligned(oy), P::load_aligned(oz)},
+                            {P::load_aligned(dx), P::load_aligned(dy), P::load_aligned(dz)}};
+        const auto h = krs::union_trace(s.u, r, s.o);
+        for (std::size_t i = 0; i < W; ++i) {
+            CAPTURE(k);
+            CAPTURE(i);
+            const auto one = krs::union_trace(s.u, rays[i], s.o);
+            REQUIRE(krs::mask_lane<P>(h.found, i) == bool(one.found));
+            REQUIRE(krs::mask_lane<P>(h.invalid, i) == bool(one.invalid));
+            REQUIRE(krs::lane_at(h.t, i) == one.t);
+            REQUIRE(krs::lane_at(h.steps, i) == float(one.steps));
+            REQUIRE(krs::lane_at(h.evaluations, i) == float(one.evaluations));
+            REQUIRE(krs::lane_at(h.nearest, i) == float(one.nearest));
+            for (std::size_t c = 0; c < 3; ++c)
+                REQUIRE(krs::lane_at(h.component_evaluations[c], i) == float(one.component_evaluations[c]));
+            hits += one.found;
+            if (one.found) ++by_component[one.nearest];
+        }
+    }
+    CHECK(hits > 480);
+    CHECK(hits < 1760);
+    CHECK(by_component[0] > 50);
+    CHECK(by_component[1] > 50);
+    CHECK(by_component[2] > 20);
 }
 
 TEST_CASE("lipschitz_warp stays 1-Lipschitz and never overestimates")

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 static_assert(std::same_as<krs::scalar_t<float>, float>);
 static_assert(std::same_as<krs::mask_t<double>, bool>);
@@ -56,6 +57,88 @@ TEST_CASE_TEMPLATE("packet vocabulary equals the scalar one lane by lane", P, kr
         CHECK(any(m) == [&] { for (std::size_t i = 0; i < n; ++i) if (a[i] < b[i]) return true; return false; }());
         CHECK(all(pa == pa));
         CHECK_FALSE(any(pa != pa));
+        // lane_sum: whole numbers, so every order of the additions gives the exact sum.
+        S whole[n], sum = 0;
+        for (std::size_t i = 0; i < n; ++i) whole[i] = std::round(a[i] * 100), sum += whole[i];
+        CHECK(krs::lane_sum(load<P>(whole)) == sum);
+        CHECK(krs::lane_sum(whole[0]) == whole[0]);
+    }
+}
+
+namespace {
+// The lane types compress/expand are tested on: scalars and every packet this build can run
+// (the portable build: SSE2; the native one adds AVX2 and AVX-512, each with its own code path).
+template <class V>
+struct lane_values {
+    using scalar = V;
+    static constexpr std::size_t n = 1;
+};
+template <class S, class A>
+struct lane_values<xsimd::batch<S, A>> {
+    using scalar = S;
+    static constexpr std::size_t n = xsimd::batch<S, A>::size;
+};
+template <class V>
+using lane_scalar = typename lane_values<V>::scalar;
+template <class V>
+V from_lanes(const lane_scalar<V>* values)
+{
+    if constexpr (std::is_arithmetic_v<V>) return values[0];
+    else return V::load_unaligned(values);
+}
+template <class V>
+void to_lanes(const V& v, lane_scalar<V>* out)
+{
+    if constexpr (std::is_arithmetic_v<V>) out[0] = v;
+    else v.store_unaligned(out);
+}
+} // namespace
+
+#define KRS_COMPRESS_TYPES float, std::int32_t, xsimd::batch<float, xsimd::sse2>, xsimd::batch<std::int32_t, xsimd::sse2>
+#if defined(__AVX512F__)
+#define KRS_COMPRESS_TYPES_WIDE , xsimd::batch<float, xsimd::avx2>, xsimd::batch<std::int32_t, xsimd::avx2>, \
+    xsimd::batch<float, xsimd::avx512f>, xsimd::batch<std::int32_t, xsimd::avx512f>
+#elif defined(__AVX2__)
+#define KRS_COMPRESS_TYPES_WIDE , xsimd::batch<float, xsimd::avx2>, xsimd::batch<std::int32_t, xsimd::avx2>
+#else
+#define KRS_COMPRESS_TYPES_WIDE
+#endif
+
+TEST_CASE_TEMPLATE("compress_store and expand_load equal their lane-by-lane meaning", V, KRS_COMPRESS_TYPES KRS_COMPRESS_TYPES_WIDE)
+{
+    using S = lane_scalar<V>;
+    constexpr std::size_t n = lane_values<V>::n;
+    std::mt19937_64 g(5);
+    // Every mask for up to 8 lanes; random ones (and the edges) for 16. Bits above the lanes are
+    // set too: they must be ignored.
+    std::vector<std::uint64_t> masks;
+    if (n <= 8)
+        for (std::uint64_t b = 0; b < (std::uint64_t(1) << n); ++b) masks.push_back(b | (g() << n));
+    else {
+        masks = {0, (std::uint64_t(1) << n) - 1, 1, std::uint64_t(1) << (n - 1)};
+        for (int k = 0; k < 2000; ++k) masks.push_back(g());
+    }
+    for (const std::uint64_t bits : masks) {
+        S x[n], in[n], old[n];
+        for (std::size_t i = 0; i < n; ++i)
+            x[i] = S(int(g() % 2001) - 1000) + S(i) / S(4), in[i] = S(int(g() % 2001) + 5000), old[i] = S(-7 - int(i));
+        // Reference: walk the lanes one at a time.
+        S want_c[n], want_e[n];
+        std::size_t c = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            if ((bits >> i) & 1u) want_c[c++] = x[i];
+        for (std::size_t i = 0, j = 0; i < n; ++i) want_e[i] = (bits >> i) & 1u ? in[j++] : old[i];
+        S got_c[n];
+        const std::size_t count = krs::compress_store(got_c, from_lanes<V>(x), bits);
+        REQUIRE(count == c);
+        for (std::size_t i = 0; i < c; ++i) REQUIRE(got_c[i] == want_c[i]);
+        S got_e[n];
+        to_lanes(krs::expand_load(from_lanes<V>(old), bits, in), got_e);
+        for (std::size_t i = 0; i < n; ++i) REQUIRE(got_e[i] == want_e[i]);
+        // Expand undoes compress on the selected lanes.
+        S round[n];
+        to_lanes(krs::expand_load(from_lanes<V>(old), bits, got_c), round);
+        for (std::size_t i = 0; i < n; ++i) REQUIRE(round[i] == ((bits >> i) & 1u ? x[i] : old[i]));
     }
 }
 

@@ -6,6 +6,7 @@
 #include "krs/fractal/log_spherical.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/sequence.hpp"
+#include "krs/trace/camera.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
 #include "support/parity.hpp"
@@ -15,6 +16,8 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -269,6 +272,166 @@ TEST_CASE("similar shell seam fixes and their measured Lipschitz values")
     }
 }
 
+namespace {
+
+// The self-similar geometry itself, the slow way: the union of the prototype's copies in the
+// shells k-2 .. k+2 around p's shell, each scaled by e^(k / density) in double. The prototype
+// lies inside its shell, so farther shells are farther than these.
+template <class Shell>
+double union_of_shells(const krs::similar_shell<Shell>& f, const vec3d& p)
+{
+    const double density = f.density();
+    const double k = std::floor(std::log(krs::length(p)) * density);
+    double d = std::numeric_limits<double>::infinity();
+    for (int j = -2; j <= 2; ++j) {
+        const double scale = std::exp((k + j) / density);
+        d = std::min(d, f.shell().distance(p / scale) * scale);
+    }
+    return d;
+}
+
+// A point at relative distance `beta` from a seam of the shells (beta < 0: inside the seam),
+// in a random direction, the seam one of the shells -3 .. 3.
+vec3d near_seam(std::mt19937_64& g, float density, double beta)
+{
+    const double seam = std::exp(std::floor(uniform(g, -3, 4)) / density);
+    return random_direction(g) * (seam * (1.0 + beta));
+}
+
+// Spheres 0.2% of r from the shell's seams (closer than the hidden boundary's cutoff): 6 on the axes
+// near the inner sphere, 8 on the diagonals near the outer one.
+struct seam_hugging_shell {
+    std::vector<krs::sphere> balls;
+    explicit seam_hugging_shell(float s)
+    {
+        const float inner = 0.25f, outer = 0.4f * s / 2.7182817f;
+        for (int axis = 0; axis < 3; ++axis)
+            for (float sign : {-1.0f, 1.0f}) {
+                vec3f c{0, 0, 0};
+                (axis == 0 ? c.x : axis == 1 ? c.y : c.z) = sign * (1.002f + inner);
+                balls.emplace_back(c, inner);
+            }
+        for (int i = 0; i < 8; ++i) {
+            const vec3f d = krs::normalize(vec3f{(i & 1) ? 1.0f : -1.0f, (i & 2) ? 1.0f : -1.0f, (i & 4) ? 1.0f : -1.0f});
+            balls.emplace_back(d * (s / 1.002f - outer), outer);
+        }
+    }
+    template <class T>
+    T distance(const krs::vec3<T>& p) const
+    {
+        T d = balls[0].distance(p);
+        using krs::min;
+        for (std::size_t i = 1; i < balls.size(); ++i) d = min(d, balls[i].distance(p));
+        return d;
+    }
+};
+
+struct march_tally {
+    double steps = 0;
+    int rays = 0, hits = 0, reference_hits = 0, mismatched = 0;
+};
+// Marches a 48 x 48 camera over f and counts hit-mask differences against `reference`'s image.
+template <class F, class R>
+march_tally march_camera(const F& f, const R& reference, const vec3f& eye)
+{
+    const krs::pinhole_camera camera(eye, {0, 0, 0.3f}, {0, 0, 1}, 50.0f, 48, 48);
+    krs::trace_options o;
+    o.max_steps = 2000;
+    o.pixel_footprint = camera.pixel_footprint() * 0.5f;
+    o.max_distance = 60.0f;
+    march_tally tally;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x) {
+            const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+            const krs::hit<float> h = krs::sphere_trace(f, r, o), want = krs::sphere_trace(reference, r, o);
+            tally.steps += h.steps;
+            ++tally.rays;
+            tally.hits += h.found;
+            tally.reference_hits += want.found;
+            tally.mismatched += h.found != want.found;
+        }
+    return tally;
+}
+
+} // namespace
+
+TEST_CASE("similar shell local step factor: a bound within its margin near seams, fewer steps than the global factor")
+{
+    // Hidden boundary with the step halved everywhere (global) or within a band of the seams
+    // (local); the band reaches past the cutoff, where the field may overestimate.
+    krs::shell_options global{krs::shell_seams::hidden_boundary, 0.05f, 0.5f};
+    krs::shell_options local = global;
+    local.seam_band = 0.06f;
+    krs::shell_options raw{krs::shell_seams::none, 0.02f, 1.0f};
+    krs::shell_options exact; // adjacent shells: the reference images
+    const float density = 1.0f;
+
+    auto check_preset = [&](const std::string& name, const auto& make, std::optional<vec3f> eye, bool hugs_seams) {
+        INFO(name);
+        const auto g = make(global), l = make(local), none = make(raw), reference = make(exact);
+        // The band covers the cutoff: the local factor keeps the global factor's margin.
+        CHECK(l.overestimate_margin() == doctest::Approx(0.5 * 0.05).epsilon(1e-6));
+        CHECK(g.overestimate_margin() == doctest::Approx(l.overestimate_margin()).epsilon(1e-6));
+        std::mt19937_64 rng(31);
+        double worst_local = -1e30, worst_global = -1e30, worst_none = -1e30;
+        int longer = 0, full_away = 0, samples_away = 0, shorter = 0;
+        for (int i = 0; i < 60000; ++i) {
+            // Dense near the seams (|beta| < 0.1), some farther in (up to 0.4).
+            const double beta = i % 4 == 3 ? uniform(rng, -0.4, 0.4) : uniform(rng, -0.1, 0.1);
+            const vec3d p = near_seam(rng, density, beta);
+            const double r = krs::length(p);
+            const double truth = union_of_shells(l, p);
+            const double dl = l.distance(p), dg = g.distance(p), dn = none.distance(p);
+            // Inside the geometry a factor below 1 raises a negative distance: not an overshoot.
+            if (!(truth > 0)) continue;
+            // Overestimate beyond the stated margin, relative to r (double lanes: rounding ~1e-7).
+            worst_local = std::max(worst_local, (dl - truth) / r - l.overestimate_margin());
+            worst_global = std::max(worst_global, (dg - truth) / r - g.overestimate_margin());
+            worst_none = std::max(worst_none, (dn - truth) / r - g.overestimate_margin());
+            // The local field is never shorter than the global one, and longer away from the seams.
+            if (dg > 0) CHECK(dl >= dg * (1.0 - 1e-9));
+            if (dl > dg * (1.0 + 1e-6) && dg > 0) ++longer;
+            if (dg > 0 && dl < dg * (1.0 + 1e-6) && std::abs(beta) > 0.14) ++shorter;
+            if (std::abs(beta) > 0.14 && dg > 0) {
+                ++samples_away;
+                // 2 band = 0.12 < 0.14 (below a seam the relative distance -beta / (1 + beta) is larger still)
+                full_away += dl == doctest::Approx(2.0 * dg).epsilon(1e-5);
+            }
+        }
+        MESSAGE(name, ": worst overestimate beyond the margin / r: local ", worst_local, ", global ", worst_global,
+                ", no seam fix ", worst_none, "; local longer than global at ", longer, " samples");
+        CHECK(worst_local <= 1e-6);
+        CHECK(worst_global <= 1e-6);
+        // The samples reach where an unfixed field overestimates: the check above can fail.
+        CHECK(worst_none > 0.05);
+        CHECK(shorter == 0);
+        CHECK(full_away == samples_away);
+        CHECK(samples_away > 1000);
+
+        // The prototype comes closer to its seams than the cutoff: there the hidden boundary
+        // overestimates, and the margin is what holds it.
+        if (hugs_seams) CHECK(worst_global > -0.2 * g.overestimate_margin());
+        if (!eye) return;
+        // Steps per ray on a test camera, and the hit masks against the exact field's image.
+        CHECK(l.distance(*eye) > 0.05f * krs::length(*eye)); // the eye is in free space
+        const march_tally tg = march_camera(g, reference, *eye), tl = march_camera(l, reference, *eye);
+        MESSAGE(name, ": steps per ray global ", tg.steps / tg.rays, ", local ", tl.steps / tl.rays, "; hits ", tg.hits,
+                " / ", tl.hits, " of ", tg.rays, " (adjacent shells ", tg.reference_hits, "), hit-mask differences against adjacent shells ", tg.mismatched, " / ",
+                tl.mismatched);
+        CHECK(tl.hits > tl.rays / 10);
+        CHECK(tl.steps < 0.85 * tg.steps);
+        CHECK(tl.mismatched <= tg.mismatched + tl.rays / 200);
+    };
+    // The lotus from below (its petals rise above the xy plane), the cubes from between two of them.
+    check_preset("recursive lotus", [&](const krs::shell_options& o) { return krs::make_recursive_lotus(density, 8, o); },
+                 vec3f{1.5f, -1.0f, -3.0f}, false);
+    check_preset("cube singularity", [&](const krs::shell_options& o) { return krs::make_cube_singularity(density, o); },
+                 vec3f{3.0f, 1.3f, -0.6f}, false);
+    check_preset("seam-hugging spheres", [&](const krs::shell_options& o) {
+        return krs::similar_shell<seam_hugging_shell>(seam_hugging_shell(float(std::exp(1.0 / density))), density, o);
+    }, std::nullopt, true);
+}
+
 TEST_CASE("log-spherical fields are finite at the singularity and far away")
 {
     const krs::recursive_lotus lotus = krs::make_recursive_lotus();
@@ -418,6 +581,20 @@ TEST_CASE("fractal parameters are validated")
             krs::make_cube_singularity(1.0f, o);
         },
         "shell_options.step_factor");
+    rejects(
+        [] {
+            krs::shell_options o;
+            o.seam_band = 0.6f;
+            krs::make_cube_singularity(1.0f, o);
+        },
+        "shell_options.seam_band");
+    rejects(
+        [] {
+            krs::shell_options o;
+            o.seam_band = -0.01f;
+            krs::make_recursive_lotus(1.0f, 8, o);
+        },
+        "shell_options.seam_band");
     rejects([] { krs::log_polar_tiling<sphere_tile>(sphere_tile{}, 0, 0.4f); }, "log_polar_tiling.cells");
     rejects([&] { krs::log_polar_tiling<sphere_tile>(sphere_tile{}, 8, nan); }, "log_polar_tiling.height");
     rejects([] { krs::log_spherical_tiling<sphere_tile>(sphere_tile{}, 7); }, "log_spherical_tiling.cells");

@@ -744,7 +744,7 @@ TEST_CASE("tile rays: every pixel of a clipped tile once, with the scalar camera
     const krs::trace_options o = primary_options(camera);
     krs::tile_rays<P> rays;
     std::vector<int> seen(std::size_t(width) * height, 0);
-    long long checked = 0;
+    long long checked = 0, set_aside = 0;
     // Tiles of 12 x 10 overrun the right and bottom edges; one lies wholly outside.
     for (int y0 = 0; y0 < height + 10; y0 += 10)
         for (int x0 = 0; x0 < width + 12; x0 += 12) {
@@ -761,6 +761,12 @@ TEST_CASE("tile rays: every pixel of a clipped tile once, with the scalar camera
                 const int x = int(job.id) % width, y = int(job.id) / width;
                 REQUIRE((x >= x0 && x < x0 + 12 && y >= y0 && y < y0 + 10));
                 const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+                if (!(job.t_start <= job.t_max)) {
+                    // Set aside as a miss (the prepass start passed t_max): its ray is not kept.
+                    REQUIRE(!(pre.start_for(r) <= o.max_distance));
+                    ++set_aside, ++checked;
+                    continue;
+                }
                 REQUIRE((job.r.origin.x == r.origin.x && job.r.origin.y == r.origin.y && job.r.origin.z == r.origin.z));
                 REQUIRE(job.r.direction.x == doctest::Approx(r.direction.x).epsilon(1e-6));
                 REQUIRE(job.r.direction.y == doctest::Approx(r.direction.y).epsilon(1e-6));
@@ -773,4 +779,156 @@ TEST_CASE("tile rays: every pixel of a clipped tile once, with the scalar camera
         }
     for (int n : seen) REQUIRE(n == 1);
     CHECK(checked == width * height);
+    CHECK(set_aside < checked / 2);
+}
+
+namespace {
+// Traces a picture's tiles through trace_queue with lane type L (queue_tile_rays fills the queue
+// a tile at a time) and checks every pixel against the scalar tracer on the same clipped range:
+// reported once, the same hit/miss and step count (the packet math rounds as the scalar's with
+// -ffp-contract=off; a contracting build may end a grazing ray a step apart), rays that miss the
+// box reported as misses without an evaluation.
+template <class L, int Interleave>
+void check_tile_queue(int tile_w, int tile_h, int refill_at, float omega, long long& in_box, long long& out_of_box)
+{
+    const scene s = grove(false);
+    const int width = 45, height = 33;
+    const krs::pinhole_camera camera({1.5f, 3.0f, -9.0f}, {1.5f, 0.3f, 1.5f}, {0, 1, 0}, 75.0f, width, height);
+    krs::trace_options o = primary_options(camera);
+    o.omega = omega;
+    const krs::box_clip clip(krs::field_box(s), camera.eye(), o);
+    krs::tile_prepass from_near;
+    from_near.start = o.min_distance;
+    std::vector<krs::hit<float>> got(std::size_t(width * height));
+    std::vector<int> reported(got.size(), 0);
+    int x0 = -tile_w, y0 = 0;
+    krs::ray_queue<L> queue;
+    auto more = [&](krs::ray_queue<L>& q) {
+        REQUIRE(q.empty());
+        if ((x0 += tile_w) >= width) x0 = 0, y0 += tile_h;
+        if (y0 >= height) return false;
+        krs::queue_tile_rays(q, camera, x0, y0, x0 + tile_w, y0 + tile_h, from_near, o.max_distance, clip);
+        return true;
+    };
+    auto done = [&](std::uint32_t id, const krs::hit<float>& h) {
+        REQUIRE(id < got.size());
+        got[id] = h, ++reported[id];
+    };
+    const krs::stream_stats stats = krs::trace_queue<L, Interleave>(s, queue, more, done, o, refill_at);
+    CHECK(stats.rays == width * height);
+    long long evaluations = 0, differ = 0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const std::size_t id = std::size_t(y * width + x);
+            REQUIRE(reported[id] == 1);
+            const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+            float t0 = o.min_distance, t1 = o.max_distance;
+            clip.apply(r, t0, t1);
+            const krs::hit<float> h = krs::sphere_trace(s, r, t0, t1, o);
+            REQUIRE(!got[id].invalid);
+            if (!(t0 <= t1)) {
+                ++out_of_box;
+                REQUIRE(!got[id].found);
+                REQUIRE(got[id].evaluations == 0);
+                continue;
+            }
+            ++in_box;
+            evaluations += got[id].evaluations;
+#if defined(KRS_TEST_FP_CONTRACT)
+            differ += got[id].found != h.found || std::abs(got[id].steps - h.steps) > 1;
+#else
+            REQUIRE(got[id].found == h.found);
+            REQUIRE(got[id].steps == h.steps);
+            REQUIRE(got[id].evaluations == h.evaluations);
+            if (h.found) REQUIRE(std::abs(got[id].t - h.t) <= o.threshold(h.t));
+#endif
+        }
+    CHECK(differ <= width * height / 500);
+    CHECK(stats.evaluations == evaluations);
+}
+} // namespace
+
+TEST_CASE("trace_queue over queued tile rays: every pixel once, box misses set aside, lanes as the scalar tracer")
+{
+    // Tiles 8 x 8 (two rows per 16-lane packet), 7 x 5 (packets straddle rows, tiles end on
+    // partial packets) and 16 x 16; whole-packet and per-lane refill; plain and relaxed steps;
+    // packets and the scalar lane type (one template for both).
+    long long in_box = 0, out_of_box = 0;
+    for (const auto& [w, h] : {std::pair{8, 8}, std::pair{7, 5}, std::pair{16, 16}})
+        for (int refill_at : {0, 1})
+            for (float omega : {1.0f, 1.6f}) {
+                check_tile_queue<P, 2>(w, h, refill_at, omega, in_box, out_of_box);
+                check_tile_queue<P, 4>(w, h, refill_at, omega, in_box, out_of_box);
+            }
+    check_tile_queue<float, 1>(8, 8, 0, 1.6f, in_box, out_of_box);
+    check_tile_queue<float, 3>(7, 5, 1, 1.0f, in_box, out_of_box);
+    // The camera sees the box in the middle of the picture: both kinds of rays were exercised.
+    CHECK(in_box > out_of_box / 4);
+    CHECK(out_of_box > in_box / 4);
+}
+
+TEST_CASE("ray_queue: packets queued in lane order, unusable rays and empty ranges set aside by id")
+{
+    using ids = krs::index_lanes<P>;
+    krs::ray_queue<P> q;
+    std::mt19937_64 g(9);
+    // Reference: the same rays queued one job at a time.
+    krs::ray_queue<P> one;
+    std::vector<std::int32_t> missed, invalid;
+    std::uint32_t next_id = 100;
+    for (int round = 0; round < 50; ++round) {
+        alignas(64) float c[8][lanes];
+        alignas(64) std::int32_t id[lanes];
+        for (std::size_t i = 0; i < lanes; ++i) {
+            for (int k = 0; k < 8; ++k) c[k][i] = float(uniform(g, -2, 2));
+            id[i] = std::int32_t(next_id++);
+            const int kind = int(g() % 6);
+            if (kind == 0) c[6][i] = c[7][i] + 1.0f;                      // empty range: a miss
+            if (kind == 1) c[0][i] = std::numeric_limits<float>::quiet_NaN(); // unusable
+            if (kind == 2) c[3][i] = c[4][i] = c[5][i] = 0.0f;             // zero direction: unusable
+        }
+        const std::uint64_t lanes_used = g() | 1u; // some lanes left out
+        const krs::ray<P> r{{P::load_aligned(c[0]), P::load_aligned(c[1]), P::load_aligned(c[2])},
+                            {P::load_aligned(c[3]), P::load_aligned(c[4]), P::load_aligned(c[5])}};
+        q.push(r, P::load_aligned(c[6]), P::load_aligned(c[7]), ids::load_aligned(id), lanes_used);
+        for (std::size_t i = 0; i < lanes; ++i) {
+            if (!((lanes_used >> i) & 1u)) continue;
+            one.push(krs::ray_job{{{c[0][i], c[1][i], c[2][i]}, {c[3][i], c[4][i], c[5][i]}}, c[6][i], c[7][i], std::uint32_t(id[i])});
+        }
+    }
+    REQUIRE(q.size() == one.size());
+    REQUIRE(q.size() > 0);
+    REQUIRE(q.missed() == one.missed());
+    REQUIRE(q.invalid() == one.invalid());
+    CHECK(!q.missed().empty());
+    CHECK(!q.invalid().empty());
+    for (std::size_t i = 0; i < q.size(); ++i) {
+        const krs::ray_job a = q.job(i), b = one.job(i);
+        REQUIRE(a.id == b.id);
+        REQUIRE((a.r.origin.x == b.r.origin.x && a.r.direction.z == b.r.direction.z && a.t_start == b.t_start && a.t_max == b.t_max));
+        REQUIRE(a.t_start <= a.t_max);
+    }
+    // take moves the front rays into the chosen lanes, in lane order, and keeps the others.
+    krs::ray<P> r{{P(7.0f), P(7.0f), P(7.0f)}, {P(7.0f), P(7.0f), P(7.0f)}};
+    P t0(7.0f), t1(7.0f);
+    ids id(7);
+    const std::uint64_t chosen = 0b1011'0010u & ((std::uint64_t(1) << lanes) - 1);
+    const std::size_t before = q.size();
+    std::vector<krs::ray_job> front;
+    for (std::size_t i = 0; i < std::size_t(std::popcount(chosen)); ++i) front.push_back(q.job(i));
+    q.take(chosen, r, t0, t1, id);
+    REQUIRE(q.size() == before - front.size());
+    alignas(64) std::int32_t id_lanes[lanes];
+    id.store_aligned(id_lanes);
+    for (std::size_t i = 0, j = 0; i < lanes; ++i) {
+        if ((chosen >> i) & 1u) {
+            CHECK(krs::lane_at(t0, i) == front[j].t_start);
+            CHECK(krs::lane_at(r.origin.y, i) == front[j].r.origin.y);
+            CHECK(std::uint32_t(id_lanes[i]) == front[j].id);
+            ++j;
+        } else {
+            CHECK(krs::lane_at(t0, i) == 7.0f);
+            CHECK(id_lanes[i] == 7);
+        }
+    }
 }

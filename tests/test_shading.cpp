@@ -2,6 +2,7 @@
 // against closed forms and brute-force references.
 
 #include "krs/compose/depth.hpp"
+#include "krs/glsl/example_scenes.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/model/terrain.hpp"
@@ -364,6 +365,141 @@ TEST_CASE("ambient occlusion above an infinite plane kernel matches the closed f
     CHECK(krs::ambient_occlusion(c, vec3d{-0.01, 0, 0}, vec3d{0, 1, 0}, o) < 0.9);
     o.samples = 0;
     CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("ambient_occlusion_options.samples"), krs::invalid_parameter);
+}
+
+namespace {
+
+// Soft shadows and ambient occlusion of packets against the scalar calls, lane by lane, on a scene
+// of the examples: points near the surface (as the GLSL parity test samples them), each lane with
+// its own point, normal (the surface's, or a random one) and light direction, a random quarter of
+// the lanes left out of the shadow. The scalar call is the reference; the packet runs the same
+// template, so under -ffp-contract=off every lane must equal it bit for bit.
+template <class S>
+void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint64_t seed)
+{
+    using P = krs::packet_f;
+    constexpr std::size_t W = krs::lane_count<P>;
+    const float scale = scene.extent();
+    krs::soft_shadow_options so;
+    so.hardness = 12.0f;
+    so.threshold = 1e-5f * scale;
+    so.max_distance = 2.0f * scale;
+    so.max_steps = 160;
+    krs::ambient_occlusion_options ao;
+    ao.step = 0.02f * scale;
+    std::mt19937_64 g(seed);
+    const auto in_box = [&] {
+        return scene.sample_center + vec3f{float(uniform(g, -1, 1)) * scene.sample_half.x,
+                                           float(uniform(g, -1, 1)) * scene.sample_half.y,
+                                           float(uniform(g, -1, 1)) * scene.sample_half.z};
+    };
+    krs_test::parity shadows{"soft shadow, packet against scalar, " + scene.name, 1.0};
+    krs_test::parity occlusion{"ambient occlusion, packet against scalar, " + scene.name, 1.0};
+    // Under FMA contraction (krs_parity_contract_native, tests/support/parity.hpp) the two paths
+    // round differently, and the soft shadow has no bound of the contraction tolerance's kind: a
+    // march passing within the threshold returns 0 on one side and up to k d / t on the other,
+    // whatever last-bit difference decided it. Away from that, an ulp of a step moves the next
+    // sample by an ulp of t and k d / t by a few ulp. So there, as in the GLSL comparison
+    // (tests/test_glsl_shading.cpp), all but 0.1% of lanes must agree to 1e-3; everywhere else,
+    // every lane bit for bit.
+    long shadow_lanes = 0, shadow_off = 0;
+    const auto same_shadow = [&](float packet, float scalar) {
+        ++shadow_lanes;
+        if (shadows.agree(packet, scalar)) return true;
+        if (!krs_test::contraction) return false;
+        shadow_off += std::abs(packet - scalar) > 1e-3f;
+        return true;
+    };
+    int penumbra = 0, dark = 0, lit = 0, left_out = 0, occluded = 0;
+    for (int k = 0; k < 60; ++k) {
+        alignas(64) float px[W], py[W], pz[W], nx[W], ny[W], nz[W], lx[W], ly[W], lz[W], th[W];
+        bool use[W];
+        for (std::size_t i = 0; i < W; ++i) {
+            vec3f p;
+            do p = in_box();
+            while (!(scene.field.distance(p) > 1e-4f * scale && scene.field.distance(p) < 0.02f * scale));
+            const vec3f n = g() % 4 == 0 ? vec3f(random_direction(g)) : scene.field.normal(p);
+            vec3f l = vec3f(random_direction(g));
+            if (krs::dot(l, n) < 0) l = -l; // toward the light side mostly, where shadows are marched
+            px[i] = p.x, py[i] = p.y, pz[i] = p.z, nx[i] = n.x, ny[i] = n.y, nz[i] = n.z;
+            lx[i] = l.x, ly[i] = l.y, lz[i] = l.z;
+            use[i] = g() % 4 != 0;
+            th[i] = float(uniform(g, 1e-6, 1e-4)) * scale; // each lane's own threshold (a primary hit's)
+        }
+        const krs::vec3<P> p{P::load_aligned(px), P::load_aligned(py), P::load_aligned(pz)};
+        const krs::vec3<P> n{P::load_aligned(nx), P::load_aligned(ny), P::load_aligned(nz)};
+        const krs::vec3<P> l{P::load_aligned(lx), P::load_aligned(ly), P::load_aligned(lz)};
+        const auto lanes = P::batch_bool_type::load_unaligned(use);
+        const P shadow = krs::soft_shadow(scene.field, p, n, l, so, lanes);
+        const P all_lanes_shadow = krs::soft_shadow(scene.field, p, n, l, so);
+        const P occ = krs::ambient_occlusion(scene.field, p, n, ao);
+        const P own_threshold = krs::soft_shadow(scene.field, p, n, l, so, lanes, P::load_aligned(th));
+        for (std::size_t i = 0; i < W; ++i) {
+            const vec3f pi{px[i], py[i], pz[i]}, ni{nx[i], ny[i], nz[i]}, li{lx[i], ly[i], lz[i]};
+            const float scalar = krs::soft_shadow(scene.field, pi, ni, li, so);
+            CAPTURE(k);
+            CAPTURE(i);
+            REQUIRE(same_shadow(krs::lane_at(all_lanes_shadow, i), scalar));
+            krs::soft_shadow_options own = so;
+            own.threshold = th[i];
+            if (use[i]) {
+                REQUIRE(same_shadow(krs::lane_at(shadow, i), scalar));
+                REQUIRE(same_shadow(krs::lane_at(own_threshold, i), krs::soft_shadow(scene.field, pi, ni, li, own)));
+            } else {
+                REQUIRE(krs::lane_at(shadow, i) == 0.0f);
+                REQUIRE(krs::lane_at(own_threshold, i) == 0.0f);
+                ++left_out;
+            }
+            const float scalar_ao = krs::ambient_occlusion(scene.field, pi, ni, ao);
+            REQUIRE(occlusion.agree(krs::lane_at(occ, i), scalar_ao));
+            penumbra += scalar > 0.0f && scalar < 1.0f;
+            dark += scalar == 0.0f;
+            lit += scalar == 1.0f;
+            occluded += scalar_ao < 0.9f;
+        }
+    }
+    shadows.report();
+    occlusion.report();
+    if (krs_test::contraction) MESSAGE(shadow_off << " of " << shadow_lanes << " shadow lanes differ by more than 1e-3");
+    CHECK(shadow_off <= shadow_lanes / 1000);
+    MESSAGE(scene.name << ": " << penumbra << " penumbra, " << dark << " dark, " << lit << " lit lanes, " << occluded
+                       << " occluded");
+    // The comparison covers every outcome of the march and of the occlusion sum.
+    CHECK(penumbra > int(W) * 2);
+    CHECK(dark > int(W) * 3);
+    CHECK(left_out > 0);
+    CHECK(occluded > int(W) * 3);
+}
+
+} // namespace
+
+TEST_CASE("soft shadows and ambient occlusion in packets equal the scalar calls lane by lane")
+{
+    namespace ex = krs::glsl::examples;
+    SUBCASE("tree") { check_packet_shading(ex::tree(), 1); }
+    SUBCASE("forest") { check_packet_shading(ex::forest(), 2); }
+    SUBCASE("terrain") { check_packet_shading(ex::terrain(), 3); }
+}
+
+TEST_CASE("soft shadow: lanes with an unusable shadow ray are dark, in packets and alone")
+{
+    const auto tree = krs::glsl::examples::tree();
+    krs::soft_shadow_options o;
+    const vec3f p{0.3f, 3.0f, 0.2f}, n{0, 1, 0};
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    for (const vec3f& l : {vec3f{0, 0, 0}, vec3f{nan, 1, 0}, vec3f{0, inf, 0}}) {
+        CHECK(krs::soft_shadow(tree.field, p, n, l, o) == 0.0f);
+        const krs::vec3<krs::packet_f> pp(p), np(n), lp(l);
+        CHECK(xsimd::all(krs::soft_shadow(tree.field, pp, np, lp, o) == krs::packet_f(0.0f)));
+    }
+    CHECK(krs::soft_shadow(tree.field, vec3f{nan, 0, 0}, n, n, o) == 0.0f);
+    // A lane's own threshold must be a threshold where the lane is shaded, and only there.
+    using P = krs::packet_f;
+    const krs::vec3<P> pp(p), np(n);
+    const P bad(0.0f);
+    CHECK_THROWS_WITH_AS(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) == P(0.0f), bad),
+                         doctest::Contains("soft_shadow.threshold"), krs::invalid_parameter);
+    CHECK(xsimd::all(krs::soft_shadow(tree.field, pp, np, np, o, P(0.0f) != P(0.0f), bad) == P(0.0f)));
 }
 
 TEST_CASE_TEMPLATE("value noise is bounded and obeys its declared gradient bound", T, float, krs::packet_f)

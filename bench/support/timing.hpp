@@ -10,14 +10,28 @@
 #include <cstdint>
 #include <exception>
 #include <cstddef>
+#include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
 
 namespace bench {
+
+// The 1, 5 and 15 minute load averages as "a b c": every table prints them before and after, so a
+// figure can be read against how busy the shared machine was.
+inline std::string load_average()
+{
+    double load[3];
+    if (getloadavg(load, 3) != 3) return "unknown";
+    char text[64];
+    std::snprintf(text, sizeof text, "%.2f %.2f %.2f", load[0], load[1], load[2]);
+    return text;
+}
 
 template <class F>
 double best_seconds(int repeat, F&& f)

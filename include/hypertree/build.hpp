@@ -33,8 +33,9 @@ namespace detail {
 // Generation, validation and density classes: the stored voxels of one tree, in a list drawn
 // from `scratch` (every temporary of the way too). Each list goes back to the scratch as soon as
 // the next is made, so the next step can reuse its pages. Where the grid allows (compact.hpp's
-// direct_buckets), each chunk's hits are bucketed on the chunk's task and its buffer reused by
-// the next chunk; else validation reads the chunks as pieces.
+// direct_buckets), the chunks are generated in groups of consecutive chunks (generate.hpp's
+// generation_group_count), each group's hits bucketed on its task while they are in cache and
+// its buffer reused by the next group; else validation reads the chunks as pieces.
 template <transform_pipeline P>
 std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::uint64_t seed, int density_class_count,
                                                 const generation_options& options, std::pmr::memory_resource* scratch)
@@ -44,16 +45,24 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
     std::pmr::vector<voxel_entry> entries(scratch);
     no_observer observer;
     if (const auto plan = direct_buckets::for_grid(definition.volume.voxel_count())) {
-        std::vector<bucketed_chunk> keyed(planned_chunk_count(definition, drawing)); // refuses before allocating
-        generate_chunks(definition, seed, drawing, observer, [&](std::size_t c, chunk_output& chunk) {
-            keyed[c] = bucket_chunk({chunk.data(), chunk.size()}, *plan, scratch);
-            chunk = {}; // its buffer back to the scratch, for the next chunk
-        });
-        merge_bucketed(keyed, *plan, options.parallel_for, scratch, entries);
-    } else {
-        const generated_chunks generated = generate_chunks(definition, seed, drawing, observer);
-        compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
+        const std::uint64_t chunks = planned_chunk_count(definition, drawing); // refuses before allocating
+        const std::size_t groups = generation_group_count(chunks, double(chunk_room(definition, std::min(drawing.chunk_cycles, cycle_count(definition)))));
+        std::vector<bucketed_chunk> keyed(groups);
+        generate_chunks(definition, seed, drawing, observer, [&](std::size_t g, chunk_output& hits) {
+            keyed[g] = bucket_chunk({hits.data(), hits.size()}, *plan, scratch);
+            hits = {}; // its buffer back to the scratch, for the next group
+        }, groups);
+        // The merge's groups are classified where they lie, each on its own task.
+        const std::vector<std::pmr::vector<voxel_entry>> groups_of_entries =
+            merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *plan, options.parallel_for, scratch);
+        keyed.clear(); // the keys back to the scratch
+        std::vector<std::span<const voxel_entry>> pieces(groups_of_entries.begin(), groups_of_entries.end());
+        const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), density_class_count, options.parallel_for);
+        return classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, definition.branch_depth,
+                               std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
     }
+    const generated_chunks generated = generate_chunks(definition, seed, drawing, observer);
+    compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
     const density_classes classes(entries, density_class_count);
     return classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
 }

@@ -49,15 +49,49 @@ public:
 
     density_classes(std::span<const voxel_entry> entries, int class_count) : class_count_(class_count)
     {
+        require_class_count(class_count);
+        place_classes(hit_count_histogram(entries));
+    }
+    // The classes of entries given as pieces taken end to end (build_tree's merge groups), each
+    // piece's histogram of hit counts made on the caller's threads: the classes of the pieces'
+    // concatenation.
+    density_classes(std::span<const std::span<const voxel_entry>> pieces, int class_count, const parallel_for_hook& parallel_for)
+        : class_count_(class_count)
+    {
+        require_class_count(class_count);
+        std::vector<std::vector<std::pair<std::uint32_t, std::size_t>>> histograms(pieces.size());
+        run_tasks(parallel_for, pieces.size(), [&](std::size_t p) { histograms[p] = hit_count_histogram(pieces[p]); });
+        if (histograms.size() == 1) {
+            place_classes(histograms[0]);
+            return;
+        }
+        // The sum of the pieces' histograms: few distinct counts (hundreds to thousands), sorted.
+        std::vector<std::pair<std::uint32_t, std::size_t>> all;
+        for (const auto& h : histograms) all.insert(all.end(), h.begin(), h.end());
+        std::sort(all.begin(), all.end());
+        std::vector<std::pair<std::uint32_t, std::size_t>> histogram;
+        for (const auto& [hits, voxels] : all) {
+            if (!histogram.empty() && histogram.back().first == hits) histogram.back().second += voxels;
+            else histogram.emplace_back(hits, voxels);
+        }
+        place_classes(histogram);
+    }
+
+private:
+    static void require_class_count(int class_count)
+    {
         if (class_count < min_class_count || class_count > max_class_count)
             throw invalid_parameter("density_classes.class_count",
                                     "must be between 2 (binary hypertree: every hit voxel full) and 255",
                                     std::to_string(class_count));
-        const std::vector<std::pair<std::uint32_t, std::size_t>> histogram = hit_count_histogram(entries);
+    }
+    // The classes over a histogram of (hit count, voxels with it), by increasing count.
+    void place_classes(const std::vector<std::pair<std::uint32_t, std::size_t>>& histogram)
+    {
         std::size_t remaining = 0;
         for (const auto& bucket : histogram) remaining += bucket.second;
 
-        const std::size_t count_of_classes = std::min<std::size_t>(std::size_t(class_count - 1), histogram.size());
+        const std::size_t count_of_classes = std::min<std::size_t>(std::size_t(class_count_ - 1), histogram.size());
         classes_.reserve(count_of_classes);
         std::size_t next = 0;
         for (std::size_t c = 1; c <= count_of_classes; ++c) {
@@ -88,6 +122,7 @@ public:
         }
     }
 
+public:
     // C as asked for, counting the empty class 0.
     int class_count() const { return class_count_; }
     // The non-empty classes 1..K in order: classes()[c - 1] is class c.
@@ -171,6 +206,95 @@ private:
 // Branch depth meaning "no branching structure": no level gets full density by depth alone.
 inline constexpr int no_branch_structure = -1;
 
+// The stored voxels of compacted entries given as pieces taken end to end (as build_tree's merge
+// groups leave them): classify's result for their concatenation, each piece on its own task,
+// written straight to its place in the list (no piece is copied into one list first).
+//
+// The loop reads through local pointers and keeps a fault flag: the list it writes is of bytes,
+// which may alias anything, so writing through the vector made the compiler reload every
+// captured value for each voxel. The first disorder is looked for only when a piece has one.
+template <class Voxels = std::vector<stored_voxel>>
+Voxels classify_pieces(std::span<const std::span<const voxel_entry>> pieces, const density_classes& classes, int branch_depth,
+                       Voxels voxels = {}, const parallel_for_hook& parallel_for = {})
+{
+    if (branch_depth < no_branch_structure || branch_depth > 255)
+        throw invalid_parameter("classify.branch_depth",
+                                "must be -1 (no branching structure) or a level between 0 and 255",
+                                std::to_string(branch_depth));
+    std::vector<std::size_t> offset(pieces.size() + 1, 0);
+    for (std::size_t p = 0; p < pieces.size(); ++p) offset[p + 1] = offset[p] + pieces[p].size();
+    const std::size_t n = offset.back();
+
+    // Hit count -> density as a table over the counts the classes span, so classifying a million
+    // voxels costs a load each instead of a bisection; counts above it take the last class.
+    const auto spanned = classes.classes();
+    const std::uint32_t table_top = spanned.empty() ? 0 : spanned.back().most_hits;
+    std::vector<std::uint8_t> density_by_hits;
+    if (std::size_t(table_top) <= 4 * n + 1024) {
+        density_by_hits.resize(std::size_t(table_top) + 1);
+        for (std::size_t h = 0; h < density_by_hits.size(); ++h)
+            density_by_hits[h] = classes.density_of(std::uint32_t(h));
+    }
+
+    // Voxel i comes from entry i; each task checks its entries' order (against the one before
+    // too) and counts those without hits, which a serial pass then removes (compact makes none).
+    voxels.resize(n);
+    std::vector<std::size_t> first_unsorted(pieces.size(), n), without_hits(pieces.size(), 0);
+    run_tasks(parallel_for, pieces.size(), [&](std::size_t p) {
+        const voxel_entry* const e = pieces[p].data();
+        const std::size_t count = pieces[p].size();
+        if (count == 0) return;
+        stored_voxel* const out = voxels.data() + offset[p];
+        const std::uint8_t* const table = density_by_hits.data();
+        const std::size_t table_size = density_by_hits.size();
+        const int depth = branch_depth;
+        // The entry before this piece's first: the last of the nearest non-empty piece before.
+        const voxel_entry* before = nullptr;
+        for (std::size_t q = p; q-- > 0;)
+            if (!pieces[q].empty()) {
+                before = &pieces[q].back();
+                break;
+            }
+        bool disorder = before && !(before->voxel < e[0].voxel);
+        std::size_t empty = 0;
+        for (std::size_t i = 0; i < count; ++i) {
+            const voxel_entry x = e[i];
+            disorder |= i > 0 && !(e[i - 1].voxel < x.voxel);
+            const std::uint8_t density = int(x.level) <= depth ? std::uint8_t(255)
+                                         : x.hits < table_size ? table[x.hits]
+                                                               : classes.density_of(x.hits);
+            out[i] = {x.voxel, voxel{density, x.level}, x.part};
+            empty += x.hits == 0;
+        }
+        without_hits[p] = empty;
+        if (disorder) {
+            if (before && !(before->voxel < e[0].voxel)) first_unsorted[p] = offset[p];
+            else
+                for (std::size_t i = 1; i < count; ++i)
+                    if (!(e[i - 1].voxel < e[i].voxel)) {
+                        first_unsorted[p] = offset[p] + i;
+                        break;
+                    }
+        }
+    });
+    const auto entry = [&](std::size_t i) -> const voxel_entry& {
+        const std::size_t p = std::size_t(std::upper_bound(offset.begin(), offset.end(), i) - offset.begin()) - 1;
+        return pieces[p][i - offset[p]];
+    };
+    if (const std::size_t i = first_unsorted.empty() ? n : *std::min_element(first_unsorted.begin(), first_unsorted.end()); i < n)
+        throw invalid_parameter("classify.entries", "must be sorted by voxel without duplicates (as compact returns them)",
+                                "voxel " + std::to_string(entry(i).voxel) + " after " + std::to_string(entry(i - 1).voxel));
+    if (std::find_if(without_hits.begin(), without_hits.end(), [](std::size_t c) { return c != 0; }) != without_hits.end()) {
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            voxels[kept] = voxels[i];
+            kept += entry(i).hits != 0;
+        }
+        voxels.resize(kept);
+    }
+    return voxels;
+}
+
 // The stored voxels of compacted entries (as `compact` returns them: sorted by voxel, unique):
 // each hit voxel with its class's density, or full density when its level <= branch_depth, its
 // level and part. Entries with no hit are left out, so the result is sorted, unique and has no
@@ -183,58 +307,11 @@ template <class Voxels = std::vector<stored_voxel>>
 Voxels classify(std::span<const voxel_entry> entries, const density_classes& classes, int branch_depth, Voxels voxels = {},
                 const parallel_for_hook& parallel_for = {})
 {
-    if (branch_depth < no_branch_structure || branch_depth > 255)
-        throw invalid_parameter("classify.branch_depth",
-                                "must be -1 (no branching structure) or a level between 0 and 255",
-                                std::to_string(branch_depth));
-
-    // Hit count -> density as a table over the counts the classes span, so classifying a million
-    // voxels costs a load each instead of a bisection; counts above it take the last class.
-    const auto spanned = classes.classes();
-    const std::uint32_t table_top = spanned.empty() ? 0 : spanned.back().most_hits;
-    std::vector<std::uint8_t> density_by_hits;
-    if (std::size_t(table_top) <= 4 * entries.size() + 1024) {
-        density_by_hits.resize(std::size_t(table_top) + 1);
-        for (std::size_t h = 0; h < density_by_hits.size(); ++h)
-            density_by_hits[h] = classes.density_of(std::uint32_t(h));
-    }
-    const auto density_of = [&](std::uint32_t hits) {
-        return hits < density_by_hits.size() ? density_by_hits[hits] : classes.density_of(hits);
-    };
-
-    // Voxel i comes from entry i; each task checks its entries' order (against the one before
-    // too) and counts those without hits, which a serial pass then removes (compact makes none).
-    // Written through indices into a sized list: push_back's end pointer lives in the vector, and
-    // the byte-sized fields written in between may alias it, so it was reloaded and stored for
-    // every voxel.
     const std::size_t n = entries.size();
-    voxels.resize(n);
     const std::size_t tasks = parallel_for && n >= (std::size_t(1) << 16) ? 4 : 1;
-    std::vector<std::size_t> first_unsorted(tasks, n), without_hits(tasks, 0);
-    run_tasks(parallel_for, tasks, [&](std::size_t p) {
-        const std::size_t begin = n * p / tasks, end = n * (p + 1) / tasks;
-        std::size_t unsorted = n, empty = 0;
-        for (std::size_t i = begin; i < end; ++i) {
-            const voxel_entry& e = entries[i];
-            if (i > 0 && !(entries[i - 1].voxel < e.voxel) && unsorted == n) unsorted = i;
-            const std::uint8_t density = int(e.level) <= branch_depth ? std::uint8_t(255) : density_of(e.hits);
-            voxels[i] = {e.voxel, voxel{density, e.level}, e.part};
-            empty += e.hits == 0;
-        }
-        first_unsorted[p] = unsorted, without_hits[p] = empty;
-    });
-    if (const std::size_t i = *std::min_element(first_unsorted.begin(), first_unsorted.end()); i < n)
-        throw invalid_parameter("classify.entries", "must be sorted by voxel without duplicates (as compact returns them)",
-                                "voxel " + std::to_string(entries[i].voxel) + " after " + std::to_string(entries[i - 1].voxel));
-    if (std::find_if(without_hits.begin(), without_hits.end(), [](std::size_t c) { return c != 0; }) != without_hits.end()) {
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            voxels[kept] = voxels[i];
-            kept += entries[i].hits != 0;
-        }
-        voxels.resize(kept);
-    }
-    return voxels;
+    std::vector<std::span<const voxel_entry>> pieces;
+    for (std::size_t p = 0; p < tasks; ++p) pieces.push_back(entries.subspan(n * p / tasks, n * (p + 1) / tasks - n * p / tasks));
+    return classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, branch_depth, std::move(voxels), parallel_for);
 }
 
 } // namespace hypertree

@@ -452,41 +452,76 @@ struct no_after_chunk {
     void operator()(std::size_t, chunk_output&) const {}
 };
 
+// How many consecutive chunks build_tree generates into one buffer and buckets together: enough
+// that a group's most hits fill about 1 MiB (the L2 cache of one core), and at least 8 groups
+// where there are that many chunks, for two to four threads to share. Bucketing chunk by chunk
+// split tree D's 1 M hits into 82 x 2048 pieces of 6 keys on average, each a cache line or more
+// to write and to read back, and the merge paid a loop per piece; in groups of 10 chunks the
+// pieces hold 60 keys.
+inline std::size_t generation_group_count(std::uint64_t chunks, double most_hits_per_chunk)
+{
+    constexpr double group_bytes = double(1 << 20);
+    constexpr std::uint64_t fewest_groups = 8;
+    const double per_group = std::max(1.0, std::floor(group_bytes / std::max(1.0, most_hits_per_chunk * double(sizeof(hit)))));
+    const std::uint64_t groups = std::max<std::uint64_t>(
+        std::min<std::uint64_t>(chunks, fewest_groups), std::uint64_t(std::ceil(double(chunks) / per_group)));
+    return std::size_t(std::min(groups, chunks));
+}
+
+// The most hits chunk `count` cycles can record: points make one per generator at most, lines the
+// walk's bound per generator; and a row's room more, which the lanes ask for before each row.
+template <transform_pipeline P>
+std::size_t chunk_room(const ifs<P>& definition, std::uint64_t count)
+{
+    const std::uint64_t depth = std::uint64_t(definition.tree_depth);
+    return definition.generator.is_point() ? std::size_t(count * depth) + cycle_lanes
+                                           : std::size_t(double(count) * double(depth) * voxels_per_generator(definition)) +
+                                                 cycle_lanes * (max_voxels_on_segment(definition.volume, definition.generator.length()) + 1);
+}
+
 // after_chunk(c, chunk) runs on chunk c's task as soon as the chunk is made, while its hits are
 // hot in cache; it may take them and empty the chunk.
+//
+// With `groups` > 0, the chunks are generated in that many groups of consecutive chunks (group g:
+// chunks [chunks g / groups, chunks (g + 1) / groups)), each group's hits one after the other in
+// one buffer on one task, and after_chunk(g, buffer) runs once per group. The hits taken in
+// group order are the hits taken in chunk order: the same list.
 template <transform_pipeline P, class Observer, class AfterChunk = no_after_chunk>
 generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_options& options, Observer& observer,
-                                 const AfterChunk& after_chunk = {})
+                                 const AfterChunk& after_chunk = {}, std::size_t groups = 0)
 {
     const std::uint64_t chunks = planned_chunk_count(definition, options);
     const drawn_ifs<P> tree(definition, seed);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
     const std::uint64_t cycles = cycle_count(definition);
-    const double voxels_per_line = voxels_per_generator(definition);
     // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
     const std::optional<lane_tables> lanes_in_step =
         options.vector_lanes && std::is_same_v<Observer, no_observer> ? lane_tables::of(tree) : std::nullopt;
-    generated_chunks out;
-    out.chunks.resize(chunks);
-    std::vector<generation_stats> chunk_stats(chunks);
-    const auto run = [&](std::size_t c) {
-        const std::uint64_t first = c * options.chunk_cycles;
-        const std::uint64_t count = std::min(options.chunk_cycles, cycles - first);
-        chunk_stats[c].recorded_per_depth.assign(depth, 0);
-        // Room for the most hits the chunk can make, so it never grows (a copy that touches fresh
-        // pages): points make one per generator at most, lines the walk's bound per generator;
-        // and a row's room more, which the lanes ask for before each row. Pages never written are
-        // never touched, so where the system overcommits (Linux's default) the worst case costs
-        // address space only; all chunks together stay within the budget checked above.
-        out.chunks[c].from = scratch_or_default(options.scratch);
-        out.chunks[c].make_room(definition.generator.is_point()
-                                    ? std::size_t(count * depth) + cycle_lanes
-                                    : std::size_t(double(count) * double(depth) * voxels_per_line) +
-                                          cycle_lanes * (max_voxels_on_segment(definition.volume, definition.generator.length()) + 1));
-        generate_chunk(tree, seed, c, count, lanes_in_step ? &*lanes_in_step : nullptr, out.chunks[c], chunk_stats[c], observer);
-        after_chunk(c, out.chunks[c]);
+    const std::size_t tasks = groups == 0 ? std::size_t(chunks) : std::min<std::size_t>(groups, std::size_t(chunks));
+    const auto first_chunk = [&](std::size_t g) {
+        // floor(chunks g / tasks) without the product, which could pass 2^64.
+        return groups == 0 ? std::uint64_t(g) : chunks / tasks * g + chunks % tasks * g / tasks;
     };
-    run_tasks(options.parallel_for, std::size_t(chunks), run);
+    generated_chunks out;
+    out.chunks.resize(tasks);
+    std::vector<generation_stats> chunk_stats(tasks);
+    const auto run = [&](std::size_t g) {
+        const std::uint64_t begin = first_chunk(g), end = first_chunk(g + 1);
+        const auto cycles_of = [&](std::uint64_t c) { return std::min(options.chunk_cycles, cycles - c * options.chunk_cycles); };
+        chunk_stats[g].recorded_per_depth.assign(depth, 0);
+        // Room for the most hits the task's chunks can make, so the buffer never grows (a copy
+        // that touches fresh pages). Pages never written are never touched, so where the system
+        // overcommits (Linux's default) the worst case costs address space only; all chunks
+        // together stay within the budget checked above.
+        std::size_t room = 0;
+        for (std::uint64_t c = begin; c < end; ++c) room += chunk_room(definition, cycles_of(c));
+        out.chunks[g].from = scratch_or_default(options.scratch);
+        out.chunks[g].make_room(room);
+        for (std::uint64_t c = begin; c < end; ++c)
+            generate_chunk(tree, seed, c, cycles_of(c), lanes_in_step ? &*lanes_in_step : nullptr, out.chunks[g], chunk_stats[g], observer);
+        after_chunk(g, out.chunks[g]);
+    };
+    run_tasks(options.parallel_for, tasks, run);
 
     out.stats.recorded_per_depth.assign(depth, 0);
     for (const generation_stats& s : chunk_stats) {

@@ -29,6 +29,7 @@
 #include "krs/shade/kernel_light.hpp"
 #include "krs/shade/lambert.hpp"
 #include "krs/shade/normal.hpp"
+#include "krs/shade/reflection.hpp"
 #include "krs/shade/texture.hpp"
 #include "krs/trace/box_clip.hpp"
 #include "krs/trace/camera.hpp"

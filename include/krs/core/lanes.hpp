@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -233,6 +234,144 @@ inline mask_t<T> mask_from_bits(std::uint64_t bits) noexcept
             for (std::size_t i = 0; i < lane_count<T>; ++i) lanes[i] = ((bits >> i) & 1u) != 0;
             return mask_t<T>::load_aligned(lanes);
         }
+    }
+}
+
+// The sum of a value's lanes (a scalar is its own sum): a packet's counters added up in one
+// reduction where a loop over its lanes would add one at a time.
+template <lane T>
+inline scalar_t<T> lane_sum(const T& x) noexcept
+{
+    if constexpr (std::floating_point<T>) return x;
+    else return xsimd::hadd(x);
+}
+
+// ---- compress and expand ----------------------------------------------------------------------
+// Moving the lanes a mask selects to the front of memory, and back: what a refilling tracer needs
+// to report its finished lanes and pull new rays into them, a whole register at a time instead of
+// one lane at a time. `bits` is a word of lane flags as mask_bits gives it (bit i = lane i).
+//
+//   compress_store(out, x, bits): out[0 .. c) = the lanes i of x with bit i set, in lane order;
+//       returns c = popcount(bits restricted to the lanes). Writes lane_count<V> values (the ones
+//       from c on are unspecified), so out must have room for all of them.
+//   expand_load(x, bits, in): lane i is in[j], j = the number of set bits below i, where bit i is
+//       set, and x's lane i elsewhere. Reads lane_count<V> values from in (the first c are used),
+//       so in must hold that many readable values.
+//
+// AVX-512 has both as instructions (vcompressps / vexpandps; their register forms are used with a
+// plain store / load, because the forms with a memory operand are microcoded on some cores).
+// AVX2 permutes by a table of 256 lane orders; other packets go through memory one lane at a
+// time, with the same meaning. Scalars are one lane: bit 0 says whether it moves. Values of 32
+// bits (float, std::int32_t lanes).
+namespace detail {
+// For 8 lanes: row b lists, first, the lanes with a bit set in b, in order (compress), and the
+// rest padded with 0; expand's row b gives lane i the rank of bit i among b's set bits.
+struct lane_orders_8 {
+    std::uint8_t compress[256][8];
+    std::uint8_t expand[256][8];
+};
+inline constexpr lane_orders_8 make_lane_orders_8()
+{
+    lane_orders_8 t{};
+    for (unsigned b = 0; b < 256; ++b) {
+        unsigned c = 0;
+        for (unsigned i = 0; i < 8; ++i) {
+            t.expand[b][i] = std::uint8_t(c & 7u);
+            if ((b >> i) & 1u) t.compress[b][c++] = std::uint8_t(i);
+        }
+    }
+    return t;
+}
+inline constexpr lane_orders_8 lane_orders_8_table = make_lane_orders_8();
+} // namespace detail
+
+template <class S>
+    requires(sizeof(S) == 4 && std::is_arithmetic_v<S>)
+inline std::size_t compress_store(S* out, S x, std::uint64_t bits) noexcept
+{
+    out[0] = x;
+    return std::size_t(bits & 1u);
+}
+template <class S, class A>
+    requires(sizeof(S) == 4)
+inline std::size_t compress_store(S* out, const xsimd::batch<S, A>& x, std::uint64_t bits) noexcept
+{
+    constexpr std::size_t n = xsimd::batch<S, A>::size;
+    bits &= n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+    const std::size_t count = std::size_t(std::popcount(bits));
+#if defined(__AVX512F__)
+    if constexpr (std::is_base_of_v<xsimd::avx512f, A>) {
+        if constexpr (std::is_same_v<S, float>)
+            _mm512_storeu_ps(out, _mm512_maskz_compress_ps(__mmask16(bits), x));
+        else
+            _mm512_storeu_si512(out, _mm512_maskz_compress_epi32(__mmask16(bits), x));
+        return count;
+    } else
+#endif
+#if defined(__AVX2__)
+        if constexpr (std::is_base_of_v<xsimd::avx2, A>) {
+        const __m256i order = _mm256_cvtepu8_epi32(
+            _mm_loadl_epi64(reinterpret_cast<const __m128i*>(detail::lane_orders_8_table.compress[bits])));
+        if constexpr (std::is_same_v<S, float>)
+            _mm256_storeu_ps(out, _mm256_permutevar8x32_ps(x, order));
+        else
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), _mm256_permutevar8x32_epi32(x, order));
+        return count;
+    } else
+#endif
+    {
+        alignas(64) S lanes[n];
+        x.store_aligned(lanes);
+        std::size_t c = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            out[c] = lanes[i];
+            c += (bits >> i) & 1u;
+        }
+        return count;
+    }
+}
+
+template <class S>
+    requires(sizeof(S) == 4 && std::is_arithmetic_v<S>)
+inline S expand_load(S x, std::uint64_t bits, const S* in) noexcept
+{
+    return (bits & 1u) ? in[0] : x;
+}
+template <class S, class A>
+    requires(sizeof(S) == 4)
+inline xsimd::batch<S, A> expand_load(const xsimd::batch<S, A>& x, std::uint64_t bits, const S* in) noexcept
+{
+    using V = xsimd::batch<S, A>;
+    constexpr std::size_t n = V::size;
+    bits &= n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+#if defined(__AVX512F__)
+    if constexpr (std::is_base_of_v<xsimd::avx512f, A>) {
+        if constexpr (std::is_same_v<S, float>)
+            return V(_mm512_mask_expand_ps(x, __mmask16(bits), _mm512_loadu_ps(in)));
+        else
+            return V(_mm512_mask_expand_epi32(x, __mmask16(bits), _mm512_loadu_si512(in)));
+    } else
+#endif
+#if defined(__AVX2__)
+        if constexpr (std::is_base_of_v<xsimd::avx2, A>) {
+        const __m256i order = _mm256_cvtepu8_epi32(
+            _mm_loadl_epi64(reinterpret_cast<const __m128i*>(detail::lane_orders_8_table.expand[bits])));
+        // Lane i's own bit, as an all-ones lane where it is set.
+        const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        const __m256i take = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(int(bits)), lane_bit), lane_bit);
+        if constexpr (std::is_same_v<S, float>)
+            return V(_mm256_blendv_ps(x, _mm256_permutevar8x32_ps(_mm256_loadu_ps(in), order), _mm256_castsi256_ps(take)));
+        else
+            return V(_mm256_blendv_epi8(x, _mm256_permutevar8x32_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(in)), order), take));
+    } else
+#endif
+    {
+        alignas(64) S lanes[n];
+        x.store_aligned(lanes);
+        std::size_t c = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            if ((bits >> i) & 1u) lanes[i] = in[c++];
+        return V::load_aligned(lanes);
     }
 }
 

@@ -39,6 +39,18 @@
 //                            a sphere, but the field may still overestimate by up to cutoff * r.
 //   step_factor              multiplies the distance (shorter steps: more of them, fewer
 //                            overshoots); combines with any seam mode.
+//   seam_band                makes the step factor local (the document: "shorten the steps
+//                            globally, or only locally in problematic regions"): with
+//                            beta = min(r - inner, outer - r) / r the relative distance to the
+//                            nearer seam of p's shell, the factor is step_factor for beta <=
+//                            band, 1 for beta >= 2 band, linear between (continuous: beta is 0
+//                            on both sides of a seam). 0 (the default) keeps it global.
+// Why the seams are the only problematic region: geometry of other shells lies beyond the seams,
+// at least beta r away, so the true distance D >= min(d_k, beta r) with d_k the own shell's
+// distance. Hidden boundary returns min(d_k, max(beta r, cutoff r)) <= D wherever beta >= cutoff:
+// it can overestimate only within beta < cutoff, and by at most f cutoff r there, f the factor
+// applied there. A band >= cutoff therefore keeps the global factor's margin (step_factor
+// cutoff r) with full steps away from the seams; overestimate_margin() states the margin.
 // The prototype geometry must lie in the shell 1 <= |p| <= s; what leaves it is clipped by the
 // adjacent-shells fix and repeated overlapping by the others.
 
@@ -291,6 +303,8 @@ struct shell_options {
     shell_seams seams = shell_seams::adjacent_shells;
     float hidden_cutoff = 0.02f; // hidden_boundary: the boundary spheres' field floor, times r
     float step_factor = 1.0f;    // in (0, 1]: multiplies the distance
+    float seam_band = 0.0f;      // in [0, 0.5]: step_factor only within this relative distance of a
+                                 // seam (ramping to 1 at twice it); 0: everywhere
 
     const shell_options& validate() const
     {
@@ -298,6 +312,10 @@ struct shell_options {
         require_positive("shell_options.step_factor", step_factor);
         if (!(step_factor <= 1.0f))
             throw invalid_parameter("shell_options.step_factor", "must be in (0, 1]", detail::to_text(step_factor));
+        // beta < (s - 1) / (s + 1) < 1 in any shell; a band of half of that already covers most of one.
+        require_non_negative("shell_options.seam_band", seam_band);
+        if (!(seam_band <= 0.5f))
+            throw invalid_parameter("shell_options.seam_band", "must be in [0, 0.5]", detail::to_text(seam_band));
         return *this;
     }
 };
@@ -349,7 +367,24 @@ public:
             break;
         }
         }
+        if (options_.seam_band > 0.0f) return d * local_step(r, k, inv_density);
         return d * T(options_.step_factor);
+    }
+
+    // How much the field may exceed the true distance at radius r, as a multiple of r, for a
+    // prototype inside its shell (the header comment): adjacent shells 0, hidden boundary the
+    // factor at beta = cutoff times cutoff, none unbounded (infinity).
+    double overestimate_margin() const
+    {
+        switch (options_.seams) {
+        case shell_seams::none: return std::numeric_limits<double>::infinity();
+        case shell_seams::hidden_boundary: {
+            const double f = options_.step_factor, band = options_.seam_band, c = options_.hidden_cutoff;
+            const double ramp = band > 0 ? std::clamp((c - band) / band, 0.0, 1.0) : 0.0;
+            return (f + (1.0 - f) * ramp) * c;
+        }
+        default: return 0.0;
+        }
     }
 
     // GLSL (krs/glsl/emitter.hpp): the prototype shell as NAME_shell, the shell scales from a table
@@ -358,7 +393,8 @@ public:
     // table, its length); then the scale table e^(k / density) for the shells k = k0 .. k0 + n - 1
     // (as many as the float radii 1e-30 .. 3.4e38 reach, at most glsl_max_table), computed by the
     // C++ expression, so the GPU scales each shell by the very float the CPU does (its own exp is
-    // ~10 ulp off); shells past the table fall back to the GPU's exp.
+    // ~10 ulp off); shells past the table fall back to the GPU's exp. A seam band adds one vec4
+    // after the table (band, 1 / band, 1 - step_factor) and the local factor's code.
     static constexpr std::string_view glsl_name = "krs_similar_shell";
     static constexpr std::string_view glsl_source = "";
     static constexpr int glsl_max_table = 256;
@@ -416,10 +452,37 @@ public:
                     "    }\n";
             break;
         }
+        if (options_.seam_band > 0.0f) {
+            // The local step factor (local_step), its own vec4 (band, 1 / band, 1 - step_factor),
+            // appended only when used so that a global factor's GLSL is as before.
+            const std::string b = out.at(out.vec4({options_.seam_band, inverse_band(), 1.0f - options_.step_factor, 0.0f},
+                                                  name + " seam band, 1 / band, 1 - step factor"));
+            body += "    float inner_k = " + name + "_scale(k);\n"
+                    "    float outer_k = inner_k * c.z;\n"
+                    "    float beta = min(r - inner_k, outer_k - r) / max(r, 1e-30);\n"
+                    "    float ramp = clamp((beta - " + b + ".x) * " + b + ".y, 0.0, 1.0);\n"
+                    "    return d * (" + o + ".y + " + b + ".z * ramp);\n}\n";
+            out.function(body);
+            return;
+        }
         out.function(body + "    return d * " + o + ".y;\n}\n");
     }
 
 private:
+    // The factor the distance is multiplied by at radius r in shell k (the header comment):
+    // step_factor near the seams, 1 from twice the band on; the step factor itself when global.
+    template <class T>
+    T local_step(const T& r, const T& k, const T& inv_density) const
+    {
+        if (!(options_.seam_band > 0.0f)) return T(options_.step_factor);
+        const T inner = lane_exp(k * inv_density), outer = inner * T(ratio_);
+        // r may fall a rounding outside [inner, outer] (k = floor(log r density)): beta < 0
+        // there, which keeps the seam's factor.
+        const T beta = min(r - inner, outer - r) / max(r, T(detail::smallest_radius));
+        const T ramp = clamp((beta - T(options_.seam_band)) * T(inverse_band()), T(0), T(1));
+        return T(options_.step_factor) + T(1.0f - options_.step_factor) * ramp;
+    }
+
     // The prototype's distance seen from shell k: f(p / s^k) s^k.
     template <class T>
     T in_shell(const vec3<T>& p, const T& k, const T& inv_density) const
@@ -427,6 +490,8 @@ private:
         const T scale = lane_exp(k * inv_density);
         return shell_.distance(p / scale) * scale;
     }
+
+    float inverse_band() const { return options_.seam_band > 0.0f ? 1.0f / options_.seam_band : 0.0f; }
 
     Shell shell_;
     shell_options options_{};

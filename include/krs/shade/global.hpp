@@ -1,6 +1,8 @@
 #pragma once
 // Global shading by sphere tracing secondary rays (paper section 6.5): soft shadows and ambient
-// occlusion. Both only need a field's distance, so they work for a KRS, a union, a warp alike.
+// occlusion. Both only need a field's distance, so they work for a KRS, a union, a warp alike, and
+// both take one point or a packet of points (docs/design.md#rule-1): a shading pass lights W
+// pixels at once, each lane the scalar call's arithmetic.
 //
 // Soft shadow (the penumbra estimate popularized for distance fields): march toward the light as a
 // shadow ray would, and keep the smallest ratio k * d(t) / t seen on the way. d(t) / t is the
@@ -26,9 +28,8 @@
 
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
+#include "krs/trace/sphere_trace.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <string>
 #include <string_view>
 
@@ -51,6 +52,7 @@ struct soft_shadow_options {
     }
 
     // float NAME(vec3 p, vec3 n, vec3 to_light): soft_shadow(FIELD, p, n, to_light, *this).
+    // (A zero light direction returns 0 there, as the C++'s unusable ray does.)
     // (The test is written `d >= threshold` negated, as the C++, so a NaN distance blocks where
     // the implementation keeps NaNs, as llvmpipe does; GLSL lets a compiler assume there are none,
     // so elsewhere a NaN's outcome is the driver's.)
@@ -59,6 +61,7 @@ struct soft_shadow_options {
     const float threshold = THRESHOLD;
     const float max_distance = MAX_DISTANCE;
     const int max_steps = MAX_STEPS;
+    if (!(dot(to_light, to_light) > 0.0)) return 0.0;
     vec3 origin = p + n * (2.0 * threshold);
     float visible = 1.0;
     float t = 0.0;
@@ -84,24 +87,76 @@ struct soft_shadow_options {
     }
 };
 
-// Visible fraction of the light from surface point p with normal n. The march starts at p lifted
-// by two thresholds along n (as krs::hard_shadow does), so it does not re-hit the surface it
-// leaves; t counts from that lifted point.
-template <field F, std::floating_point S>
-S soft_shadow(const F& f, const vec3<S>& p, const vec3<S>& n, const vec3<S>& to_light, const soft_shadow_options& o)
+// Visible fraction of the light from surface point p with normal n, for one point (T = float,
+// double) or a packet of points (T = packet_f: W shadow rays marched together, each lane with its
+// own point, normal and light direction). The march starts at p lifted by two thresholds along n
+// (as krs::hard_shadow does), so it does not re-hit the surface it leaves; t counts from that
+// lifted point.
+//
+// The march is the tracers' own (docs/design.md#rule-1): march_state / march_step with the
+// threshold fixed at `threshold` (no footprint), over-relaxation off, `max_steps` samples and the
+// far limit `max_distance`. The penumbra ratio rides in the step's observer, which sees each
+// sample t and its distance d before the step acts on them. That is the loop of the GLSL above,
+// line for line: a sample with !(d >= threshold) (the surface, or NaN) makes the lane 0; others
+// lower the estimate to k d / t where t > 0; the step is t += d; the lane stops once t passes
+// max_distance or after max_steps samples. (An infinite d ends the march without lowering the
+// estimate, as t += d passing max_distance does in the GLSL.)
+//
+// Lanes outside `lanes` are not marched and return 0, as does a lane whose shadow ray is unusable
+// (a non-finite point or normal, a zero or non-finite light direction): no light arrives along a
+// direction that is not one, and a NaN distance blocks as well.
+//
+// `threshold` gives each lane its own hit threshold (and lift), e.g. its primary hit's, in place
+// of o.threshold: a packet of shading points at different depths. It must be > 0 in every lane in
+// `lanes`. It rides in the march state's threshold_bias over a zero floor, so the test is
+// d < 0 * t + 0 + threshold = threshold exactly, as the scalar call with o.threshold makes it.
+template <field F, class T>
+T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_light, const soft_shadow_options& o,
+              const mask_t<T>& lanes, const T& threshold)
 {
+    using S = scalar_t<T>;
     o.validate();
-    const S k = S(o.hardness), threshold = S(o.threshold), t_max = S(o.max_distance);
-    const vec3<S> origin = p + n * (S(2) * threshold);
-    S visible = S(1), t = S(0);
-    for (int step = 0; step < o.max_steps; ++step) {
-        const S d = f.distance(origin + to_light * t);
-        if (!(d >= threshold)) return S(0); // reached the surface (or NaN: treat as blocked)
-        if (t > S(0)) visible = std::min(visible, k * d / t);
-        t += d;
-        if (t > t_max) break;
-    }
-    return std::clamp(visible, S(0), S(1));
+    if (any(lanes && !(threshold > T(0) && is_finite(threshold))))
+        throw invalid_parameter("soft_shadow.threshold", "must be finite and > 0 in every lane shaded");
+    trace_options march;
+    march.pixel_footprint = 0.0f; // threshold(t) = 0 * t + 0, plus the lane's bias: see above
+    march.threshold_floor = 0.0f; // (not a valid floor for a tracer; here the bias is the threshold)
+    march.max_distance = o.max_distance;
+    march.max_steps = o.max_steps;
+    const T k(S(o.hardness));
+    const ray<T> r{p + n * (T(2) * threshold), to_light};
+    // A lane left out ends before its start: start_march rejects it without a step, and its
+    // sample point stays the finite origin the caller gave (a field never sees an infinite point
+    // for a lane that was not asked for).
+    const T far = select(lanes, T(S(o.max_distance)), T(-1));
+    march_state<T> m = start_march(r, T(0), far, march);
+    m.threshold_bias = threshold;
+    T visible(1);
+    mask_t<T> blocked = m.active && !m.active; // all false, in the mask's own type
+    auto penumbra = [&](const march_state<T>& at, const T& d) {
+        const mask_t<T> open = d >= threshold;
+        blocked = blocked || (at.active && !open);
+        visible = select(at.active && open && at.t > T(0), min(visible, k * d / at.t), visible);
+    };
+    while (any(m.active)) march_step(f, m, march, penumbra);
+    // visible starts at 1 and only falls by positive ratios: the clamp is the GLSL's, for form.
+    return select(blocked || m.result.invalid || !lanes, T(0), clamp(visible, T(0), T(1)));
+}
+
+// The lanes in `lanes`, with o.threshold.
+template <field F, class T>
+T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_light, const soft_shadow_options& o,
+              const mask_t<T>& lanes)
+{
+    return soft_shadow(f, p, n, to_light, o, lanes, T(scalar_t<T>(o.threshold)));
+}
+
+// Every lane (one point: the point itself), with o.threshold.
+template <field F, class T>
+T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_light, const soft_shadow_options& o)
+{
+    const T zero(0);
+    return soft_shadow(f, p, n, to_light, o, zero == zero);
 }
 
 struct ambient_occlusion_options {
@@ -156,20 +211,28 @@ struct ambient_occlusion_options {
     }
 };
 
-template <field F, std::floating_point S>
-S ambient_occlusion(const F& f, const vec3<S>& p, const vec3<S>& n, const ambient_occlusion_options& o)
+// Ambient occlusion at p with normal n, for one point (T = float, double) or a packet (T = packet_f,
+// each lane its own point and normal). The samples sit at fixed distances along the normal, so
+// there is no march to share with the tracers: the loop is one template over the lane type, the
+// weights and sample distances are the same for every lane and stay scalar, and each lane does
+// the scalar call's arithmetic in its order (a lane equals the scalar result bit for bit where
+// the build does not contract a * b + c differently in the two, tests/support/parity.hpp).
+template <field F, class T>
+T ambient_occlusion(const F& f, const vec3<T>& p, const vec3<T>& n, const ambient_occlusion_options& o)
 {
+    using S = scalar_t<T>;
     o.validate();
-    S occlusion = 0, total = 0, weight = 1;
+    T occlusion(0);
+    S total = 0, weight = 1;
     for (int j = 1; j <= o.samples; ++j) {
         const S s = S(j) * S(o.step);
-        const S d = f.distance(p + n * s);
-        occlusion += weight * (s - d) / s;
+        const T d = f.distance(p + n * T(s));
+        occlusion += T(weight) * (T(s) - d) / T(s);
         total += weight;
         weight *= S(o.falloff);
     }
-    const S ao = S(1) - S(o.strength) * occlusion / total;
-    return std::isfinite(ao) ? std::clamp(ao, S(0), S(1)) : S(1);
+    const T ao = T(1) - T(S(o.strength)) * occlusion / T(total);
+    return select(is_finite(ao), clamp(ao, T(0), T(1)), T(1));
 }
 
 } // namespace krs

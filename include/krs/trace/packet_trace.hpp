@@ -10,16 +10,33 @@
 // is `march_advance`, the template the scalar tracer's `march_step` runs: scheduling is the only
 // thing this header adds (docs/design.md#rule-1).
 //
-// Rays come from `next(ray_job&) -> bool` (false: the queue is empty) and leave through
+// Rays wait in a `ray_queue`: structure of arrays (one array per coordinate, start, end, id), so
+// a packet's finished lanes are refilled by one expand per coordinate (krs/core/lanes.hpp's
+// expand_load: the next c rays of the queue go to the c finished lanes, in lane order) and its
+// results leave by one compress per value, never by copying rays lane by lane. A ray is checked
+// once, W at a time, as it is queued: one that cannot be marched (an unusable ray, or an empty
+// range such as a ray that misses the field's box) is set aside as a miss and never takes a lane,
+// so a refilled lane is always active and the refill blends only what a new ray changes. Against
+// the stream that pulled one `ray_job` per lane and blended a whole march_state (issue 23), that
+// is 1.7-2.2x the rays per second per core on bench_embree_peer's scenes at the 0.5 px threshold
+// (about 2 evaluations per ray), with the same hits; where rays take 15 evaluations the field is
+// most of the time and the gain is 1.0-1.2x (bench_packet_trace).
+//
+// `trace_queue(f, queue, more, done, ...)` traces a queue and asks `more(queue)` for more rays
+// when it runs dry (false: there are no more; krs/trace/tile_rays.hpp queues a screen tile's
+// rays in packets). `trace_stream(f, next, done, ...)` takes rays one at a time from
+// `next(ray_job&) -> bool` instead and queues them itself. Results leave through
 // `done(std::uint32_t id, const hit<float>&)`, in completion order, on the calling thread. The
 // library starts no thread; callers run one stream per thread (e.g. one per tile).
 
 #include "krs/trace/sphere_trace.hpp"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 namespace krs {
 
@@ -50,43 +67,128 @@ struct stream_stats {
     }
 };
 
-namespace detail {
-
-// SoA staging of one packet's rays, so single lanes can be replaced between steps. Per-lane
-// flags are words of bits (bit i = lane i), so finding the finished lanes is a few word
-// operations rather than a loop over the packet.
-template <class P>
-struct packet_lanes {
+// Rays waiting for a stream's lanes, as a structure of arrays, plus the ids of the rays set aside
+// as they were queued (reported as misses without a step). Rays are appended W at a time from
+// packets (`push`, one compress per array) or one at a time (`push(ray_job)`); the stream takes
+// them from the front with `take` (one expand per array). Every array keeps 2 W values of room
+// past its end: a compress writes a whole register at the end, an expand reads one at the front.
+template <class P = packet_f>
+class ray_queue {
+public:
     static constexpr std::size_t W = lane_count<P>;
-    alignas(64) float ox[W]{}, oy[W]{}, oz[W]{}, dx[W], dy[W], dz[W], t0[W], t1[W];
-    std::uint32_t id[W];
-    std::uint64_t live = 0; // lanes holding a ray that has not been reported yet
+    using ids = index_lanes<P>;
 
-    // Fills lane i from the queue. A job whose range is empty (t_start > t_max: a ray clipped
-    // away) goes to `empty` at once instead of taking the lane for a step it would not take. A
-    // lane left empty gets a ray the tracer rejects at once; it keeps the origin of the lane's
-    // last ray, so the point the field is evaluated at for the idle lane (its origin, see
-    // trace_stream) is a finite one the caller chose.
-    template <class Next, class Empty>
-    void pull(std::size_t i, Next& next, bool& queue_open, Empty& empty)
+    // Rays waiting (queued, not yet taken).
+    std::size_t size() const { return size_ - head_; }
+    bool empty() const { return size_ == head_; }
+    // Drops every ray, waiting or set aside.
+    void clear()
     {
-        ray_job job;
-        while (queue_open && (queue_open = next(job)) && job.t_start > job.t_max) empty(job);
-        const std::uint64_t bit = std::uint64_t(1) << i;
-        live = queue_open ? (live | bit) : (live & ~bit);
-        if (!queue_open)
-            job = ray_job{{{ox[i], oy[i], oz[i]}, {0, 0, 1}}, std::numeric_limits<float>::infinity(), 0.0f, 0};
-        ox[i] = job.r.origin.x, oy[i] = job.r.origin.y, oz[i] = job.r.origin.z;
-        dx[i] = job.r.direction.x, dy[i] = job.r.direction.y, dz[i] = job.r.direction.z;
-        t0[i] = job.t_start, t1[i] = job.t_max, id[i] = job.id;
+        size_ = head_ = 0;
+        missed_.clear(), invalid_.clear();
     }
-    march_state<P> start(const trace_options& options) const
+
+    // Queues the lanes of `lanes` (bit i = lane i) whose ray can be marched, in lane order. The
+    // others are set aside: a ray unusable_ray refuses as invalid, one whose range is empty
+    // (t_start > t_max, or NaN: a ray clipped away) as a plain miss; `id` holds the caller's ids
+    // (as index lanes; an id is any 32-bit value, stored as its bits).
+    void push(const ray<P>& r, const P& t_start, const P& t_max, const ids& id, std::uint64_t lanes)
     {
-        const ray<P> r{{P::load_aligned(ox), P::load_aligned(oy), P::load_aligned(oz)},
-                       {P::load_aligned(dx), P::load_aligned(dy), P::load_aligned(dz)}};
-        return start_march(r, P::load_aligned(t0), P::load_aligned(t1), options);
+        lanes &= all_lanes;
+        const std::uint64_t bad = mask_bits<P>(unusable_ray(r, t_start)) & lanes;
+        const std::uint64_t keep = mask_bits<P>(t_start <= t_max) & lanes & ~bad;
+        if (keep != lanes) {
+            set_aside(invalid_, id, bad);
+            set_aside(missed_, id, lanes & ~bad & ~keep);
+        }
+        if (keep == 0) return;
+        room();
+        const std::size_t at = size_;
+        compress_store(x_[0].data() + at, r.origin.x, keep);
+        compress_store(x_[1].data() + at, r.origin.y, keep);
+        compress_store(x_[2].data() + at, r.origin.z, keep);
+        compress_store(x_[3].data() + at, r.direction.x, keep);
+        compress_store(x_[4].data() + at, r.direction.y, keep);
+        compress_store(x_[5].data() + at, r.direction.z, keep);
+        compress_store(x_[6].data() + at, t_start, keep);
+        compress_store(x_[7].data() + at, t_max, keep);
+        size_ += compress_store(id_.data() + at, id, keep);
     }
+    // Queues one ray, set aside as above when it cannot be marched.
+    void push(const ray_job& job)
+    {
+        if (unusable_ray(job.r, job.t_start)) {
+            invalid_.push_back(std::int32_t(job.id));
+            return;
+        }
+        if (!(job.t_start <= job.t_max)) {
+            missed_.push_back(std::int32_t(job.id));
+            return;
+        }
+        room();
+        const float v[8] = {job.r.origin.x,    job.r.origin.y,    job.r.origin.z, job.r.direction.x,
+                            job.r.direction.y, job.r.direction.z, job.t_start,    job.t_max};
+        for (int k = 0; k < 8; ++k) x_[std::size_t(k)][size_] = v[k];
+        id_[size_++] = std::int32_t(job.id);
+    }
+
+    // Moves the next popcount(lanes) rays into the lanes of `lanes` (in lane order), leaving the
+    // other lanes as they are. Precondition: popcount(lanes) <= size().
+    void take(std::uint64_t lanes, ray<P>& r, P& t_start, P& t_max, ids& id)
+    {
+        const std::size_t at = head_;
+        r.origin.x = expand_load(r.origin.x, lanes, x_[0].data() + at);
+        r.origin.y = expand_load(r.origin.y, lanes, x_[1].data() + at);
+        r.origin.z = expand_load(r.origin.z, lanes, x_[2].data() + at);
+        r.direction.x = expand_load(r.direction.x, lanes, x_[3].data() + at);
+        r.direction.y = expand_load(r.direction.y, lanes, x_[4].data() + at);
+        r.direction.z = expand_load(r.direction.z, lanes, x_[5].data() + at);
+        t_start = expand_load(t_start, lanes, x_[6].data() + at);
+        t_max = expand_load(t_max, lanes, x_[7].data() + at);
+        id = expand_load(id, lanes, id_.data() + at);
+        head_ += std::size_t(std::popcount(lanes & all_lanes));
+    }
+
+    // Waiting ray i (0 = the next one) as a job, for callers that hand rays out one at a time.
+    ray_job job(std::size_t i) const
+    {
+        const std::size_t k = head_ + i;
+        return {{{x_[0][k], x_[1][k], x_[2][k]}, {x_[3][k], x_[4][k], x_[5][k]}}, x_[6][k], x_[7][k], std::uint32_t(id_[k])};
+    }
+    void drop_front(std::size_t count) { head_ = std::min(size_, head_ + count); }
+
+    // Ids of the rays set aside since the last clear: misses, and rays that could not be marched.
+    const std::vector<std::int32_t>& missed() const { return missed_; }
+    const std::vector<std::int32_t>& invalid() const { return invalid_; }
+    void clear_set_aside() { missed_.clear(), invalid_.clear(); }
+
+private:
+    static constexpr std::uint64_t all_lanes = W >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1;
+
+    // Room for one more register at the end, and a register's read past it.
+    void room()
+    {
+        const std::size_t need = size_ + 2 * W;
+        if (id_.size() >= need) return;
+        const std::size_t grow = std::max(need, 2 * id_.size());
+        for (auto& a : x_) a.resize(grow);
+        id_.resize(grow);
+    }
+    void set_aside(std::vector<std::int32_t>& list, const ids& id, std::uint64_t lanes)
+    {
+        if (lanes == 0) return;
+        const std::size_t at = list.size();
+        list.resize(at + W);
+        list.resize(at + compress_store(list.data() + at, id, lanes));
+    }
+
+    std::array<std::vector<float>, 8> x_; // origin xyz, direction xyz, start, end
+    std::vector<std::int32_t> id_;
+    std::size_t size_ = 0, head_ = 0;
+    std::vector<std::int32_t> missed_, invalid_;
 };
+
+namespace detail {
 
 // The field at K points: in one call when the field walks several points in lockstep (a
 // sequence's `distances`), else one call per point.
@@ -102,23 +204,15 @@ std::array<T, K> distances_of(const F& f, const std::array<vec3<T>, K>& points)
     }
 }
 
-template <class T>
-void blend(const mask_t<T>& m, march_state<T>& into, const march_state<T>& from)
+// The lowest n set bits of `bits` (all of them when it has at most n).
+inline std::uint64_t lowest_bits(std::uint64_t bits, std::size_t n)
 {
-    into.r.origin = select(m, from.r.origin, into.r.origin);
-    into.r.direction = select(m, from.r.direction, into.r.direction);
-    into.t = select(m, from.t, into.t);
-    into.t_max = select(m, from.t_max, into.t_max);
-    into.accepted_t = select(m, from.accepted_t, into.accepted_t);
-    into.accepted_d = select(m, from.accepted_d, into.accepted_d);
-    into.omega = select(m, from.omega, into.omega);
-    into.threshold_bias = select(m, from.threshold_bias, into.threshold_bias);
-    into.active = (m && from.active) || (!m && into.active);
-    into.result.t = select(m, from.result.t, into.result.t);
-    into.result.found = (m && from.result.found) || (!m && into.result.found);
-    into.result.invalid = (m && from.result.invalid) || (!m && into.result.invalid);
-    into.result.steps = select(m, from.result.steps, into.result.steps);
-    into.result.evaluations = select(m, from.result.evaluations, into.result.evaluations);
+    std::uint64_t out = 0;
+    for (std::size_t k = 0; k < n && bits != 0; ++k) {
+        const std::uint64_t low = bits & (~bits + 1);
+        out |= low, bits ^= low;
+    }
+    return out;
 }
 
 // When to refill. Lanes that finish early idle until refilled, but a lane refilled alone starts
@@ -140,91 +234,165 @@ int default_refill(const F& f, int width)
 
 } // namespace detail
 
-// Traces every ray `next` yields through f with packets of type P, refilling finished lanes.
-// A lane is refilled once at least `refill_at` lanes of its packet have finished (default: see
-// above; refilling costs a spill of the packet to memory), or when none is left running. Results
-// equal per-ray `sphere_trace` calls up to float rounding of the packet math.
-template <class P = packet_f, int Interleave = 2, field F, class Next, class Done>
-stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_options& options, int refill_at = 0)
+// Traces every ray of `queue`, and of what `more(queue)` adds each time the queue runs dry (it
+// returns false when there is nothing more; the queue is cleared before each call), through f
+// with packets of type P, refilling finished lanes. A packet's lanes are refilled once at least
+// `refill_at` of them have finished (default: see above), or when none is left running. Rays
+// the queue set aside are reported as misses (`invalid` for unusable rays) without a step.
+// Results equal per-ray `sphere_trace` calls up to float rounding of the packet math.
+//
+// Per packet the stream keeps a march_state, the lanes' ids (index lanes) and `live`, the lanes
+// holding a ray not yet reported. A harvest compresses the finished lanes' results into a small
+// buffer for `done` and expands the queue's next rays into those lanes; of the state it then
+// resets only what start_march sets differently for a new ray (the ray, t, t_max, counters,
+// found, active; and the over-relaxation's kept sphere and factor where omega > 1). No lane is
+// ever invalid here: the queue set those rays aside.
+template <class P = packet_f, int Interleave = 2, field F, class More, class Done>
+stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& done, const trace_options& options,
+                         int refill_at = 0)
 {
-    static_assert(Interleave >= 1, "trace_stream needs at least one packet");
+    static_assert(Interleave >= 1, "trace_queue needs at least one packet");
     options.validate();
+    using S = scalar_t<P>;
+    using ids = index_lanes<P>;
     constexpr std::size_t W = lane_count<P>;
     if (refill_at <= 0) refill_at = detail::default_refill(f, int(W));
+    const bool relaxed = options.omega > 1.0f;
+    const P inf(std::numeric_limits<S>::infinity());
     stream_stats stats;
-    std::array<detail::packet_lanes<P>, Interleave> lanes;
-    std::array<march_state<P>, Interleave> state;
-    bool queue_open = true;
-    // A job with an empty range is a miss without a step, reported as it is pulled (invalid as
-    // sphere_trace reports it when the ray itself is unusable).
-    auto empty = [&](const ray_job& job) {
+    // Reports the rays set aside since the queue was last cleared.
+    auto report_set_aside = [&] {
         hit<float> h;
         h.t = std::numeric_limits<float>::infinity();
-        h.invalid = unusable_ray(job.r, job.t_start);
-        ++stats.rays;
-        done(job.id, h);
+        for (const std::int32_t id : queue.missed()) done(std::uint32_t(id), h);
+        h.invalid = true;
+        for (const std::int32_t id : queue.invalid()) done(std::uint32_t(id), h);
+        stats.rays += (long long)(queue.missed().size() + queue.invalid().size());
+        queue.clear_set_aside();
     };
-    for (int k = 0; k < Interleave; ++k) {
-        for (std::size_t i = 0; i < W; ++i) lanes[k].pull(i, next, queue_open, empty);
-        state[k] = lanes[k].start(options);
-    }
-    // Reports the finished lanes of packet k and refills them. Lanes whose ray was rejected at
-    // start (invalid input) finish without a step and are reported like any other.
-    auto harvest = [&](int k, bool force) {
-        detail::packet_lanes<P>& L = lanes[k];
-        march_state<P>& m = state[k];
-        const std::uint64_t finished = L.live & ~mask_bits<P>(m.active);
-        const int count = std::popcount(finished);
-        if (count == 0 || (count < refill_at && !force)) return;
-        alignas(64) float t[W], steps[W], evaluations[W];
-        m.result.t.store_aligned(t);
-        m.result.steps.store_aligned(steps);
-        m.result.evaluations.store_aligned(evaluations);
-        const std::uint64_t found = mask_bits<P>(m.result.found), invalid = mask_bits<P>(m.result.invalid);
-        for (std::uint64_t rest = finished; rest != 0; rest &= rest - 1) {
-            const std::size_t i = std::size_t(std::countr_zero(rest));
-            hit<float> h;
-            h.t = t[i], h.found = (found >> i) & 1u, h.invalid = (invalid >> i) & 1u;
-            h.steps = int(steps[i]), h.evaluations = int(evaluations[i]);
-            ++stats.rays;
-            stats.evaluations += h.evaluations;
-            stats.busy_lanes += h.steps;
-            done(L.id[i], h);
-            L.pull(i, next, queue_open, empty);
+    bool open = true; // `more` may still add rays
+    auto refill_queue = [&] {
+        while (open && queue.empty()) {
+            queue.clear();
+            open = more(queue);
+            report_set_aside();
         }
-        // Every finished lane was pulled again: those lanes start afresh.
-        detail::blend(mask_from_bits<P>(finished), m, L.start(options));
+        return !queue.empty();
     };
+    report_set_aside();
+
+    // Every lane starts idle (an empty range at the origin, no step taken): the first harvest
+    // fills them all.
+    std::array<march_state<P>, Interleave> state;
+    std::array<ids, Interleave> id;
+    std::array<std::uint64_t, Interleave> live{};
+    for (int k = 0; k < Interleave; ++k) {
+        state[k] = start_march(ray<P>{{P(0.0f), P(0.0f), P(0.0f)}, {P(0.0f), P(0.0f), P(1.0f)}}, P(1.0f), P(0.0f), options);
+        id[k] = ids(0);
+    }
+
+    // Reports the finished lanes of packet k and refills its idle lanes (the caller calls it when
+    // at least refill_at lanes have finished or none runs). The counters are summed in two
+    // reductions; what is left per ray is `done`.
+    auto harvest = [&](int k, std::uint64_t active) -> std::uint64_t {
+        march_state<P>& m = state[k];
+        const std::uint64_t finished = live[k] & ~active;
+        const int count = std::popcount(finished);
+        if (count > 0) {
+            const mask_t<P> gone = mask_from_bits<P>(finished);
+            stats.evaluations += (long long)lane_sum(select(gone, P(m.result.evaluations), P(0.0f)));
+            stats.busy_lanes += (long long)lane_sum(select(gone, P(m.result.steps), P(0.0f)));
+            alignas(64) float t[W], found[W], steps[W], evaluations[W];
+            alignas(64) std::int32_t who[W];
+            compress_store(t, m.result.t, finished);
+            compress_store(found, select(m.result.found, P(1.0f), P(0.0f)), finished);
+            compress_store(steps, P(m.result.steps), finished); // count_t<P> is int for scalars
+            compress_store(evaluations, P(m.result.evaluations), finished);
+            compress_store(who, id[k], finished);
+            for (int c = 0; c < count; ++c) {
+                hit<float> h;
+                h.t = t[c], h.found = found[c] != 0.0f;
+                h.steps = int(steps[c]), h.evaluations = int(evaluations[c]);
+                done(std::uint32_t(who[c]), h);
+            }
+            stats.rays += count;
+        }
+        // Every lane not running takes the queue's next ray, while there are rays.
+        std::uint64_t want = ~active & ((W >= 64) ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1), filled = 0;
+        while (want != 0 && refill_queue()) {
+            const std::size_t need = std::size_t(std::popcount(want));
+            const std::uint64_t take = queue.size() >= need ? want : detail::lowest_bits(want, queue.size());
+            queue.take(take, m.r, m.t, m.t_max, id[k]);
+            if (relaxed) m.accepted_t = select(mask_from_bits<P>(take), m.t, m.accepted_t);
+            filled |= take, want &= ~take;
+        }
+        live[k] = (live[k] & active) | filled;
+        if (filled == 0) return active;
+        const mask_t<P> fresh = mask_from_bits<P>(filled);
+        if (relaxed) {
+            m.accepted_d = select(fresh, inf, m.accepted_d);
+            m.omega = select(fresh, P(options.omega), m.omega);
+        }
+        m.result.t = select(fresh, inf, m.result.t);
+        if constexpr (std::floating_point<P>) {
+            m.result.steps = 0, m.result.evaluations = 0; // the one lane is fresh
+        } else {
+            m.result.steps = select(fresh, P(0.0f), m.result.steps);
+            m.result.evaluations = select(fresh, P(0.0f), m.result.evaluations);
+        }
+        m.result.found = m.result.found && !fresh;
+        m.active = m.active || fresh;
+        return active | filled;
+    };
+
     for (;;) {
-        for (int k = 0; k < Interleave; ++k) harvest(k, !any(state[k].active));
+        std::array<std::uint64_t, Interleave> active;
+        int first_running = -1;
+        for (int k = 0; k < Interleave; ++k) {
+            active[k] = mask_bits<P>(state[k].active);
+            if (active[k] == 0 || std::popcount(live[k] & ~active[k]) >= refill_at) active[k] = harvest(k, active[k]);
+            if (active[k] != 0 && first_running < 0) first_running = k;
+        }
+        // Nothing runs after every packet was refilled: the queue and `more` are used up.
+        if (first_running < 0) break;
         // All packets' points in one evaluation. An idle lane is evaluated at its ray's origin
         // (its sample point may be at infinity), and a packet with no active lane left, near the
         // end of the stream, takes the points of an active one: it rides along at no extra depth
         // of the walk and is not advanced.
         std::array<vec3<P>, Interleave> points;
-        int first_running = -1;
-        for (int k = 0; k < Interleave; ++k) {
-            if (!any(state[k].active)) continue;
-            if (first_running < 0) first_running = k;
-            points[std::size_t(k)] = point_at(state[k].r, select(state[k].active, state[k].t, P(0.0f)));
-        }
         for (int k = 0; k < Interleave; ++k)
-            if (first_running >= 0 && !any(state[k].active)) points[std::size_t(k)] = points[std::size_t(first_running)];
-        if (first_running >= 0) {
-            const std::array<P, Interleave> d = detail::distances_of(f, points);
-            for (int k = 0; k < Interleave; ++k) {
-                if (!any(state[k].active)) continue;
-                march_advance(state[k], d[std::size_t(k)], options);
-                ++stats.packet_steps;
-            }
-            continue;
+            if (active[k] != 0) points[std::size_t(k)] = point_at(state[k].r, select(state[k].active, state[k].t, P(0.0f)));
+        for (int k = 0; k < Interleave; ++k)
+            if (active[k] == 0) points[std::size_t(k)] = points[std::size_t(first_running)];
+        const std::array<P, Interleave> d = detail::distances_of(f, points);
+        for (int k = 0; k < Interleave; ++k) {
+            if (active[k] == 0) continue;
+            march_advance(state[k], d[std::size_t(k)], options);
+            ++stats.packet_steps;
         }
-        // Nothing runs: done unless a lane still holds an unreported (rejected) ray.
-        bool pending = false;
-        for (int k = 0; k < Interleave; ++k) pending = pending || lanes[k].live != 0;
-        if (!pending) break;
     }
     return stats;
+}
+
+// Traces every ray `next` yields (taken a few packets' worth at a time into a ray_queue) through
+// f with packets of type P, as trace_queue does; rays whose range is empty (t_start > t_max) or
+// that cannot be marched are reported as misses without a step. Results equal per-ray
+// `sphere_trace` calls up to float rounding of the packet math.
+template <class P = packet_f, int Interleave = 2, field F, class Next, class Done>
+stream_stats trace_stream(const F& f, Next&& next, Done&& done, const trace_options& options, int refill_at = 0)
+{
+    options.validate();
+    ray_queue<P> queue;
+    bool open = true;
+    auto more = [&](ray_queue<P>& q) {
+        // Enough rays to refill every packet once, so `next` is called in runs.
+        constexpr std::size_t batch = 2 * Interleave * lane_count<P>;
+        std::size_t pulled = 0;
+        ray_job job;
+        while (open && pulled < batch && (open = next(job))) q.push(job), ++pulled;
+        return pulled > 0;
+    };
+    return trace_queue<P, Interleave>(f, queue, more, done, options, refill_at);
 }
 
 } // namespace krs

@@ -16,6 +16,7 @@
 
 #include <limits>
 #include <type_traits>
+#include <utility>
 
 namespace krs {
 
@@ -178,6 +179,27 @@ template <field F, class T>
 void march_step(const F& f, march_state<T>& m, const trace_options& options)
 {
     march_advance(m, f.distance(point_at(m.r, m.t)), options);
+}
+
+// The step with an observer: `observe(m, d)` sees every sample the step takes, the state as the
+// step found it (each lane's sample point t, its active mask) and the field's value d there, before
+// the step acts on them. It is how a march that wants more than the hit reads the ray without a
+// loop of its own: the soft shadow keeps min k d / t over its samples (krs/shade/global.hpp), the
+// union tracer's per-component bookkeeping rides beside it (krs/compose/union.hpp). The step
+// itself is march_advance, unchanged, so an observed march stops where an unobserved one does.
+// (With over-relaxation the observer also sees samples the overlap test then discards: they are
+// still the field's true values at points on the ray.)
+template <class T, class Observer>
+void march_advance(march_state<T>& m, const T& d, const trace_options& options, Observer&& observe)
+{
+    observe(std::as_const(m), d);
+    march_advance(m, d, options);
+}
+
+template <field F, class T, class Observer>
+void march_step(const F& f, march_state<T>& m, const trace_options& options, Observer&& observe)
+{
+    march_advance(m, f.distance(point_at(m.r, m.t)), options, observe);
 }
 
 // Both validate the options (trace_options::validate names what is wrong): a negative footprint, a

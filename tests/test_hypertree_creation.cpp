@@ -1,0 +1,126 @@
+// build_tree's creation path (generation in groups of chunks, four-way bucketing, the merge's
+// groups classified where they lie) against a brute-force reference built from generate()'s hit
+// list with a std::map: per voxel the hit count and the shallowest (level, part), then the
+// density classes of those entries and the branch rule, voxel by voxel. The reference shares
+// only the generator (tested on its own in test_hypertree_ifs.cpp) and the placing of classes
+// over a histogram (test_hypertree_store.cpp) with the code under test.
+
+#include "hypertree/build.hpp"
+#include "hypertree/presets.hpp"
+
+#include <doctest/doctest.h>
+
+#include <functional>
+#include <map>
+#include <thread>
+#include <utility>
+#include <vector>
+
+using namespace hypertree;
+
+namespace {
+
+struct reference_entry {
+    std::uint32_t hits = 0;
+    std::uint16_t best = 0xffff; // level << 8 | part, the smallest
+};
+
+std::vector<stored_voxel> brute_force_voxels(const ifs<>& tree, std::uint64_t seed, int class_count)
+{
+    const generated_hits generated = generate(tree, seed);
+    std::map<voxel_index, reference_entry> by_voxel;
+    for (const hit& h : generated.hits) {
+        reference_entry& e = by_voxel[h.voxel];
+        ++e.hits;
+        e.best = std::min<std::uint16_t>(e.best, std::uint16_t(h.level << 8 | h.part));
+    }
+    std::vector<voxel_entry> entries;
+    for (const auto& [v, e] : by_voxel) entries.push_back({v, e.hits, std::uint8_t(e.best >> 8), std::uint8_t(e.best & 0xff)});
+    const density_classes classes(entries, class_count);
+    std::vector<stored_voxel> voxels;
+    for (const voxel_entry& e : entries) {
+        const std::uint8_t density = int(e.level) <= tree.branch_depth ? 255 : classes.density_of(e.hits);
+        voxels.push_back({e.voxel, voxel{density, e.level}, e.part});
+    }
+    return voxels;
+}
+
+parallel_for_hook two_threads()
+{
+    return [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::thread other([&] {
+            for (std::size_t i = 1; i < count; i += 2) body(i);
+        });
+        for (std::size_t i = 0; i < count; i += 2) body(i);
+        other.join();
+    };
+}
+
+} // namespace
+
+TEST_CASE("hypertree creation: build_tree's voxels equal a brute-force map over generate()'s hits, presets A-D")
+{
+    // Full workloads (tree A: 25 chunks in 8 groups; D: 82 chunks; C: lines of up to 33 voxels),
+    // at 100 and 300, on one thread and two: every voxel's index, density, level and part.
+    for (const int resolution : {100, 300}) {
+        for (const auto& make : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+            const ifs<> tree = make(resolution);
+            const std::vector<stored_voxel> expected = brute_force_voxels(tree, 5, 32);
+            REQUIRE(expected.size() > 10000);
+            for (const bool threaded : {false, true}) {
+                INFO("tree " << tree.name << " at " << resolution << (threaded ? ", two threads" : ", one thread"));
+                scratch_memory scratch;
+                generation_options options;
+                if (threaded) options.parallel_for = two_threads();
+                const std::pmr::vector<stored_voxel> voxels = detail::stored_voxels_of(tree, 5, 32, options, &scratch);
+                REQUIRE(voxels.size() == expected.size());
+                std::size_t differ = 0;
+                for (std::size_t i = 0; i < expected.size(); ++i)
+                    differ += voxels[i].index != expected[i].index || !(voxels[i].value == expected[i].value) || voxels[i].part != expected[i].part;
+                CHECK(differ == 0);
+            }
+        }
+    }
+}
+
+TEST_CASE("hypertree creation: generation in groups of chunks makes the chunk-by-chunk hit list")
+{
+    // Groups of consecutive chunks in one buffer each: the hits taken in group order are
+    // generate()'s, in the same order, whatever the number of groups.
+    auto tree = presets::tree_c(80);
+    tree.iterations = 30000;
+    generation_options options;
+    options.chunk_cycles = 250; // 24 chunks
+    const generated_hits whole = generate(tree, 3, options);
+    for (const std::size_t groups : {std::size_t(1), std::size_t(5), std::size_t(24), std::size_t(100)}) {
+        INFO(groups << " groups");
+        detail::no_observer observer;
+        std::vector<hit> taken;
+        std::size_t calls = 0;
+        detail::generate_chunks(tree, 3, options, observer, [&](std::size_t, detail::chunk_output& out) {
+            ++calls;
+            taken.insert(taken.end(), out.data(), out.data() + out.size());
+        }, groups);
+        CHECK(calls == std::min<std::size_t>(groups, 24));
+        REQUIRE(taken.size() == whole.hits.size());
+        std::size_t differ = 0;
+        for (std::size_t i = 0; i < taken.size(); ++i)
+            differ += taken[i].voxel != whole.hits[i].voxel || taken[i].level != whole.hits[i].level || taken[i].part != whole.hits[i].part;
+        CHECK(differ == 0);
+    }
+}
+
+TEST_CASE("hypertree creation: classify over pieces finds disorder across piece boundaries")
+{
+    // Entries sorted within each piece but not across two of them, an empty piece between: the
+    // refusal names the voxels, as classify's over the whole list does.
+    const std::vector<voxel_entry> first = {{1, 2, 3, 0}, {5, 1, 3, 0}}, second = {{5, 1, 3, 0}, {9, 4, 3, 0}};
+    const std::vector<std::span<const voxel_entry>> pieces = {first, {}, second};
+    const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), 8, {});
+    CHECK_THROWS_WITH_AS(classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, 1), doctest::Contains("voxel 5 after 5"),
+                         krs::invalid_parameter);
+    const std::vector<voxel_entry> third = {{6, 1, 3, 0}, {9, 4, 3, 0}};
+    const std::vector<std::span<const voxel_entry>> sorted = {first, {}, third};
+    const auto voxels = classify_pieces(std::span<const std::span<const voxel_entry>>(sorted), classes, 1);
+    CHECK(voxels.size() == 4);
+}
