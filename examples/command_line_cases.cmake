@@ -78,6 +78,24 @@ krs_case(krs_fractals      2 "--output-dir;missing"                             
 krs_case(krs_fractals      2 "--zoom"                                              --zoom 3)
 krs_case(krs_fractals      0 "--width;--output-dir"                                --help)
 krs_case(krs_fractals      0 "total:;12 frames"                                    --width 4 --height 4 --threads 1 --output-dir <out>)
+krs_case(krs_fractals      0 "total:;12 frames"                                    --width 4 --height 4 --threads 1 --colouring off
+                                                                                   --output-dir <out>)
+krs_case(krs_fractals      2 "--colouring;'yes';one of on|off"                     --colouring yes)
+# The cross-section view (krs/cross_section.hpp): a sphere overestimates nowhere, the Menger
+# sponge's slice is written as two PNGs; what the images hold is tests/test_cross_section.cpp's.
+krs_case(krs_fractals      0 "slice sphere: 32x24;flagged 0 of 768 pixels;slice_sphere_distance.png;slice_sphere_gradient.png"
+                                                                                   --slice sphere --width 32 --height 24 --output-dir <out>)
+krs_case(krs_fractals      0 "slice menger: 24x24, plane xz at 0.1;slice_menger_gradient.png"
+                                                                                   --slice menger --slice-plane xz --slice-offset 0.1
+                                                                                   --slice-extent 1.2 --slice-spacing 0.1 --width 24 --height 24
+                                                                                   --output-dir <out>)
+krs_case(krs_fractals      2 "--slice;'torus';one of sphere|square|cube|menger|sierpinski|koch|lotus|cube_singularity"
+                                                                                   --slice torus)
+krs_case(krs_fractals      2 "--slice-plane;'xw';one of xy|xz|yz"                  --slice menger --slice-plane xw)
+krs_case(krs_fractals      2 "--slice-spacing;'0';a finite number in (0, 1000000]" --slice menger --slice-spacing 0)
+krs_case(krs_fractals      2 "--slice-extent;'nan'"                                --slice menger --slice-extent nan)
+krs_case(krs_fractals      2 "--slice-offset;'2e6';[-1000000, 1000000]"            --slice menger --slice-offset 2e6)
+krs_case(krs_fractals      2 "--slice-spacing needs --slice FIELD"                 --slice-spacing 0.1)
 
 # glsl_export
 krs_case(glsl_export       2 "--scene;'sky';one of tree|forest|"                   --scene sky) # the list: test_glsl.cpp

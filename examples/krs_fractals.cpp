@@ -7,14 +7,33 @@
 //         a zoom into the cube singularity (krs/fractal/log_spherical.hpp) at scales 10^0 ...
 //         10^-6: the same detail at every scale, with no loop in the distance function
 //
-// Each frame prints its time per ray (core-microseconds) and mean march steps per ray.
+// The KIFS frames are coloured by their orbits (krs/fractal/kifs_colour.hpp): a point trap and the
+// number of folds that moved the point pick the hue, a plane trap the brightness (--colouring off
+// renders them in one colour each, as before). Each frame prints its time per ray
+// (core-microseconds) and mean march steps per ray.
 //
-//     krs_fractals [--width W] [--height H] [--threads N] [--output-dir DIR]
+//     krs_fractals [--width W] [--height H] [--threads N] [--output-dir DIR] [--colouring on|off]
+//
+// The cross-section view for debugging a field (krs/cross_section.hpp) instead of the frames:
+//
+//     krs_fractals --slice FIELD [--slice-plane xy|xz|yz] [--slice-offset Z] [--slice-extent E]
+//                  [--slice-spacing S] [--width W] [--height H] [--output-dir DIR]
+//
+// writes slice_FIELD_distance.png (the distance in bands of S with iso lines, the zero line white,
+// inside blue, outside orange) and slice_FIELD_gradient.png (|grad d| in grey, red where the slope
+// along the gradient exceeds 1: there the field overestimates and a sphere tracer may step
+// through), W x H pixels over the
+// square [-E, E] (the shorter side scaled to keep pixels square) of the plane at Z along its
+// normal, and prints how many pixels overestimate. FIELD is one of sphere (a reference: none may),
+// square, cube, menger, sierpinski, koch, lotus, cube_singularity.
 //
 // Threads render 16x16 tiles taken from a shared counter; the library itself starts no threads.
 
+#include "krs/cross_section.hpp"
 #include "krs/fractal/kifs.hpp"
+#include "krs/fractal/kifs_colour.hpp"
 #include "krs/fractal/log_spherical.hpp"
+#include "krs/kernels/sphere.hpp"
 #include "krs/shade/normal.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/sphere_trace.hpp"
@@ -40,17 +59,35 @@ using krs::vec3f;
 struct options {
     int width = 256, height = 192, threads = 0;
     std::string output_dir = ".";
+    std::string colouring = "on";
+    // The cross-section view (empty slice: render the frames).
+    std::string slice, slice_plane = "xy";
+    float slice_offset = 0.0f, slice_extent = 1.5f, slice_spacing = 0.05f;
 };
 
 options parse(int argc, char** argv)
 {
     options o;
-    example::command_line args("krs_fractals", "Renders the KIFS gallery and a log-spherical zoom to PNG files.");
+    example::command_line args("krs_fractals", "Renders the KIFS gallery and a log-spherical zoom to PNG files, or "
+                                               "with --slice a cross-section of one field's distance.");
     args.integer("--width", o.width, 1, 8192, "image width in pixels");
     args.integer("--height", o.height, 1, 8192, "image height in pixels");
     args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
     args.text("--output-dir", o.output_dir, "the folder the PNG files go to", "DIR");
+    args.choice("--colouring", o.colouring, {"on", "off"}, "colour the KIFS frames by orbit traps and fold counts");
+    args.choice("--slice", o.slice, {"sphere", "square", "cube", "menger", "sierpinski", "koch", "lotus", "cube_singularity"},
+                "write a cross-section of this field's distance and gradient instead of the frames");
+    CLI::Option* plane = args.choice("--slice-plane", o.slice_plane, {"xy", "xz", "yz"}, "the plane of the slice");
+    CLI::Option* offset = args.number("--slice-offset", o.slice_offset, -1e6, 1e6, false,
+                                      "the slice's position along the plane's normal");
+    CLI::Option* extent = args.number("--slice-extent", o.slice_extent, 0.0, 1e6, true,
+                                      "half the slice's longer side, in world units");
+    CLI::Option* spacing = args.number("--slice-spacing", o.slice_spacing, 0.0, 1e6, true,
+                                       "world distance between iso lines");
     args.parse(argc, argv);
+    if (o.slice.empty())
+        for (const CLI::Option* given : {plane, offset, extent, spacing})
+            if (given->count() > 0) args.fail(given->get_name() + " needs --slice FIELD");
     o.threads = example::thread_count(o.threads);
     return o;
 }
@@ -63,9 +100,10 @@ const vec3f light_direction = krs::normalize(vec3f{0.5f, 0.8f, 0.35f});
 
 // Traces one camera ray through `field` and shades the hit with a gradient normal: Lambert from one
 // light, a sky term, and a cheap occlusion from the step count (rays that crept through crevices).
-template <class F>
+// `albedo(p)` gives the surface colour at the hit point p.
+template <class F, class Albedo>
 vec3f shade_pixel(const F& field, const krs::pinhole_camera& camera, const krs::trace_options& trace, float x,
-                  float y, const vec3f& albedo, ray_counts& counts)
+                  float y, const Albedo& albedo, ray_counts& counts)
 {
     const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
     const krs::hit<float> h = krs::sphere_trace(field, r, trace);
@@ -79,7 +117,28 @@ vec3f shade_pixel(const F& field, const krs::pinhole_camera& camera, const krs::
     const float occlusion = std::clamp(1.0f - float(h.steps) / float(trace.max_steps) * 2.5f, 0.15f, 1.0f);
     const float ambient = 0.25f + 0.15f * n.y;
     const float k = (0.8f * diffuse + ambient) * occlusion;
-    return vec3f{albedo.x * k, albedo.y * k, albedo.z * k};
+    const vec3f a = albedo(p);
+    return vec3f{a.x * k, a.y * k, a.z * k};
+}
+
+// The orbit colouring of the KIFS frames: a point trap at the origin and the plane y = 0
+// (krs/fractal/orbit_trap.hpp), escape radius 10.
+const krs::kifs_colouring gallery_traps{{krs::orbit_trap::point({0, 0, 0}), krs::orbit_trap::plane({0, 1, 0}, 0.0f)}, 10.0f};
+
+// The hue from how near the orbit came to the point trap and how many folds moved the point (a
+// cosine palette, one period per ~0.8 of trap or ~16 folds: on the presets' surfaces the trap
+// spans about 0.5 and the fold count about 8 between the 10th and 90th percentiles), brightened
+// near the plane trap; mixed into `base` so each fractal keeps a tint of its own.
+vec3f orbit_albedo(const krs::kifs_colour_result<float>& c, const vec3f& base)
+{
+    const float near_plane = std::exp(-8.0f * c.trap[1]);
+    const float t = 1.2f * c.trap[0] + 0.06f * c.fold_count;
+    const float tau = 6.2831853f;
+    const vec3f palette{0.55f + 0.45f * std::cos(tau * t), 0.55f + 0.45f * std::cos(tau * (t + 0.33f)),
+                        0.55f + 0.45f * std::cos(tau * (t + 0.67f))};
+    const float light = 0.75f + 0.25f * near_plane;
+    return vec3f{(0.3f * base.x + 0.7f * palette.x) * light, (0.3f * base.y + 0.7f * palette.y) * light,
+                 (0.3f * base.z + 0.7f * palette.z) * light};
 }
 
 // Renders `pixel(x, y, counts)` into dir/name.png over tiles and threads; prints time per ray and
@@ -120,9 +179,9 @@ double render(const options& opt, const std::string& name,
     return seconds;
 }
 
-template <class F>
-double gallery_frame(const options& opt, const std::string& name, const F& field, const vec3f& eye, const vec3f& target,
-                     const vec3f& albedo)
+template <class Program, class Kernel>
+double gallery_frame(const options& opt, const std::string& name, const krs::kifs<Program, Kernel>& field, const vec3f& eye,
+                     const vec3f& target, const vec3f& base)
 {
     const krs::pinhole_camera camera(eye, target, {0, 1, 0}, 40.0f, opt.width, opt.height);
     krs::trace_options trace;
@@ -131,9 +190,68 @@ double gallery_frame(const options& opt, const std::string& name, const F& field
     trace.max_distance = 20.0f;
     trace.max_steps = 256;
     trace.validate();
+    // The colour is a separate call at the hit: the march runs kifs::distance alone.
+    const bool coloured = opt.colouring == "on";
+    const auto albedo = [&](const vec3f& p) {
+        return coloured ? orbit_albedo(krs::kifs_colour(field, p, gallery_traps), base) : base;
+    };
     return render(opt, name, [&](float x, float y, ray_counts& c) {
         return shade_pixel(field, camera, trace, x, y, albedo, c);
     });
+}
+
+// --slice: the cross-section of `field` (see the top of this file). Returns the exit status.
+template <class F>
+int write_slice(const options& opt, const F& field)
+{
+    const vec3f x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
+    krs::slice_plane plane;
+    vec3f normal = z;
+    if (opt.slice_plane == "xy") plane.u_axis = x, plane.v_axis = y, normal = z;
+    else if (opt.slice_plane == "xz") plane.u_axis = x, plane.v_axis = z, normal = y;
+    else plane.u_axis = y, plane.v_axis = z, normal = x;
+    plane.origin = normal * opt.slice_offset;
+    const float wide = float(std::max(opt.width, opt.height));
+    plane.half_width = opt.slice_extent * float(opt.width) / wide;
+    plane.half_height = opt.slice_extent * float(opt.height) / wide;
+    plane.columns = opt.width;
+    plane.rows = opt.height;
+    krs::cross_section_options settings;
+    settings.iso_spacing = opt.slice_spacing;
+    const auto start = std::chrono::steady_clock::now();
+    krs::cross_section_image image;
+    try {
+        image = krs::cross_section(field, plane, settings);
+    } catch (const krs::invalid_parameter& e) {
+        std::fprintf(stderr, "krs_fractals: %s\n", e.what());
+        return 2;
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const std::string stem = opt.output_dir + "/slice_" + opt.slice;
+    if (!example::write_png(stem + "_distance.png", opt.width, opt.height, image.distance_image()) ||
+        !example::write_png(stem + "_gradient.png", opt.width, opt.height, image.gradient_image()))
+        return 1;
+    std::printf("slice %s: %dx%d, plane %s at %g, extent %g, iso spacing %g, gradient step %.3g: flagged %zu of %zu "
+                "pixels (slope along the gradient > 1 + %g), max slope %.5g, max |grad| %.4g, %.2f s -> %s_distance.png, "
+                "%s_gradient.png\n",
+                opt.slice.c_str(), opt.width, opt.height, opt.slice_plane.c_str(), double(opt.slice_offset),
+                double(opt.slice_extent), double(opt.slice_spacing), image.step, image.overestimating, image.pixels(),
+                double(settings.lipschitz_tolerance), double(image.max_slope), double(image.max_gradient), seconds,
+                stem.c_str(), stem.c_str());
+    return 0;
+}
+
+int slice_main(const options& opt)
+{
+    const std::string& f = opt.slice;
+    if (f == "sphere") return write_slice(opt, krs::sphere({0, 0, 0}, 1.0f));
+    if (f == "square") return write_slice(opt, krs::make_square_fractal(6, 0.3f));
+    if (f == "cube") return write_slice(opt, krs::make_cube_fractal(5));
+    if (f == "menger") return write_slice(opt, krs::make_menger_sponge(4));
+    if (f == "sierpinski") return write_slice(opt, krs::make_sierpinski_tetrahedron(9));
+    if (f == "koch") return write_slice(opt, krs::make_koch_curve(6, 0.01f));
+    if (f == "lotus") return write_slice(opt, krs::make_recursive_lotus(1.0f));
+    return write_slice(opt, krs::make_cube_singularity(1.0f));
 }
 
 } // namespace
@@ -141,6 +259,7 @@ double gallery_frame(const options& opt, const std::string& name, const F& field
 int main(int argc, char** argv)
 {
     const options opt = parse(argc, argv);
+    if (!opt.slice.empty()) return slice_main(opt);
     double total = 0;
     int frames = 0;
 
@@ -172,7 +291,7 @@ int main(int argc, char** argv)
         trace.max_steps = 256;
         trace.validate();
         total += render(opt, "zoom_" + std::to_string(k), [&](float x, float y, ray_counts& c) {
-            return shade_pixel(singularity, camera, trace, x, y, {0.75f, 0.50f, 0.85f}, c);
+            return shade_pixel(singularity, camera, trace, x, y, [](const vec3f&) { return vec3f{0.75f, 0.50f, 0.85f}; }, c);
         });
         ++frames;
     }

@@ -10,6 +10,7 @@
 
 #include "krs/compose.hpp"
 #include "krs/fractal/kifs.hpp"
+#include "krs/fractal/orbit_trap.hpp"
 #include "krs/fractal/log_spherical.hpp"
 #include "krs/glsl/emitter.hpp"
 #include "krs/kernels/kernels.hpp"
@@ -177,6 +178,13 @@ TEST_CASE("GLSL of every field type matches the C++ on llvmpipe, and every type 
     check_distance("plane", krs::plane(krs::normalize(vec3f{0.2f, 1.0f, -0.1f}), 0.3f), {0, 0.3f, 0}, {2, 2, 2},
                    {"plane"});
     check_distance("tetrahedron", krs::tetrahedron{}, {0, 0, 0}, {1.6f, 1.6f, 1.6f}, {"tetrahedron"});
+    // Orbit traps (krs/fractal/orbit_trap.hpp) are distances to their shapes: each kind run as a field
+    // (KIFS colouring runs them along orbits: test_glsl_gpu.cpp).
+    check_distance("orbit_trap_point", krs::orbit_trap::point({0.2f, -0.1f, 0.3f}), {0, 0, 0}, {2, 2, 2}, {"orbit_trap"});
+    check_distance("orbit_trap_plane", krs::orbit_trap::plane({1, 2, -0.5f}, 0.3f), {0, 0, 0}, {2, 2, 2}, {"orbit_trap"});
+    check_distance("orbit_trap_line", krs::orbit_trap::line({0.1f, 0.2f, 0}, {0.3f, -1, 0.7f}), {0, 0, 0}, {2, 2, 2},
+                   {"orbit_trap"});
+    check_distance("orbit_trap_shell", krs::orbit_trap::shell({0, 0.1f, 0}, 1.5f), {0, 0, 0}, {2, 2, 2}, {"orbit_trap"});
 
     // An axis-aligned KRS.
     krs::axis_sequence<krs::capsule, krs::sphere>::builder ab;

@@ -7,6 +7,7 @@
 
 #include "krs/compose.hpp"
 #include "krs/fractal/kifs.hpp"
+#include "krs/fractal/kifs_colour.hpp"
 #include "krs/fractal/log_spherical.hpp"
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/kernels/sphere.hpp"
@@ -723,4 +724,104 @@ TEST_CASE("GLSL field scenes (not sequences) match the C++ field on llvmpipe")
         }
     });
     CHECK(scenes == 8); // coral, the five KIFS presets, the lotus and the cube singularity
+}
+
+// ---- KIFS colouring (krs/fractal/kifs_colour.hpp) --------------------------------------------
+
+namespace {
+
+// Runs the emitted `krs_kifs_colour NAME(vec3 p)` over the points in a compute shader: trap.xyzw,
+// escape_iteration, fold_count, last_fold per point.
+std::vector<std::array<float, 7>> gpu_colours(const std::string& snippet, const std::string& name,
+                                              const std::vector<vec3f>& points, const std::vector<float>& data)
+{
+    require_context();
+    const std::string text = "#version 430 core\nlayout(local_size_x = 64) in;\n" + snippet +
+                             "layout(std430, binding = 1) readonly buffer krs_points { float points[]; };\n"
+                             "layout(std430, binding = 2) writeonly buffer krs_results { float results[]; };\n"
+                             "uniform uint count;\n"
+                             "void main() {\n"
+                             "    uint i = gl_GlobalInvocationID.x;\n"
+                             "    if (i >= count) return;\n"
+                             "    krs_kifs_colour c = " + name + "(vec3(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]));\n"
+                             "    results[7u * i] = c.trap.x;\n    results[7u * i + 1u] = c.trap.y;\n"
+                             "    results[7u * i + 2u] = c.trap.z;\n    results[7u * i + 3u] = c.trap.w;\n"
+                             "    results[7u * i + 4u] = c.escape_iteration;\n    results[7u * i + 5u] = c.fold_count;\n"
+                             "    results[7u * i + 6u] = c.last_fold;\n"
+                             "}\n";
+    const GLuint program = link({compile(GL_COMPUTE_SHADER, text)});
+    glUseProgram(program);
+    const GLuint data_buffer = buffer(GL_SHADER_STORAGE_BUFFER, data.data(), data.size() * sizeof(float), GL_DYNAMIC_DRAW);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, data_buffer);
+    std::vector<float> packed;
+    for (const vec3f& p : points) packed.insert(packed.end(), {p.x, p.y, p.z});
+    const GLuint in = buffer(GL_SHADER_STORAGE_BUFFER, packed.data(), packed.size() * sizeof(float), GL_STATIC_DRAW);
+    const GLuint out = buffer(GL_SHADER_STORAGE_BUFFER, nullptr, points.size() * 7 * sizeof(float), GL_DYNAMIC_READ);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, in);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, out);
+    glUniform1ui(glGetUniformLocation(program, "count"), GLuint(points.size()));
+    glDispatchCompute(GLuint((points.size() + 63) / 64), 1, 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    std::vector<std::array<float, 7>> results(points.size());
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, out);
+    glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(results.size() * sizeof(results[0])), results.data());
+    REQUIRE(glGetError() == GL_NO_ERROR);
+    const GLuint buffers[3] = {in, out, data_buffer};
+    glDeleteBuffers(3, buffers);
+    glDeleteProgram(program);
+    return results;
+}
+
+krs::kifs_colouring gpu_test_traps()
+{
+    return {{krs::orbit_trap::point({0.25f, -0.5f, 0.125f}), krs::orbit_trap::plane({1, 2, -0.5f}, 0.3f),
+             krs::orbit_trap::line({0.1f, 0.2f, 0.0f}, {0.3f, -1, 0.7f}), krs::orbit_trap::shell({0, 0, 0}, 1.5f)},
+            6.0f};
+}
+
+} // namespace
+
+TEST_CASE("GLSL KIFS colouring matches kifs_colour on llvmpipe")
+{
+    // The orbit points are the C++'s bit for bit where the steps' GLSL is (+ - * / exact on
+    // llvmpipe, no FMA): the counts must agree except where a fold's output is within an ulp of its
+    // input, and the traps to GLSL's length (1-2 ulp) of the orbit's magnitude.
+    const std::string dir = std::string(KRS_BINARY_DIR) + "/glsl-check";
+    std::system(("mkdir -p \"" + dir + "\"").c_str());
+    for_each_kifs_preset([&](const auto& c) {
+        const krs::kifs_colour_glsl request{c.field, gpu_test_traps()};
+        for (const auto t : {krs::glsl::target::glsl330, krs::glsl::target::glsl450, krs::glsl::target::es300}) {
+            krs::glsl::emitter e({t, krs::glsl::data_mode::constants, c.name + "_data", 0});
+            const std::string fn = e.add_shading(request, c.name + "_colour");
+            validate_with_glslang(dir + "/" + c.name + "_colour." + std::string(krs::glsl::target_name(t)) + ".frag",
+                                  e.source(true) + "out vec4 krs_out;\nvoid main() { krs_kifs_colour c = " + fn +
+                                      "(vec3(0.5, 0.25, 0.125)); krs_out = c.trap + vec4(c.fold_count); }\n");
+        }
+        krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, c.name + "_data", 0});
+        const std::string fn = e.add_shading(request, c.name + "_colour");
+        std::mt19937 random(31);
+        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::vector<vec3f> points(16384);
+        for (vec3f& p : points) p = {u(random) * c.sample_half.x, u(random) * c.sample_half.y, u(random) * c.sample_half.z};
+        const auto gpu = gpu_colours(e.source(), fn, points, e.data());
+        double worst_trap = 0;
+        std::size_t counts_equal = 0, traps_bit_equal = 0, stayed = 0;
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            const krs::kifs_colour_result<float> cpu = krs::kifs_colour(c.field, points[i], request.colouring);
+            counts_equal += gpu[i][4] == cpu.escape_iteration && gpu[i][5] == cpu.fold_count && gpu[i][6] == cpu.last_fold;
+            stayed += cpu.escape_iteration == float(c.field.iterations() + 1);
+            bool bits = true;
+            for (std::size_t k = 0; k < 4; ++k) {
+                worst_trap = std::max(worst_trap, std::abs(double(gpu[i][k]) - double(cpu.trap[k])) / 7.0); // 1 + R
+                bits = bits && gpu[i][k] == cpu.trap[k];
+            }
+            traps_bit_equal += bits;
+        }
+        std::printf("%-10s colour points %zu  counts equal %zu  traps bit-equal %zu  max |trap_gpu - trap_cpu| / (1 + R) "
+                    "%.3g  (orbits that stayed %zu)\n",
+                    c.name.c_str(), points.size(), counts_equal, traps_bit_equal, worst_trap, stayed);
+        INFO(c.name);
+        CHECK(double(counts_equal) >= 0.999 * double(points.size()));
+        CHECK(worst_trap <= 1e-6);
+    });
 }

@@ -688,8 +688,10 @@ TEST_CASE("GLSL shading compiles for 330, 450 and ES 3.00 (glslangValidator) and
 // glsl_shading member: the last class opened before it owns it) without a case here fails this.
 TEST_CASE("Every type of include/krs with GLSL shading is run by a case of this file")
 {
+    // kifs_colour_glsl's case is in test_glsl_gpu.cpp ("GLSL KIFS colouring matches kifs_colour on
+    // llvmpipe"), beside the KIFS distance presets it colours.
     const std::set<std::string> run = {"soft_shadow_options", "ambient_occlusion_options", "fractal_noise",
-                                       "triplanar_projection", "depth_projection", "kernel_uv_glsl"};
+                                       "triplanar_projection", "depth_projection", "kernel_uv_glsl", "kifs_colour_glsl"};
     const std::set<std::string> found = krs_test::classes_with(std::regex(R"(\bvoid\s+glsl_shading\s*\()"));
     for (const std::string& type : found) {
         INFO("krs::" << type << " has GLSL shading that no case of tests/test_glsl_shading.cpp runs");

@@ -3,6 +3,7 @@
 // individual headers instead to keep compile times down in large projects.
 
 #include "krs/collision.hpp"
+#include "krs/cross_section.hpp"
 #include "krs/compose.hpp"
 #include "krs/core/glm_interop.hpp"
 #include "krs/core/lanes.hpp"
@@ -11,6 +12,8 @@
 #include "krs/expansion.hpp"
 #include "krs/field.hpp"
 #include "krs/fractal/kifs.hpp"
+#include "krs/fractal/kifs_colour.hpp"
+#include "krs/fractal/orbit_trap.hpp"
 #include "krs/fractal/log_spherical.hpp"
 #include "krs/glsl/glsl.hpp"
 #include "krs/kernels/kernels.hpp"

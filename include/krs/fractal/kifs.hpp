@@ -57,6 +57,13 @@ concept fold_step = requires(const S& s, const vec3f& pf, const vec3d& pd) {
     { s.scale() } -> std::convertible_to<double>;
 };
 
+// Whether a fold step counts as a fold for colouring (krs/fractal/kifs_colour.hpp): a step that
+// moves only some points (a reflection taken from one side: abs_fold, plane_fold, sort_fold say
+// `static constexpr bool counts_as_fold = true`). scale_about, rotate_step and translate_step move
+// every point and are not counted.
+template <class S>
+inline constexpr bool counts_as_fold = requires { requires S::counts_as_fold; };
+
 // Axis masks for abs_fold.
 inline constexpr unsigned fold_x = 1u, fold_y = 2u, fold_z = 4u, fold_xyz = 7u;
 
@@ -72,6 +79,7 @@ struct abs_fold {
                 (Axes & fold_z) ? abs(p.z) : p.z};
     }
     double scale() const { return 1.0; }
+    static constexpr bool counts_as_fold = true; // for colouring (krs/fractal/kifs_colour.hpp)
 
     // GLSL (krs/glsl/emitter.hpp): one vec4, 1 on the folded axes, 0 elsewhere.
     static constexpr std::string_view glsl_name = "krs_abs_fold";
@@ -111,6 +119,7 @@ struct plane_fold {
         return fold_positive_side(-normal, -offset, p);
     }
     double scale() const { return 1.0; }
+    static constexpr bool counts_as_fold = true;
 
     // GLSL: one vec4 (normal, offset); the arithmetic spelled out in the C++ order.
     static constexpr std::string_view glsl_name = "krs_plane_fold";
@@ -133,6 +142,7 @@ struct sort_fold {
         return {max(a, p.z), max(b, c), min(b, c)};
     }
     double scale() const { return 1.0; }
+    static constexpr bool counts_as_fold = true;
 
     // GLSL: no parameters.
     static constexpr std::string_view glsl_name = "krs_sort_fold";
@@ -270,6 +280,35 @@ public:
                         const std::size_t at = out.parameters(s, name + " step " + std::to_string(index++));
                         program += "    p = " + std::string(S::glsl_name) + "_apply(p" +
                                    out.template arguments<S>(at) + ");\n";
+                    }(step),
+                    ...);
+            },
+            steps_);
+        out.function(program + "    return p;\n}\n");
+    }
+
+    // GLSL for colouring (krs/fractal/kifs_colour.hpp): `vec3 NAME_program_folds(vec3 p, float i,
+    // inout float fold_count, inout float last_fold)`, one iteration as NAME_program that also
+    // counts each fold step (counts_as_fold) that moved the point, as kifs_colour does.
+    template <class Out>
+    void glsl_emit_counted(Out& out, const std::string& name) const
+    {
+        std::string program = "vec3 " + name + "_program_folds(vec3 p, float i, inout float fold_count, inout float last_fold) {\n    vec3 q;\n";
+        std::size_t index = 0;
+        std::apply(
+            [&](const auto&... step) {
+                (
+                    [&](const auto& s) {
+                        using S = std::remove_cvref_t<decltype(s)>;
+                        out.template library<S>();
+                        const std::size_t at = out.parameters(s, name + " step " + std::to_string(index++));
+                        const std::string call = std::string(S::glsl_name) + "_apply(p" + out.template arguments<S>(at) + ")";
+                        if constexpr (counts_as_fold<S>)
+                            program += "    q = " + call + ";\n"
+                                       "    if (any(notEqual(q, p))) { fold_count += 1.0; last_fold = i; }\n"
+                                       "    p = q;\n";
+                        else
+                            program += "    p = " + call + ";\n";
                     }(step),
                     ...);
             },
