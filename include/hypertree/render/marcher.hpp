@@ -21,9 +21,14 @@
 // Shading (8.3, voxel_shading.hpp): ambient light attenuated toward the interior, wrapped Lambert
 // diffuse and Blinn-Phong specular with the procedural normals of the structure flow, each light's
 // term attenuated by the opacity a shadow ray accumulates toward it (same step, same early exit).
-// By default a sample is shaded at its voxel's center (shade_per_voxel), so a voxel's shading is
-// computed once per render and kept in a table (shade_memo.hpp): either all voxels before the
-// rays, their shadow rays marched 16 at a time (shade_bricks), or each when a ray first meets it.
+// By default (march_options::shadow_by = sweep) those shadows come from the light sweep
+// (light_sweep.hpp), computed once when the marcher is made: each voxel's shadow ray is cut at its
+// first non-empty voxel toward the light and completed by that voxel's swept shadow. With `rays`
+// every shaded voxel marches its full shadow ray in every render (the reference; the GLSL marcher
+// always does). By default a sample is shaded at its voxel's center (shade_per_voxel), so a
+// voxel's shading is computed once per render and kept in a table (shade_memo.hpp): either all
+// voxels before the rays (shade_bricks: the swept shadows read, or shadow rays marched 16 at a
+// time), or each when a ray first meets it.
 //
 // Two marches, one accumulation: the loop over samples, the masks and the compositing are written
 // once over T. Rays through voxels all shaded ahead only read: their lanes march in step,
