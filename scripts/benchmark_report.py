@@ -489,7 +489,7 @@ def openvdb_section(path, images, md):
     if lit:
         md.append("\nLighting on (`lit_dense`: library defaults, per-voxel shading with the light sweep; `openvdb_lit`: a shadow ray per "
                   "sample through a second intersector; ambient + diffuse x shadow, no normals; RMSE of OpenVDB's image against the "
-                  "library's lit one):\n")
+                  "library's lit image shaded per sample, `lit_per_sample`, the same quantity but for the sweep):\n")
         md.append(table(["tree", "library setup", "library frame", "OpenVDB setup", "OpenVDB frame", "time ratio (frame)",
                          "time ratio (with setup)", "RMSE"], lit))
     md.append("\nRatios (store memory / grid memory; best library render time / OpenVDB render time, < 1 means the library is "
