@@ -252,14 +252,14 @@ int main(int argc, char** argv)
             for (int near : {2, 4, 8}) {
                 march_options mo = defaults;
                 mo.sweep_near_steps = near;
-                const image img = measure("light sweep, near steps " + std::to_string(near), store, shape, mo, one);
+                const image img = measure("light sweep near steps " + std::to_string(near), store, shape, mo, one);
                 std::printf("%-34s %43.5f\n", "  against shadow rays", rmse(img, by_rays));
             }
             march_options mo = defaults;
             mo.shade_per_voxel = false;
             measure("shading per sample", store, shape, mo, one);
             mo.shadow_by = march_options::shadow_method::rays;
-            measure("shading per sample, shadow rays", store, shape, mo, one);
+            measure("shading per sample with shadow rays", store, shape, mo, one);
             mo = defaults;
             mo.use_spheres = true;
             measure("bounding spheres", store, shape, mo, one);
