@@ -420,25 +420,35 @@ def render_section(path, images, md):
     rows = read_rows(path)
     tab = [r for r in rows if r.get("table") == "table"]
     if tab:
+        # Per row of the table, both shadow methods (the CSV's setting: rays or sweep).
         merged = {}
         for r in tab:
             key = (r["tree"], r["resolution"], r["supersampling"], r["store"])
-            merged.setdefault(key, {"paper": num(r.get("paper_seconds"))})[r["marcher"]] = num(r.get("seconds"))
+            entry = merged.setdefault(key, {"paper": num(r.get("paper_seconds"))})
+            entry.setdefault(r.get("setting") or "rays", {})[r["marcher"]] = num(r.get("seconds"))
+            if r.get("setting") == "sweep" and r.get("rmse"):
+                entry["rmse"] = num(r.get("rmse"))
         body = []
+
+        def ms(x):
+            return "%.1f ms" % (1e3 * x) if x else "-"
         for (tree, res, s, store), v in merged.items():
-            best = min(x for x in (v.get("scalar"), v.get("packet")) if x is not None)
-            paper, setup = v["paper"], v.get("setup")
-            body.append([tree, res, s, store, "%.1f ms" % (1e3 * setup) if setup else "-",
-                         "%.1f ms" % (1e3 * v["scalar"]) if v.get("scalar") else "-",
-                         "%.1f ms" % (1e3 * v["packet"]) if v.get("packet") else "-", "%.1f s" % paper if paper else "-",
-                         "%.0fx" % (paper / best) if paper else "-",
-                         "%.0fx" % (paper / (best + setup)) if paper and setup else "-"])
+            rays, sweep, paper = v.get("rays", {}), v.get("sweep", {}), v["paper"]
+            best_rays = min([x for x in (rays.get("scalar"), rays.get("packet")) if x] or [None]) if rays else None
+            best = min([x for x in (sweep.get("scalar"), sweep.get("packet")) if x] or [None]) if sweep else None
+            setup = sweep.get("setup")
+            body.append([tree, res, s, store, ms(rays.get("setup")), ms(rays.get("packet")), ms(setup), ms(sweep.get("scalar")),
+                         ms(sweep.get("packet")), fmt(v.get("rmse")), "%.1f s" % paper if paper else "-",
+                         "%.0fx" % (paper / best_rays) if paper and best_rays else "-", "%.0fx" % (paper / best) if paper and best else "-",
+                         "%.0fx" % (paper / (best + setup)) if paper and best and setup else "-"])
         md.append("300 x 300 pixels, all cores; the paper's rendering times (index list, index list + bit array, 3D array + bit "
                   "array against our index_list, bit_array, dense). A frame is rendered by a marcher already made; `setup` makes "
-                  "the marcher (its brick copy of the store), once per tree and lighting. Speedups per frame, and for one frame "
-                  "with its setup.\n")
-        md.append(table(["tree", "res", "supersampling", "store", "setup", "scalar", "packet", "paper", "speedup",
-                         "with setup"], body))
+                  "the marcher (its brick copy of the store and, with the light sweep, every voxel's swept shadow), once per tree and "
+                  "lighting. Shadow rays (marched from every voxel in every frame) and the light sweep (the default) side by side, "
+                  "their rounds alternating in one run; RMSE is the sweep's image against the shadow rays'. Speedups per frame "
+                  "(shadow rays, sweep), and for one frame of the sweep with its setup.\n")
+        md.append(table(["tree", "res", "supersampling", "store", "rays: setup", "rays: packet", "sweep: setup", "sweep: scalar",
+                         "sweep: packet", "RMSE vs rays", "paper", "speedup (rays)", "speedup (sweep)", "sweep with setup"], body))
     err = [r for r in rows if r.get("table") == "error"]
     if err:
         md.append("\nSpeed against error (tree A, resolution 300; RMSE against a converged reference):\n")
@@ -465,7 +475,7 @@ def openvdb_section(path, images, md):
     first = rows[0]
     md.append("Same voxels (trees A-D at resolution %s) in every store kind and in OpenVDB 10 grids (FloatGrid of density/255; a "
               "byte grid `Tree4<uint8_t,5,4,3>`). Random lookups on one thread; the render is one %s x %s view on %s threads, "
-              "no lighting, the same opacity law and sample positions on both sides (step factor %s; library shading %s). `+skipping` is what each "
+              "lighting off (on in the rows `lit_dense` and `openvdb_lit`, below), the same opacity law and sample positions on both sides (step factor %s; library shading %s). `+skipping` is what each "
               "marcher adds to skip empty space (the library marcher's brick copy of the store, which its rays read; the "
               "intersector's bool tree). RMSE and differing pixels are "
               "against the dense store's image.\n" % (first.get("resolution"), first.get("image_size"), first.get("image_size"),
@@ -499,6 +509,21 @@ def openvdb_section(path, images, md):
         summary.append([tree, ratio("index_list", vm), ratio("bit_array", vm), ratio("partitioned", vm), ratio("index_list", v8),
                         ratio("bit_array", v8), "%.1f ms" % best, "%.1f ms" % num(vdb["render_scalar_ms"]),
                         "%.2f" % (best / num(vdb["render_scalar_ms"]))])
+    lit = []
+    for tree, s_ in by_tree.items():
+        ours, theirs = s_.get("lit_dense"), s_.get("openvdb_lit")
+        if not ours or not theirs:
+            continue
+        frame = min(x for x in (num(ours.get("render_scalar_ms")), num(ours.get("render_packet_ms"))) if x)
+        setup, vdb_frame, vdb_setup = num(ours.get("setup_ms"), 0), num(theirs["render_scalar_ms"]), num(theirs.get("setup_ms"), 0)
+        lit.append([tree, "%.1f ms" % setup, "%.1f ms" % frame, "%.1f ms" % vdb_setup, "%.1f ms" % vdb_frame, "%.2f" % (frame / vdb_frame),
+                    "%.2f" % ((frame + setup) / (vdb_frame + vdb_setup)), fmt(num(theirs.get("image_rmse")))])
+    if lit:
+        md.append("\nLighting on (`lit_dense`: library defaults, per-voxel shading with the light sweep; `openvdb_lit`: a shadow ray per "
+                  "sample through a second intersector; ambient + diffuse x shadow, no normals; RMSE of OpenVDB's image against the "
+                  "library's lit image shaded per sample, `lit_per_sample`, the same quantity but for the sweep):\n")
+        md.append(table(["tree", "library setup", "library frame", "OpenVDB setup", "OpenVDB frame", "time ratio (frame)",
+                         "time ratio (with setup)", "RMSE"], lit))
     md.append("\nRatios (store memory / grid memory; best library render time / OpenVDB render time, < 1 means the library is "
               "faster):\n")
     md.append(table(["tree", "index_list / FloatGrid", "bit_array / FloatGrid", "partitioned / FloatGrid", "index_list / byte grid",

@@ -161,7 +161,10 @@ frame_agreement compare_frames(const march_options& options, const char* label)
     const small_tree& t = tree();
     const krs::pinhole_camera& cam = camera();
     const int w = cam.width(), h = cam.height();
-    const volume_marcher marcher(t.dense, t.shape, t.colors, options);
+    // The GLSL marcher marches shadow rays (glsl.hpp); the CPU marcher is asked for the same.
+    march_options by_rays = options;
+    by_rays.shadow_by = march_options::shadow_method::rays;
+    const volume_marcher marcher(t.dense, t.shape, t.colors, by_rays);
     render_settings settings;
     const auto c0 = std::chrono::steady_clock::now();
     const image cpu = render<float>(marcher, cam, settings);

@@ -47,7 +47,9 @@
 // the brick's exit, taking exactly the samples it would have stepped through. What the GPU
 // leaves out: the shadow memo (a memoized shadow is a pure function of its voxel) and the ray
 // cache (a cached voxel equals the bricks'). Each only spares work on the CPU and changes no
-// pixel, so the GPU computes the same values directly. The part-sphere test is kept
+// pixel, so the GPU computes the same values directly. Shadows are always shadow rays, whatever
+// march_options::shadow_by: the CPU's default light sweep (light_sweep.hpp) is a table made with
+// the marcher, which the GPU does not get; its CPU counterpart is shadow_method::rays. The part-sphere test is kept
 // (use_spheres): it also changes no pixel, but it is the paper's traversal.
 //
 // Names: every global the code declares starts with the prefix (default krs_, checked by

@@ -34,6 +34,14 @@ struct march_options {
     // the same spread, "from 40% faster to twice slower".
     bool use_spheres = false;
     bool shadows = true;
+    // How a voxel's shadow is found (light_sweep.hpp): `rays` marches a shadow ray toward each
+    // light from every shaded voxel in every render (the paper's method, and the reference);
+    // `sweep` computes every voxel's transmittance once, when the marcher is made, each shadow ray
+    // cut at its first non-empty voxel toward the light (after at least `sweep_near_steps`
+    // samples) and completed by that voxel's own swept shadow. The GLSL marcher always uses rays.
+    enum class shadow_method { rays, sweep };
+    shadow_method shadow_by = shadow_method::sweep;
+    int sweep_near_steps = 1;
     // Shade at the voxel's center instead of the sample (the voxel is a homogeneous region, as in
     // section 9), so one voxel's ambient, normal and shadow rays serve every sample in it
     // (memoized for all threads of a render: see shade_memo.hpp). Off: everything per sample,
@@ -65,6 +73,12 @@ struct march_options {
         krs::require_non_negative("march_options.diffuse", diffuse);
         krs::require_non_negative("march_options.specular", specular);
         krs::require_non_negative("march_options.shininess", shininess);
+        if (shadow_by != shadow_method::rays && shadow_by != shadow_method::sweep)
+            throw krs::invalid_parameter("march_options.shadow_by", "must be shadow_method::rays or shadow_method::sweep",
+                                         std::to_string(int(shadow_by)));
+        // (Samples are counted in floats, exact to 2^24; a larger count is a full shadow ray anyway.)
+        if (!(sweep_near_steps >= 1 && sweep_near_steps <= (1 << 20)))
+            throw krs::invalid_parameter("march_options.sweep_near_steps", "must be in [1, 2^20]", std::to_string(sweep_near_steps));
         for (const auto& light : lights) require_color("march_options.lights.color", light.color);
         if (lights.size() > max_lights)
             throw krs::invalid_parameter("march_options.lights", "may hold at most " + std::to_string(max_lights) + " lights",
