@@ -161,14 +161,15 @@ int main(int argc, char** argv)
     args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")->check(grid_file(".vdb"));
     args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")->check(grid_file(".nvdb"));
     args.parse(argc, argv);
-    // Refused before the tree is generated, which can take minutes: an output that cannot be written.
+    // Refused before the tree is generated, which can take minutes: an output whose folder cannot
+    // be made (folders are made as for the PNG).
     for (const auto& [option, path] : {std::pair{"--save-vdb", o.save_vdb}, std::pair{"--save-nvdb", o.save_nvdb}}) {
         if (path.empty()) continue;
         const std::filesystem::path parent = std::filesystem::path(path).parent_path();
         std::error_code ec;
-        if (!parent.empty() && !std::filesystem::is_directory(parent, ec)) {
-            std::fprintf(stderr, "%s: %s: '%s' cannot be written: no directory %s\n", args.program().c_str(), option, path.c_str(),
-                         parent.string().c_str());
+        if (!parent.empty() && (std::filesystem::create_directories(parent, ec), !std::filesystem::is_directory(parent, ec))) {
+            std::fprintf(stderr, "%s: %s: '%s' cannot be written: no directory %s can be made there\n", args.program().c_str(), option,
+                         path.c_str(), parent.string().c_str());
             return 2;
         }
     }
