@@ -197,8 +197,8 @@ inline vdb_volume volume_of(const openvdb::GridBase& grid, std::string_view file
             const openvdb::Vec3d o = origin_meta->value(), e = extent_meta->value();
             const openvdb::Vec3i r = res_meta->value();
             out.volume = hypervolume({o[0], o[1], o[2]}, {e[0], e[1], e[2]}, resolution{r[0], r[1], r[2]});
-            // The transform must put voxel centres where this hypervolume does (within float-free
-            // rounding: a thousandth of a voxel), or the file was edited inconsistently.
+            // The transform must put voxel centres where this hypervolume does (to a thousandth of
+            // a voxel: the sums round differently), or the file was edited inconsistently.
             const vec3d& s = out.volume.voxel_size();
             const double expected[3] = {o[0] + 0.5 * s.x, o[1] + 0.5 * s.y, o[2] + 0.5 * s.z};
             const double sides[3] = {s.x, s.y, s.z};
