@@ -54,6 +54,17 @@ krs_case(hypertree_render  0 "rendered 16x16, supersampling 10"                 
                                                                                    --supersampling 010 --threads 1 --output <out>/hypertree.png)
 krs_case(hypertree_render  0 "rendered 16x16, supersampling 1"                     --preset C --resolution 16 --width 16 --height 16
                                                                                    --supersampling 1 --threads 1 --output <out>/hypertree.png)
+# The grid files: a name ending as the format's do, a directory that exists, a build with OpenVDB.
+krs_case(hypertree_render  2 "--save-vdb;'tree.txt';ending in .vdb"                 --save-vdb tree.txt)
+krs_case(hypertree_render  2 "--save-nvdb;'.nvdb';ending in .nvdb"                  --save-nvdb .nvdb)
+if(KRS_WITH_OPENVDB)
+    krs_case(hypertree_render 2 "--save-vdb;no directory"                          --save-vdb /dev/null/t.vdb)
+    krs_case(hypertree_render 0 "saved the grids to;t.vdb;t.nvdb;rendered 16x16"  --preset C --resolution 16 --width 16
+                                                                                  --height 16 --threads 1 --output <out>/hypertree.png
+                                                                                  --save-vdb <out>/t.vdb --save-nvdb <out>/t.nvdb)
+else()
+    krs_case(hypertree_render 2 "--save-vdb;no OpenVDB"                            --save-vdb t.vdb)
+endif()
 
 # krs_scenes
 krs_case(krs_scenes        2 "--width;'0';[1, 8192]"                               --width 0)

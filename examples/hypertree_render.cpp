@@ -5,7 +5,11 @@
 //     hypertree_render [--tree FILE | --forest FILE | --preset A|B|C|D] [--resolution N]
 //                      [--store dense|index_list|bit_array|partitioned] [--width W] [--height H]
 //                      [--supersampling S|auto] [--density-scale K] [--threads N] [--seed N]
-//                      [--output FILE.png] [--save-volume FILE]
+//                      [--output FILE.png] [--save-volume FILE] [--save-vdb FILE.vdb] [--save-nvdb FILE.nvdb]
+//
+// --save-vdb and --save-nvdb write the store as OpenVDB and NanoVDB grids (hypertree/io/openvdb.hpp,
+// io/nanovdb.hpp): they exist only in a build that found OpenVDB and NanoVDB (KRS_WITH_OPENVDB,
+// from the target krs::hypertree_openvdb); elsewhere they are refused with a message saying so.
 
 #include "hypertree/forest.hpp"
 #include "hypertree/hypertree.hpp"
@@ -15,9 +19,20 @@
 #include "support/example_io.hpp"
 #include "support/progress.hpp"
 
+#ifndef KRS_WITH_OPENVDB
+#define KRS_WITH_OPENVDB 0
+#endif
+#if KRS_WITH_OPENVDB
+#include "hypertree/io/nanovdb.hpp"
+#include "hypertree/io/openvdb.hpp"
+#endif
+
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <utility>
 #include <optional>
 #include <string>
 #include <thread>
@@ -30,7 +45,7 @@ using clock_type = std::chrono::steady_clock;
 double seconds_since(clock_type::time_point t0) { return std::chrono::duration<double>(clock_type::now() - t0).count(); }
 
 struct settings {
-    std::string tree_file, forest_file, preset = "A", output = "out/hypertree.png", save_volume;
+    std::string tree_file, forest_file, preset = "A", output = "out/hypertree.png", save_volume, save_vdb, save_nvdb;
     std::optional<int> resolution;
     storage_type store = storage_type::bit_array;
     int width = 480, height = 480, supersampling = 0, threads = 0; // supersampling 0 = auto
@@ -69,6 +84,19 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
         save(store, o.save_volume); // binary, with a checksum: io/binary.hpp
         std::printf("saved the volume to %s\n", o.save_volume.c_str());
     }
+#if KRS_WITH_OPENVDB
+    // The library's errors name the path; the option is named here.
+    const auto saving = [](const char* option, const std::string& path, auto&& save_as) {
+        try {
+            save_as();
+        } catch (const std::exception& e) {
+            throw std::runtime_error(std::string(option) + " " + path + ": " + e.what());
+        }
+        std::printf("saved the grids to %s\n", path.c_str());
+    };
+    if (!o.save_vdb.empty()) saving("--save-vdb", o.save_vdb, [&] { save_vdb(store, o.save_vdb); });
+    if (!o.save_nvdb.empty()) saving("--save-nvdb", o.save_nvdb, [&] { save_nvdb(store, o.save_nvdb); });
+#endif
     const tree_shape shape = tree_shape::of(volume, voxels);
     march_options mo;
     mo.density_scale = o.density_scale;
@@ -119,7 +147,32 @@ int main(int argc, char** argv)
     args.integer("--seed", o.seed, 0, 1 << 30, "seed of the generation");
     args.text("--output", o.output, "the PNG to write", "FILE");
     args.text("--save-volume", o.save_volume, "also save the voxel store (binary, with a checksum)", "FILE");
+    // A file name, ending as the format's files do (what Houdini and Blender look for).
+    const auto grid_file = [](const char* extension) {
+        return CLI::Validator(
+            [extension](std::string& text) {
+                if (text.size() <= std::string(extension).size() || !text.ends_with(extension))
+                    return "'" + text + "' is not a file name ending in " + extension;
+                if (!KRS_WITH_OPENVDB) return std::string("this build has no OpenVDB/NanoVDB (install libopenvdb-dev and libnanovdb-dev, then build again)");
+                return std::string();
+            },
+            "", "grid file");
+    };
+    args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")->check(grid_file(".vdb"));
+    args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")->check(grid_file(".nvdb"));
     args.parse(argc, argv);
+    // Refused before the tree is generated, which can take minutes: an output whose folder cannot
+    // be made (folders are made as for the PNG).
+    for (const auto& [option, path] : {std::pair{"--save-vdb", o.save_vdb}, std::pair{"--save-nvdb", o.save_nvdb}}) {
+        if (path.empty()) continue;
+        const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+        std::error_code ec;
+        if (!parent.empty() && (std::filesystem::create_directories(parent, ec), !std::filesystem::is_directory(parent, ec))) {
+            std::fprintf(stderr, "%s: %s: '%s' cannot be written: no directory %s can be made there\n", args.program().c_str(), option,
+                         path.c_str(), parent.string().c_str());
+            return 2;
+        }
+    }
     if (resolution_option->count() > 0) o.resolution = resolution;
     const bool store_given = store_option->count() > 0;
     o.store = storage_type(std::find(store_names.begin(), store_names.end(), store) - store_names.begin());

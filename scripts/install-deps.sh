@@ -2,7 +2,8 @@
 # Install the Debian packages krs needs.  Usage: scripts/install-deps.sh [--tests|--examples|--all|--peers]
 #   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa, glslang and spirv-tools (GLSL tests), Python 3
 #               (the check of docs/stability.md's figures), OpenImageIO and CLI11 (a test checks an
-#               example's image, others its command line)
+#               example's image, others its command line), OpenVDB and NanoVDB (the VDB export's tests
+#               read its files with both libraries' own readers)
 #   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO (and its tools, which its CMake
 #               config names), CLI11
 #   --all       all of the above plus Google Benchmark (the default)
@@ -14,7 +15,8 @@ set -euo pipefail
 mode="${1:---all}"
 
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
-tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools spirv-tools python3)
+tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools spirv-tools python3
+       libopenvdb-dev libnanovdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost
 examples=(libopenimageio-dev openimageio-tools libcli11-dev)
 benchmarks=(libbenchmark-dev)
 peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost
@@ -25,7 +27,7 @@ case "$mode" in
     --all) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}") ;;
     --peers) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}" "${peers[@]}") ;;
     -h | --help)
-        sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'
+        sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'
         exit 0
         ;;
     *)

@@ -27,6 +27,9 @@ file(REMOVE_RECURSE "${work}")
 set(configure_args
     -S "${KRS_CONSUMER_SOURCE_DIR}" -B "${work}" -G "${KRS_GENERATOR}"
     -DCMAKE_CXX_COMPILER=${KRS_CXX_COMPILER} -DCMAKE_BUILD_TYPE=${KRS_CONFIG})
+if(KRS_CONSUMER_OPENVDB)
+    list(APPEND configure_args -DKRS_CONSUMER_OPENVDB=ON)
+endif()
 
 if(KRS_MODE STREQUAL "package")
     set(prefix "${KRS_BUILD_DIR}/consumer-prefix")
