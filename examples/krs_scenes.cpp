@@ -73,7 +73,8 @@ vec3f sky(const vec3f& d)
     return vec3f{0.70f, 0.78f, 0.90f} * (1.0f - t) + vec3f{0.30f, 0.48f, 0.82f} * t;
 }
 vec3f mul(const vec3f& a, const vec3f& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
-vec3f mix3(const vec3f& a, const vec3f& b, float t) { return a + (b - a) * std::clamp(t, 0.0f, 1.0f); }
+// GLSL's mix (krs::mix, vec3.hpp) with the weight clamped to [0, 1].
+vec3f mix_clamped(const vec3f& a, const vec3f& b, float t) { return krs::mix(a, b, std::clamp(t, 0.0f, 1.0f)); }
 
 // A field moved by `offset` (the second forest stands beside the first).
 template <class F>
@@ -122,7 +123,8 @@ lit operator+(lit l, const vec3f& c)
     l.base = l.base + c;
     return l;
 }
-lit mix3(const lit& a, const vec3f& b, float t)
+// A lit pixel faded toward a plain colour (fog): its light terms fade with its base.
+lit fade_to(const lit& a, const vec3f& b, float t)
 {
     const float s = std::clamp(t, 0.0f, 1.0f);
     lit l = a;
@@ -349,7 +351,7 @@ double forest_scene(const options& opt)
             const auto k = krs::shade_in_kernel_space(ground, p, sun_direction, -r.direction, band);
             diffuse = std::max(krs::dot(k.normal, k.light), 0.0f);
             n = ground.normal(p);
-            albedo = mix3(albedo, vec3f{0.22f, 0.32f, 0.12f}, 0.5f + 0.5f * ground_noise(p));
+            albedo = mix_clamped(albedo, vec3f{0.22f, 0.32f, 0.12f}, 0.5f + 0.5f * ground_noise(p));
         } else if (h.nearest == 2) {
             n = krs::normalize(trunk.normal(p));
             albedo = {0.40f, 0.25f, 0.15f};
@@ -409,10 +411,10 @@ double terrain_scene(const options& opt)
         auto pattern = [&](float u, float v) { return detail(vec3f{u, v, 0.37f * (u - v)}); };
         const float rock = krs::triplanar(pattern, p * 0.8f, n);
         const vec3f grass{0.22f, 0.34f, 0.10f}, stone{0.45f, 0.41f, 0.36f};
-        const vec3f albedo = mix3(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
+        const vec3f albedo = mix_clamped(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
         const lit c = mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));
         const float fog = 1.0f - std::exp(-h.t / 400.0f);
-        return mix3(c, sky(r.direction), fog);
+        return fade_to(c, sky(r.direction), fog);
     }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
         light_packet(terrain, 60.0f, 0.6f, p, n, th, facing, s, a);
     });
@@ -531,7 +533,7 @@ double mirrors_scene(const options& opt)
 
     auto albedo_of = [](const krs::location<float>& where) {
         const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
-        return mix3(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
+        return mix_clamped(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
     };
     auto shade = [&](int kind, const auto& cloud, const view& v, const krs::ray<float>& r, ray_counts& counts) -> lit {
         const krs::hit<float> h = krs::sphere_trace(cloud, r, v.trace);
@@ -559,10 +561,10 @@ double mirrors_scene(const options& opt)
             const vec3f m = cloud.normal(there);
             seen = mul(albedo_of(there), sun_color * std::max(krs::dot(m, sun_direction), 0.0f) + sky_light);
         }
-        // mix_reflection(lit, seen, w) = lit (1 - w) + seen w, and lit's shadow and occlusion terms
+        // mix(lit, seen, w) = lit (1 - w) + seen w, and lit's shadow and occlusion terms
         // are still to come (packets, after the tile): scale them by 1 - w now, fold seen into the base.
         const float weight = krs::fresnel_schlick(std::abs(krs::dot(n, r.direction)), opt.reflectivity);
-        here.base = krs::mix_reflection(here.base, seen, weight);
+        here.base = krs::mix(here.base, seen, weight);
         here.sun = here.sun * (1.0f - weight);
         here.sky = here.sky * (1.0f - weight);
         return here;
@@ -608,7 +610,7 @@ double coral_scene(const options& opt)
         vec3f n{0, 1, 0}, albedo{0.60f, 0.55f, 0.42f};
         if (h.nearest == 0) {
             n = krs::gradient_normal(bent, p, 2.0f * threshold);
-            albedo = mix3(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
+            albedo = mix_clamped(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
         }
         const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
         return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts));
@@ -696,7 +698,7 @@ double grass_scene(const options& opt)
         vec3f albedo{0.30f, 0.26f, 0.16f};
         if (std::holds_alternative<krs::torus_capsule>(grass.sequence.kernels()[where.kernel])) {
             const float height = std::clamp((p.y - gp.ground_height) / gp.blade_height, 0.0f, 1.0f);
-            albedo = mix3(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
+            albedo = mix_clamped(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
         }
         const float diffuse = std::abs(krs::dot(n, sun_direction)); // thin blades pass light through
         return mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));

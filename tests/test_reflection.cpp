@@ -196,11 +196,23 @@ TEST_CASE("reflection rays: packet lanes equal the scalar rays and their traced 
 TEST_CASE("glossy mix: weight 0 is the base colour exactly, Schlick's weight is F0 head-on and 1 at grazing")
 {
     const vec3f base{0.3f, 0.5f, 0.7f}, mirrored{0.9f, 0.1f, 0.2f};
-    const vec3f same = krs::mix_reflection(base, mirrored, 0.0f);
+    const vec3f same = krs::mix(base, mirrored, 0.0f);
     CHECK((same.x == base.x && same.y == base.y && same.z == base.z));
-    CHECK(krs::mix_reflection(base, mirrored, 1.0f).x == doctest::Approx(mirrored.x));
+    CHECK(krs::mix(base, mirrored, 1.0f).x == doctest::Approx(mirrored.x));
     CHECK(krs::fresnel_schlick(1.0f, 0.04f) == doctest::Approx(0.04f));
     CHECK(krs::fresnel_schlick(0.0f, 0.04f) == doctest::Approx(1.0f));
     // (1 - cos)^5 at cos = 0.5: 1/32.
     CHECK(krs::fresnel_schlick(0.5f, 0.0f) == doctest::Approx(1.0f / 32.0f));
+    // |n . d| a little above 1 by rounding is head-on, not a weight below f0.
+    CHECK(krs::fresnel_schlick(1.0000001f, 0.04f) == 0.04f);
+    // A reflectivity outside [0, 1] or NaN is refused, in any lane.
+    for (const float bad : {-0.1f, 1.5f, std::numeric_limits<float>::quiet_NaN()})
+        CHECK_THROWS_WITH_AS(krs::fresnel_schlick(0.5f, bad), doctest::Contains("fresnel_schlick.f0"), krs::invalid_parameter);
+    CHECK(krs::fresnel_schlick(0.5f, 1.0f) == 1.0f);
+    using P = krs::packet_f;
+    alignas(64) float f0[krs::lane_count<P>];
+    for (std::size_t i = 0; i < krs::lane_count<P>; ++i) f0[i] = 0.5f;
+    f0[krs::lane_count<P> - 1] = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_WITH_AS(krs::fresnel_schlick(P(0.5f), P::load_aligned(f0)), doctest::Contains("fresnel_schlick.f0"),
+                         krs::invalid_parameter);
 }
