@@ -227,7 +227,8 @@ double render(const options& opt, const std::string& name, const complexity& sce
                     out.push_back(&pixels[(std::size_t(y) * opt.width + x) * 3]);
                 }
             // The tile's lit pixels, by lighting setup, W at a time (the last packet's spare lanes
-            // repeat its first pixel and are not written).
+            // repeat its first pixel with facing 0, so they march no shadow ray, and are not
+            // written).
             for (int kind = 0;; ++kind) {
                 std::vector<std::size_t> todo;
                 bool more = false;
@@ -239,9 +240,10 @@ double render(const options& opt, const std::string& name, const complexity& sce
                     alignas(64) float px[lanes], py[lanes], pz[lanes], nx[lanes], ny[lanes], nz[lanes], th[lanes];
                     alignas(64) float facing[lanes], shadow[lanes], occlusion[lanes];
                     for (std::size_t j = 0; j < lanes; ++j) {
-                        const lit& l = shaded[todo[first + (first + j < todo.size() ? j : 0)]];
+                        const bool real = first + j < todo.size();
+                        const lit& l = shaded[todo[first + (real ? j : 0)]];
                         px[j] = l.p.x, py[j] = l.p.y, pz[j] = l.p.z, nx[j] = l.n.x, ny[j] = l.n.y, nz[j] = l.n.z;
-                        th[j] = l.threshold, facing[j] = l.shadowed ? 1.0f : 0.0f;
+                        th[j] = l.threshold, facing[j] = real && l.shadowed ? 1.0f : 0.0f;
                     }
                     P s, a;
                     light(kind, {P::load_aligned(px), P::load_aligned(py), P::load_aligned(pz)},
