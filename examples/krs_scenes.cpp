@@ -32,6 +32,7 @@
 #include "krs/model/forest.hpp"
 #include "krs/model/forest_ground.hpp"
 #include "krs/model/grass.hpp"
+#include "krs/model/mirror_cloud.hpp"
 #include "krs/model/terrain.hpp"
 #include "krs/shade/global.hpp"
 #include "krs/shade/kernel_light.hpp"
@@ -471,54 +472,18 @@ double rock_scene(const options& opt)
     });
 }
 
-// Figure 5: one sphere multiplied by 9 mirrors into 512 spheres. Left: the mirrors alternate
-// between the x, y and z axes, and the copies form a lattice whose symmetry the eye sees at once.
-// Right: each mirror's normal is random, and the same 512 spheres read as a natural cluster.
-template <class Mirror>
-using sphere_cloud = krs::basic_sequence<Mirror, krs::sphere>;
-
-template <class Mirror, class MakeMirror>
-sphere_cloud<Mirror> build_cloud(const krs::sphere& seed, int doublings, float gap, MakeMirror make)
-{
-    typename sphere_cloud<Mirror>::builder b;
-    b.kernel(seed);
-    std::vector<vec3f> copies{seed.center};
-    for (int k = 0; k < doublings; ++k) {
-        // Just beyond the copies along the normal: every copy stays on the negative side (separated).
-        const Mirror m = make(k, copies, seed.radius + 0.5f * gap);
-        b.mirror(m);
-        const std::size_t count = copies.size();
-        for (std::size_t i = 0; i < count; ++i) copies.push_back(m.reflect(copies[i]));
-    }
-    return b.build();
-}
-
+// Figure 5: one sphere multiplied by 9 mirrors into 512 spheres (krs/model/mirror_cloud.hpp).
+// Left: the mirrors alternate between the x, y and z axes, and the copies form a lattice whose
+// symmetry the eye sees at once. Right: each mirror's normal is random, and the same 512 spheres
+// read as a natural cluster.
 double mirrors_scene(const options& opt)
 {
-    const krs::sphere ball({0, 0.4f, 0}, 0.4f);
-    constexpr int doublings = 9;
-    auto extent = [](const std::vector<vec3f>& copies, const vec3f& n) {
-        float e = -1e30f;
-        for (const vec3f& p : copies) e = std::max(e, krs::dot(n, p));
-        return e;
-    };
-    const auto aligned = build_cloud<krs::axis_mirror>(ball, doublings, 0.3f, [&](int k, const std::vector<vec3f>& copies,
-                                                                                   float margin) {
-        const int axis = k % 3;
-        vec3f n{0, 0, 0};
-        (axis == 0 ? n.x : axis == 1 ? n.y : n.z) = 1;
-        return krs::axis_mirror(axis, extent(copies, n) + margin, true);
-    });
-    std::mt19937 random(opt.seed);
-    std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
-    const auto unaligned = build_cloud<krs::mirror>(ball, doublings, 0.3f, [&](int k, const std::vector<vec3f>& copies,
-                                                                                float margin) {
-        // The same alternation of axes (a compact cluster, not a chain), each turned at random.
-        vec3f n{uniform(random), uniform(random), uniform(random)};
-        (k % 3 == 0 ? n.x : k % 3 == 1 ? n.y : n.z) += 1.3f;
-        n = krs::normalize(n);
-        return krs::mirror(n, extent(copies, n) + margin);
-    });
+    krs::model::mirror_cloud_parameters cloud;
+    cloud.doublings = 9;
+    cloud.gap = 0.3f;
+    cloud.seed = opt.seed;
+    const auto aligned = krs::model::build_aligned_cloud(cloud);
+    const auto unaligned = krs::model::build_scattered_cloud(cloud);
     const int half = std::max(1, opt.width / 2);
     struct view {
         krs::pinhole_camera camera;
