@@ -10,6 +10,7 @@
 #include "krs/shade/reflection.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/parity.hpp"
 #include "support/random.hpp"
 
 #include <doctest/doctest.h>
@@ -160,6 +161,14 @@ TEST_CASE("reflection rays: packet lanes equal the scalar rays and their traced 
     o.threshold_floor = 1e-4f;
     o.max_distance = 40.0f;
     std::mt19937_64 g(8);
+    // Under FMA contraction (krs_parity_contract_native, tests/support/parity.hpp) the paths may
+    // fuse p + m lift and the reflection differently: the rays then agree within parity's
+    // tolerance of the scene's extent (10: the balls and the plane around them), and a march that
+    // passes within the threshold of a surface may stop on one side only, so hits and t agree
+    // but for at most 1% of the lanes (the comparison is small: 32 packets). Otherwise bit for bit.
+    krs_test::parity same_ray{"reflection rays, packet against scalar", 10.0};
+    krs_test::parity same_t{"reflected hits' t, packet against scalar", 10.0};
+    long lanes = 0, off = 0;
     for (int round = 0; round < 32; ++round) {
         alignas(64) float px[W], py[W], pz[W], nx[W], ny[W], nz[W], dx[W], dy[W], dz[W];
         vec3f ps[W], ns[W], ds[W];
@@ -181,16 +190,22 @@ TEST_CASE("reflection rays: packet lanes equal the scalar rays and their traced 
             const krs::hit<float> hs = krs::sphere_trace(scene, rs, o);
             INFO("round ", round, " lane ", i);
             const vec3f origin = krs::lane_at(rp.origin, i), direction = krs::lane_at(rp.direction, i);
-            CHECK(origin.x == rs.origin.x);
-            CHECK(origin.y == rs.origin.y);
-            CHECK(origin.z == rs.origin.z);
-            CHECK(direction.x == rs.direction.x);
-            CHECK(direction.y == rs.direction.y);
-            CHECK(direction.z == rs.direction.z);
-            CHECK(krs::mask_lane<P>(hp.found, i) == hs.found);
-            if (hs.found) CHECK(krs::lane_at(hp.t, i) == hs.t);
+            CHECK(same_ray.agree(origin.x, rs.origin.x));
+            CHECK(same_ray.agree(origin.y, rs.origin.y));
+            CHECK(same_ray.agree(origin.z, rs.origin.z));
+            CHECK(same_ray.agree(direction.x, rs.direction.x));
+            CHECK(same_ray.agree(direction.y, rs.direction.y));
+            CHECK(same_ray.agree(direction.z, rs.direction.z));
+            ++lanes;
+            const bool same_hit = krs::mask_lane<P>(hp.found, i) == hs.found && same_t.agree(krs::lane_at(hp.t, i), hs.t);
+            if (krs_test::contraction) off += !same_hit;
+            else CHECK(same_hit);
         }
     }
+    same_ray.report();
+    same_t.report();
+    if (krs_test::contraction) MESSAGE(off << " of " << lanes << " lanes differ in hit or beyond the tolerance in t");
+    CHECK(off <= lanes / 100);
 }
 
 TEST_CASE("glossy mix: weight 0 is the base colour exactly, Schlick's weight is F0 head-on and 1 at grazing")
