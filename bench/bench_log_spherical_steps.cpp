@@ -5,11 +5,14 @@
 //     bench_log_spherical_steps [--csv FILE] [--threads T] [--size N] [--rounds R]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
-// For the recursive lotus and the cube singularity (density 1) and each seam setting (none and
-// hidden boundary, each with step factor 1, 0.5 everywhere, 0.5 within a band of relative width
-// 0.06 of the seams), next to the exact adjacent-shells field:
+// For the recursive lotus and the cube singularity (density 1) and each seam setting (adjacent
+// shells, none and hidden boundary, each with step factor 1, 0.5 everywhere, 0.5 within a band of
+// relative width 0.06 of the seams; the local factor also in its earlier form, d times a factor
+// ramped in beta from 0.5 at the band to 1 at twice it, reproduced here as `old ramp` for the
+// side-by-side), next to the exact adjacent-shells field:
 //   - the measured Lipschitz ratio max |d(p) - d(q)| / |p - q| over 200000 close pairs (|p - q| =
-//     1e-3 |p|) near the seams (relative distance beta < 0.06) and away from them (beta > 0.12);
+//     1e-3 |p|) near the seams (relative distance beta < 0.06), in the old ramp (0.06 <= beta <=
+//     0.12, both points) and away from the seams (beta > 0.12);
 //   - the worst overestimate (d - D) / r over 200000 points near the seams, D the union of the
 //     prototype's copies in the five nearest shells (brute force, double);
 //   - an N x N image (default 256) from a camera in free space: steps per ray, milliseconds (best
@@ -64,15 +67,15 @@ double seam_distance(const vec3d& p, double density)
     const double inner = std::exp(k / density), outer = std::exp((k + 1) / density);
     return std::min(r - inner, outer - r) / r;
 }
-template <class Shell>
-double union_of_shells(const krs::similar_shell<Shell>& f, const vec3d& p)
+template <class F>
+double union_of_shells(const F& f, const vec3d& p)
 {
     const double density = f.density();
     const double k = std::floor(std::log(krs::length(p)) * density);
     double d = std::numeric_limits<double>::infinity();
     for (int j = -2; j <= 2; ++j) {
         const double scale = std::exp((k + j) / density);
-        d = std::min(d, f.shell().distance(p / scale) * scale);
+        d = std::min(d, f.prototype().distance(p / scale) * scale);
     }
     return d;
 }
@@ -80,17 +83,58 @@ double union_of_shells(const krs::similar_shell<Shell>& f, const vec3d& p)
 struct setting {
     const char* name;
     krs::shell_options options;
+    bool old_ramp = false; // the local factor's earlier form (bench_field)
 };
 constexpr float band = 0.06f;
 const setting settings[] = {
     {"adjacent shells (exact)", {krs::shell_seams::adjacent_shells, 0.05f, 1.0f, 0.0f}},
+    {"adjacent, 0.5 local", {krs::shell_seams::adjacent_shells, 0.05f, 0.5f, band}},
+    {"adjacent, 0.5 old ramp", {krs::shell_seams::adjacent_shells, 0.05f, 0.5f, band}, true},
     {"none", {krs::shell_seams::none, 0.05f, 1.0f, 0.0f}},
     {"none, 0.5 global", {krs::shell_seams::none, 0.05f, 0.5f, 0.0f}},
     {"none, 0.5 local", {krs::shell_seams::none, 0.05f, 0.5f, band}},
+    {"none, 0.5 old ramp", {krs::shell_seams::none, 0.05f, 0.5f, band}, true},
     {"hidden boundary", {krs::shell_seams::hidden_boundary, 0.05f, 1.0f, 0.0f}},
     {"hidden, 0.5 global", {krs::shell_seams::hidden_boundary, 0.05f, 0.5f, 0.0f}},
     {"hidden, 0.5 local", {krs::shell_seams::hidden_boundary, 0.05f, 0.5f, band}},
+    {"hidden, 0.5 old ramp", {krs::shell_seams::hidden_boundary, 0.05f, 0.5f, band}, true},
 };
+
+// A setting's field. With old_ramp, the local factor as similar_shell had it before it was made
+// 1-Lipschitz (log_spherical.hpp at 5a952cd, local_step): the field with factor 1 times
+// f + (1 - f) clamp((beta - band) / band, 0, 1), beta = min(r - inner, outer - r) / r, the same
+// operations in the same order. Its gradient in the ramp is about g + (1 - f) d / (band r).
+template <class F>
+struct bench_field {
+    F shell;
+    bool old_ramp = false;
+    float factor = 1.0f, seam_band = 0.0f;
+
+    template <class T>
+    T distance(const krs::vec3<T>& p) const
+    {
+        const T d = shell.distance(p);
+        if (!old_ramp) return d;
+        const T r = krs::length(p);
+        const T rs = krs::max(r, T(1e-30f));
+        const T inv_density(1.0f / shell.density());
+        const T k = krs::lane_floor(krs::lane_log(rs) * T(shell.density()));
+        const T inner = krs::lane_exp(k * inv_density), outer = inner * T(shell.ratio());
+        const T beta = krs::min(r - inner, outer - r) / krs::max(r, T(1e-30f));
+        const T ramp = krs::clamp((beta - T(seam_band)) * T(1.0f / seam_band), T(0), T(1));
+        return d * (T(factor) + T(1.0f - factor) * ramp);
+    }
+    double density() const { return shell.density(); }
+    const auto& prototype() const { return shell.shell(); }
+};
+template <class F>
+bench_field<F> field_of(const setting& s, const std::function<F(const krs::shell_options&)>& make)
+{
+    if (!s.old_ramp) return {make(s.options), false};
+    krs::shell_options plain = s.options;
+    plain.step_factor = 1.0f, plain.seam_band = 0.0f;
+    return {make(plain), true, s.options.step_factor, s.options.seam_band};
+}
 constexpr std::size_t setting_count = std::size(settings);
 
 struct frame {
@@ -120,9 +164,11 @@ void bench_preset(const char* preset, const Make& make, const vec3f& eye, int si
                   std::ofstream& csv)
 {
     const double density = 1.0;
-    using field_t = decltype(make(krs::shell_options{}));
+    using shell_t = decltype(make(krs::shell_options{}));
+    using field_t = bench_field<shell_t>;
     std::vector<field_t> fields;
-    for (const setting& s : settings) fields.push_back(make(s.options));
+    const std::function<shell_t(const krs::shell_options&)> maker = make;
+    for (const setting& s : settings) fields.push_back(field_of(s, maker));
 
     const krs::pinhole_camera camera(eye, {0, 0, 0.3f}, {0, 0, 1}, 50.0f, size, size);
     krs::trace_options o;
@@ -139,20 +185,22 @@ void bench_preset(const char* preset, const Make& make, const vec3f& eye, int si
         }
 
     std::printf("%s (density 1, %dx%d, eye (%.1f, %.1f, %.1f))\n", preset, size, size, eye.x, eye.y, eye.z);
-    std::printf("%-24s %9s %9s %10s | %9s %8s %6s %9s %8s\n", "setting", "Lip seam", "Lip away", "over / r", "steps/ray",
-                "ms", "hits", "hit diff", "depth");
+    std::printf("%-24s %9s %9s %9s %10s | %9s %8s %6s %9s %8s\n", "setting", "Lip seam", "Lip ramp", "Lip away", "over / r",
+                "steps/ray", "ms", "hits", "hit diff", "depth");
     const frame& reference = frames[0];
     for (std::size_t i = 0; i < setting_count; ++i) {
         const field_t& f = fields[i];
         // Lipschitz ratios near the seams and away, and the worst overestimate near them.
         std::mt19937_64 g(11);
-        double lip_seam = 0, lip_away = 0, over = -1e300;
+        double lip_seam = 0, lip_ramp = 0, lip_away = 0, over = -1e300;
         for (int k = 0; k < 200000; ++k) {
             const vec3d a = near_seam(g, density, uniform(g, -0.3, 0.3));
             const vec3d b = a + direction(g) * (1e-3 * krs::length(a));
             const double ratio = std::abs(f.distance(a) - f.distance(b)) / krs::length(b - a);
             const double beta = std::min(seam_distance(a, density), seam_distance(b, density));
+            const double beta_far = std::max(seam_distance(a, density), seam_distance(b, density));
             if (beta < band) lip_seam = std::max(lip_seam, ratio);
+            if (beta >= band && beta_far <= 2 * band) lip_ramp = std::max(lip_ramp, ratio);
             if (beta > 2 * band) lip_away = std::max(lip_away, ratio);
             const vec3d p = near_seam(g, density, uniform(g, -double(band), double(band)));
             const double truth = union_of_shells(f, p);
@@ -172,10 +220,11 @@ void bench_preset(const char* preset, const Make& make, const vec3f& eye, int si
         }
         const double rays = double(frames[i].t.size());
         const double depth_rmse = both ? std::sqrt(depth_sq / double(both)) : 0.0;
-        std::printf("%-24s %9.3f %9.3f %10.4f | %9.2f %8.1f %6lld %9lld %8.2e\n", settings[i].name, lip_seam, lip_away, over,
-                    double(steps) / rays, best[i] * 1e3, hits, differ, depth_rmse);
+        std::printf("%-24s %9.3f %9.3f %9.3f %10.4f | %9.2f %8.1f %6lld %9lld %8.2e\n", settings[i].name, lip_seam, lip_ramp,
+                    lip_away, over, double(steps) / rays, best[i] * 1e3, hits, differ, depth_rmse);
         csv << preset << ",\"" << settings[i].name << "\"," << settings[i].options.step_factor << ','
-            << settings[i].options.seam_band << ',' << lip_seam << ',' << lip_away << ',' << over << ','
+            << settings[i].options.seam_band << ',' << settings[i].old_ramp << ',' << lip_seam << ',' << lip_ramp << ','
+            << lip_away << ',' << over << ','
             << double(steps) / rays << ',' << best[i] << ',' << hits << ',' << differ << ',' << depth_rmse << ',' << size
             << '\n';
     }
@@ -207,15 +256,15 @@ int main(int argc, char** argv)
     }
     if (csv_path.empty()) csv_path = bench::csv_next_to_executable(argv[0]);
     std::ofstream csv(csv_path);
-    csv << "preset,setting,step_factor,seam_band,lipschitz_near_seams,lipschitz_away,overestimate_over_r,steps_per_ray,"
+    csv << "preset,setting,step_factor,seam_band,old_ramp,lipschitz_near_seams,lipschitz_ramp,lipschitz_away,overestimate_over_r,steps_per_ray,"
            "seconds,hits,hit_differences,depth_rmse,size\n";
     const std::string load_before = bench::load_average();
     std::printf("similar shell step factor, global against local (seam band %.2f), %u thread(s), best of %d rounds\n"
-                "Lip: max |d(p)-d(q)|/|p-q| over close pairs near the seams (beta < %.2f) and away (beta > %.2f); "
+                "Lip: max |d(p)-d(q)|/|p-q| over close pairs near the seams (beta < %.2f), in the old ramp (%.2f..%.2f) and away (beta > %.2f); "
                 "over / r: worst (d - D) / r near the seams, D the union of shells (brute force); hit diff: pixels "
                 "whose hit differs from the exact field's image; depth: RMSE of (t - t_exact) / t_exact where both "
                 "hit\n\n",
-                band, threads, rounds, band, 2 * band);
+                band, threads, rounds, band, band, 2 * band, 2 * band);
     bench_preset("recursive lotus", [](const krs::shell_options& o) { return krs::make_recursive_lotus(1.0f, 8, o); },
                  vec3f{1.5f, -1.0f, -3.0f}, size, rounds, threads, csv);
     bench_preset("cube singularity", [](const krs::shell_options& o) { return krs::make_cube_singularity(1.0f, o); },

@@ -32,6 +32,7 @@
 #include "krs/model/forest.hpp"
 #include "krs/model/forest_ground.hpp"
 #include "krs/model/grass.hpp"
+#include "krs/model/mirror_cloud.hpp"
 #include "krs/model/terrain.hpp"
 #include "krs/shade/global.hpp"
 #include "krs/shade/kernel_light.hpp"
@@ -73,7 +74,8 @@ vec3f sky(const vec3f& d)
     return vec3f{0.70f, 0.78f, 0.90f} * (1.0f - t) + vec3f{0.30f, 0.48f, 0.82f} * t;
 }
 vec3f mul(const vec3f& a, const vec3f& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
-vec3f mix3(const vec3f& a, const vec3f& b, float t) { return a + (b - a) * std::clamp(t, 0.0f, 1.0f); }
+// GLSL's mix (krs::mix, vec3.hpp) with the weight clamped to [0, 1].
+vec3f mix_clamped(const vec3f& a, const vec3f& b, float t) { return krs::mix(a, b, std::clamp(t, 0.0f, 1.0f)); }
 
 // A field moved by `offset` (the second forest stands beside the first).
 template <class F>
@@ -122,7 +124,8 @@ lit operator+(lit l, const vec3f& c)
     l.base = l.base + c;
     return l;
 }
-lit mix3(const lit& a, const vec3f& b, float t)
+// A lit pixel faded toward a plain colour (fog): its light terms fade with its base.
+lit fade_to(const lit& a, const vec3f& b, float t)
 {
     const float s = std::clamp(t, 0.0f, 1.0f);
     lit l = a;
@@ -225,7 +228,8 @@ double render(const options& opt, const std::string& name, const complexity& sce
                     out.push_back(&pixels[(std::size_t(y) * opt.width + x) * 3]);
                 }
             // The tile's lit pixels, by lighting setup, W at a time (the last packet's spare lanes
-            // repeat its first pixel and are not written).
+            // repeat its first pixel with facing 0, so they march no shadow ray, and are not
+            // written).
             for (int kind = 0;; ++kind) {
                 std::vector<std::size_t> todo;
                 bool more = false;
@@ -237,9 +241,10 @@ double render(const options& opt, const std::string& name, const complexity& sce
                     alignas(64) float px[lanes], py[lanes], pz[lanes], nx[lanes], ny[lanes], nz[lanes], th[lanes];
                     alignas(64) float facing[lanes], shadow[lanes], occlusion[lanes];
                     for (std::size_t j = 0; j < lanes; ++j) {
-                        const lit& l = shaded[todo[first + (first + j < todo.size() ? j : 0)]];
+                        const bool real = first + j < todo.size();
+                        const lit& l = shaded[todo[first + (real ? j : 0)]];
                         px[j] = l.p.x, py[j] = l.p.y, pz[j] = l.p.z, nx[j] = l.n.x, ny[j] = l.n.y, nz[j] = l.n.z;
-                        th[j] = l.threshold, facing[j] = l.shadowed ? 1.0f : 0.0f;
+                        th[j] = l.threshold, facing[j] = real && l.shadowed ? 1.0f : 0.0f;
                     }
                     P s, a;
                     light(kind, {P::load_aligned(px), P::load_aligned(py), P::load_aligned(pz)},
@@ -349,7 +354,7 @@ double forest_scene(const options& opt)
             const auto k = krs::shade_in_kernel_space(ground, p, sun_direction, -r.direction, band);
             diffuse = std::max(krs::dot(k.normal, k.light), 0.0f);
             n = ground.normal(p);
-            albedo = mix3(albedo, vec3f{0.22f, 0.32f, 0.12f}, 0.5f + 0.5f * ground_noise(p));
+            albedo = mix_clamped(albedo, vec3f{0.22f, 0.32f, 0.12f}, 0.5f + 0.5f * ground_noise(p));
         } else if (h.nearest == 2) {
             n = krs::normalize(trunk.normal(p));
             albedo = {0.40f, 0.25f, 0.15f};
@@ -409,10 +414,10 @@ double terrain_scene(const options& opt)
         auto pattern = [&](float u, float v) { return detail(vec3f{u, v, 0.37f * (u - v)}); };
         const float rock = krs::triplanar(pattern, p * 0.8f, n);
         const vec3f grass{0.22f, 0.34f, 0.10f}, stone{0.45f, 0.41f, 0.36f};
-        const vec3f albedo = mix3(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
+        const vec3f albedo = mix_clamped(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
         const lit c = mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));
         const float fog = 1.0f - std::exp(-h.t / 400.0f);
-        return mix3(c, sky(r.direction), fog);
+        return fade_to(c, sky(r.direction), fog);
     }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
         light_packet(terrain, 60.0f, 0.6f, p, n, th, facing, s, a);
     });
@@ -467,54 +472,18 @@ double rock_scene(const options& opt)
     });
 }
 
-// Figure 5: one sphere multiplied by 9 mirrors into 512 spheres. Left: the mirrors alternate
-// between the x, y and z axes, and the copies form a lattice whose symmetry the eye sees at once.
-// Right: each mirror's normal is random, and the same 512 spheres read as a natural cluster.
-template <class Mirror>
-using sphere_cloud = krs::basic_sequence<Mirror, krs::sphere>;
-
-template <class Mirror, class MakeMirror>
-sphere_cloud<Mirror> build_cloud(const krs::sphere& seed, int doublings, float gap, MakeMirror make)
-{
-    typename sphere_cloud<Mirror>::builder b;
-    b.kernel(seed);
-    std::vector<vec3f> copies{seed.center};
-    for (int k = 0; k < doublings; ++k) {
-        // Just beyond the copies along the normal: every copy stays on the negative side (separated).
-        const Mirror m = make(k, copies, seed.radius + 0.5f * gap);
-        b.mirror(m);
-        const std::size_t count = copies.size();
-        for (std::size_t i = 0; i < count; ++i) copies.push_back(m.reflect(copies[i]));
-    }
-    return b.build();
-}
-
+// Figure 5: one sphere multiplied by 9 mirrors into 512 spheres (krs/model/mirror_cloud.hpp).
+// Left: the mirrors alternate between the x, y and z axes, and the copies form a lattice whose
+// symmetry the eye sees at once. Right: each mirror's normal is random, and the same 512 spheres
+// read as a natural cluster.
 double mirrors_scene(const options& opt)
 {
-    const krs::sphere ball({0, 0.4f, 0}, 0.4f);
-    constexpr int doublings = 9;
-    auto extent = [](const std::vector<vec3f>& copies, const vec3f& n) {
-        float e = -1e30f;
-        for (const vec3f& p : copies) e = std::max(e, krs::dot(n, p));
-        return e;
-    };
-    const auto aligned = build_cloud<krs::axis_mirror>(ball, doublings, 0.3f, [&](int k, const std::vector<vec3f>& copies,
-                                                                                   float margin) {
-        const int axis = k % 3;
-        vec3f n{0, 0, 0};
-        (axis == 0 ? n.x : axis == 1 ? n.y : n.z) = 1;
-        return krs::axis_mirror(axis, extent(copies, n) + margin, true);
-    });
-    std::mt19937 random(opt.seed);
-    std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
-    const auto unaligned = build_cloud<krs::mirror>(ball, doublings, 0.3f, [&](int k, const std::vector<vec3f>& copies,
-                                                                                float margin) {
-        // The same alternation of axes (a compact cluster, not a chain), each turned at random.
-        vec3f n{uniform(random), uniform(random), uniform(random)};
-        (k % 3 == 0 ? n.x : k % 3 == 1 ? n.y : n.z) += 1.3f;
-        n = krs::normalize(n);
-        return krs::mirror(n, extent(copies, n) + margin);
-    });
+    krs::model::mirror_cloud_parameters cloud;
+    cloud.doublings = 9;
+    cloud.gap = 0.3f;
+    cloud.seed = opt.seed;
+    const auto aligned = krs::model::build_aligned_cloud(cloud);
+    const auto unaligned = krs::model::build_scattered_cloud(cloud);
     const int half = std::max(1, opt.width / 2);
     struct view {
         krs::pinhole_camera camera;
@@ -531,7 +500,7 @@ double mirrors_scene(const options& opt)
 
     auto albedo_of = [](const krs::location<float>& where) {
         const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
-        return mix3(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
+        return mix_clamped(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
     };
     auto shade = [&](int kind, const auto& cloud, const view& v, const krs::ray<float>& r, ray_counts& counts) -> lit {
         const krs::hit<float> h = krs::sphere_trace(cloud, r, v.trace);
@@ -559,10 +528,10 @@ double mirrors_scene(const options& opt)
             const vec3f m = cloud.normal(there);
             seen = mul(albedo_of(there), sun_color * std::max(krs::dot(m, sun_direction), 0.0f) + sky_light);
         }
-        // mix_reflection(lit, seen, w) = lit (1 - w) + seen w, and lit's shadow and occlusion terms
+        // mix(lit, seen, w) = lit (1 - w) + seen w, and lit's shadow and occlusion terms
         // are still to come (packets, after the tile): scale them by 1 - w now, fold seen into the base.
         const float weight = krs::fresnel_schlick(std::abs(krs::dot(n, r.direction)), opt.reflectivity);
-        here.base = krs::mix_reflection(here.base, seen, weight);
+        here.base = krs::mix(here.base, seen, weight);
         here.sun = here.sun * (1.0f - weight);
         here.sky = here.sky * (1.0f - weight);
         return here;
@@ -608,7 +577,7 @@ double coral_scene(const options& opt)
         vec3f n{0, 1, 0}, albedo{0.60f, 0.55f, 0.42f};
         if (h.nearest == 0) {
             n = krs::gradient_normal(bent, p, 2.0f * threshold);
-            albedo = mix3(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
+            albedo = mix_clamped(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
         }
         const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
         return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts));
@@ -696,7 +665,7 @@ double grass_scene(const options& opt)
         vec3f albedo{0.30f, 0.26f, 0.16f};
         if (std::holds_alternative<krs::torus_capsule>(grass.sequence.kernels()[where.kernel])) {
             const float height = std::clamp((p.y - gp.ground_height) / gp.blade_height, 0.0f, 1.0f);
-            albedo = mix3(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
+            albedo = mix_clamped(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
         }
         const float diffuse = std::abs(krs::dot(n, sun_direction)); // thin blades pass light through
         return mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));

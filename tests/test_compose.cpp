@@ -11,6 +11,7 @@
 #include "krs/model/terrain.hpp"
 #include "krs/model/tree.hpp"
 
+#include "support/parity.hpp"
 #include "support/random.hpp"
 
 #include <doctest/doctest.h>
@@ -424,6 +425,15 @@ TEST_CASE("the union tracer in packets equals the scalar union tracer lane by la
     const union_rays_scene s = union_scene();
     std::mt19937_64 g(35);
     int hits = 0, by_component[3] = {0, 0, 0};
+    // Under FMA contraction (krs_parity_contract_native, tests/support/parity.hpp) the two paths
+    // round each distance differently, within the contraction tolerance, and t sums the steps'
+    // differences; a march passing within the threshold of a surface may even stop on one side
+    // and go on on the other. There t is compared through krs_test::parity (its tolerance of the
+    // scene's extent, the far limit), and lanes that differ beyond it or in anything else (hit,
+    // nearest component, counts) are counted: at most 0.1%. Otherwise every lane equals the
+    // scalar trace bit for bit.
+    krs_test::parity same_t{"union trace t, packet against scalar", double(s.o.max_distance)};
+    long lanes = 0, off = 0;
     const int packets = 1920 / int(W); // 1920 rays whatever the width
     for (int k = 0; k < packets; ++k) {
         alignas(64) float ox[W], oy[W], oz[W], dx[W], dy[W], dz[W];
@@ -442,18 +452,34 @@ TEST_CASE("the union tracer in packets equals the scalar union tracer lane by la
             CAPTURE(k);
             CAPTURE(i);
             const auto one = krs::union_trace(s.u, rays[i], s.o);
-            REQUIRE(krs::mask_lane<P>(h.found, i) == bool(one.found));
-            REQUIRE(krs::mask_lane<P>(h.invalid, i) == bool(one.invalid));
-            REQUIRE(krs::lane_at(h.t, i) == one.t);
-            REQUIRE(krs::lane_at(h.steps, i) == float(one.steps));
-            REQUIRE(krs::lane_at(h.evaluations, i) == float(one.evaluations));
-            REQUIRE(krs::lane_at(h.nearest, i) == float(one.nearest));
-            for (std::size_t c = 0; c < 3; ++c)
-                REQUIRE(krs::lane_at(h.component_evaluations[c], i) == float(one.component_evaluations[c]));
+            ++lanes;
+            const bool same_t_here = same_t.agree(krs::lane_at(h.t, i), one.t);
+            if (krs_test::contraction) {
+                bool same = same_t_here && krs::mask_lane<P>(h.found, i) == bool(one.found) &&
+                            krs::mask_lane<P>(h.invalid, i) == bool(one.invalid) &&
+                            krs::lane_at(h.steps, i) == float(one.steps) &&
+                            krs::lane_at(h.evaluations, i) == float(one.evaluations) &&
+                            krs::lane_at(h.nearest, i) == float(one.nearest);
+                for (std::size_t c = 0; c < 3; ++c)
+                    same = same && krs::lane_at(h.component_evaluations[c], i) == float(one.component_evaluations[c]);
+                off += !same;
+            } else {
+                REQUIRE(krs::mask_lane<P>(h.found, i) == bool(one.found));
+                REQUIRE(krs::mask_lane<P>(h.invalid, i) == bool(one.invalid));
+                REQUIRE(same_t_here);
+                REQUIRE(krs::lane_at(h.steps, i) == float(one.steps));
+                REQUIRE(krs::lane_at(h.evaluations, i) == float(one.evaluations));
+                REQUIRE(krs::lane_at(h.nearest, i) == float(one.nearest));
+                for (std::size_t c = 0; c < 3; ++c)
+                    REQUIRE(krs::lane_at(h.component_evaluations[c], i) == float(one.component_evaluations[c]));
+            }
             hits += one.found;
             if (one.found) ++by_component[one.nearest];
         }
     }
+    same_t.report();
+    if (krs_test::contraction) MESSAGE(off << " of " << lanes << " lanes differ beyond the tolerance or in a count");
+    CHECK(off <= lanes / 1000);
     CHECK(hits > 480);
     CHECK(hits < 1760);
     CHECK(by_component[0] > 50);

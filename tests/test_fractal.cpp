@@ -373,7 +373,7 @@ TEST_CASE("similar shell local step factor: a bound within its margin near seams
         CHECK(l.overestimate_margin() == doctest::Approx(0.5 * 0.05).epsilon(1e-6));
         CHECK(g.overestimate_margin() == doctest::Approx(l.overestimate_margin()).epsilon(1e-6));
         std::mt19937_64 rng(31);
-        double worst_local = -1e30, worst_global = -1e30, worst_none = -1e30;
+        double worst_local = -1e30, worst_global = -1e30, worst_none = -1e30, worst_form = 0;
         int longer = 0, full_away = 0, samples_away = 0, shorter = 0;
         for (int i = 0; i < 60000; ++i) {
             // Dense near the seams (|beta| < 0.1), some farther in (up to 0.4).
@@ -391,17 +391,28 @@ TEST_CASE("similar shell local step factor: a bound within its margin near seams
             // The local field is never shorter than the global one, and longer away from the seams.
             if (dg > 0) CHECK(dl >= dg * (1.0 - 1e-9));
             if (dl > dg * (1.0 + 1e-6) && dg > 0) ++longer;
-            if (dg > 0 && dl < dg * (1.0 + 1e-6) && std::abs(beta) > 0.14) ++shorter;
-            if (std::abs(beta) > 0.14 && dg > 0) {
-                ++samples_away;
-                // 2 band = 0.12 < 0.14 (below a seam the relative distance -beta / (1 + beta) is larger still)
-                full_away += dl == doctest::Approx(2.0 * dg).epsilon(1e-5);
+            // The local field's closed form (the header comment), from d = dg / 0.5 and the
+            // distance g to the nearer seam of p's shell, in double.
+            if (dg > 0) {
+                const double k = std::floor(std::log(r) * density);
+                const double inner = std::exp(k / density), outer = std::exp((k + 1) / density);
+                const double e = std::max(std::min(r - inner, outer - r) - 0.06 * r, 0.0);
+                const double want = std::min(2.0 * dg, dg + 0.5 / 1.06 * e);
+                worst_form = std::max(worst_form, std::abs(dl - want) / r);
+                // Away from the seams, where the sphere of radius d stays out of the band, the
+                // steps are full (2 band = 0.12 < 0.14: the band is always short of beta = 0.14).
+                if (std::abs(beta) > 0.14 && 2.0 * dg * 1.06 <= 0.99 * e) {
+                    ++samples_away;
+                    full_away += dl == doctest::Approx(2.0 * dg).epsilon(1e-5);
+                    shorter += dl < dg * (1.0 + 1e-6);
+                }
             }
         }
         MESSAGE(name, ": worst overestimate beyond the margin / r: local ", worst_local, ", global ", worst_global,
                 ", no seam fix ", worst_none, "; local longer than global at ", longer, " samples");
         CHECK(worst_local <= 1e-6);
         CHECK(worst_global <= 1e-6);
+        CHECK(worst_form <= 1e-6);
         // The samples reach where an unfixed field overestimates: the check above can fail.
         CHECK(worst_none > 0.05);
         CHECK(shorter == 0);
@@ -430,6 +441,50 @@ TEST_CASE("similar shell local step factor: a bound within its margin near seams
     check_preset("seam-hugging spheres", [&](const krs::shell_options& o) {
         return krs::similar_shell<seam_hugging_shell>(seam_hugging_shell(float(std::exp(1.0 / density))), density, o);
     }, std::nullopt, true);
+}
+
+TEST_CASE("similar shell local step factor keeps the field 1-Lipschitz across its transition")
+{
+    // The factor goes from f within the band to 1 farther out; a factor ramped in beta alone
+    // (d g(beta)) has the gradient g + (1 - f) d / (band r) there, about 6 with adjacent shells.
+    // Dense close pairs (|p - q| = 1e-4 r) with beta from -0.3 to 0.3, in double lanes (rounding
+    // ~1e-12 of the ratio): adjacent shells across seams too; the hidden boundary, which jumps at
+    // a seam by design, within one shell (both points of a pair in p's shell).
+    const float density = 1.0f;
+    for (const auto seams : {krs::shell_seams::adjacent_shells, krs::shell_seams::hidden_boundary}) {
+        krs::shell_options o{seams, 0.05f, 0.5f, 0.06f};
+        const auto lotus = krs::make_recursive_lotus(density, 8, o);
+        const auto cubes = krs::make_cube_singularity(density, o);
+        std::mt19937_64 g(17);
+        double worst[2] = {0, 0}, worst_band[2] = {0, 0};
+        int in_transition = 0;
+        for (int i = 0; i < 200000; ++i) {
+            const double beta = uniform(g, -0.3, 0.3);
+            const vec3d p = near_seam(g, density, beta);
+            const vec3d q = p + random_direction(g) * (1e-4 * krs::length(p));
+            const double rp = krs::length(p), rq = krs::length(q);
+            if (seams == krs::shell_seams::hidden_boundary &&
+                std::floor(std::log(rp) * density) != std::floor(std::log(rq) * density))
+                continue;
+            const double ratio[2] = {std::abs(lotus.distance(p) - lotus.distance(q)) / krs::length(p - q),
+                                     std::abs(cubes.distance(p) - cubes.distance(q)) / krs::length(p - q)};
+            const double b = std::abs(beta) / (1.0 + beta); // relative to r
+            for (int f = 0; f < 2; ++f) {
+                worst[f] = std::max(worst[f], ratio[f]);
+                if (b >= 0.06 && b <= 0.3) worst_band[f] = std::max(worst_band[f], ratio[f]);
+            }
+            in_transition += b >= 0.06 && b <= 0.12;
+        }
+        MESSAGE((seams == krs::shell_seams::adjacent_shells ? "adjacent shells" : "hidden boundary"),
+                ", step 0.5 within band 0.06: Lipschitz ratio lotus ", worst[0], " (beyond the band ", worst_band[0],
+                "), cubes ", worst[1], " (", worst_band[1], ")");
+        CHECK(in_transition > 20000);
+        for (int f = 0; f < 2; ++f) {
+            CHECK(worst[f] <= 1.0 + 1e-6);
+            // The check can fail: the field's gradient reaches 1 beyond the band (full steps).
+            CHECK(worst_band[f] >= 0.9);
+        }
+    }
 }
 
 TEST_CASE("log-spherical fields are finite at the singularity and far away")
@@ -595,6 +650,26 @@ TEST_CASE("fractal parameters are validated")
             krs::make_recursive_lotus(1.0f, 8, o);
         },
         "shell_options.seam_band");
+    // A band of (s - 1) / (s + 1) or more covers every shell (0.4621 at density 1, 0.0500 at 10).
+    rejects(
+        [] {
+            krs::shell_options o;
+            o.seam_band = 0.47f;
+            krs::make_cube_singularity(1.0f, o);
+        },
+        "shell_options.seam_band");
+    rejects(
+        [] {
+            krs::shell_options o;
+            o.seam_band = 0.06f;
+            krs::make_recursive_lotus(10.0f, 8, o);
+        },
+        "shell_options.seam_band");
+    {
+        krs::shell_options o;
+        o.seam_band = 0.46f;
+        CHECK_NOTHROW(krs::make_cube_singularity(1.0f, o));
+    }
     rejects([] { krs::log_polar_tiling<sphere_tile>(sphere_tile{}, 0, 0.4f); }, "log_polar_tiling.cells");
     rejects([&] { krs::log_polar_tiling<sphere_tile>(sphere_tile{}, 8, nan); }, "log_polar_tiling.height");
     rejects([] { krs::log_spherical_tiling<sphere_tile>(sphere_tile{}, 7); }, "log_spherical_tiling.cells");

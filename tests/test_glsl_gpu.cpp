@@ -526,6 +526,8 @@ const shell_case_options shell_variants[] = {
     {"hidden_boundary", {krs::shell_seams::hidden_boundary, 0.02f, 1.0f}},
     {"adjacent_shells, step_factor 0.7", {krs::shell_seams::adjacent_shells, 0.02f, 0.7f}},
     {"hidden_boundary, step_factor 0.5 within seam_band 0.06", {krs::shell_seams::hidden_boundary, 0.05f, 0.5f, 0.06f}},
+    {"adjacent_shells, step_factor 0.5 within seam_band 0.06", {krs::shell_seams::adjacent_shells, 0.02f, 0.5f, 0.06f}},
+    {"none, step_factor 0.5 within seam_band 0.06", {krs::shell_seams::none, 0.02f, 0.5f, 0.06f}},
 };
 
 template <class Fn>

@@ -10,6 +10,7 @@
 #include "krs/shade/reflection.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/parity.hpp"
 #include "support/random.hpp"
 
 #include <doctest/doctest.h>
@@ -160,6 +161,14 @@ TEST_CASE("reflection rays: packet lanes equal the scalar rays and their traced 
     o.threshold_floor = 1e-4f;
     o.max_distance = 40.0f;
     std::mt19937_64 g(8);
+    // Under FMA contraction (krs_parity_contract_native, tests/support/parity.hpp) the paths may
+    // fuse p + m lift and the reflection differently: the rays then agree within parity's
+    // tolerance of the scene's extent (10: the balls and the plane around them), and a march that
+    // passes within the threshold of a surface may stop on one side only, so hits and t agree
+    // but for at most 1% of the lanes (the comparison is small: 32 packets). Otherwise bit for bit.
+    krs_test::parity same_ray{"reflection rays, packet against scalar", 10.0};
+    krs_test::parity same_t{"reflected hits' t, packet against scalar", 10.0};
+    long lanes = 0, off = 0;
     for (int round = 0; round < 32; ++round) {
         alignas(64) float px[W], py[W], pz[W], nx[W], ny[W], nz[W], dx[W], dy[W], dz[W];
         vec3f ps[W], ns[W], ds[W];
@@ -181,26 +190,44 @@ TEST_CASE("reflection rays: packet lanes equal the scalar rays and their traced 
             const krs::hit<float> hs = krs::sphere_trace(scene, rs, o);
             INFO("round ", round, " lane ", i);
             const vec3f origin = krs::lane_at(rp.origin, i), direction = krs::lane_at(rp.direction, i);
-            CHECK(origin.x == rs.origin.x);
-            CHECK(origin.y == rs.origin.y);
-            CHECK(origin.z == rs.origin.z);
-            CHECK(direction.x == rs.direction.x);
-            CHECK(direction.y == rs.direction.y);
-            CHECK(direction.z == rs.direction.z);
-            CHECK(krs::mask_lane<P>(hp.found, i) == hs.found);
-            if (hs.found) CHECK(krs::lane_at(hp.t, i) == hs.t);
+            CHECK(same_ray.agree(origin.x, rs.origin.x));
+            CHECK(same_ray.agree(origin.y, rs.origin.y));
+            CHECK(same_ray.agree(origin.z, rs.origin.z));
+            CHECK(same_ray.agree(direction.x, rs.direction.x));
+            CHECK(same_ray.agree(direction.y, rs.direction.y));
+            CHECK(same_ray.agree(direction.z, rs.direction.z));
+            ++lanes;
+            const bool same_hit = krs::mask_lane<P>(hp.found, i) == hs.found && same_t.agree(krs::lane_at(hp.t, i), hs.t);
+            if (krs_test::contraction) off += !same_hit;
+            else CHECK(same_hit);
         }
     }
+    same_ray.report();
+    same_t.report();
+    if (krs_test::contraction) MESSAGE(off << " of " << lanes << " lanes differ in hit or beyond the tolerance in t");
+    CHECK(off <= lanes / 100);
 }
 
 TEST_CASE("glossy mix: weight 0 is the base colour exactly, Schlick's weight is F0 head-on and 1 at grazing")
 {
     const vec3f base{0.3f, 0.5f, 0.7f}, mirrored{0.9f, 0.1f, 0.2f};
-    const vec3f same = krs::mix_reflection(base, mirrored, 0.0f);
+    const vec3f same = krs::mix(base, mirrored, 0.0f);
     CHECK((same.x == base.x && same.y == base.y && same.z == base.z));
-    CHECK(krs::mix_reflection(base, mirrored, 1.0f).x == doctest::Approx(mirrored.x));
+    CHECK(krs::mix(base, mirrored, 1.0f).x == doctest::Approx(mirrored.x));
     CHECK(krs::fresnel_schlick(1.0f, 0.04f) == doctest::Approx(0.04f));
     CHECK(krs::fresnel_schlick(0.0f, 0.04f) == doctest::Approx(1.0f));
     // (1 - cos)^5 at cos = 0.5: 1/32.
     CHECK(krs::fresnel_schlick(0.5f, 0.0f) == doctest::Approx(1.0f / 32.0f));
+    // |n . d| a little above 1 by rounding is head-on, not a weight below f0.
+    CHECK(krs::fresnel_schlick(1.0000001f, 0.04f) == 0.04f);
+    // A reflectivity outside [0, 1] or NaN is refused, in any lane.
+    for (const float bad : {-0.1f, 1.5f, std::numeric_limits<float>::quiet_NaN()})
+        CHECK_THROWS_WITH_AS(krs::fresnel_schlick(0.5f, bad), doctest::Contains("fresnel_schlick.f0"), krs::invalid_parameter);
+    CHECK(krs::fresnel_schlick(0.5f, 1.0f) == 1.0f);
+    using P = krs::packet_f;
+    alignas(64) float f0[krs::lane_count<P>];
+    for (std::size_t i = 0; i < krs::lane_count<P>; ++i) f0[i] = 0.5f;
+    f0[krs::lane_count<P> - 1] = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_WITH_AS(krs::fresnel_schlick(P(0.5f), P::load_aligned(f0)), doctest::Contains("fresnel_schlick.f0"),
+                         krs::invalid_parameter);
 }

@@ -7,6 +7,7 @@
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
+#include "krs/model/mirror_cloud.hpp"
 #include "krs/sequence.hpp"
 #include "support/grid.hpp"
 
@@ -588,29 +589,16 @@ namespace {
 
 // KRS paper section 5, figure 5: mirrors aligned with the axes repeat the kernel on a lattice the
 // eye reads at once; mirrors turned at random ("planes of reflection selected so that the eye can
-// only be near to a few of them") do not. The cloud as krs_scenes builds it: one sphere, each
-// mirror's normal along the axes x, y, z in turn (aligned) or turned from it at random
-// (scattered), the mirror placed a random gap beyond every copy so far (separated).
-using sphere_cloud = krs::sequence<krs::sphere>;
-sphere_cloud build_cloud(std::uint64_t seed, bool scattered, int doublings)
+// only be near to a few of them") do not. The clouds are krs_scenes' (krs/model/mirror_cloud.hpp),
+// with the seed of the random normals varied.
+template <class Mirror>
+std::vector<vec3d> cloud_centers(const krs::model::sphere_cloud<Mirror>& cloud)
 {
-    random_source r(seed);
-    const krs::sphere ball({0, 0.4f, 0}, 0.4f);
-    sphere_cloud::builder b;
-    b.kernel(ball);
-    std::vector<vec3d> copies{vec3d(ball.center)};
-    for (int k = 0; k < doublings; ++k) {
-        vec3d n{0, 0, 0};
-        (k % 3 == 0 ? n.x : k % 3 == 1 ? n.y : n.z) = 1;
-        if (scattered) n = krs::normalize(n * 1.3 + vec3d{r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1)});
-        double extent = -1e30;
-        for (const vec3d& p : copies) extent = std::max(extent, krs::dot(n, p));
-        const krs::mirror m(to_f(n), float(extent + ball.radius + r.uniform(0.1, 0.3)));
-        b.mirror(m);
-        const std::size_t count = copies.size();
-        for (std::size_t i = 0; i < count; ++i) copies.push_back(vec3d(m.reflect(to_f(copies[i]))));
-    }
-    return b.build();
+    const auto e = krs::expand(cloud);
+    std::vector<vec3d> centers;
+    for (const auto& in : e.instances)
+        centers.push_back(in.to_world.apply(vec3d(std::get<krs::sphere>(cloud.kernels()[in.kernel]).center)));
+    return centers;
 }
 
 // Visible repetition of a set of instance positions: the highest peak of their autocorrelation
@@ -644,16 +632,16 @@ TEST_CASE("unaligned mirrors hide symmetry: the instances' autocorrelation peak 
     constexpr int doublings = 9; // 512 spheres, as in figure 5
     double lowest_aligned = 1e30, highest_scattered = 0;
     for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+        krs::model::mirror_cloud_parameters parameters;
+        parameters.doublings = doublings;
+        parameters.seed = std::uint32_t(seed);
+        const std::vector<vec3d> centers[2] = {cloud_centers(krs::model::build_aligned_cloud(parameters)),
+                                               cloud_centers(krs::model::build_scattered_cloud(parameters))};
         double score[2];
         for (int scattered = 0; scattered < 2; ++scattered) {
-            const sphere_cloud cloud = build_cloud(seed, scattered == 1, doublings);
-            const auto e = krs::expand(cloud);
-            std::vector<vec3d> centers;
-            for (const auto& in : e.instances)
-                centers.push_back(in.to_world.apply(vec3d(std::get<krs::sphere>(cloud.kernels()[in.kernel]).center)));
-            REQUIRE(centers.size() == std::size_t(1) << doublings);
+            REQUIRE(centers[scattered].size() == std::size_t(1) << doublings);
             // Offsets equal within a fifth of the sphere's radius read as the same to the eye.
-            score[scattered] = repetition(centers, 0.08);
+            score[scattered] = repetition(centers[scattered], 0.08);
         }
         MESSAGE("seed ", seed, ": repetition aligned ", score[0], ", scattered ", score[1]);
         lowest_aligned = std::min(lowest_aligned, score[0]);
@@ -666,4 +654,18 @@ TEST_CASE("unaligned mirrors hide symmetry: the instances' autocorrelation peak 
     // Random mirrors: no offset repeats for more than a few percent of the spheres.
     CHECK(highest_scattered <= 0.05);
     CHECK(lowest_aligned >= 10 * highest_scattered);
+    // The builder's parameters are checked before anything is built.
+    for (const int bad : {-1, 21}) {
+        krs::model::mirror_cloud_parameters p;
+        p.doublings = bad;
+        CHECK_THROWS_WITH_AS(krs::model::build_scattered_cloud(p), doctest::Contains("mirror_cloud.doublings"), krs::invalid_parameter);
+    }
+    for (const float bad : {0.0f, -0.1f, std::numeric_limits<float>::quiet_NaN()}) {
+        krs::model::mirror_cloud_parameters p;
+        p.gap = bad;
+        CHECK_THROWS_WITH_AS(krs::model::build_aligned_cloud(p), doctest::Contains("mirror_cloud.gap"), krs::invalid_parameter);
+    }
+    krs::model::mirror_cloud_parameters p;
+    p.radius = -1.0f;
+    CHECK_THROWS_WITH_AS(krs::model::build_aligned_cloud(p), doctest::Contains("sphere.radius"), krs::invalid_parameter);
 }

@@ -704,3 +704,73 @@ TEST_CASE("a depth buffer value limits each ray")
         CHECK_THROWS_WITH_AS(krs::trace_against_depth(s, r, o, proj, axis, proj.buffer_depth(3.0)),
                              doctest::Contains("trace_against_depth.forward"), krs::invalid_parameter);
 }
+
+namespace {
+
+// A field that remembers whether it was ever asked about a point with a NaN or infinite coordinate.
+template <class F>
+struct watched_field {
+    const F* inner;
+    mutable bool saw_non_finite = false;
+
+    template <class T>
+    T distance(const krs::vec3<T>& p) const
+    {
+        saw_non_finite = saw_non_finite || krs::any(!krs::is_finite(p));
+        return inner->distance(p);
+    }
+};
+
+} // namespace
+
+TEST_CASE("soft shadow: a left-out lane's NaN or infinite input never reaches the field")
+{
+    using P = krs::packet_f;
+    constexpr std::size_t W = krs::lane_count<P>;
+    krs::sequence<krs::sphere, krs::plane>::builder b;
+    b.kernel(krs::sphere({0, 1.0f, 0}, 0.4f));
+    b.mirror(krs::mirror({1, 0, 0.3f}, 1.2f));
+    b.kernel(krs::plane({0, 1, 0}, 0.0f));
+    const auto s = b.build();
+    krs::soft_shadow_options so;
+    so.threshold = 1e-4f;
+    so.max_distance = 20.0f;
+    so.max_steps = 256;
+    so.hardness = 8.0f;
+    std::mt19937_64 g(11);
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    for (int k = 0; k < 20; ++k) {
+        alignas(64) float px[W], py[W], pz[W], nx[W], ny[W], nz[W], lx[W], ly[W], lz[W], th[W];
+        bool use[W];
+        for (std::size_t i = 0; i < W; ++i) {
+            const vec3f l = krs::normalize(vec3f{float(uniform(g, -0.5, 0.5)), 1.0f, float(uniform(g, -0.5, 0.5))});
+            px[i] = float(uniform(g, -2, 4)), py[i] = 0.0f, pz[i] = float(uniform(g, -2, 2));
+            nx[i] = 0, ny[i] = 1, nz[i] = 0, lx[i] = l.x, ly[i] = l.y, lz[i] = l.z;
+            th[i] = 1e-4f;
+            use[i] = i % 3 != 1;
+        }
+        const auto lanes = P::batch_bool_type::load_unaligned(use);
+        const auto run = [&](const auto& field) {
+            return krs::soft_shadow(field, krs::vec3<P>{P::load_aligned(px), P::load_aligned(py), P::load_aligned(pz)},
+                                    krs::vec3<P>{P::load_aligned(nx), P::load_aligned(ny), P::load_aligned(nz)},
+                                    krs::vec3<P>{P::load_aligned(lx), P::load_aligned(ly), P::load_aligned(lz)}, so, lanes,
+                                    P::load_aligned(th));
+        };
+        const P clean = run(s);
+        // Poison every input of the left-out lanes.
+        for (std::size_t i = 0; i < W; ++i)
+            if (!use[i]) {
+                px[i] = nan, py[i] = inf, pz[i] = -inf, nx[i] = inf, ny[i] = nan, nz[i] = 0;
+                lx[i] = nan, ly[i] = inf, lz[i] = nan, th[i] = i % 2 ? nan : inf;
+            }
+        watched_field<decltype(s)> watched{&s};
+        const P poisoned = run(watched);
+        CHECK_FALSE(watched.saw_non_finite);
+        for (std::size_t i = 0; i < W; ++i) {
+            CAPTURE(k);
+            CAPTURE(i);
+            REQUIRE(krs::lane_at(poisoned, i) == krs::lane_at(clean, i)); // active lanes unchanged, left out 0
+            if (!use[i]) REQUIRE(krs::lane_at(poisoned, i) == 0.0f);
+        }
+    }
+}

@@ -106,6 +106,13 @@ inline mask_t<T> is_finite(const vec3<T>& a)
 {
     return is_finite(a.x) && is_finite(a.y) && is_finite(a.z);
 }
+// GLSL's mix(vec3, vec3, float): a + (b - a) * t per axis, t not clamped (lanes.hpp's mix for
+// one lane value). t = 0 gives a exactly (for finite b).
+template <class T>
+inline vec3<T> mix(const vec3<T>& a, const vec3<T>& b, const T& t)
+{
+    return a + (b - a) * t;
+}
 // Reflection of a direction on a plane with unit normal m (the paper's M_i operator).
 template <class T>
 inline vec3<T> reflect_direction(const vec3<T>& w, const vec3<T>& m)

@@ -40,17 +40,34 @@
 //   step_factor              multiplies the distance (shorter steps: more of them, fewer
 //                            overshoots); combines with any seam mode.
 //   seam_band                makes the step factor local (the document: "shorten the steps
-//                            globally, or only locally in problematic regions"): with
-//                            beta = min(r - inner, outer - r) / r the relative distance to the
-//                            nearer seam of p's shell, the factor is step_factor for beta <=
-//                            band, 1 for beta >= 2 band, linear between (continuous: beta is 0
-//                            on both sides of a seam). 0 (the default) keeps it global.
+//                            globally, or only locally in problematic regions"). With
+//                            g = min(r - inner, outer - r) the distance along r to the nearer
+//                            seam of p's shell (beta = g / r, relative) and e = max(g - band r,
+//                            0) how far p lies outside the band beta < band, the field is
+//                                d_local = min(d, f d + w e),   f = step_factor,
+//                                                              w = (1 - f) / (1 + band):
+//                            f d within the band (e = 0, as the global factor), d once the
+//                            sphere of radius d stays c e = e / (1 + band) short of the band,
+//                            between them the step cut short at the band plus f of the rest.
+//                            1-Lipschitz whenever d is: g is 1-Lipschitz in r (|dg/dr| = 1) and
+//                            r in p, so e is (1 + band)-Lipschitz; then f d + w e is f + (1 - f)
+//                            = 1-Lipschitz, and a min of 1-Lipschitz functions is 1-Lipschitz
+//                            (the adjacent-shells field keeps its contract, and union_of's skip
+//                            stays valid). d_local <= d, so it never overestimates more than d.
+//                            (A ramp d g(beta) of the factor from f to 1 has the gradient
+//                            g + (1 - f) d / (band r) there: about 6 with adjacent shells at
+//                            density 1, f 0.5, band 0.06.) Continuous across seams (g = 0 on both
+//                            sides). Inside the geometry (d < 0) d_local = d. 0 (the default)
+//                            keeps the factor global; the similar shell refuses a band of
+//                            (s - 1) / (s + 1) or more, the largest beta of any shell, where it
+//                            would be global too.
 // Why the seams are the only problematic region: geometry of other shells lies beyond the seams,
 // at least beta r away, so the true distance D >= min(d_k, beta r) with d_k the own shell's
 // distance. Hidden boundary returns min(d_k, max(beta r, cutoff r)) <= D wherever beta >= cutoff:
-// it can overestimate only within beta < cutoff, and by at most f cutoff r there, f the factor
-// applied there. A band >= cutoff therefore keeps the global factor's margin (step_factor
-// cutoff r) with full steps away from the seams; overestimate_margin() states the margin.
+// it can overestimate only within beta < cutoff, where d <= cutoff r, and by at most d_local
+// <= f cutoff r + w max(cutoff - band, 0) r there (and <= cutoff r). A band >= cutoff therefore
+// keeps the global factor's margin (step_factor cutoff r) with full steps away from the seams;
+// overestimate_margin() states the margin.
 // The prototype geometry must lie in the shell 1 <= |p| <= s; what leaves it is clipped by the
 // adjacent-shells fix and repeated overlapping by the others.
 
@@ -304,7 +321,8 @@ struct shell_options {
     float hidden_cutoff = 0.02f; // hidden_boundary: the boundary spheres' field floor, times r
     float step_factor = 1.0f;    // in (0, 1]: multiplies the distance
     float seam_band = 0.0f;      // in [0, 0.5]: step_factor only within this relative distance of a
-                                 // seam (ramping to 1 at twice it); 0: everywhere
+                                 // seam (full steps where the step stays outside it, the header
+                                 // comment); 0: everywhere. Below (s - 1) / (s + 1) for the shell.
 
     const shell_options& validate() const
     {
@@ -312,7 +330,8 @@ struct shell_options {
         require_positive("shell_options.step_factor", step_factor);
         if (!(step_factor <= 1.0f))
             throw invalid_parameter("shell_options.step_factor", "must be in (0, 1]", detail::to_text(step_factor));
-        // beta < (s - 1) / (s + 1) < 1 in any shell; a band of half of that already covers most of one.
+        // 0.5: a band covering half of every relative distance is no longer local. Whether the
+        // band leaves any of the shell outside it depends on the density: similar_shell checks it.
         require_non_negative("shell_options.seam_band", seam_band);
         if (!(seam_band <= 0.5f))
             throw invalid_parameter("shell_options.seam_band", "must be in [0, 0.5]", detail::to_text(seam_band));
@@ -332,6 +351,17 @@ public:
         ratio_ = float(std::exp(1.0 / double(density_)));
         const double w = 1.0 - 1.0 / std::exp(1.0 / double(density_));
         other_shells_ = float_at_most(w);
+        // beta = min(r - inner, outer - r) / r is largest at r = (inner + outer) / 2, where it is
+        // (s - 1) / (s + 1): a band at least that wide covers every shell, the factor is global.
+        const double widest = (double(ratio_) - 1.0) / (double(ratio_) + 1.0);
+        if (options_.seam_band > 0.0f && !(double(options_.seam_band) < widest))
+            throw invalid_parameter("shell_options.seam_band",
+                                    "must be below (s - 1) / (s + 1) = " + detail::to_text(float(widest)) +
+                                        " for density " + detail::to_text(density_) +
+                                        " (a wider band covers every shell: use seam_band 0 for a global factor)",
+                                    detail::to_text(options_.seam_band));
+        // w = (1 - f) / (1 + band) of the header comment, rounded down: f + w (1 + band) <= 1.
+        band_weight_ = float_at_most((1.0 - double(options_.step_factor)) / (1.0 + double(options_.seam_band)));
     }
 
     float density() const { return density_; }
@@ -347,27 +377,34 @@ public:
         const T rs = max(r, T(detail::smallest_radius));
         const T inv_density(1.0f / density_);
         const T k = lane_floor(lane_log(rs) * T(density_));
+        // Shell k's scale (its inner radius) and outer radius, once for every use below.
+        const T inner = lane_exp(k * inv_density), outer = inner * T(ratio_);
         T d;
         switch (options_.seams) {
-        case shell_seams::none: d = in_shell(p, k, inv_density); break;
+        case shell_seams::none: d = in_shell(p, inner); break;
         case shell_seams::hidden_boundary: {
-            const T inner = lane_exp(k * inv_density), outer = inner * T(ratio_);
             const T boundary = max(min(r - inner, outer - r), T(options_.hidden_cutoff) * r);
-            d = min(in_shell(p, k, inv_density), boundary);
+            d = min(in_shell(p, inner), boundary);
             break;
         }
         default: {
             d = T(other_shells_) * r;
             for (int j = -1; j <= 1; ++j) {
-                const T kj = k + T(float(j));
-                const T inner = lane_exp(kj * inv_density), outer = inner * T(ratio_);
-                const T to_shell = max(max(inner - r, r - outer), T(0));
-                d = min(d, max(in_shell(p, kj, inv_density), to_shell));
+                const T inner_j = j == 0 ? inner : lane_exp((k + T(float(j))) * inv_density);
+                const T outer_j = inner_j * T(ratio_);
+                const T to_shell = max(max(inner_j - r, r - outer_j), T(0));
+                d = min(d, max(in_shell(p, inner_j), to_shell));
             }
             break;
         }
         }
-        if (options_.seam_band > 0.0f) return d * local_step(r, k, inv_density);
+        if (options_.seam_band > 0.0f) {
+            // The local factor (the header comment): e = max(g - band r, 0), g the distance to the
+            // nearer seam of shell k (a rounding below 0 when r falls just outside [inner, outer]:
+            // e = 0 there, the seam's factor).
+            const T e = max(min(r - inner, outer - r) - T(options_.seam_band) * r, T(0));
+            return min(d, d * T(options_.step_factor) + T(band_weight_) * e);
+        }
         return d * T(options_.step_factor);
     }
 
@@ -379,9 +416,10 @@ public:
         switch (options_.seams) {
         case shell_seams::none: return std::numeric_limits<double>::infinity();
         case shell_seams::hidden_boundary: {
+            // Within beta < cutoff, d <= cutoff r and e <= max(cutoff - band, 0) r.
             const double f = options_.step_factor, band = options_.seam_band, c = options_.hidden_cutoff;
-            const double ramp = band > 0 ? std::clamp((c - band) / band, 0.0, 1.0) : 0.0;
-            return (f + (1.0 - f) * ramp) * c;
+            if (!(band > 0)) return f * c;
+            return std::min(c, f * c + double(band_weight_) * std::max(c - band, 0.0));
         }
         default: return 0.0;
         }
@@ -394,7 +432,8 @@ public:
     // (as many as the float radii 1e-30 .. 3.4e38 reach, at most glsl_max_table), computed by the
     // C++ expression, so the GPU scales each shell by the very float the CPU does (its own exp is
     // ~10 ulp off); shells past the table fall back to the GPU's exp. A seam band adds one vec4
-    // after the table (band, 1 / band, 1 - step_factor) and the local factor's code.
+    // after the table (band, (1 - step_factor) / (1 + band) rounded down) and the local factor's
+    // code.
     static constexpr std::string_view glsl_name = "krs_similar_shell";
     static constexpr std::string_view glsl_source = "";
     static constexpr int glsl_max_table = 256;
@@ -427,41 +466,37 @@ public:
                            "        return " + out.data_name() + "[" + std::to_string(first) + " + (j >> 2)][j & 3];\n"
                            "    }\n"
                            "    return exp(k * " + c + ".y);\n}\n";
-        body += "float " + name + "_in_shell(vec3 p, float k) {\n    float scale = " + name + "_scale(k);\n"
+        body += "float " + name + "_in_shell(vec3 p, float scale) {\n"
                 "    return " + name + "_shell(p / scale) * scale;\n}\n";
         body += "float " + name + "(vec3 p) {\n"
                 "    vec4 c = " + c + ";\n"
                 "    float r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);\n"
-                "    float k = floor(log(max(r, 1e-30)) * c.x);\n";
+                "    float k = floor(log(max(r, 1e-30)) * c.x);\n"
+                "    float inner = " + name + "_scale(k);\n"
+                "    float outer = inner * c.z;\n";
         switch (options_.seams) {
-        case shell_seams::none: body += "    float d = " + name + "_in_shell(p, k);\n"; break;
+        case shell_seams::none: body += "    float d = " + name + "_in_shell(p, inner);\n"; break;
         case shell_seams::hidden_boundary:
-            body += "    float inner = " + name + "_scale(k);\n"
-                    "    float outer = inner * c.z;\n"
-                    "    float boundary = max(min(r - inner, outer - r), " + o + ".x * r);\n"
-                    "    float d = min(" + name + "_in_shell(p, k), boundary);\n";
+            body += "    float boundary = max(min(r - inner, outer - r), " + o + ".x * r);\n"
+                    "    float d = min(" + name + "_in_shell(p, inner), boundary);\n";
             break;
         default:
             body += "    float d = c.w * r;\n"
                     "    for (int j = -1; j <= 1; ++j) {\n"
-                    "        float kj = k + float(j);\n"
-                    "        float inner = " + name + "_scale(kj);\n"
-                    "        float outer = inner * c.z;\n"
-                    "        float to_shell = max(max(inner - r, r - outer), 0.0);\n"
-                    "        d = min(d, max(" + name + "_in_shell(p, kj), to_shell));\n"
+                    "        float inner_j = j == 0 ? inner : " + name + "_scale(k + float(j));\n"
+                    "        float outer_j = inner_j * c.z;\n"
+                    "        float to_shell = max(max(inner_j - r, r - outer_j), 0.0);\n"
+                    "        d = min(d, max(" + name + "_in_shell(p, inner_j), to_shell));\n"
                     "    }\n";
             break;
         }
         if (options_.seam_band > 0.0f) {
-            // The local step factor (local_step), its own vec4 (band, 1 / band, 1 - step_factor),
+            // The local step factor (distance()), its own vec4 (band, (1 - f) / (1 + band)),
             // appended only when used so that a global factor's GLSL is as before.
-            const std::string b = out.at(out.vec4({options_.seam_band, inverse_band(), 1.0f - options_.step_factor, 0.0f},
-                                                  name + " seam band, 1 / band, 1 - step factor"));
-            body += "    float inner_k = " + name + "_scale(k);\n"
-                    "    float outer_k = inner_k * c.z;\n"
-                    "    float beta = min(r - inner_k, outer_k - r) / max(r, 1e-30);\n"
-                    "    float ramp = clamp((beta - " + b + ".x) * " + b + ".y, 0.0, 1.0);\n"
-                    "    return d * (" + o + ".y + " + b + ".z * ramp);\n}\n";
+            const std::string b = out.at(out.vec4({options_.seam_band, band_weight_, 0.0f, 0.0f},
+                                                  name + " seam band, (1 - step factor) / (1 + band)"));
+            body += "    float e = max(min(r - inner, outer - r) - " + b + ".x * r, 0.0);\n"
+                    "    return min(d, d * " + o + ".y + " + b + ".y * e);\n}\n";
             out.function(body);
             return;
         }
@@ -469,34 +504,18 @@ public:
     }
 
 private:
-    // The factor the distance is multiplied by at radius r in shell k (the header comment):
-    // step_factor near the seams, 1 from twice the band on; the step factor itself when global.
+    // The prototype's distance seen from the shell of scale s^k: f(p / s^k) s^k.
     template <class T>
-    T local_step(const T& r, const T& k, const T& inv_density) const
+    T in_shell(const vec3<T>& p, const T& scale) const
     {
-        if (!(options_.seam_band > 0.0f)) return T(options_.step_factor);
-        const T inner = lane_exp(k * inv_density), outer = inner * T(ratio_);
-        // r may fall a rounding outside [inner, outer] (k = floor(log r density)): beta < 0
-        // there, which keeps the seam's factor.
-        const T beta = min(r - inner, outer - r) / max(r, T(detail::smallest_radius));
-        const T ramp = clamp((beta - T(options_.seam_band)) * T(inverse_band()), T(0), T(1));
-        return T(options_.step_factor) + T(1.0f - options_.step_factor) * ramp;
-    }
-
-    // The prototype's distance seen from shell k: f(p / s^k) s^k.
-    template <class T>
-    T in_shell(const vec3<T>& p, const T& k, const T& inv_density) const
-    {
-        const T scale = lane_exp(k * inv_density);
         return shell_.distance(p / scale) * scale;
     }
-
-    float inverse_band() const { return options_.seam_band > 0.0f ? 1.0f / options_.seam_band : 0.0f; }
 
     Shell shell_;
     shell_options options_{};
     float density_ = 1, ratio_ = float(std::numbers::e);
     float other_shells_ = 0; // 1 - 1/s, rounded down
+    float band_weight_ = 0;  // (1 - step_factor) / (1 + seam_band), rounded down
 
     // Shells the float radii reach (floor(log r density) for r in [1e-30, 3.4e38], one more
     // inside for the adjacent shells, none whose scale overflows), cut to glsl_max_table around 0.

@@ -124,13 +124,16 @@ T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_
     march.max_distance = o.max_distance;
     march.max_steps = o.max_steps;
     const T k(S(o.hardness));
-    const ray<T> r{p + n * (T(2) * threshold), to_light};
-    // A lane left out ends before its start: start_march rejects it without a step, and its
-    // sample point stays the finite origin the caller gave (a field never sees an infinite point
-    // for a lane that was not asked for).
+    // A lane left out ends before its start: start_march rejects it without a step. march_step
+    // still evaluates the field in every lane, and a left-out lane's p, n, threshold and direction
+    // are never checked (a NaN or infinity there is allowed), so its ray is replaced by the origin
+    // with a zero direction: the field never sees a point that was not asked for.
+    const vec3<T> zero(T(0), T(0), T(0));
+    const vec3<T> origin = select(lanes, p + n * (T(2) * threshold), zero);
+    const ray<T> r{origin, select(lanes, to_light, zero)};
     const T far = select(lanes, T(S(o.max_distance)), T(-1));
     march_state<T> m = start_march(r, T(0), far, march);
-    m.threshold_bias = threshold;
+    m.threshold_bias = select(lanes, threshold, T(1)); // finite in left-out lanes too
     T visible(1);
     mask_t<T> blocked = m.active && !m.active; // all false, in the mask's own type
     auto penumbra = [&](const march_state<T>& at, const T& d) {

@@ -16,12 +16,13 @@
 //     on the surface it leaves. Lifting along n (not along r) moves the origin off the surface by
 //     the full amount even for grazing reflections.
 //
-// A glossy (partly reflecting) surface mixes: colour = base + (reflected - base) * weight, with
+// A glossy (partly reflecting) surface mixes: colour = mix(base, reflected, weight) (vec3.hpp), with
 // weight = reflectivity at normal incidence raised towards 1 at grazing angles by Schlick's
 // approximation of the Fresnel factor, F = F0 + (1 - F0) (1 - cos)^5. Weight 0 gives the base
 // colour exactly (for finite colours), so a caller that skips the reflected ray at weight 0 draws
 // what it drew without reflections.
 
+#include "krs/core/validate.hpp"
 #include "krs/core/vec3.hpp"
 #include "krs/trace/ray.hpp"
 
@@ -39,19 +40,18 @@ ray<T> reflection_ray(const vec3<T>& p, const vec3<T>& n, const vec3<T>& incomin
 }
 
 // Schlick's Fresnel weight for a reflectivity f0 at normal incidence, cos_incidence = |n . d|.
+// f0 must lie in [0, 1] in every lane (a NaN or a reflectivity outside would give a weight outside
+// [0, 1], a colour outside the two it mixes): refused, naming fresnel_schlick.f0. cos_incidence is
+// clamped to [0, 1] (rounding can put |n . d| of unit vectors just above 1); the weight is then in
+// [f0, 1]. Glossy colour: mix(base, reflected, weight) (vec3.hpp), base exactly at weight 0.
 template <class T>
 T fresnel_schlick(const T& cos_incidence, const T& f0)
 {
-    const T c = T(1) - min(max(cos_incidence, T(0)), T(1));
+    if (any(!(f0 >= T(0) && f0 <= T(1))))
+        throw invalid_parameter("fresnel_schlick.f0", "must be in [0, 1] (the reflectivity at normal incidence) in every lane");
+    const T c = T(1) - clamp(cos_incidence, T(0), T(1));
     const T c2 = c * c;
     return f0 + (T(1) - f0) * (c2 * c2 * c);
-}
-
-// base + (reflected - base) * weight: the glossy mix; weight 0 gives base exactly.
-template <class T>
-vec3<T> mix_reflection(const vec3<T>& base, const vec3<T>& reflected, const T& weight)
-{
-    return base + (reflected - base) * weight;
 }
 
 } // namespace krs

@@ -184,8 +184,9 @@ void march_step(const F& f, march_state<T>& m, const trace_options& options)
 // The step with an observer: `observe(m, d)` sees every sample the step takes, the state as the
 // step found it (each lane's sample point t, its active mask) and the field's value d there, before
 // the step acts on them. It is how a march that wants more than the hit reads the ray without a
-// loop of its own: the soft shadow keeps min k d / t over its samples (krs/shade/global.hpp), the
-// union tracer's per-component bookkeeping rides beside it (krs/compose/union.hpp). The step
+// loop of its own: the soft shadow keeps min k d / t over its samples (krs/shade/global.hpp). (The
+// union tracer, krs/compose/union.hpp, does not use it: it evaluates its components itself, skipping
+// the ones that cannot be nearest, and calls the plain march_advance with their minimum.) The step
 // itself is march_advance, unchanged, so an observed march stops where an unobserved one does.
 // (With over-relaxation the observer also sees samples the overlap test then discards: they are
 // still the field's true values at points on the ray.)
