@@ -574,7 +574,18 @@ public:
         };
         const hit* const h = hits.data();
         const std::size_t n = hits.size(), q = n / 4;
-        for (std::size_t i = 0; i < q; ++i) one(h[i]), one(h[q + i]), one(h[2 * q + i]), one(h[3 * q + i]);
+        // Each stream's slot `ahead` hits on is asked for before it is needed: the table (4 MiB
+        // at 100^3) lies past the L2 cache, and with the request in flight early the adds ran
+        // 1.5-2x faster (one thread, trees A-D at 100; 16 and 48 hits ahead alike).
+        constexpr std::size_t ahead = 16;
+        const std::size_t prefetched = q > ahead ? q - ahead : 0;
+        for (std::size_t i = 0; i < prefetched; ++i) {
+#if defined(__GNUC__) || defined(__clang__)
+            for (std::size_t k = 0; k < 4; ++k) __builtin_prefetch(slot + h[k * q + i + ahead].voxel, 1);
+#endif
+            one(h[i]), one(h[q + i]), one(h[2 * q + i]), one(h[3 * q + i]);
+        }
+        for (std::size_t i = prefetched; i < q; ++i) one(h[i]), one(h[q + i]), one(h[2 * q + i]), one(h[3 * q + i]);
         for (std::size_t i = 4 * q; i < n; ++i) one(h[i]);
         overflowed_ = overflowed_ || (top >> 31) != 0;
     }
