@@ -32,10 +32,12 @@ namespace detail {
 
 // Generation, validation and density classes: the stored voxels of one tree, in a list drawn
 // from `scratch` (every temporary of the way too). Each list goes back to the scratch as soon as
-// the next is made, so the next step can reuse its pages. Where the grid allows (compact.hpp's
-// direct_buckets), the chunks are generated in groups of consecutive chunks (generate.hpp's
-// generation_group_count), each group's hits bucketed on its task while they are in cache and
-// its buffer reused by the next group; else validation reads the chunks as pieces.
+// the next is made, so the next step can reuse its pages. Where the grid allows, the chunks are
+// generated in groups of consecutive chunks (generate.hpp's generation_group_count), each group's
+// hits validated on its task while they are in cache and its buffer reused by the next group:
+// added to a per-voxel table on grids up to 2^21 voxels (compact.hpp's voxel_table), else
+// bucketed (compact.hpp's direct_buckets) and merged; on larger grids validation reads the
+// chunks as pieces.
 template <transform_pipeline P>
 std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::uint64_t seed, int density_class_count,
                                                 const generation_options& options, std::pmr::memory_resource* scratch)

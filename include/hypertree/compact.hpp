@@ -18,6 +18,9 @@
 // (fresh pages cost more than the sorting itself at this size). Only the voxel is a sort key: the
 // level and part are reduced by a minimum over each run, which gives the same result as sorting on
 // (voxel, level, part) with fewer passes.
+//
+// On grids of at most 2^21 voxels build_tree skips the buckets: voxel_table (below) keeps one slot
+// per voxel, so each hit is one read-modify-write and the entries are read out in voxel order.
 
 #include "hypertree/scratch.hpp"
 #include "hypertree/voxel.hpp"
