@@ -533,7 +533,7 @@ void merge_bucketed(std::span<const bucketed_chunk> chunks, const direct_buckets
 // (2^21: 128^3, so resolution 100 and below). A hit adds one to its voxel's count and keeps the
 // smaller (level, part) in the slot, a single read-modify-write in a 4 MiB table that the L3
 // cache holds, where bucketing wrote each hit as a key and read it back in the merge: one pass
-// instead of two, and no per-bucket loops (measured on one thread at 100^3: 1.5 to 2.6x less
+// instead of two, and no per-bucket loops (measured on one thread at 100^3: 1.6 to 3x less
 // time than bucket + merge, docs/benchmarks.md). A bit per line of 16 slots marks the lines in
 // use, so reading the entries out visits only those (a tree at 100^3 touches 1-5% of its grid)
 // and clears them as it goes. The entries come out in voxel order with every voxel's count and
@@ -579,7 +579,7 @@ public:
         const std::size_t n = hits.size(), q = n / 4;
         // Each stream's slot `ahead` hits on is asked for before it is needed: the table (4 MiB
         // at 100^3) lies past the L2 cache, and with the request in flight early the adds ran
-        // 1.5-2x faster (one thread, trees A-D at 100; 16 and 48 hits ahead alike).
+        // 1.8-2.5x faster (one thread, trees A-D at 100; 16 and 48 hits ahead alike).
         constexpr std::size_t ahead = 16;
         const std::size_t prefetched = q > ahead ? q - ahead : 0;
         for (std::size_t i = 0; i < prefetched; ++i) {
