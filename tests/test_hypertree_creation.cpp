@@ -192,4 +192,11 @@ TEST_CASE("hypertree creation: the per-voxel table (two tables at once) equals a
     CHECK(one[0][0].hits == (1u << 17) - 1);
     busy.with_table([&](detail::voxel_table& t) { t.add(same), t.add(std::vector<hit>(2, hit{7, 3, 1})); });
     CHECK(busy.overflowed());
+
+    // Hits the table cannot hold are refused, naming the parameter.
+    detail::voxel_table_pool small(16, &scratch);
+    small.with_table([&](detail::voxel_table& t) {
+        CHECK_THROWS_WITH_AS(t.add(std::vector<hit>{{3, 1, 0}, {16, 1, 0}}), doctest::Contains("voxel_table.hits"), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(t.add(std::vector<hit>{{3, 64, 0}}), doctest::Contains("level 64"), krs::invalid_parameter);
+    });
 }

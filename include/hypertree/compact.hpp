@@ -554,18 +554,27 @@ public:
     static constexpr unsigned line_slots = 16; // one cache line of slots per used bit
 
     voxel_table(std::uint64_t voxel_count, std::pmr::memory_resource* scratch)
-        : lines_((voxel_count + line_slots - 1) / line_slots), slots_(lines_ * line_slots, scratch), used_((lines_ + 63) / 64, scratch)
+        : voxel_count_(voxel_count), lines_((voxel_count + line_slots - 1) / line_slots), slots_(lines_ * line_slots, scratch), used_((lines_ + 63) / 64, scratch)
     {
         std::fill_n(slots_.get(), slots_.size(), std::uint32_t(0));
         std::fill_n(used_.get(), used_.size(), std::uint64_t(0));
     }
-    // Adds `hits` (voxels inside the table's grid, levels below 64: the generator's). The hits
+    // Adds `hits` (voxels inside the table's grid, levels below 64: the generator's; a hit
+    // outside is refused before anything is written, as bucket_chunk refuses it). The hits
     // are taken as four interleaved streams (the list's quarters), as bucket_chunk does: a line's
     // consecutive hits share a used word, and one stream would wait for its own last store to it.
     void add(std::span<const hit> hits)
     {
         std::uint32_t* const slot = slots_.get();
         std::uint64_t* const used = used_.get();
+        // One pass over the hits (8 bytes each, streamed) before the table is touched: a stray
+        // index would write past the table, a level of 64 or more would carry into the count.
+        voxel_index most = 0;
+        unsigned levels = 0;
+        for (const hit& h : hits) most = std::max(most, h.voxel), levels |= h.level;
+        if (!hits.empty() && (std::uint64_t(most) >= voxel_count_ || levels >= 64))
+            throw invalid_parameter("voxel_table.hits", "must lie in the grid, at levels below 64 (as the generator makes them)",
+                                    levels >= 64 ? std::string("a hit at level 64 or deeper") : "a hit in voxel " + std::to_string(most) + " of " + std::to_string(voxel_count_));
         std::uint32_t top = 0;
         const auto one = [&](const hit& h) {
             const std::uint32_t rank = 0x3fffu - (std::uint32_t(h.level) << 8 | h.part);
@@ -632,6 +641,7 @@ public:
     }
 
 private:
+    std::uint64_t voxel_count_;
     std::size_t lines_;
     scratch_array<std::uint32_t> slots_;
     scratch_array<std::uint64_t> used_;
