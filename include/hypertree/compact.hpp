@@ -542,8 +542,8 @@ void merge_bucketed(std::span<const bucketed_chunk> chunks, const direct_buckets
 // A slot is count << 14 | (0x3fff - (level << 8 | part)): levels are below 64 (6 bits), so the
 // complement of level and part takes 14 bits, and its maximum is their minimum, with an empty
 // slot (0) below every hit. The count has the other 18 bits; a voxel reaching 2^17 hits sets the
-// top bit, which `overflowed` reports, and the caller then takes the bucketed path (no tree of
-// the presets comes near: its busiest voxels have a few thousand hits).
+// top bit, which `overflowed` reports, and the caller then takes the bucketed path (generating
+// again: a cost paid only by a tree that piles that many hits on one voxel).
 //
 // Threads: each task adds a group of hits to a table of its own, taken from a pool (a task finds
 // a free table or makes one, zeroed); the tables' slots add and take maxima, so reading out sums
