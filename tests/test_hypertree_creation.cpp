@@ -1,5 +1,5 @@
-// build_tree's creation path (generation in groups of chunks, four-way bucketing, the merge's
-// groups classified where they lie) against a brute-force reference built from generate()'s hit
+// build_tree's creation path (generation in groups of chunks; per-voxel tables up to 2^21 voxels,
+// else four-way bucketing, the merge's groups classified where they lie) against a brute-force reference built from generate()'s hit
 // list with a std::map: per voxel the hit count and the shallowest (level, part), then the
 // density classes of those entries and the branch rule, voxel by voxel. The reference shares
 // only the generator (tested on its own in test_hypertree_ifs.cpp) and the placing of classes
@@ -123,4 +123,80 @@ TEST_CASE("hypertree creation: classify over pieces finds disorder across piece 
     const std::vector<std::span<const voxel_entry>> sorted = {first, {}, third};
     const auto voxels = classify_pieces(std::span<const std::span<const voxel_entry>>(sorted), classes, 1);
     CHECK(voxels.size() == 4);
+}
+
+TEST_CASE("hypertree creation: the per-voxel table (two tables at once) equals a brute-force map, and flags a voxel past 2^17 hits")
+{
+    // Hits drawn at random over a small grid whose size is not a multiple of the table's lines
+    // (16 slots) nor of its used words (1024 slots), many per voxel, levels and parts over their
+    // whole range; given to two tables at once, as two tasks would, then read out in three pieces.
+    const std::uint64_t voxel_count = 70001;
+    std::vector<hit> hits;
+    std::uint64_t state = 12345;
+    const auto next = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return std::uint32_t(state >> 33);
+    };
+    for (int i = 0; i < 400000; ++i) {
+        const std::uint32_t r = next();
+        // Half the hits in the first 3000 voxels (runs of the same voxel), the rest anywhere.
+        const voxel_index v = voxel_index((r & 1) ? next() % 3000 : next() % voxel_count);
+        hits.push_back({v, std::uint8_t(next() % 64), std::uint8_t(next() % 256)});
+    }
+    hits.push_back({voxel_index(voxel_count - 1), 63, 255});
+    std::map<voxel_index, reference_entry> by_voxel;
+    for (const hit& h : hits) {
+        reference_entry& e = by_voxel[h.voxel];
+        ++e.hits;
+        e.best = std::min<std::uint16_t>(e.best, std::uint16_t(h.level << 8 | h.part));
+    }
+    scratch_memory scratch;
+    detail::voxel_table_pool pool(voxel_count, &scratch);
+    const std::size_t half = hits.size() / 2;
+    // Nested: the outer task holds its table, so the inner one makes a second.
+    pool.with_table([&](detail::voxel_table& first) {
+        first.add({hits.data(), half});
+        pool.with_table([&](detail::voxel_table& second) {
+            CHECK(&second != &first);
+            second.add({hits.data() + half, hits.size() - half});
+        });
+    });
+    REQUIRE(!pool.overflowed());
+    const auto pieces = pool.read_out<std::vector<voxel_entry>>(3, two_threads());
+    std::vector<voxel_entry> entries;
+    for (const auto& p : pieces) entries.insert(entries.end(), p.begin(), p.end());
+    REQUIRE(entries.size() == by_voxel.size());
+    std::size_t differ = 0, i = 0;
+    for (const auto& [v, e] : by_voxel) {
+        const voxel_entry& got = entries[i++];
+        differ += got.voxel != v || got.hits != e.hits || got.level != (e.best >> 8) || got.part != (e.best & 0xff);
+    }
+    CHECK(differ == 0);
+    // Read out, the tables are empty again: a second round gives the same entries.
+    pool.with_table([&](detail::voxel_table& t) { t.add(hits); });
+    const auto again = pool.read_out<std::vector<voxel_entry>>(1, {});
+    REQUIRE(again.size() == 1);
+    CHECK(again[0].size() == entries.size());
+    CHECK(std::equal(again[0].begin(), again[0].end(), entries.begin(), [](const voxel_entry& a, const voxel_entry& b) {
+        return a.voxel == b.voxel && a.hits == b.hits && a.level == b.level && a.part == b.part;
+    }));
+
+    // 2^17 - 1 hits in one voxel fit; one more is flagged (the caller then takes the bucketed path).
+    detail::voxel_table_pool busy(16, &scratch);
+    const std::vector<hit> same((std::size_t(1) << 17) - 1, hit{7, 3, 1});
+    busy.with_table([&](detail::voxel_table& t) { t.add(same); });
+    CHECK(!busy.overflowed());
+    const auto one = busy.read_out<std::vector<voxel_entry>>(1, {});
+    REQUIRE(one.size() == 1);
+    REQUIRE(one[0].size() == 1);
+    CHECK(one[0][0].hits == (1u << 17) - 1);
+    busy.with_table([&](detail::voxel_table& t) { t.add(same), t.add(std::vector<hit>(2, hit{7, 3, 1})); });
+    CHECK(busy.overflowed());
+
+    // Hits the table cannot hold are refused, naming the parameter.
+    detail::voxel_table_pool small(16, &scratch);
+    small.with_table([&](detail::voxel_table& t) {
+        CHECK_THROWS_WITH_AS(t.add(std::vector<hit>{{3, 1, 0}, {16, 1, 0}}), doctest::Contains("voxel_table.hits"), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(t.add(std::vector<hit>{{3, 64, 0}}), doctest::Contains("level 64"), krs::invalid_parameter);
+    });
 }

@@ -32,10 +32,12 @@ namespace detail {
 
 // Generation, validation and density classes: the stored voxels of one tree, in a list drawn
 // from `scratch` (every temporary of the way too). Each list goes back to the scratch as soon as
-// the next is made, so the next step can reuse its pages. Where the grid allows (compact.hpp's
-// direct_buckets), the chunks are generated in groups of consecutive chunks (generate.hpp's
-// generation_group_count), each group's hits bucketed on its task while they are in cache and
-// its buffer reused by the next group; else validation reads the chunks as pieces.
+// the next is made, so the next step can reuse its pages. Where the grid allows, the chunks are
+// generated in groups of consecutive chunks (generate.hpp's generation_group_count), each group's
+// hits validated on its task while they are in cache and its buffer reused by the next group:
+// added to a per-voxel table on grids up to 2^21 voxels (compact.hpp's voxel_table), else
+// bucketed (compact.hpp's direct_buckets) and merged; on larger grids validation reads the
+// chunks as pieces.
 template <transform_pipeline P>
 std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::uint64_t seed, int density_class_count,
                                                 const generation_options& options, std::pmr::memory_resource* scratch)
@@ -44,9 +46,30 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
     drawing.scratch = scratch;
     std::pmr::vector<voxel_entry> entries(scratch);
     no_observer observer;
-    if (const auto plan = direct_buckets::for_grid(definition.volume.voxel_count())) {
+    const std::uint64_t voxel_count = definition.volume.voxel_count();
+    const auto groups_of = [&] {
         const std::uint64_t chunks = planned_chunk_count(definition, drawing); // refuses before allocating
-        const std::size_t groups = generation_group_count(chunks, double(chunk_room(definition, std::min(drawing.chunk_cycles, cycle_count(definition)))));
+        return generation_group_count(chunks, double(chunk_room(definition, std::min(drawing.chunk_cycles, cycle_count(definition)))));
+    };
+    const auto classified = [&](const auto& groups_of_entries) {
+        std::vector<std::span<const voxel_entry>> pieces(groups_of_entries.begin(), groups_of_entries.end());
+        const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), density_class_count, options.parallel_for);
+        return classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, definition.branch_depth,
+                               std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
+    };
+    if (voxel_count > 0 && voxel_count <= voxel_table::max_voxels) {
+        // Small grids: one table slot per voxel (compact.hpp's voxel_table), each group's hits
+        // added on its task while hot. A voxel past 2^17 hits (never in the presets) sends the
+        // build to the bucketed path below, which counts in 32 bits.
+        voxel_table_pool pool(voxel_count, scratch);
+        generate_chunks(definition, seed, drawing, observer, [&](std::size_t, chunk_output& hits) {
+            pool.with_table([&](voxel_table& table) { table.add({hits.data(), hits.size()}); });
+            hits = {}; // its buffer back to the scratch, for the next group
+        }, groups_of());
+        if (!pool.overflowed()) return classified(pool.read_out<std::pmr::vector<voxel_entry>>(options.parallel_for ? 4 : 1, options.parallel_for));
+    }
+    if (const auto plan = direct_buckets::for_grid(definition.volume.voxel_count())) {
+        const std::size_t groups = groups_of();
         std::vector<bucketed_chunk> keyed(groups);
         generate_chunks(definition, seed, drawing, observer, [&](std::size_t g, chunk_output& hits) {
             keyed[g] = bucket_chunk({hits.data(), hits.size()}, *plan, scratch);
@@ -56,10 +79,7 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
         const std::vector<std::pmr::vector<voxel_entry>> groups_of_entries =
             merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *plan, options.parallel_for, scratch);
         keyed.clear(); // the keys back to the scratch
-        std::vector<std::span<const voxel_entry>> pieces(groups_of_entries.begin(), groups_of_entries.end());
-        const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), density_class_count, options.parallel_for);
-        return classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, definition.branch_depth,
-                               std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
+        return classified(groups_of_entries);
     }
     const generated_chunks generated = generate_chunks(definition, seed, drawing, observer);
     compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
