@@ -122,7 +122,22 @@ TEST_CASE("hypertree creation: classify over pieces finds disorder across piece 
     const std::vector<voxel_entry> third = {{6, 1, 3, 0}, {9, 4, 3, 0}};
     const std::vector<std::span<const voxel_entry>> sorted = {first, {}, third};
     const auto voxels = classify_pieces(std::span<const std::span<const voxel_entry>>(sorted), classes, 1);
-    CHECK(voxels.size() == 4);
+    // Each voxel as the classes give it, written out here: level <= branch depth 1 is full
+    // density, deeper levels take their count's class; index, level and part as entered.
+    const std::vector<voxel_entry> all = {first[0], first[1], third[0], third[1]};
+    REQUIRE(voxels.size() == all.size());
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        INFO("voxel " << all[i].voxel);
+        CHECK(voxels[i].index == all[i].voxel);
+        CHECK(voxels[i].value.level == all[i].level);
+        CHECK(voxels[i].part == all[i].part);
+        CHECK(voxels[i].value.density == (all[i].level <= 1 ? 255 : classes.density_of(all[i].hits)));
+    }
+    // Disorder inside a later piece (not at its border) is refused too, naming those voxels.
+    const std::vector<voxel_entry> unsorted_inside = {{6, 1, 3, 0}, {12, 4, 3, 0}, {11, 2, 3, 0}};
+    const std::vector<std::span<const voxel_entry>> late = {first, {}, unsorted_inside};
+    CHECK_THROWS_WITH_AS(classify_pieces(std::span<const std::span<const voxel_entry>>(late), classes, 1), doctest::Contains("voxel 11 after 12"),
+                         krs::invalid_parameter);
 }
 
 TEST_CASE("hypertree creation: the per-voxel table (two tables at once) equals a brute-force map, and flags a voxel past 2^17 hits")

@@ -413,13 +413,14 @@ void compact_into(std::span<const std::span<const hit>> pieces, const parallel_f
     }
 }
 
-// Validation chunk by chunk (build_tree's way, on grids whose buckets all merge directly: up to
-// 2^25 voxels). Each chunk's hits (in build_tree, a group of consecutive chunks generated into one
-// buffer: generate.hpp's generation_group_count) become short keys grouped by bucket on the
-// chunk's own task, while they are hot in cache, and the chunk's hit buffer goes back to the
-// scratch memory for the next chunk; then each bucket merges its keys from every chunk. The generator's hits always fit
-// short keys (levels below max_tree_depth = 64, voxels inside the grid). The entries equal
-// compact()'s: a voxel's entry reduces its keys by count and minimum, whatever their order.
+// Validation piece by piece (build_tree's way, on grids whose buckets all merge directly: up to
+// 2^25 voxels). A piece is one buffer of hits: in build_tree, a group of consecutive chunks
+// generated together (generate.hpp's generation_group_count). Its hits become short keys grouped
+// by bucket on the piece's own task, while they are hot in cache, and its buffer goes back to the
+// scratch memory for the next piece; then each bucket merges its keys from every piece. The
+// generator's hits always fit short keys (levels below max_tree_depth = 64, voxels inside the
+// grid). The entries equal compact()'s: a voxel's entry reduces its keys by count and minimum,
+// whatever their order.
 struct direct_buckets {
     unsigned low_bits = 0;
     std::size_t buckets = 0;

@@ -77,6 +77,30 @@ public:
         place_classes(histogram);
     }
 
+    // C as asked for, counting the empty class 0.
+    int class_count() const { return class_count_; }
+    // The non-empty classes 1..K in order: classes()[c - 1] is class c.
+    std::span<const density_class> classes() const { return classes_; }
+
+    // The class of a voxel hit `hits` times: 0 for no hit; a count between two classes' ranges
+    // (absent from the entries the classes were built from) joins the lower class, one below the
+    // first class joins class 1, one above the last joins the last.
+    int class_of(std::uint32_t hits) const
+    {
+        if (hits == 0 || classes_.empty()) return hits == 0 ? 0 : 1;
+        const auto above = std::upper_bound(classes_.begin(), classes_.end(), hits,
+                                            [](std::uint32_t h, const density_class& k) { return h < k.fewest_hits; });
+        return std::max(1, int(above - classes_.begin()));
+    }
+    // Density of a voxel hit `hits` times. Classes built from no hit voxel at all make every hit
+    // voxel full, as in a binary hypertree.
+    std::uint8_t density_of(std::uint32_t hits) const
+    {
+        if (hits == 0) return 0;
+        if (classes_.empty()) return 255;
+        return classes_[std::size_t(class_of(hits) - 1)].density;
+    }
+
 private:
     static void require_class_count(int class_count)
     {
@@ -122,32 +146,6 @@ private:
         }
     }
 
-public:
-    // C as asked for, counting the empty class 0.
-    int class_count() const { return class_count_; }
-    // The non-empty classes 1..K in order: classes()[c - 1] is class c.
-    std::span<const density_class> classes() const { return classes_; }
-
-    // The class of a voxel hit `hits` times: 0 for no hit; a count between two classes' ranges
-    // (absent from the entries the classes were built from) joins the lower class, one below the
-    // first class joins class 1, one above the last joins the last.
-    int class_of(std::uint32_t hits) const
-    {
-        if (hits == 0 || classes_.empty()) return hits == 0 ? 0 : 1;
-        const auto above = std::upper_bound(classes_.begin(), classes_.end(), hits,
-                                            [](std::uint32_t h, const density_class& k) { return h < k.fewest_hits; });
-        return std::max(1, int(above - classes_.begin()));
-    }
-    // Density of a voxel hit `hits` times. Classes built from no hit voxel at all make every hit
-    // voxel full, as in a binary hypertree.
-    std::uint8_t density_of(std::uint32_t hits) const
-    {
-        if (hits == 0) return 0;
-        if (classes_.empty()) return 255;
-        return classes_[std::size_t(class_of(hits) - 1)].density;
-    }
-
-private:
     // (hit count, number of voxels with it) for every hit count present, by increasing count.
     static std::vector<std::pair<std::uint32_t, std::size_t>> hit_count_histogram(std::span<const voxel_entry> entries)
     {
