@@ -351,11 +351,19 @@ private:
                 const T t = t0[r] + (k[r] + half) * ds;
                 const krs::vec3<T> p = rays[r].origin + rays[r].direction * t;
                 const brick_walk::probe_result<T> found = probe(walk, view, p, slope[r], active[r], walk.skip_margin(margin0[r], t), faces[r]);
-                const I place = krs::index_max(found.place, I(0));
-                const T a = select(found.looks, krs::gather(alpha_at, place), zero);
-                const I entry = krs::gather(slot_at, place) * stride;
-                composite(o, a, krs::gather(lit, entry), krs::gather(lit, entry + I(1)), krs::gather(lit, entry + I(2)));
-                o.lookups = o.lookups + select(found.looks, one, zero);
+                // A sample of opacity 0 in every lane adds nothing (composite leaves the sums as
+                // they are, bit for bit: the lit colors are finite), so its gathers are left out:
+                // all five where no lane looks (empty space, where the walk alone runs), the
+                // four of the colors where the lanes that look find empty voxels.
+                if (any(found.looks)) {
+                    const I place = krs::index_max(found.place, I(0));
+                    const T a = select(found.looks, krs::gather(alpha_at, place), zero);
+                    o.lookups = o.lookups + select(found.looks, one, zero);
+                    if (any(a > zero)) {
+                        const I entry = krs::gather(slot_at, place) * stride;
+                        composite(o, a, krs::gather(lit, entry), krs::gather(lit, entry + I(1)), krs::gather(lit, entry + I(2)));
+                    }
+                }
                 o.probes = o.probes + select(active[r], one, zero);
                 k[r] = k[r] + found.advance;
                 active[r] = active[r] & (t0[r] + (k[r] + half) * ds < t1[r]) & (o.transmittance >= least);
