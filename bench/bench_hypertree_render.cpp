@@ -23,8 +23,10 @@
 // default) against the walk of empty bricks and 16^3 blocks only (the one before), trees A-D at
 // resolutions 100 and 300, dense store, side by side in alternating rounds: per primary ray (pixel
 // centres of the 300 x 300 view, rays that enter the tree's box) the probes (brick walk visits)
-// and lookups, the primary rays' time on one thread through voxels shaded ahead (best of 5), the
-// frame's time on T threads (render(), shadow rays included: they walk too; best of 5), and the
+// and lookups, the primary rays' time on one thread through voxels shaded ahead (best of 7, as the
+// thread's CPU time, CLOCK_THREAD_CPUTIME_ID, and the wall time: on a loaded machine the CPU time
+// leaves out the time the thread waited for a core), the
+// frame's time on T threads (render(), shadow rays included: they walk too; best of 7), and the
 // pixels that differ between the two walks' frames (the walks look at the same samples: 0).
 
 #include "hypertree/hypertree.hpp"
@@ -39,6 +41,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <functional>
 #include <optional>
@@ -86,6 +89,13 @@ std::vector<stored_voxel> classified(const ifs<>& tree, std::uint64_t seed)
     return classify(entries, density_classes(entries, 32), tree.branch_depth);
 }
 
+
+double thread_cpu_seconds()
+{
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 std::string load_average()
 {
@@ -276,8 +286,8 @@ int main(int argc, char** argv)
     if (only.empty() || only == "walk") {
         std::printf("brick walk: empty cubes of every level against empty bricks and 16^3 blocks only; 300x300, dense store, "
                     "load average %s\n\n", load_average().c_str());
-        std::printf("%-4s %4s %2s %-7s %7s %9s %9s %11s %11s %8s\n", "tree", "res", "s", "walk", "levels", "probes/ray", "lookups/ray",
-                    "primary 1t", "frame", "pixels!=");
+        std::printf("%-4s %4s %2s %-7s %7s %10s %11s %11s %11s %11s %8s\n", "tree", "res", "s", "walk", "levels", "probes/ray", "lookups/ray",
+                    "primary cpu", "primary", "frame", "pixels!=");
         for (auto [res, s] : {std::pair{100, 1}, std::pair{300, 2}}) {
             for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
                 const ifs<> tree = maker(res);
@@ -298,23 +308,27 @@ int main(int argc, char** argv)
                     marchers[m].shade_bricks(memos[m], 0, marchers[m].bricks().brick_count());
                     memos[m].seal();
                 }
-                std::array<double, 2> primary{1e300, 1e300}, frame{1e300, 1e300};
+                std::array<double, 2> primary{1e300, 1e300}, primary_cpu{1e300, 1e300}, frame{1e300, 1e300};
                 std::array<primary_counts, 2> counts;
                 std::array<image, 2> images;
-                for (int round = 0; round < 5; ++round)
+                for (int round = 0; round < 7; ++round)
                     for (std::size_t m = 0; m < 2; ++m) {
+                        const double cpu0 = thread_cpu_seconds();
                         primary[m] = std::min(primary[m], bench::best_seconds(1, [&] { counts[m] = march_primary(marchers[m], camera, memos[m]); }));
+                        primary_cpu[m] = std::min(primary_cpu[m], thread_cpu_seconds() - cpu0);
                         frame[m] = std::min(frame[m], bench::best_seconds(1, [&] { images[m] = render<krs::packet_f>(marchers[m], camera, rs); }));
                     }
                 std::size_t differ = 0;
                 for (std::size_t i = 0; i < images[0].rgb.size(); i += 3)
                     differ += std::memcmp(&images[0].rgb[i], &images[1].rgb[i], 3 * sizeof(float)) != 0;
                 for (std::size_t m = 0; m < 2; ++m) {
-                    std::printf("%-4s %4d %2d %-7s %7d %9.2f %9.2f %9.2fms %9.2fms %8zu\n", tree.name.c_str(), res, s, names[m],
+                    std::printf("%-4s %4d %2d %-7s %7d %10.2f %11.2f %9.2fms %9.2fms %9.2fms %8zu\n", tree.name.c_str(), res, s, names[m],
                                 marchers[m].bricks().empty_levels(), counts[m].probes / counts[m].rays, counts[m].lookups / counts[m].rays,
-                                primary[m] * 1e3, frame[m] * 1e3, differ);
+                                primary_cpu[m] * 1e3, primary[m] * 1e3, frame[m] * 1e3, differ);
                     csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_primary," << primary[m] << ','
                         << counts[m].lookups / counts[m].rays << ",," << '\n';
+                    csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_primary_cpu," << primary_cpu[m]
+                        << ",,,\n";
                     csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_frame," << frame[m] << ",,"
                         << differ << ",\n";
                     csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_probes_per_ray,"
@@ -323,7 +337,8 @@ int main(int argc, char** argv)
             }
         }
         std::printf("\n(probes and lookups per primary ray entering the box; primary: those rays on one thread through voxels shaded "
-                    "ahead; frame: render() on %u thread(s); pixels!=: pixels of the two frames not bit-equal)\nload average after: %s\n",
+                    "ahead, CPU and wall time; frame: render() on %u thread(s); pixels!=: pixels of the two frames not bit-equal)\n"
+                    "load average after: %s\n",
                     threads, load_average().c_str());
     }
     std::printf("\nwrote %s\n", csv_path.c_str());
