@@ -355,14 +355,15 @@ private:
                 // they are, bit for bit: the lit colors are finite), so its gathers are left out:
                 // all five where no lane looks (empty space, where the walk alone runs), the
                 // four of the colors where the lanes that look find empty voxels.
+                // (The slots are gathered beside the opacities, before the test: after it, they
+                // waited for the opacities' gather too.)
                 if (any(found.looks)) {
                     const I place = krs::index_max(found.place, I(0));
                     const T a = select(found.looks, krs::gather(alpha_at, place), zero);
+                    const I entry = krs::gather(slot_at, place) * stride;
                     o.lookups = o.lookups + select(found.looks, one, zero);
-                    if (any(a > zero)) {
-                        const I entry = krs::gather(slot_at, place) * stride;
+                    if (any(a > zero))
                         composite(o, a, krs::gather(lit, entry), krs::gather(lit, entry + I(1)), krs::gather(lit, entry + I(2)));
-                    }
                 }
                 o.probes = o.probes + select(active[r], one, zero);
                 k[r] = k[r] + found.advance;
