@@ -214,49 +214,72 @@ private:
     {
         using dims = std::array<std::size_t, 3>;
         const auto at = [](const dims& n, std::size_t x, std::size_t y, std::size_t z) { return x + n[0] * (y + n[1] * z); };
+        // Row by row, x fastest, pairs of cubes ORed into their parent, the last level written
+        // into the rank table without a branch: tree B at resolution 300 (75^3 bricks) copies in
+        // 1.2 ms from an index list against 0.8 ms without the levels (with an index computed per
+        // cube and a branch per brick, the levels had cost 1.5 ms more).
         std::vector<dims> size{brick_count_};
-        std::vector<std::vector<std::uint8_t>> occupied(1);
-        occupied[0].resize(brick_rank_.size());
-        for (std::size_t b = 0; b < brick_rank_.size(); ++b) occupied[0][b] = brick_rank_[b] >= 0;
+        std::vector<std::vector<std::uint8_t>> occupied(1); // per level above the bricks (level 0 is the rank table)
         while (size.back()[0] > 1 || size.back()[1] > 1 || size.back()[2] > 1) {
-            const dims& n = size.back();
+            const dims n = size.back();
             const dims m{(n[0] + 1) / 2, (n[1] + 1) / 2, (n[2] + 1) / 2};
             std::vector<std::uint8_t> up(m[0] * m[1] * m[2], 0);
-            const std::vector<std::uint8_t>& down = occupied.back();
             for (std::size_t z = 0; z < n[2]; ++z)
-                for (std::size_t y = 0; y < n[1]; ++y)
-                    for (std::size_t x = 0; x < n[0]; ++x) up[at(m, x / 2, y / 2, z / 2)] |= down[at(n, x, y, z)];
+                for (std::size_t y = 0; y < n[1]; ++y) {
+                    std::uint8_t* to = up.data() + at(m, 0, y / 2, z / 2);
+                    // Pairs along x, then the odd last one (a pair of ranks holds a brick unless
+                    // both are negative: their & is).
+                    const std::size_t pairs = n[0] / 2;
+                    if (size.size() == 1) {
+                        const std::int32_t* from = brick_rank_.data() + at(n, 0, y, z);
+                        for (std::size_t x = 0; x < pairs; ++x) to[x] |= std::uint8_t((from[2 * x] & from[2 * x + 1]) >= 0);
+                        if (n[0] % 2) to[pairs] |= std::uint8_t(from[n[0] - 1] >= 0);
+                    } else {
+                        const std::uint8_t* from = occupied.back().data() + at(n, 0, y, z);
+                        for (std::size_t x = 0; x < pairs; ++x) to[x] |= std::uint8_t(from[2 * x] | from[2 * x + 1]);
+                        if (n[0] % 2) to[pairs] |= from[n[0] - 1];
+                    }
+                }
             size.push_back(m);
             occupied.push_back(std::move(up));
         }
+        const std::size_t top = size.size() - 1;
+        const bool top_occupied = top == 0 ? brick_rank_[0] >= 0 : occupied[top][0] != 0;
         // A 16^3 block (4^3 bricks, the cubes of level 2) is empty when its cube is.
         block_code_.assign(block_count_[0] * block_count_[1] * block_count_[2], 0);
-        if (size.size() > 2) {
+        if (top >= 2) {
             for (std::size_t b = 0; b < block_code_.size(); ++b) block_code_[b] = occupied[2][b] ? 0 : -std::int32_t(brick_voxels);
         } else {
             // A grid of at most 2 bricks a side: its one block is empty when every brick is.
-            block_code_[0] = occupied.back()[0] ? 0 : -std::int32_t(brick_voxels);
+            block_code_[0] = top_occupied ? 0 : -std::int32_t(brick_voxels);
         }
-        // level[c] of the current level: the level of the largest empty cube holding cube c, or
-        // -1 when c holds a voxel.
-        std::vector<std::int8_t> level(1, occupied.back()[0] ? -1 : std::int8_t(size.size() - 1)), finer;
-        for (std::size_t e = size.size() - 1; e-- > 0;) {
+        // From the top down, level[c]: the level of the largest empty cube holding cube c, or -1
+        // when c holds a voxel; at the bricks, an empty one's rank becomes -(level + 1).
+        std::vector<std::int8_t> level(1, top_occupied ? -1 : std::int8_t(top)), finer;
+        empty_levels_ = top_occupied ? 0 : int(top);
+        for (std::size_t e = top; e-- > 0;) {
             const dims &n = size[e], &m = size[e + 1];
-            finer.assign(n[0] * n[1] * n[2], -1);
+            if (e > 0) finer.assign(n[0] * n[1] * n[2], -1);
             for (std::size_t z = 0; z < n[2]; ++z)
-                for (std::size_t y = 0; y < n[1]; ++y)
-                    for (std::size_t x = 0; x < n[0]; ++x) {
-                        const std::size_t c = at(n, x, y, z);
-                        if (occupied[e][c]) continue;
-                        const std::int8_t parent = level[at(m, x / 2, y / 2, z / 2)];
-                        finer[c] = parent >= 0 ? parent : std::int8_t(e);
+                for (std::size_t y = 0; y < n[1]; ++y) {
+                    const std::int8_t* parent = level.data() + at(m, 0, y / 2, z / 2);
+                    if (e > 0) {
+                        const std::uint8_t* full = occupied[e].data() + at(n, 0, y, z);
+                        std::int8_t* out = finer.data() + at(n, 0, y, z);
+                        for (std::size_t x = 0; x < n[0]; ++x)
+                            if (!full[x]) out[x] = parent[x / 2] >= 0 ? parent[x / 2] : std::int8_t(e);
+                    } else {
+                        std::int32_t* rank = brick_rank_.data() + at(n, 0, y, z);
+                        for (std::size_t x = 0; x < n[0]; ++x) {
+                            const std::int32_t l = std::max<std::int32_t>(parent[x / 2], 0);
+                            rank[x] = rank[x] >= 0 ? rank[x] : -(l + 1);
+                        }
                     }
-            std::swap(level, finer);
-            occupied[e + 1].clear(), occupied[e + 1].shrink_to_fit();
+                }
+            if (e > 0) std::swap(level, finer);
+            if (e == 1) // the bricks' levels are these or 0
+                for (const std::int8_t l : level) empty_levels_ = std::max(empty_levels_, int(l));
         }
-        empty_levels_ = 0;
-        for (std::size_t b = 0; b < brick_rank_.size(); ++b)
-            if (brick_rank_[b] < 0) brick_rank_[b] = -(std::int32_t(level[b]) + 1), empty_levels_ = std::max(empty_levels_, int(level[b]));
     }
 
     // Adds the empty brick holding cell c and returns its rank.
