@@ -535,6 +535,8 @@ TEST_CASE("hypertree voxel bricks hold exactly the store's voxels")
             alignas(64) std::int32_t places[n];
             view.place(I::load_aligned(c[0]), I::load_aligned(c[1]), I::load_aligned(c[2])).store_aligned(places);
             for (std::size_t k = 0; k < n; ++k) REQUIRE(places[k] == view.place(c[0][k], c[1][k], c[2][k]));
+            view.place_by_blocks(I::load_aligned(c[0]), I::load_aligned(c[1]), I::load_aligned(c[2])).store_aligned(places);
+            for (std::size_t k = 0; k < n; ++k) REQUIRE(places[k] == view.place_by_blocks(c[0][k], c[1][k], c[2][k]));
         }
     }
 }

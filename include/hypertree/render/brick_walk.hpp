@@ -153,14 +153,15 @@ public:
         if (skipping_ == skips::every_level) {
             place = bricks.place(c[0], c[1], c[2]);
             found = index_to_float(place); // >= 0: a voxel
-            // The cube of 4 << e voxels: side 2^(e + 2) and its inverse made from their float
-            // bits (xsimd 8.1 has no per-lane integer shift), so lo = floor(c / side) side, exact
-            // in floats (c < 2^24, powers of two), is c with its low e + 2 bits cleared. Lanes
-            // with a voxel take e = 0 (their exit is not used).
-            const I e = krs::index_min(krs::index_max(voxel_bricks::view::empty_level(place), I(0)), I(100));
-            const T side = krs::index_pow2(e + I(2)), inverse = krs::index_pow2(I(-2) - e);
-            const T lo[3] = {krs::lane_floor(index_to_float(c[0]) * inverse) * side, krs::lane_floor(index_to_float(c[1]) * inverse) * side,
-                             krs::lane_floor(index_to_float(c[2]) * inverse) * side};
+            // The cube of 4 << e voxels: its side made from float bits (xsimd 8.1 has no per-lane
+            // integer shift), then lo = c with its low e + 2 bits cleared (c & -side), as the GLSL
+            // does. e is capped at 28 (a side of 2^30, within int; a smaller aligned cube around
+            // the cell is empty too); lanes with a voxel take e = 0 (their exit is not used).
+            const I e = krs::index_min(krs::index_max(voxel_bricks::view::empty_level(place), I(0)), I(28));
+            const T side = krs::index_pow2(e + I(2));
+            const I low_bits_cleared = I(0) - truncate_to_index(side);
+            const T lo[3] = {index_to_float(c[0] & low_bits_cleared), index_to_float(c[1] & low_bits_cleared),
+                             index_to_float(c[2] & low_bits_cleared)};
             leave(lo, side);
         } else {
             place = bricks.place_by_blocks(c[0], c[1], c[2]);
