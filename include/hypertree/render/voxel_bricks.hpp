@@ -24,8 +24,9 @@
 // the exit of the largest empty cube in one step. (Two levels kept apart, a brick table and a
 // 16^3 block table read side by side, was the walk before: its second read cost a gather per
 // sample, and the blocks stopped at 16^3. It is kept as the reference walk, `place_by_blocks`.)
-// The levels are computed after the voxels are in, from the bricks up, one pass per level over
-// a table 8 times smaller than the last: at most 1/7 more than a pass over the brick table.
+// The levels are computed after the voxels are in: a pass up over the brick table, one per level
+// above over a byte table 8 times smaller than the last, and the same down, writing the codes
+// (tree B at resolution 300: 0.45 ms, against 0.8 ms for the rest of the copy).
 //
 // A voxel that needs more than a density (the shading memo: shade_memo.hpp) gets a dense number
 // among the non-empty voxels, its slot, kept per place (a gather for packets, where a popcount of
