@@ -149,15 +149,6 @@ std::pair<timed, timed> alternating(int repeat, A&& a, B&& b)
     return {ta, tb};
 }
 
-// This thread's CPU time in seconds: what a step costs on one core, whatever else shares the
-// machine (a step descheduled for a while does not count the wait).
-double thread_seconds()
-{
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-
 // The floor table: build_tree's own steps (stored_voxels_of's, then two stores' build), each on
 // one thread in CPU time, best of R. Their sum over two is what two ideal threads would take.
 struct step_floor {
@@ -178,26 +169,26 @@ step_floor floor_of(const ifs<>& tree, int repeat)
     if (!plan) return f;
     index_list_store list;
     dense_store dense;
-    const auto best = [](double& slot, double start) { slot = std::min(slot, thread_seconds() - start); };
+    const auto best = [](double& slot, double start) { slot = std::min(slot, bench::thread_cpu_seconds() - start); };
     for (int r = 0; r < repeat; ++r) {
         hypertree::detail::no_observer observer;
         const std::uint64_t chunks = hypertree::detail::planned_chunk_count(tree, g);
         const std::size_t groups = hypertree::detail::generation_group_count(
             chunks, double(hypertree::detail::chunk_room(tree, std::min(g.chunk_cycles, hypertree::detail::cycle_count(tree)))));
         std::size_t hits = 0;
-        double start = thread_seconds();
+        double start = bench::thread_cpu_seconds();
         hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) { hits += h.size(), h = {}; }, groups);
         best(f.generate, start);
         f.hits = hits;
         std::vector<hypertree::detail::bucketed_chunk> keyed(groups);
-        start = thread_seconds();
+        start = bench::thread_cpu_seconds();
         hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t k, hypertree::detail::chunk_output& h) {
             keyed[k] = hypertree::detail::bucket_chunk({h.data(), h.size()}, *plan, &scratch);
             h = {};
         }, groups);
-        const double generate_and_bucket = thread_seconds() - start;
+        const double generate_and_bucket = bench::thread_cpu_seconds() - start;
         f.bucket = std::min(f.bucket, std::max(0.0, generate_and_bucket - f.generate));
-        start = thread_seconds();
+        start = bench::thread_cpu_seconds();
         const auto merged = hypertree::detail::merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *plan, {}, &scratch);
         best(f.merge, start);
         keyed.clear();
@@ -205,13 +196,13 @@ step_floor floor_of(const ifs<>& tree, int repeat)
             // The per-voxel table in place of bucket + merge, in the same round (alternating with
             // them), checked against the merge's entries.
             hypertree::detail::voxel_table_pool pool(tree.volume.voxel_count(), &scratch);
-            start = thread_seconds();
+            start = bench::thread_cpu_seconds();
             hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) {
                 pool.with_table([&](hypertree::detail::voxel_table& t) { t.add({h.data(), h.size()}); });
                 h = {};
             }, groups);
-            f.table_add = std::min(f.table_add, std::max(0.0, thread_seconds() - start - f.generate));
-            start = thread_seconds();
+            f.table_add = std::min(f.table_add, std::max(0.0, bench::thread_cpu_seconds() - start - f.generate));
+            start = bench::thread_cpu_seconds();
             const auto read = pool.read_out<std::pmr::vector<voxel_entry>>(1, {});
             best(f.table_read, start);
             std::size_t i = 0, j = 0, k = 0;
@@ -228,16 +219,16 @@ step_floor floor_of(const ifs<>& tree, int repeat)
             f.table_same = f.table_same && same && i == total;
         }
         const std::vector<std::span<const voxel_entry>> pieces(merged.begin(), merged.end());
-        start = thread_seconds();
+        start = bench::thread_cpu_seconds();
         const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), 32, {});
         const auto voxels = classify_pieces(std::span<const std::span<const voxel_entry>>(pieces), classes, tree.branch_depth,
                                             std::pmr::vector<stored_voxel>(&scratch));
         best(f.classify, start);
         f.voxels = voxels.size();
-        start = thread_seconds();
+        start = bench::thread_cpu_seconds();
         list = index_list_store::build(tree.volume, voxels, g.budget, std::move(list));
         best(f.index_list, start);
-        start = thread_seconds();
+        start = bench::thread_cpu_seconds();
         dense = dense_store::build(tree.volume, voxels, g.budget, std::move(dense));
         best(f.dense, start);
     }

@@ -1,7 +1,7 @@
 // bench_hypertree_render: the rendering columns of the hypertree paper's Table 1, and speed
 // against error for the raymarcher's settings (docs/design.md#rule-5).
 //
-//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error]
+//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|walk]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
 // Table: trees A-D (hypertree/presets.hpp) in a 300 x 300 image, at resolution 100 without
@@ -22,6 +22,16 @@
 // spheres, ray cache, voxels shaded as rays meet them instead of ahead, shadow rays instead of the
 // sweep (with the sweep's setup and its RMSE against the shadow rays' image). Each timing is the
 // best of 2 runs.
+//
+// Walk (`--only walk`): the brick walk with empty cubes of every level (brick_walk::skips, the
+// default) against the walk of empty bricks and 16^3 blocks only (the one before), trees A-D at
+// resolutions 100 and 300, dense store, side by side in alternating rounds: per primary ray (pixel
+// centres of the 300 x 300 view, rays that enter the tree's box) the probes (brick walk visits)
+// and lookups, the primary rays' time on one thread through voxels shaded ahead (best of 7, as the
+// thread's CPU time, CLOCK_THREAD_CPUTIME_ID, and the wall time: on a loaded machine the CPU time
+// leaves out the time the thread waited for a core), the
+// frame's time on T threads (render() with march_options' defaults; best of 7), and the
+// pixels that differ between the two walks' frames (the walks look at the same samples: 0).
 
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
@@ -34,6 +44,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <ctime>
 #include <fstream>
 #include <functional>
 #include <optional>
@@ -64,15 +76,6 @@ std::optional<std::size_t> paper_column(storage_type s)
     return std::nullopt;
 }
 
-std::string load_average()
-{
-    double load[3] = {0, 0, 0};
-    if (getloadavg(load, 3) != 3) return "unknown";
-    char b[64];
-    std::snprintf(b, sizeof b, "%.2f %.2f %.2f", load[0], load[1], load[2]);
-    return b;
-}
-
 double rmse(const image& a, const image& b)
 {
     double sum = 0;
@@ -90,6 +93,37 @@ std::vector<stored_voxel> classified(const ifs<>& tree, std::uint64_t seed)
     return classify(entries, density_classes(entries, 32), tree.branch_depth);
 }
 
+
+// The primary rays of a view through a marcher's voxels all shaded ahead (as render() marches
+// them, two packets at a time): pixel centres, one thread. Returns the rays that enter the box,
+// and sums their probes and lookups.
+struct primary_counts {
+    double rays = 0, probes = 0, lookups = 0;
+};
+primary_counts march_primary(const volume_marcher& marcher, const krs::pinhole_camera& camera, const shade_memo& memo)
+{
+    using P = krs::packet_f;
+    constexpr std::size_t n = krs::lane_count<P>;
+    primary_counts c;
+    const int w = camera.width(), h = camera.height();
+    march_context context{nullptr, const_cast<shade_memo*>(&memo)}; // read only: the memo is complete
+    for (int y = 0; y < h; ++y)
+        for (int x0 = 0; x0 < w; x0 += int(2 * n)) {
+            std::array<krs::ray<P>, 2> rays;
+            for (std::size_t g = 0; g < 2; ++g) {
+                std::array<float, n> lx, ly;
+                for (std::size_t l = 0; l < n; ++l) lx[l] = float(std::min(w - 1, x0 + int(g * n + l))) + 0.5f, ly[l] = float(y) + 0.5f;
+                rays[g] = camera.primary_ray(P::load_unaligned(lx.data()), P::load_unaligned(ly.data()));
+            }
+            const auto out = marcher.march_packets<P, 2>(rays, context);
+            for (std::size_t g = 0; g < 2; ++g) {
+                const auto probes = krs::lanes_of(out[g].probes), lookups = krs::lanes_of(out[g].lookups);
+                for (std::size_t l = 0; l < n && x0 + int(g * n + l) < w; ++l)
+                    c.rays += probes[l] > 0, c.probes += double(probes[l]), c.lookups += double(lookups[l]);
+            }
+        }
+    return c;
+}
 } // namespace
 
 int main(int argc, char** argv)
@@ -100,7 +134,7 @@ int main(int argc, char** argv)
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (i + 1 >= argc) {
-            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|walk]\n", argv[0]);
             return 2;
         }
         const std::string v = argv[++i];
@@ -117,7 +151,7 @@ int main(int argc, char** argv)
     std::ofstream csv(csv_path);
     csv << "table,tree,resolution,supersampling,store,marcher,setting,seconds,lookups,rmse,paper_seconds\n";
 
-    std::printf("load average before: %s\n", load_average().c_str());
+    std::printf("load average before: %s\n", bench::load_average().c_str());
     if (only.empty() || only == "table") {
         std::printf("hypertree rendering (paper Table 1): 300x300, %u thread(s), best of 5 (shadow rays and sweep alternating)\n\n", threads);
         std::printf("%-4s %4s %2s %-12s | %8s %8s %8s | %8s %8s %8s %8s %9s | %8s %6s %6s %8s\n", "tree", "res", "s", "store", "setup", "scalar",
@@ -277,6 +311,65 @@ int main(int argc, char** argv)
             measure("level of detail " + std::to_string(res), lod, tree_shape::of(v, reduced), defaults, one);
         }
     }
-    std::printf("\nload average after: %s\nwrote %s\n", load_average().c_str(), csv_path.c_str());
+
+    if (only.empty() || only == "walk") {
+        std::printf("brick walk: empty cubes of every level against empty bricks and 16^3 blocks only; 300x300, dense store, "
+                    "load average %s\n\n", bench::load_average().c_str());
+        std::printf("%-4s %4s %2s %-7s %7s %10s %11s %11s %11s %11s %8s\n", "tree", "res", "s", "walk", "levels", "probes/ray", "lookups/ray",
+                    "primary cpu", "primary", "frame", "pixels!=");
+        for (auto [res, s] : {std::pair{100, 1}, std::pair{300, 2}}) {
+            for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+                const ifs<> tree = maker(res);
+                const std::vector<stored_voxel> voxels = classified(tree, 1);
+                const tree_shape shape = tree_shape::of(tree.volume, voxels);
+                const dense_store store = dense_store::build(tree.volume, voxels);
+                const krs::pinhole_camera camera = framing_camera(shape.box, 300, 300);
+                const depth_colors colors = depth_colors::tree(tree.branch_depth, tree.tree_depth);
+                render_settings rs;
+                rs.supersampling = s;
+                rs.parallel_for = bench::parallel_for(threads);
+                const std::array<brick_walk::skips, 2> kinds{brick_walk::skips::every_level, brick_walk::skips::bricks_and_blocks};
+                const std::array<const char*, 2> names{"levels", "blocks"};
+                std::vector<volume_marcher> marchers;
+                for (auto k : kinds) marchers.emplace_back(store, shape, colors, march_options{}, k);
+                std::array<shade_memo, 2> memos{marchers[0].new_shade_memo(), marchers[1].new_shade_memo()};
+                for (std::size_t m = 0; m < 2; ++m) {
+                    marchers[m].shade_bricks(memos[m], 0, marchers[m].bricks().brick_count());
+                    memos[m].seal();
+                }
+                std::array<double, 2> primary{1e300, 1e300}, primary_cpu{1e300, 1e300}, frame{1e300, 1e300};
+                std::array<primary_counts, 2> counts;
+                std::array<image, 2> images;
+                for (int round = 0; round < 7; ++round)
+                    for (std::size_t m = 0; m < 2; ++m) {
+                        const double cpu0 = bench::thread_cpu_seconds();
+                        primary[m] = std::min(primary[m], bench::best_seconds(1, [&] { counts[m] = march_primary(marchers[m], camera, memos[m]); }));
+                        primary_cpu[m] = std::min(primary_cpu[m], bench::thread_cpu_seconds() - cpu0);
+                        frame[m] = std::min(frame[m], bench::best_seconds(1, [&] { images[m] = render<krs::packet_f>(marchers[m], camera, rs); }));
+                    }
+                std::size_t differ = 0;
+                for (std::size_t i = 0; i < images[0].rgb.size(); i += 3)
+                    differ += std::memcmp(&images[0].rgb[i], &images[1].rgb[i], 3 * sizeof(float)) != 0;
+                for (std::size_t m = 0; m < 2; ++m) {
+                    std::printf("%-4s %4d %2d %-7s %7d %10.2f %11.2f %9.2fms %9.2fms %9.2fms %8zu\n", tree.name.c_str(), res, s, names[m],
+                                marchers[m].bricks().empty_levels(), counts[m].probes / counts[m].rays, counts[m].lookups / counts[m].rays,
+                                primary_cpu[m] * 1e3, primary[m] * 1e3, frame[m] * 1e3, differ);
+                    csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_primary," << primary[m] << ','
+                        << counts[m].lookups / counts[m].rays << ",," << '\n';
+                    csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_primary_cpu," << primary_cpu[m]
+                        << ",,,\n";
+                    csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_frame," << frame[m] << ",,"
+                        << differ << ",\n";
+                    csv << "walk," << tree.name << ',' << res << ',' << s << ",dense,packet," << names[m] << "_probes_per_ray,"
+                        << counts[m].probes / counts[m].rays << ",,,\n";
+                }
+            }
+        }
+        std::printf("\n(probes and lookups per primary ray entering the box; primary: those rays on one thread through voxels shaded "
+                    "ahead, CPU and wall time; frame: render() on %u thread(s); pixels!=: pixels of the two frames not bit-equal)\n"
+                    "load average after: %s\n",
+                    threads, bench::load_average().c_str());
+    }
+    std::printf("\nload average after: %s\nwrote %s\n", bench::load_average().c_str(), csv_path.c_str());
     return 0;
 }

@@ -296,10 +296,7 @@ int main(int argc, char** argv)
         }
     }
     openvdb::initialize();
-    {
-        double load[3] = {0, 0, 0};
-        if (getloadavg(load, 3) == 3) std::printf("load average before: %.2f %.2f %.2f\n", load[0], load[1], load[2]);
-    }
+    std::printf("load average before: %s\n", bench::load_average().c_str());
 
     std::vector<row> rows;
     // Per tree: the four store kinds, lit_per_sample, lit_dense, openvdb_float, openvdb_lit, openvdb_uint8.
@@ -523,10 +520,7 @@ int main(int argc, char** argv)
             << ',' << number(r.packet_ms) << ',' << (r.rendered ? number(r.image.rmse) : "") << ','
             << (r.rendered ? number(r.image.max) : "") << ',' << (r.rendered ? number(r.image.share) : "") << ',' << threads << ','
             << size << ',' << step_factor << ',' << (shade_per_voxel ? "per-voxel" : "per-sample") << '\n';
-    {
-        double load[3] = {0, 0, 0};
-        if (getloadavg(load, 3) == 3) std::printf("\nload average after: %.2f %.2f %.2f", load[0], load[1], load[2]);
-    }
+    std::printf("\nload average after: %s", bench::load_average().c_str());
     std::printf("\nwrote %s\n", csv_path.c_str());
     return sink == 0xffffffffu ? 1 : 0;
 }

@@ -46,13 +46,6 @@ namespace {
 using namespace hypertree;
 using clock_type = std::chrono::steady_clock;
 
-std::string load_average()
-{
-    double load[3] = {0, 0, 0};
-    if (getloadavg(load, 3) != 3) return "unknown";
-    return bench::format("%.2f %.2f %.2f", load[0], load[1], load[2]);
-}
-
 // Wall and process CPU seconds of f().
 struct timing {
     double wall = 1e300, cpu = 1e300;
@@ -114,7 +107,7 @@ int main(int argc, char** argv)
     std::printf("VDB export (OpenVDB %s): resolution %d, best of %d alternating rounds, TBB threads %s; files in %s\n",
                 openvdb::getLibraryAbiVersionString(), res, rounds, tbb_threads > 0 ? std::to_string(tbb_threads).c_str() : "default",
                 dir.string().c_str());
-    std::printf("load average before: %s\n\n", load_average().c_str());
+    std::printf("load average before: %s\n\n", bench::load_average().c_str());
     std::printf("%-4s %-12s %9s %10s | %-7s %11s %9s %9s %9s %9s %8s\n", "tree", "store", "voxels", "memory", "format", "file", "write",
                 "(cpu)", "read", "(cpu)", "differ");
 
@@ -175,7 +168,7 @@ int main(int argc, char** argv)
         });
         std::printf("\n");
     }
-    std::printf("load average after: %s\n", load_average().c_str());
+    std::printf("load average after: %s\n", bench::load_average().c_str());
     std::error_code ignored;
     for (const char* f : {"tree.htree", "tree.vdb", "tree.nvdb"}) std::filesystem::remove(dir / f, ignored);
 

@@ -1,7 +1,8 @@
 // The brick walk (hypertree/render/brick_walk.hpp) against independent references: plain stepping
-// (every sample, its brick's occupancy taken from the voxels the test placed, not from the bricks)
-// and a fine walk along the ray. A walk must look at exactly the samples stepping finds in
-// non-empty bricks, in order, and skip none of the bricks a ray crosses for more than a step.
+// (every sample, its brick's occupancy taken from the voxels the test placed, not from the bricks),
+// a fine walk along the ray, and the reference walk of empty bricks and 16^3 blocks only. A walk
+// must look at exactly the samples stepping finds in non-empty bricks, in order, and skip none of
+// the bricks a ray crosses for more than a step.
 
 #include "hypertree/render/brick_walk.hpp"
 #include "hypertree/store/index_list_store.hpp"
@@ -156,6 +157,49 @@ TEST_CASE("brick walk: a packet's lanes walk as the scalar walk, and known exit 
     CHECK(skipping > 1000);      // the skips were compared
     CHECK(block_skipping > 100); // among them skips over empty blocks
     CHECK(agreed > 100);    // and the packets' faces were known
+}
+
+TEST_CASE("brick walk: empty cubes of every level look at the samples of stepping and of the reference walk, in fewer probes, in a forest")
+{
+    // A forest's clearings are the coarse levels' case: rays from near and far, at three step
+    // factors, walked with every level, with bricks and blocks only, and stepped; the three
+    // must look at the same samples in the same order.
+    std::size_t rays = 0, looked = 0;
+    skip_counts levels, blocks;
+    for (std::uint32_t seed : {1u, 2u}) {
+        const forest s(seed);
+        REQUIRE(s.occupied.size() > 100);
+        REQUIRE(s.bricks.empty_levels() >= 4); // cubes of 64^3 voxels lie in the clearings
+        for (float step_factor : {1.0f, 0.7f, 1.9f}) {
+            const float ds = step_factor * float(s.volume.smallest_voxel_side());
+            const brick_walk w(s.volume, ds), reference(s.volume, ds, brick_walk::skips::bricks_and_blocks);
+            REQUIRE(w.skipping() == brick_walk::skips::every_level);
+            lcg r{seed * 31u + 7u};
+            for (float distance : {1.0f, 30.0f, 1000.0f}) {
+                for (int i = 0; i < 300; ++i) {
+                    krs::vec3f o, d;
+                    random_ray(r, s.volume, distance, i, o, d);
+                    float t0 = 0;
+                    int count = 0;
+                    if (!samples_across(s.volume, o, d, ds, t0, count)) continue;
+                    INFO("ray from " << o.x << " " << o.y << " " << o.z << " along " << d.x << " " << d.y << " " << d.z);
+                    const std::vector<looked_at> expect = stepped(s, o, d, t0, ds, count);
+                    const std::vector<looked_at> got = walked(s, w, o, d, t0, count, levels);
+                    REQUIRE(got == expect);
+                    REQUIRE(walked(s, reference, o, d, t0, count, blocks) == expect);
+                    ++rays, looked += got.size();
+                }
+            }
+        }
+    }
+    std::printf("forest walk: %zu rays, %zu samples looked at; probes %zu with every level (%zu in cubes of 32^3 or more), %zu with "
+                "bricks and blocks\n",
+                rays, looked, levels.probes, levels.in_coarse_cube, blocks.probes);
+    CHECK(looked > 1000);
+    CHECK(levels.in_coarse_cube > 1000); // the coarse levels were met
+    CHECK(levels.over_bricks > 1000);
+    // and saved probes (measured: 0.77 of them, though every ray takes 6 probes outside the grid, 3 steps each side)
+    CHECK(double(levels.probes) < 0.85 * double(blocks.probes));
 }
 
 TEST_CASE("brick walk refuses a step that is not finite and > 0, by name")

@@ -5,6 +5,8 @@
 #include "hypertree/presets.hpp"
 #include "hypertree/render/render.hpp"
 
+#include "support/brick_walk_rays.hpp"
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -447,7 +449,8 @@ TEST_CASE("hypertree shade memo: concurrent readers only ever see whole entries,
 namespace {
 
 // A store whose voxels are scattered at random over a 37 x 21 x 50 grid (sides that are not
-// multiples of 4 or 16), with a dense run along one row and whole empty 16^3 blocks.
+// multiples of 4 or 16), with a dense run along one row, whole empty 16^3 blocks, and one empty
+// aligned cube of 32^3 (x and z below 32; the grid's 21 rows of y are all in it).
 index_list_store scattered_store(std::uint32_t seed)
 {
     const hypervolume v({0, 0, 0}, {3.7, 2.1, 5.0}, resolution{37, 21, 50});
@@ -458,6 +461,7 @@ index_list_store scattered_store(std::uint32_t seed)
         const auto c = v.coordinates(i);
         const bool row = c[1] == 20 && c[2] == 49;
         if (c[2] >= 16 && c[2] < 32 && !row) continue; // an empty slab of blocks
+        if (c[0] < 32 && c[2] < 32) continue;         // and the empty cube
         if (row || (state >> 24) < 8) voxels.push_back({i, {std::uint8_t(1 + (state >> 8) % 255), std::uint8_t((state >> 16) % 7)}, 0});
     }
     return index_list_store::build(v, voxels);
@@ -474,7 +478,23 @@ TEST_CASE("hypertree voxel bricks hold exactly the store's voxels")
         CHECK(bricks.voxel_count() == store.nonempty_count());
         std::vector<int> slot_seen(bricks.voxel_count(), 0);
         const voxel_bricks::view view = bricks.view_of();
-        std::size_t empty_bricks = 0, empty_blocks = 0;
+        // The reference occupancy: a prefix sum of the store's non-empty voxels, so a box's count
+        // is 8 reads (cells past the grid hold nothing).
+        const int nx = v.grid().x, ny = v.grid().y, nz = v.grid().z;
+        std::vector<int> sum(std::size_t(nx + 1) * std::size_t(ny + 1) * std::size_t(nz + 1), 0);
+        const auto S = [&](int x, int y, int z) -> int& { return sum[std::size_t(x) + std::size_t(nx + 1) * (std::size_t(y) + std::size_t(ny + 1) * std::size_t(z))]; };
+        for (int z = 1; z <= nz; ++z)
+            for (int y = 1; y <= ny; ++y)
+                for (int x = 1; x <= nx; ++x)
+                    S(x, y, z) = (store.at(v.index(x - 1, y - 1, z - 1)).density != 0) + S(x - 1, y, z) + S(x, y - 1, z) + S(x, y, z - 1) -
+                                 S(x - 1, y - 1, z) - S(x - 1, y, z - 1) - S(x, y - 1, z - 1) + S(x - 1, y - 1, z - 1);
+        // Non-empty voxels in the aligned cube of `side` cells holding cell (x, y, z).
+        const auto in_cube = [&](int x, int y, int z, int side) {
+            const int x0 = std::min(nx, x & -side), y0 = std::min(ny, y & -side), z0 = std::min(nz, z & -side);
+            const int x1 = std::min(nx, x0 + side), y1 = std::min(ny, y0 + side), z1 = std::min(nz, z0 + side);
+            return S(x1, y1, z1) - S(x0, y1, z1) - S(x1, y0, z1) - S(x1, y1, z0) + S(x0, y0, z1) + S(x0, y1, z0) + S(x1, y0, z0) - S(x0, y0, z0);
+        };
+        std::size_t empty_bricks = 0, empty_blocks = 0, coarse = 0;
         for (int z = 0; z < v.grid().z; ++z)
             for (int y = 0; y < v.grid().y; ++y)
                 for (int x = 0; x < v.grid().x; ++x) {
@@ -482,28 +502,35 @@ TEST_CASE("hypertree voxel bricks hold exactly the store's voxels")
                     const voxel got = bricks.at(x, y, z);
                     REQUIRE(got.density == expect.density);
                     REQUIRE(got.level == expect.level);
-                    // The place's sign says whether the brick (and the block) holds a voxel,
-                    // checked against the store by brute force over the brick's cells.
+                    // The place's sign says whether the brick holds a voxel, and an empty
+                    // brick's level e names the largest empty aligned cube around it: the cube
+                    // of 4 << e cells is empty and the one of 8 << e is not (unless it already
+                    // covers the grid), checked against the store's voxels by the prefix sum.
                     const std::int32_t place = view.place(x, y, z);
-                    bool brick_holds = false, block_holds = false;
-                    for (int dz = 0; dz < 16; ++dz)
-                        for (int dy = 0; dy < 16; ++dy)
-                            for (int dx = 0; dx < 16 && !(brick_holds && block_holds); ++dx) {
-                                const int cx = (x & ~15) + dx, cy = (y & ~15) + dy, cz = (z & ~15) + dz;
-                                if (cx >= v.grid().x || cy >= v.grid().y || cz >= v.grid().z) continue;
-                                if (store.at(v.index(cx, cy, cz)).density == 0) continue;
-                                block_holds = true;
-                                if ((cx >> 2) == (x >> 2) && (cy >> 2) == (y >> 2) && (cz >> 2) == (z >> 2)) brick_holds = true;
-                            }
-                    REQUIRE((place >= 0) == brick_holds);
-                    REQUIRE((place < -64) == !block_holds);
-                    empty_bricks += place < 0, empty_blocks += place < -64;
+                    REQUIRE((place >= 0) == (in_cube(x, y, z, 4) > 0));
+                    if (place < 0) {
+                        const int e = voxel_bricks::view::empty_level(place), side = 4 << e;
+                        REQUIRE(e >= 0);
+                        REQUIRE(place == -64 * (e + 1) + ((x & 3) | (y & 3) << 2 | (z & 3) << 4));
+                        REQUIRE(e <= bricks.empty_levels());
+                        CHECK(in_cube(x, y, z, side) == 0);
+                        const bool whole_grid = side >= nx && side >= ny && side >= nz;
+                        if (!whole_grid) CHECK(in_cube(x, y, z, 2 * side) > 0);
+                        coarse += e >= 3;
+                    }
+                    // The reference walk's place: below -64 exactly where the 16^3 block is empty.
+                    const std::int32_t by_blocks = view.place_by_blocks(x, y, z);
+                    REQUIRE((by_blocks >= 0) == (place >= 0));
+                    REQUIRE((by_blocks < -64) == (in_cube(x, y, z, 16) == 0));
+                    if (place >= 0) REQUIRE(by_blocks == place);
+                    empty_bricks += place < 0, empty_blocks += by_blocks < -64;
                     if (expect.density != 0) ++slot_seen[bricks.slot(std::size_t(place))];
                 }
         // Every non-empty voxel has its own slot.
         CHECK(std::count(slot_seen.begin(), slot_seen.end(), 1) == std::ptrdiff_t(slot_seen.size()));
         CHECK(empty_bricks > 1000); // the cases occur
         CHECK(empty_blocks > 1000);
+        CHECK(coarse > 1000);
         // The lanes' lookup gives each lane the scalar place.
         using I = krs::index_lanes<krs::packet_f>;
         constexpr std::size_t n = krs::lane_count<krs::packet_f>;
@@ -517,6 +544,8 @@ TEST_CASE("hypertree voxel bricks hold exactly the store's voxels")
             alignas(64) std::int32_t places[n];
             view.place(I::load_aligned(c[0]), I::load_aligned(c[1]), I::load_aligned(c[2])).store_aligned(places);
             for (std::size_t k = 0; k < n; ++k) REQUIRE(places[k] == view.place(c[0][k], c[1][k], c[2][k]));
+            view.place_by_blocks(I::load_aligned(c[0]), I::load_aligned(c[1]), I::load_aligned(c[2])).store_aligned(places);
+            for (std::size_t k = 0; k < n; ++k) REQUIRE(places[k] == view.place_by_blocks(c[0][k], c[1][k], c[2][k]));
         }
     }
 }
@@ -609,4 +638,47 @@ TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of
             else CHECK(b.lookups == a.lookups);
         }
     }
+}
+
+TEST_CASE("hypertree render: the walk of empty cubes of every level gives the reference walk's pixels, trees A-D and a forest")
+{
+    // The two walks look at the same samples (test_hypertree_brick_walk.cpp), so every pixel and
+    // every lookup count must be equal, scalar and packet, voxels shaded ahead or as met; ray by
+    // ray, the walk of every level never probes more samples.
+    std::size_t rays = 0, fewer = 0;
+    const auto compare = [&](const auto& store, const std::string& name) {
+        INFO(name);
+        const tree_shape shape = tree_shape::of(store);
+        const depth_colors colors = depth_colors::tree(3, 6);
+        const volume_marcher levels(store, shape, colors), blocks(store, shape, colors, march_options{}, brick_walk::skips::bricks_and_blocks);
+        const krs::pinhole_camera camera = framing_camera(shape.box, 40, 32);
+        for (bool ahead : {true, false}) {
+            render_settings s;
+            s.shade_ahead = ahead;
+            const image a = render<float>(levels, camera, s), b = render<float>(blocks, camera, s);
+            const image pa = render<krs::packet_f>(levels, camera, s), pb = render<krs::packet_f>(blocks, camera, s);
+            CHECK(max_difference(a, b) == 0.0);
+            CHECK(max_difference(pa, pb) == 0.0);
+            CHECK(a.lookups == b.lookups);
+            CHECK(pa.lookups == pb.lookups);
+        }
+        for (int y = 0; y < 32; ++y)
+            for (int x = 0; x < 40; ++x) {
+                const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+                const march_result<float> a = levels.march(r), b = blocks.march(r);
+                REQUIRE(a.transmittance == b.transmittance);
+                REQUIRE(a.lookups == b.lookups);
+                REQUIRE(a.probes <= b.probes);
+                ++rays, fewer += a.probes < b.probes;
+            }
+    };
+    for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+        auto t = maker(40);
+        t.iterations = 30000;
+        compare(build_tree<dense_store>(t, 2), t.name);
+    }
+    const krs_test::forest forest(3);
+    compare(forest.store, "forest");
+    INFO(fewer << " of " << rays << " rays took fewer probes");
+    CHECK(fewer > rays / 10);
 }

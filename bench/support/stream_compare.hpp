@@ -44,16 +44,6 @@
 
 namespace bench {
 
-// This thread's CPU time: on a machine shared by more runnable threads than cores, wall time
-// counts the time the thread waited for a core; its CPU time does not (caches shared with the
-// other threads still slow it).
-inline double thread_cpu_seconds()
-{
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-
 inline double nominal_ghz()
 {
     std::ifstream in("/proc/cpuinfo");

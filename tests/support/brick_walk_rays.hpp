@@ -1,7 +1,8 @@
 #pragma once
-// The brick-walk tests' scene and rays, shared by the CPU test (test_hypertree_brick_walk.cpp) and
-// the GPU one (test_hypertree_glsl_gpu.cpp): a scattered grid whose occupied bricks are known
-// independently of voxel_bricks, plain stepping as the reference, the scalar walk, and random rays.
+// The brick-walk tests' scenes and rays, shared by the CPU test (test_hypertree_brick_walk.cpp) and
+// the GPU one (test_hypertree_glsl_gpu.cpp): a scattered grid and a forest of clumps whose occupied
+// bricks are known independently of voxel_bricks, plain stepping as the reference, the scalar
+// walk, and random rays.
 
 #include "hypertree/render/brick_walk.hpp"
 #include "hypertree/store/index_list_store.hpp"
@@ -57,6 +58,43 @@ struct scattered {
     }
 };
 
+// A forest: a 150 x 40 x 170 grid (off the origin, non-cubic voxels) holding a few clumps of
+// voxels (trees) with wide clearings between them, the empty space the walk's coarse levels
+// skip: most of the grid lies in empty cubes of 32^3 and more.
+struct forest {
+    hypervolume volume{{3.0, -0.5, -4.0}, {7.5, 1.6, 6.8}, resolution{150, 40, 170}};
+    std::set<std::array<int, 3>> occupied; // bricks (cell >> 2) holding a voxel: the reference
+    index_list_store store;
+    voxel_bricks bricks;
+    explicit forest(std::uint32_t seed)
+    {
+        lcg random{seed};
+        std::vector<stored_voxel> voxels;
+        // Clumps: a trunk up from the ground and a ball of scattered voxels above it.
+        for (int tree = 0; tree < 7; ++tree) {
+            const int cx = 6 + int(random.uniform() * 136), cz = 6 + int(random.uniform() * 156), top = 20 + int(random.uniform() * 14);
+            const float radius = 3 + random.uniform() * 4;
+            for (int z = 0; z < 170; ++z)
+                for (int y = 0; y < 40; ++y)
+                    for (int x = 0; x < 150; ++x) {
+                        const float dx = float(x - cx), dy = float(y - top), dz = float(z - cz);
+                        const bool trunk = x == cx && z == cz && y < top;
+                        const bool crown = dx * dx + dy * dy + dz * dz < radius * radius && random.uniform() < 0.3f;
+                        if (trunk || crown) voxels.push_back({volume.index(x, y, z), {std::uint8_t(1 + int(random.uniform() * 254)), 3}, 0});
+                    }
+        }
+        std::sort(voxels.begin(), voxels.end(), [](const stored_voxel& a, const stored_voxel& b) { return a.index < b.index; });
+        voxels.erase(std::unique(voxels.begin(), voxels.end(), [](const stored_voxel& a, const stored_voxel& b) { return a.index == b.index; }),
+                     voxels.end());
+        for (const stored_voxel& v : voxels) {
+            const auto c = volume.coordinates(v.index);
+            occupied.insert({int(c[0]) >> 2, int(c[1]) >> 2, int(c[2]) >> 2});
+        }
+        store = index_list_store::build(volume, voxels);
+        bricks = voxel_bricks(store);
+    }
+};
+
 struct looked_at {
     float k;
     int x, y, z;
@@ -70,7 +108,8 @@ inline krs::vec3f cells_of(const hypervolume& v, const krs::vec3f& p)
 }
 
 // Plain stepping: every sample k of [0, count), in a non-empty brick by the reference set.
-inline std::vector<looked_at> stepped(const scattered& s, const krs::vec3f& o, const krs::vec3f& d, float t0, float ds, int count)
+template <class Scene>
+std::vector<looked_at> stepped(const Scene& s, const krs::vec3f& o, const krs::vec3f& d, float t0, float ds, int count)
 {
     std::vector<looked_at> out;
     const int n[3] = {s.volume.grid().x, s.volume.grid().y, s.volume.grid().z};
@@ -84,14 +123,17 @@ inline std::vector<looked_at> stepped(const scattered& s, const krs::vec3f& o, c
     return out;
 }
 
-// What the walks skipped: samples, probes in an empty block, and skips whose landing lies two
-// or more bricks (along some axis) past the sample that made them, which only a block's can.
+// What the walks did: probes, samples skipped, probes in an empty cube of 16^3 or more (level
+// >= 2, or the reference walk's empty block), probes in one of 32^3 or more (level >= 3), and skips
+// whose landing lies two or more bricks (along some axis) past the sample that made them, which
+// only a cube larger than a brick's can.
 struct skip_counts {
-    std::size_t skipped = 0, in_empty_block = 0, over_bricks = 0;
+    std::size_t probes = 0, skipped = 0, in_empty_block = 0, in_coarse_cube = 0, over_bricks = 0;
 };
 
 // The walk of one ray, scalar: what probe looks at, advancing as it says.
-inline std::vector<looked_at> walked(const scattered& s, const brick_walk& w, const krs::vec3f& o, const krs::vec3f& d, float t0, int count,
+template <class Scene>
+std::vector<looked_at> walked(const Scene& s, const brick_walk& w, const krs::vec3f& o, const krs::vec3f& d, float t0, int count,
                               skip_counts& counts)
 {
     std::vector<looked_at> out;
@@ -103,8 +145,12 @@ inline std::vector<looked_at> walked(const scattered& s, const brick_walk& w, co
         const float t = t0 + (k + 0.5f) * w.step();
         const auto found = w.probe<float>(s.bricks.view_of(), o + d * t, slope, true, w.skip_margin(m0, t), faces);
         if (found.looks) out.push_back({k, found.cell[0], found.cell[1], found.cell[2]});
+        ++counts.probes;
         counts.skipped += std::size_t(found.advance - 1);
-        counts.in_empty_block += found.place < -64;
+        const bool levels = w.skipping() == brick_walk::skips::every_level;
+        const int level = found.place < 0 ? voxel_bricks::view::empty_level(found.place) : -1;
+        counts.in_empty_block += levels ? level >= 2 : found.place < -64;
+        counts.in_coarse_cube += levels && level >= 3;
         if (found.advance > 1) {
             const krs::vec3f here = cells_of(s.volume, o + d * t), there = cells_of(s.volume, o + d * (t0 + (k + found.advance + 0.5f) * w.step()));
             const float from[3] = {here.x, here.y, here.z}, to[3] = {there.x, there.y, there.z};

@@ -1,23 +1,31 @@
 #pragma once
 // The walk of a ray's samples through the bricks of voxel_bricks.hpp (like NanoVDB's HDDA, a
 // hierarchical walk that steps over empty nodes): one sample at a time, what the sample finds,
-// and how far the ray may jump when it lies in an empty brick or an empty 16^3 block.
+// and how far the ray may jump when it lies in empty space.
 //
 // A ray's samples sit at t_k = t_0 + (k + 1/2) ds. `probe` maps a sample's position to its cell
 // ((p - origin) x cells per unit, truncated: the float operations the GLSL marcher repeats) and
 // its place in the bricks, and says whether the sample reads a voxel (`looks`: in the grid and in
 // a non-empty brick) and how many samples to advance: 1, or in an empty brick the steps to the
-// exit of the largest empty brick or block along the ray, less a margin for rounding (below) and
-// rounded up. The invariant: the samples a walk looks at are exactly the samples that plain
-// stepping (advance 1 always) finds in non-empty bricks, in the same order; only the empty ones
-// between are not computed (tested against such stepping and against a fine walk along the ray).
+// exit of the largest empty cube around it along the ray (the aligned cube of 4 << e voxels a
+// side that the brick's entry names: 4^3 up to the whole grid), less a margin for rounding
+// (below) and rounded up. The invariant: the samples a walk looks at are exactly the samples that
+// plain stepping (advance 1 always) finds in non-empty bricks, in the same order; only the empty
+// ones between are not computed (tested against such stepping, against a fine walk along the ray,
+// and against the reference walk below).
+//
+// The reference walk (`skips::bricks_and_blocks`, the walk before the levels): empty bricks and
+// empty 16^3 blocks only, from two reads per sample (voxel_bricks::view::place_by_blocks). It
+// looks at the same samples in the same order, in more probes: the benchmarks' "before".
 //
 // Why the margin. The exit is predicted from this sample's position, but each sample's position
 // is computed anew in floats, p = o + d t then (p - origin) x cells per unit, with an error of a
 // few ulps of |o| + t + |origin|: 2^-21 of that in all, both samples' errors counted, in steps.
-// Close to the tree it is the 1e-3 of the exit's own rounding; from a camera 1000 units away it
-// grows to several steps, and skips stop short rather than jump over a voxel. `skip_margin`
-// gives it at t from `margin_at_origin(o)`, the part computed once per ray.
+// The landing sample lies up to the grid's diagonal further (a skip over a whole empty grid), so
+// the reach counts the grid's far corner too. Close to the tree it is the 1e-3 of the exit's own
+// rounding; from a camera 1000 units away it grows to several steps, and skips stop short rather
+// than jump over a voxel. `skip_margin` gives it at t from `margin_at_origin(o)`, the part
+// computed once per ray.
 //
 // The slopes are the t it takes to cross one cell along each axis (0 for an axis the ray does not
 // move along), so an empty brick costs multiplications. When all lanes of a packet leave a brick
@@ -41,8 +49,9 @@ namespace hypertree {
 
 class brick_walk {
 public:
-    // The bricks' geometry, from voxel_bricks: bricks of 4^3 voxels in blocks of 16^3. A place in
-    // [-64, -1] lies in an empty brick (rank -1), below -64 in an empty block (code -64 added).
+    // The bricks' geometry, from voxel_bricks: bricks of 4^3 voxels; an empty brick's place says
+    // the level e of its empty cube (4 << e voxels a side). The reference walk's blocks are 16^3:
+    // its place is in [-64, -1] in an empty brick, below -64 in an empty block.
     static constexpr int brick_side = 1 << voxel_bricks::fine_shift, block_side = 1 << voxel_bricks::coarse_shift;
     static constexpr int brick_voxels = int(voxel_bricks::brick_voxels);
     static_assert(brick_voxels == brick_side * brick_side * brick_side && block_side % brick_side == 0);
@@ -54,7 +63,7 @@ public:
     };
 
     // What a sample finds, lane by lane: its cell (0 outside the grid), its place in the bricks
-    // (negative in an empty brick, below -64 in an empty block), whether it reads a voxel, and how
+    // (negative in an empty brick: see voxel_bricks::view), whether it reads a voxel, and how
     // many samples to advance.
     template <class T>
     struct probe_result {
@@ -64,17 +73,24 @@ public:
         krs::index_lanes<T> cell[3];
     };
 
+    // Which empty space a walk skips: the largest empty cube of every level (the default), or
+    // only empty bricks and 16^3 blocks (the reference walk, as before the levels).
+    enum class skips { every_level, bricks_and_blocks };
+
     brick_walk() = default;
     // Samples `step` apart (world units) through the grid of `volume`. A step that is not finite
     // and > 0 is refused (brick_walk.step): it would give an infinite or NaN skip, a walk without end.
-    brick_walk(const hypervolume& volume, float step)
+    brick_walk(const hypervolume& volume, float step, skips skipping = skips::every_level)
         : origin_(volume.origin()), cells_per_unit_(volume.cells_per_unit()), grid_{volume.grid().x, volume.grid().y, volume.grid().z},
           step_(krs::require_positive("brick_walk.step", step)), rounding_per_step_(float(0x1.0p-21 / double(step_))),
-          grid_reach_(std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)}))
+          grid_reach_(float(std::max({std::abs(volume.origin().x), std::abs(volume.origin().y), std::abs(volume.origin().z)}) +
+                            krs::length(volume.extent()))),
+          skipping_(skipping)
     {
     }
 
     float step() const { return step_; }
+    skips skipping() const { return skipping_; }
     const std::array<int, 3>& grid() const { return grid_; }
 
     // The slopes of the lanes of a unit direction: 1 / (d * cells per unit) per axis, or 0.
@@ -117,22 +133,46 @@ public:
         // conversion outside int's range would be undefined.
         I c[3];
         for (int a = 0; a < 3; ++a) c[a] = krs::index_min(truncate_to_index(select(inside, f[a], zero)), I(grid_[std::size_t(a)] - 1));
-        const I place = bricks.place(c[0], c[1], c[2]);
-        const T found = index_to_float(place); // >= 0: a voxel; < -64: an empty 16^3 block
-        const krs::mask_t<T> looks = inside & (found >= zero);
-        const auto in_block = found < T(-float(brick_voxels) - 0.5f); // (places are whole: halfway to the next)
         T exit(3.0e38f);
-        for (int a = 0; a < 3; ++a) {
-            const T lo = select(in_block, index_to_float(c[a] & I(~(block_side - 1))), index_to_float(c[a] & I(~(brick_side - 1))));
-            const T hi = lo + select(in_block, T(float(block_side)), T(float(brick_side)));
-            switch (faces.along[a]) {
-            case exit_faces::high: exit = min(exit, (hi - f[a]) * slope[a]); break;
-            case exit_faces::low: exit = min(exit, (lo - f[a]) * slope[a]); break;
-            case exit_faces::none: break;
-            default: // lanes going different ways
-                exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]), select(slope[a] < zero, min(exit, (lo - f[a]) * slope[a]), exit));
+        I place;
+        T found;
+        // The exit along each axis of the cube [lo, lo + side) around the sample's cell.
+        const auto leave = [&](const T (&lo)[3], const T& side) {
+            for (int a = 0; a < 3; ++a) {
+                const T hi = lo[a] + side;
+                switch (faces.along[a]) {
+                case exit_faces::high: exit = min(exit, (hi - f[a]) * slope[a]); break;
+                case exit_faces::low: exit = min(exit, (lo[a] - f[a]) * slope[a]); break;
+                case exit_faces::none: break;
+                default: // lanes going different ways
+                    exit = select(slope[a] > zero, min(exit, (hi - f[a]) * slope[a]),
+                                  select(slope[a] < zero, min(exit, (lo[a] - f[a]) * slope[a]), exit));
+                }
             }
+        };
+        if (skipping_ == skips::every_level) {
+            place = bricks.place(c[0], c[1], c[2]);
+            found = index_to_float(place); // >= 0: a voxel
+            // The cube of 4 << e voxels: its side made from float bits (xsimd 8.1 has no per-lane
+            // integer shift), then lo = c with its low e + 2 bits cleared (c & -side), as the GLSL
+            // does. e is capped at 28 (a side of 2^30, within int; a smaller aligned cube around
+            // the cell is empty too); lanes with a voxel take e = 0 (their exit is not used).
+            const I e = krs::index_min(krs::index_max(voxel_bricks::view::empty_level(place), I(0)), I(28));
+            const T side = krs::index_pow2(e + I(2));
+            const I low_bits_cleared = I(0) - truncate_to_index(side);
+            const T lo[3] = {index_to_float(c[0] & low_bits_cleared), index_to_float(c[1] & low_bits_cleared),
+                             index_to_float(c[2] & low_bits_cleared)};
+            leave(lo, side);
+        } else {
+            place = bricks.place_by_blocks(c[0], c[1], c[2]);
+            found = index_to_float(place); // >= 0: a voxel; < -64: an empty 16^3 block
+            const auto in_block = found < T(-float(brick_voxels) - 0.5f); // (places are whole: halfway to the next)
+            T lo[3];
+            for (int a = 0; a < 3; ++a)
+                lo[a] = select(in_block, index_to_float(c[a] & I(~(block_side - 1))), index_to_float(c[a] & I(~(brick_side - 1))));
+            leave(lo, select(in_block, T(float(block_side)), T(float(brick_side))));
         }
+        const krs::mask_t<T> looks = inside & (found >= zero);
         const T steps = ceil(exit / T(step_) - margin);
         const T advance = select(inside & (found < zero), select(steps > one, min(steps, T(1.0e6f)), one), one);
         return {place, looks, advance, {c[0], c[1], c[2]}};
@@ -153,8 +193,8 @@ public:
         return at_origin + t * T(rounding_per_step_);
     }
 
-    // The same walk as GLSL, for the marcher of glsl.hpp: constants $_brick_side, $_block_side and
-    // $_brick_voxels (the geometry above), $_grid_reach and $_rounding_per_step (this walk's
+    // The same walk as GLSL (always the walk of every level: the reference walk is the CPU's), for
+    // the marcher of glsl.hpp: constants $_brick_side and $_brick_voxels (the geometry above), $_grid_reach and $_rounding_per_step (this walk's
     // floats), `float $_margin_at_origin(vec3 from)`,
     // `vec3 $_slopes(vec3 d)` and `int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell,
     // out float advance)`, which returns the sample's place (< 0: nothing to look at) and how many
@@ -164,7 +204,6 @@ public:
     std::string glsl(const std::string& name) const
     {
         std::string s = "const int " + name + "_brick_side = " + std::to_string(brick_side) + ";\n";
-        s += "const int " + name + "_block_side = " + std::to_string(block_side) + ";\n";
         s += "const int " + name + "_brick_voxels = " + std::to_string(brick_voxels) + ";\n";
         s += "const float " + name + "_grid_reach = " + krs::glsl::float_literal(grid_reach_) + ";\n";
         s += "const float " + name + "_rounding_per_step = " + krs::glsl::float_literal(rounding_per_step_) + ";\n";
@@ -176,7 +215,7 @@ float $_margin_at_origin(vec3 from) {
 }
 
 // brick_walk::probe for one ray: the place of the sample at p (< 0: none to look at), its cell,
-// and the samples to advance (1, or in an empty brick or block the whole steps to its exit).
+// and the samples to advance (1, or in an empty brick the whole steps to the exit of its empty cube).
 int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance) {
     advance = 1.0;
     cell = ivec3(0);
@@ -187,10 +226,10 @@ int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance)
     cell = ivec3(min(int(f.x), $_grid.x - 1), min(int(f.y), $_grid.y - 1), min(int(f.z), $_grid.z - 1));
     int place = $_place(cell);
     if (place >= 0) return place;
-    bool in_block = place < -$_brick_voxels;
+    // The level e of the empty cube (voxel_bricks::view::empty_level): 4 << e voxels a side.
+    int side = $_brick_side << min((-1 - place) >> 6, 28);
     float exit = 3.0e38;
     for (int a = 0; a < 3; ++a) {
-        int side = in_block ? $_block_side : $_brick_side;
         float lo = float(cell[a] & ~(side - 1));
         float hi = lo + float(side);
         if (slope[a] > 0.0) exit = min(exit, (hi - f[a]) * slope[a]);
@@ -216,7 +255,8 @@ private:
     krs::vec3f origin_{}, cells_per_unit_{};
     std::array<int, 3> grid_{};
     float step_ = 1;
-    float rounding_per_step_ = 0, grid_reach_ = 0; // skip_margin's: 2^-21 / step, and max |origin|
+    float rounding_per_step_ = 0, grid_reach_ = 0; // skip_margin's: 2^-21 / step, and max |origin| + the grid's diagonal
+    skips skipping_ = skips::every_level;
 };
 
 } // namespace hypertree

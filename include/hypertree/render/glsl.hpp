@@ -17,8 +17,8 @@
 // The volume is data: the marcher's own bricks (voxel_bricks.hpp), the one layout both marchers
 // read, made by voxel_bricks' constructor from any store. `pack_bricks` does not lay anything out
 // again: it concatenates the brick arrays, word for word as they lie in the CPU's memory, into one
-// buffer of 32-bit words: the brick ranks (int32 per 4^3 brick of the grid, -1 when empty), the
-// block codes (int32 per 16^3 block, 0 or -64), then the densities and the levels by place
+// buffer of 32-bit words: the brick ranks (int32 per 4^3 brick of the grid; -(e + 1) when empty,
+// e the level of the largest empty aligned cube around it), then the densities and the levels by place
 // (rank * 64 + offset in the brick), four bytes to a word, the first in the low byte (the memory
 // order of a little-endian CPU). The GPU gets it as a buffer texture of R32UI texels:
 //
@@ -28,8 +28,8 @@
 //     glTexBuffer(GL_TEXTURE_BUFFER, GL_R32UI, buffer);
 //
 // bound to the sampler `<prefix><name>_bricks` (a `usamplerBuffer`, the shader's only uniform),
-// read with texelFetch. The shader finds a voxel as voxel_bricks::view::place does (two reads, one
-// per level, then a byte of a word). A buffer texture holds GL_MAX_TEXTURE_BUFFER_SIZE texels, a
+// read with texelFetch. The shader finds a voxel as voxel_bricks::view::place does (one read of the
+// brick's rank, then a byte of a word). A buffer texture holds GL_MAX_TEXTURE_BUFFER_SIZE texels, a
 // limit to query: GL guarantees only 65536, and tree A at resolution 300 takes about 1.2 million
 // words (75^3 brick ranks, and 25 000 non-empty bricks of 32 words). Pass the queried limit to
 // pack_bricks as max_texels: it refuses a larger buffer (pack_bricks.max_texels, naming the words
@@ -43,8 +43,8 @@
 // the bricks stay.
 //
 // Rays and shadow rays walk the bricks as the CPU's do (brick_walk::glsl, emitted from the walk's
-// own constants): a sample in an empty brick or 16^3 block is not looked up and the ray jumps to
-// the brick's exit, taking exactly the samples it would have stepped through. What the GPU
+// own constants): a sample in an empty brick is not looked up and the ray jumps to the exit of
+// the largest empty cube around it, taking exactly the samples it would have stepped through. What the GPU
 // leaves out: the shadow memo (a memoized shadow is a pure function of its voxel) and the ray
 // cache (a cached voxel equals the bricks'). Each only spares work on the CPU and changes no
 // pixel, so the GPU computes the same values directly. Shadows are always shadow rays, whatever
@@ -92,9 +92,9 @@ namespace hypertree {
 // starts and the sizes the shader's constants need.
 struct packed_bricks {
     std::vector<std::uint32_t> words;
-    std::uint32_t rank_offset = 0, block_offset = 0, density_offset = 0, level_offset = 0; // in words
-    std::array<int, 3> grid{};                                     // the volume's, in voxels
-    std::array<std::uint32_t, 3> grid_bricks{}, grid_blocks{};     // (grid + 3) / 4 and (grid + 15) / 16
+    std::uint32_t rank_offset = 0, density_offset = 0, level_offset = 0; // in words
+    std::array<int, 3> grid{};                                         // the volume's, in voxels
+    std::array<std::uint32_t, 3> grid_bricks{};                        // (grid + 3) / 4
     int level_count = 1; // 1 + the deepest level stored: the length of the shader's color table
 };
 
@@ -107,7 +107,7 @@ inline void require_packable(std::size_t words, memory_budget budget, std::size_
     const std::string needed = std::to_string(words) + " words (" + std::to_string(words * 4) + " bytes)";
     if (words > budget.bytes / 4)
         throw krs::invalid_parameter("pack_bricks.budget",
-                                     "must hold the buffer: 4 bytes per brick and per block of the grid, 1 per density and per level "
+                                     "must hold the buffer: 4 bytes per brick of the grid, 1 per density and per level "
                                      "of each voxel of the non-empty bricks (budget " + std::to_string(budget.bytes) + " bytes)",
                                      needed);
     if (words >= (std::size_t(1) << 31))
@@ -126,15 +126,13 @@ inline void require_packable(std::size_t words, memory_budget budget, std::size_
 inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budget = {},
                                  std::size_t max_texels = std::numeric_limits<std::size_t>::max())
 {
-    const auto ranks = bricks.brick_ranks(), codes = bricks.block_codes();
+    const auto ranks = bricks.brick_ranks();
     const auto density = bricks.densities(), level = bricks.levels();
-    const std::size_t words = ranks.size() + codes.size() + (density.size() + 3) / 4 + (level.size() + 3) / 4;
+    const std::size_t words = ranks.size() + (density.size() + 3) / 4 + (level.size() + 3) / 4;
     detail::require_packable(words, budget, max_texels);
     packed_bricks out;
     out.words.reserve(words);
     for (std::int32_t r : ranks) out.words.push_back(std::uint32_t(r));
-    out.block_offset = std::uint32_t(out.words.size());
-    for (std::int32_t c : codes) out.words.push_back(std::uint32_t(c));
     const auto bytes = [&](std::span<const std::uint8_t> b) {
         for (std::size_t i = 0; i < b.size(); i += 4) {
             std::uint32_t w = 0;
@@ -147,8 +145,7 @@ inline packed_bricks pack_bricks(const voxel_bricks& bricks, memory_budget budge
     out.level_offset = std::uint32_t(out.words.size());
     bytes(level);
     out.grid = bricks.grid();
-    for (std::size_t a = 0; a < 3; ++a)
-        out.grid_bricks[a] = std::uint32_t(bricks.grid_bricks()[a]), out.grid_blocks[a] = std::uint32_t(bricks.grid_blocks()[a]);
+    for (std::size_t a = 0; a < 3; ++a) out.grid_bricks[a] = std::uint32_t(bricks.grid_bricks()[a]);
     out.level_count = level_count(bricks);
     return out;
 }
@@ -188,7 +185,7 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
     const std::array<int, 3> grid{v.grid().x, v.grid().y, v.grid().z};
     bool matches = bricks.grid == grid;
     for (std::size_t a = 0; a < 3; ++a)
-        matches = matches && bricks.grid_bricks[a] == std::uint32_t((grid[a] + 3) / 4) && bricks.grid_blocks[a] == std::uint32_t((grid[a] + 15) / 16);
+        matches = matches && bricks.grid_bricks[a] == std::uint32_t((grid[a] + 3) / 4);
     if (!matches)
         throw krs::invalid_parameter("hypertree_glsl.bricks", "must be pack_bricks of a store of this volume",
                                      "bricks of a " + std::to_string(bricks.grid[0]) + "x" + std::to_string(bricks.grid[1]) + "x" +
@@ -212,10 +209,7 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
     // The bricks' table (voxel_bricks::view).
     s += "const int " + n + "_bricks_x = " + integer(bricks.grid_bricks[0]) + ";\n";
     s += "const int " + n + "_bricks_xy = " + integer(bricks.grid_bricks[0] * bricks.grid_bricks[1]) + ";\n";
-    s += "const int " + n + "_blocks_x = " + integer(bricks.grid_blocks[0]) + ";\n";
-    s += "const int " + n + "_blocks_xy = " + integer(bricks.grid_blocks[0] * bricks.grid_blocks[1]) + ";\n";
     s += "const int " + n + "_rank_offset = " + integer(bricks.rank_offset) + ";\n";
-    s += "const int " + n + "_block_offset = " + integer(bricks.block_offset) + ";\n";
     s += "const int " + n + "_density_offset = " + integer(bricks.density_offset) + ";\n";
     s += "const int " + n + "_level_offset = " + integer(bricks.level_offset) + ";\n";
     s += "const float " + n + "_step = " + float_literal(walk.step()) + ";\n";
@@ -278,14 +272,12 @@ void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
 }
 
 )", n);
-    s += krs::glsl::with_name(R"(// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), in [-64, -1]
-// when its brick is empty, below -64 when its 16^3 block is (>> of a negative int is arithmetic).
+    s += krs::glsl::with_name(R"(// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), or in an
+// empty brick -64 (e + 1) + offset, e the level of its empty cube.
 int $_place(ivec3 c) {
     int brick = (c.x >> 2) + (c.y >> 2) * $_bricks_x + (c.z >> 2) * $_bricks_xy;
-    int block = (c.x >> 4) + (c.y >> 4) * $_blocks_x + (c.z >> 4) * $_blocks_xy;
     int rank = int(texelFetch($_bricks, $_rank_offset + brick).r);
-    int code = int(texelFetch($_bricks, $_block_offset + block).r);
-    return ((rank << 6) | (c.x & 3) | ((c.y & 3) << 2) | ((c.z & 3) << 4)) + ((rank >> 31) & code);
+    return (rank << 6) | (c.x & 3) | ((c.y & 3) << 2) | ((c.z & 3) << 4);
 }
 
 // The voxel at a place >= 0: x = density, y = level. Byte k of word w is place 4 w + k.

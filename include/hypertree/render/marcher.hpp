@@ -13,8 +13,10 @@
 // into 4^3 bricks (voxel_bricks.hpp, the layout the GLSL marcher reads too), the hypervolume, the
 // shape and the shading. The store kind only changes how long the copy takes to make, and the
 // store may go once the marcher is made. Empty space is skipped by the brick walk
-// (brick_walk.hpp): a sample in an empty brick or 16^3 block is not looked up, and the ray jumps by
-// whole steps to the brick's exit, so it takes exactly the samples it would have stepped through.
+// (brick_walk.hpp): a sample in an empty brick is not looked up, and the ray jumps by whole steps
+// to the exit of the largest empty aligned cube around it (4^3 voxels up to the whole grid), so it
+// takes exactly the samples it would have stepped through. (The walk of empty bricks and 16^3
+// blocks only, the one before, is kept as a reference: the constructor's `skipping`.)
 // Optionally, samples outside every secondary bounding sphere are not looked up either
 // (tree_shape.hpp: the spheres hold every non-empty cell). Neither changes a pixel, only the work.
 //
@@ -71,6 +73,7 @@ struct march_result {
     T r = T(0.0f), g = T(0.0f), b = T(0.0f);
     T transmittance = T(1.0f);
     T lookups = T(0.0f); // store lookups made (primary and shadow)
+    T probes = T(0.0f);  // the primary ray's samples probed (brick walk visits: lookups and skips)
 };
 
 // A ray cache for the scalar marcher (8.2): one per thread, reused ray after ray.
@@ -90,10 +93,12 @@ struct march_context {
 class volume_marcher {
 public:
     // Validates the options for this tree (march_options::validate) before copying the store.
+    // `skipping` picks the brick walk's empty space (brick_walk::skips): the same pixels either way.
     template <voxel_store S>
-    volume_marcher(const S& store, tree_shape shape, depth_colors colors, march_options options = {})
+    volume_marcher(const S& store, tree_shape shape, depth_colors colors, march_options options = {},
+                   brick_walk::skips skipping = brick_walk::skips::every_level)
         : volume_(validated(store.volume(), shape, options)), options_(std::move(options)), shape_(std::move(shape)),
-          bricks_(store), walk_(volume_, options_.step_factor * float(volume_.smallest_voxel_side())),
+          bricks_(store), walk_(volume_, options_.step_factor * float(volume_.smallest_voxel_side()), skipping),
           shading_(options_, shape_, colors)
     {
         // (At least one entry: lanes with no voxel read entry 0, even in an empty tree.)
@@ -375,11 +380,21 @@ private:
                 const T t = t0[r] + (k[r] + half) * ds;
                 const krs::vec3<T> p = rays[r].origin + rays[r].direction * t;
                 const brick_walk::probe_result<T> found = probe(walk, view, p, slope[r], active[r], walk.skip_margin(margin0[r], t), faces[r]);
-                const I place = krs::index_max(found.place, I(0));
-                const T a = select(found.looks, krs::gather(alpha_at, place), zero);
-                const I entry = krs::gather(slot_at, place) * stride;
-                composite(o, a, krs::gather(lit, entry), krs::gather(lit, entry + I(1)), krs::gather(lit, entry + I(2)));
-                o.lookups = o.lookups + select(found.looks, one, zero);
+                // A sample of opacity 0 in every lane adds nothing (composite leaves the sums as
+                // they are, bit for bit: the lit colors are finite), so its gathers are left out:
+                // all five where no lane looks (empty space, where the walk alone runs), the
+                // four of the colors where the lanes that look find empty voxels.
+                // (The slots are gathered beside the opacities, before the test: after it, they
+                // waited for the opacities' gather too.)
+                if (any(found.looks)) {
+                    const I place = krs::index_max(found.place, I(0));
+                    const T a = select(found.looks, krs::gather(alpha_at, place), zero);
+                    const I entry = krs::gather(slot_at, place) * stride;
+                    o.lookups = o.lookups + select(found.looks, one, zero);
+                    if (any(a > zero))
+                        composite(o, a, krs::gather(lit, entry), krs::gather(lit, entry + I(1)), krs::gather(lit, entry + I(2)));
+                }
+                o.probes = o.probes + select(active[r], one, zero);
                 k[r] = k[r] + found.advance;
                 active[r] = active[r] & (t0[r] + (k[r] + half) * ds < t1[r]) & (o.transmittance >= least);
             }
@@ -461,6 +476,10 @@ private:
             }
             composite(out, load<T>(alpha), load<T>(r), load<T>(g), load<T>(b));
             out.lookups = out.lookups + load<T>(lookups);
+            {
+                using krs::select; // (packets take xsimd's, found by argument)
+                out.probes = out.probes + select(active, T(1.0f), T(0.0f));
+            }
             k = k + load<T>(advance);
             active = active & (t0 + (k + half) * ds < t1) & (out.transmittance >= T(options_.min_transmittance));
         }

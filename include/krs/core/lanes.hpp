@@ -405,6 +405,14 @@ inline xsimd::batch<float, A> index_to_float(const xsimd::batch<std::int32_t, A>
 {
     return xsimd::to_float(i);
 }
+// 2^e as a float, from its bits (no per-lane variable shift in xsimd 8.1). Precondition: every
+// lane's e lies in [-126, 127] (a normal float).
+inline float index_pow2(std::int32_t e) noexcept { return std::bit_cast<float>((e + 127) << 23); }
+template <class A>
+inline xsimd::batch<float, A> index_pow2(const xsimd::batch<std::int32_t, A>& e) noexcept
+{
+    return xsimd::bitwise_cast<xsimd::batch<float, A>>((e + xsimd::batch<std::int32_t, A>(127)) << 23);
+}
 inline std::int32_t index_min(std::int32_t a, std::int32_t b) noexcept { return std::min(a, b); }
 inline std::int32_t index_max(std::int32_t a, std::int32_t b) noexcept { return std::max(a, b); }
 template <class A>
