@@ -16,10 +16,10 @@ mode="${1:---all}"
 
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
 tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools spirv-tools python3
-       libopenvdb-dev libnanovdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost
+       libopenvdb-dev libnanovdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev) # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
 examples=(libopenimageio-dev openimageio-tools libcli11-dev)
 benchmarks=(libbenchmark-dev)
-peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev) # OpenVDB's headers need Boost
+peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev) # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
 
 case "$mode" in
     --tests) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}") ;;
