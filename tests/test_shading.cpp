@@ -716,7 +716,8 @@ struct watched_field {
     template <class T>
     T distance(const krs::vec3<T>& p) const
     {
-        saw_non_finite = saw_non_finite || krs::any(!krs::is_finite(p));
+        using krs::any; // (unqualified below: packets take xsimd's, found by argument)
+        saw_non_finite = saw_non_finite || any(!krs::is_finite(p));
         return inner->distance(p);
     }
 };
