@@ -331,7 +331,7 @@ int main(int argc, char** argv)
                 const std::array<brick_walk::skips, 2> kinds{brick_walk::skips::every_level, brick_walk::skips::bricks_and_blocks};
                 const std::array<const char*, 2> names{"levels", "blocks"};
                 std::vector<volume_marcher> marchers;
-                for (auto k : kinds) marchers.emplace_back(store, shape, colors, march_options{}, k);
+                for (auto k : kinds) marchers.emplace_back(store, shape, colors, march_options{}, parallel_for_hook{}, k);
                 std::array<shade_memo, 2> memos{marchers[0].new_shade_memo(), marchers[1].new_shade_memo()};
                 for (std::size_t m = 0; m < 2; ++m) {
                     marchers[m].shade_bricks(memos[m], 0, marchers[m].bricks().brick_count());

@@ -9,7 +9,10 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <thread>
+#include <vector>
 
 using namespace hypertree;
 
@@ -175,4 +178,68 @@ TEST_CASE("hypertree light sweep: without shadows or lights, the pixels of shado
         const image a = render<krs::packet_f>(rays, camera), b = render<krs::packet_f>(sweep, camera);
         CHECK(a.rgb == b.rgb);
     }
+}
+
+namespace {
+// A hook on `threads` threads started for the call, taking tasks in order from a shared counter.
+parallel_for_hook threads_hook(unsigned threads)
+{
+    return [threads](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::atomic<std::size_t> next{0};
+        const auto work = [&] {
+            for (std::size_t i; (i = next++) < count;) body(i);
+        };
+        std::vector<std::thread> pool;
+        for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+        work();
+        for (std::thread& t : pool) t.join();
+    };
+}
+} // namespace
+
+TEST_CASE("hypertree light sweep: on 1, 2 and 3 threads, the same table to the bit")
+{
+    // The table is a pure function of voxels, options and lights (light_sweep.hpp): the threaded
+    // sweep (levels in chunks, large levels split) must give every voxel the single thread's
+    // value, bit for bit. Trees A-D at resolution 100, where levels of at least 2 x sweep_piece
+    // voxels exist and are split (checked over the four trees: tree B has none), and the default lights, whose signs differ per axis.
+    // A hook running the tasks on one thread in reverse order checks that a task may sweep alone.
+    const parallel_for_hook reverse = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        for (std::size_t i = count; i-- > 0;) body(i);
+    };
+    std::size_t split = 0;
+    for (const auto maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+        const ifs<> tree = maker(100);
+        const auto store = build_tree<bit_array_store>(tree, 1);
+        const tree_shape shape = tree_shape::of(store);
+        const depth_colors colors = depth_colors::tree(tree.branch_depth, tree.tree_depth);
+        march_options o = by(method::sweep);
+        o.lights.push_back(o.lights[0]);
+        o.lights[1].direction = {-0.5f, 0.3f, -0.8f};
+        const volume_marcher one(store, shape, colors, o);
+        REQUIRE(!one.sweep().empty());
+        const std::vector<krs::vec3f>& lights = one.shading().light_directions();
+        REQUIRE(lights.size() >= 2);
+        for (const krs::vec3f& l : lights) {
+            const sweep_order order = sweep_order::toward(one.bricks(), l);
+            for (std::size_t level = 0; level < order.levels(); ++level)
+                split += order.level[level + 1] - order.level[level] >= 2 * volume_marcher::sweep_piece;
+        }
+        INFO("tree " << tree.name);
+        for (const auto& [name, hook] : {std::pair{std::string("2 threads"), threads_hook(2)}, std::pair{std::string("3 threads"), threads_hook(3)},
+                                         std::pair{std::string("one thread, tasks reversed"), reverse}}) {
+            const volume_marcher many(store, shape, colors, o, hook);
+            std::size_t differ = 0, voxels = 0;
+            for (std::size_t i = 0; i < lights.size(); ++i)
+                for_each_voxel(one, [&](const krs::vec3f&, std::uint32_t slot) {
+                    ++voxels;
+                    differ += std::bit_cast<std::uint32_t>(one.sweep().toward(i)[slot]) != std::bit_cast<std::uint32_t>(many.sweep().toward(i)[slot]);
+                });
+            INFO(name << ": " << differ << " of " << voxels << " entries differ");
+            CHECK(voxels > 0);
+            CHECK(differ == 0);
+        }
+    }
+    MESSAGE(split << " levels split (trees A-D, both lights)");
+    CHECK(split > 0);
 }
