@@ -60,7 +60,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <bit>
 #include <cmath>
 #include <span>
@@ -125,10 +124,74 @@ public:
     // The swept transmittances (light_sweep.hpp), made with the marcher under shadow_method::sweep;
     // empty under rays.
     const light_sweep& sweep() const { return swept_; }
-    // Voxels per chunk of the sweep on threads (sweep_lights): levels of at least twice this are
-    // split. 8 packets of 16 rays, about 10 us (tree A at resolution 300), against a few hundred
-    // ns to claim a chunk and publish it.
-    static constexpr std::size_t sweep_piece = 128;
+    // The sweep's table as the constructor makes it, in two passes, the first on the caller's
+    // threads (`parallel_for`; empty: this thread).
+    //
+    // A voxel's swept transmittance is P(v) T(w): P(v) the product of (1 - alpha) over its ray's
+    // samples up to and including its cut w (light_sweep.hpp), T(w) the cut voxel's own. Only the
+    // last factor depends on another voxel's result, and only through one multiply. So the first
+    // pass marches every voxel's ray to its cut, with no order at all: the voxels of runs of
+    // sweep_bricks bricks per task, in memory order, so a packet's 16 rays start side by side and
+    // read the same bricks (the level order of the first sweep spread a packet over a diagonal
+    // plane of the tree); it writes P(v) to the table and w (or none) to a list. The second pass,
+    // on this thread, completes T(v) = P(v) T(w) along each chain of cuts: from each voxel it
+    // follows the cuts to the first voxel already complete (a voxel with no cut is complete), then
+    // completes the chain backwards. Cuts go to strictly larger keys (light_sweep.hpp), so a chain
+    // ends; each voxel is completed once. Every voxel's value is the same product in the same order
+    // as in the sweep by levels (make_sweep_in_light_order): the tables are equal to the bit, on
+    // any number of threads (tested).
+    light_sweep make_sweep(const parallel_for_hook& parallel_for = {}) const
+    {
+        const std::vector<krs::vec3f>& lights = shading_.light_directions();
+        light_sweep table(bricks_.voxel_count(), lights.size());
+        constexpr std::uint32_t none = ~std::uint32_t(0);
+        std::vector<std::uint32_t> cut(bricks_.voxel_count() * lights.size(), none);
+        const std::size_t runs = (bricks_.brick_count() + sweep_bricks - 1) / sweep_bricks;
+        run_tasks(parallel_for, runs * lights.size(), [&](std::size_t task) {
+            const std::size_t light = task / runs, first = task % runs * sweep_bricks;
+            const std::size_t last = std::min(bricks_.brick_count(), first + sweep_bricks);
+            std::vector<std::uint32_t> places;
+            for (std::size_t b = first; b < last; ++b)
+                for (std::uint64_t m = bricks_.mask(b); m != 0; m &= m - 1)
+                    places.push_back(std::uint32_t(b * voxel_bricks::brick_voxels + std::size_t(std::countr_zero(m))));
+            if (places.empty()) return;
+            sweep_wave wave;
+            sweep_rays(lights[light], places, table.toward(light), cut.data() + light * bricks_.voxel_count(), wave);
+        });
+        std::vector<std::uint32_t> chain;
+        for (std::size_t light = 0; light < lights.size(); ++light) {
+            float* out = table.toward(light);
+            std::uint32_t* next = cut.data() + light * bricks_.voxel_count();
+            for (std::size_t v = 0; v < bricks_.voxel_count(); ++v) {
+                chain.clear();
+                for (std::uint32_t u = std::uint32_t(v); next[u] != none; u = next[u]) chain.push_back(u);
+                for (std::size_t i = chain.size(); i-- > 0;) {
+                    const std::uint32_t u = chain[i];
+                    out[u] = out[u] * out[next[u]]; // (as sweep_rays multiplies at the cut)
+                    next[u] = none;
+                }
+            }
+        }
+        return table;
+    }
+    // The sweep's table as it was first made (the reference): per light, the levels of
+    // sweep_order in turn, nearest the light first, each level's rays completed at their cuts from
+    // the levels before. One thread.
+    light_sweep make_sweep_in_light_order() const
+    {
+        const std::vector<krs::vec3f>& lights = shading_.light_directions();
+        light_sweep table(bricks_.voxel_count(), lights.size());
+        sweep_wave wave;
+        for (std::size_t i = 0; i < lights.size(); ++i) {
+            const sweep_order order = sweep_order::toward(bricks_, lights[i]);
+            for (std::size_t level = 0; level < order.levels(); ++level)
+                sweep_rays(lights[i], std::span(order.places).subspan(order.level[level], order.level[level + 1] - order.level[level]),
+                           table.toward(i), nullptr, wave);
+        }
+        return table;
+    }
+    // Bricks per task of make_sweep's first pass (tree A at resolution 300: about 750 voxels).
+    static constexpr std::size_t sweep_bricks = 64;
     // An empty shading memo sized for this marcher (its voxel count and lights), for one render:
     // all its threads may share it.
     shade_memo new_shade_memo() const { return shade_memo(bricks_.voxel_count(), 3 + shading_.light_directions().size()); }
@@ -641,134 +704,38 @@ private:
         return lit(q, level, shadows);
     }
 
-    // Fills the sweep's table (light_sweep.hpp): per light, the levels of sweep_order in turn, each
-    // a wavefront (sweep_level).
-    //
-    // On threads (sweep_chunks): a level's voxels are independent, but a level reads any level
-    // before it (a cut may land anywhere toward the light), so levels are ordered and a level is
-    // the unit of waiting. The levels are cut into chunks, claimed in order from one counter by
-    // every task of one parallel_for call: a level of at least 2 x sweep_piece voxels is split
-    // into pieces of about sweep_piece, and runs of smaller consecutive levels go whole into one
-    // chunk (run in order by its task), so a chunk is never tiny and a level is never waited on
-    // for less than about sweep_piece voxels of work. A chunk starts when every chunk of its light
-    // before its first level's first chunk is done. A chunk waits only on chunks claimed before it,
-    // each held by a running task that waits only on earlier ones, so the earliest unfinished chunk
-    // always runs: no deadlock, however many of the tasks the hook runs at once (one runs them
-    // all). Each ray computes what it computes alone (its lanes' operations do not depend on the
-    // packet around them), so the table does not depend on the split (tested at 1, 2 and 3 threads).
-    void sweep_lights(const parallel_for_hook& parallel_for)
-    {
-        const std::vector<krs::vec3f>& lights = shading_.light_directions();
-        swept_ = light_sweep(bricks_.voxel_count(), lights.size());
-        std::vector<sweep_order> orders;
-        orders.reserve(lights.size());
-        for (std::size_t i = 0; i < lights.size(); ++i) orders.push_back(sweep_order::toward(bricks_, lights[i]));
-        if (!parallel_for) {
-            sweep_wave wave;
-            for (std::size_t i = 0; i < lights.size(); ++i)
-                for (std::size_t level = 0; level < orders[i].levels(); ++level)
-                    sweep_level(lights[i], level_places(orders[i], level, 0, 1), swept_.toward(i), wave);
-            return;
-        }
-        sweep_chunks(parallel_for, orders);
-    }
-
-    // Level `level`'s places, piece `piece` of `pieces` (equal parts up to one).
-    static std::span<const std::uint32_t> level_places(const sweep_order& order, std::size_t level, std::size_t piece, std::size_t pieces)
-    {
-        const std::size_t begin = order.level[level], n = order.level[level + 1] - begin;
-        return std::span(order.places).subspan(begin + n * piece / pieces, n * (piece + 1) / pieces - n * piece / pieces);
-    }
-
-    void sweep_chunks(const parallel_for_hook& parallel_for, const std::vector<sweep_order>& orders)
-    {
-        struct chunk {
-            std::size_t light, first_level, last_level; // levels [first_level, last_level)
-            std::size_t piece, pieces;                  // of first_level (a run of whole levels: 0 of 1)
-            std::size_t after;                          // chunks of this light that must be done first
-        };
-        std::vector<chunk> chunks;
-        std::vector<std::size_t> light_first(orders.size() + 1, 0); // each light's first chunk
-        for (std::size_t i = 0; i < orders.size(); ++i) {
-            light_first[i] = chunks.size();
-            const sweep_order& order = orders[i];
-            for (std::size_t level = 0; level < order.levels();) {
-                const std::size_t n = order.level[level + 1] - order.level[level], after = chunks.size() - light_first[i];
-                if (n >= 2 * sweep_piece) {
-                    const std::size_t pieces = n / sweep_piece;
-                    for (std::size_t p = 0; p < pieces; ++p) chunks.push_back({i, level, level + 1, p, pieces, after});
-                    ++level;
-                    continue;
-                }
-                std::size_t end = level + 1; // a run of small levels up to about sweep_piece voxels
-                while (end < order.levels() && order.level[end] - order.level[level] < sweep_piece &&
-                       order.level[end + 1] - order.level[end] < 2 * sweep_piece)
-                    ++end;
-                chunks.push_back({i, level, end, 0, 1, after});
-                level = end;
-            }
-        }
-        light_first[orders.size()] = chunks.size();
-        // Per light, the chunks done (release: their table entries are written); claims in order.
-        std::vector<std::atomic<std::size_t>> done(orders.size());
-        for (auto& d : done) d.store(0);
-        std::atomic<std::size_t> next{0};
-        std::atomic<bool> failed{false};
-        const std::vector<krs::vec3f>& lights = shading_.light_directions();
-        const auto task = [&](std::size_t) {
-            try {
-                sweep_wave wave;
-                for (std::size_t c; (c = next.fetch_add(1)) < chunks.size();) {
-                    const chunk& k = chunks[c];
-                    std::atomic<std::size_t>& light_done = done[k.light];
-                    for (std::size_t now = light_done.load(std::memory_order_acquire); now < k.after;
-                         now = light_done.load(std::memory_order_acquire))
-                        light_done.wait(now, std::memory_order_acquire);
-                    if (failed.load()) return;
-                    for (std::size_t level = k.first_level; level < k.last_level; ++level)
-                        sweep_level(lights[k.light], level_places(orders[k.light], level, k.piece, k.pieces), swept_.toward(k.light), wave);
-                    light_done.fetch_add(1, std::memory_order_release);
-                    light_done.notify_all();
-                }
-            } catch (...) {
-                // (std::bad_alloc in a wave.) Release every waiter, then let the hook pass it on.
-                failed.store(true);
-                for (std::size_t i = 0; i < done.size(); ++i) {
-                    done[i].fetch_add(chunks.size() + 1);
-                    done[i].notify_all();
-                }
-                throw;
-            }
-        };
-        // A task claims chunks until none are left: tasks beyond the hook's threads find none.
-        run_tasks(parallel_for, std::min<std::size_t>(chunks.size(), 64), task);
-    }
+    // Fills the sweep's table (light_sweep.hpp) in two passes (make_sweep).
+    void sweep_lights(const parallel_for_hook& parallel_for) { swept_ = make_sweep(parallel_for); }
 
     // The state of one level's shadow rays, an entry per voxel (struct of arrays).
     struct sweep_wave {
         std::vector<float> x, y, z, base, t1, margin0, j, transmittance, live;
+        std::vector<float> cut; // the cut voxel's slot as bits (krs::index_bits), ~0: none (yet)
         std::vector<std::int32_t> own;
         std::vector<std::uint32_t> slot; // ~0: padding
         void resize(std::size_t n)
         {
-            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live}) v->resize(n);
+            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live, &cut}) v->resize(n);
             own.resize(n), slot.resize(n);
         }
         void move(std::size_t to, std::size_t from)
         {
-            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live}) (*v)[to] = (*v)[from];
+            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live, &cut}) (*v)[to] = (*v)[from];
             own[to] = own[from], slot[to] = slot[from];
         }
     };
 
-    // The cut shadow rays of one level's voxels (shadow_transmittances with `swept`, the same
+    // The cut shadow rays of the voxels at `places` (shadow_transmittances with `swept`, the same
     // operations per ray), marched as a wavefront: packets of live rays take a few steps each,
     // then the finished rays leave the wave (their transmittance is written) and the rest close
     // ranks, so packets stay full. Packets of fixed voxels waited on their longest ray (one that
-    // meets no voxel marches out of the box): 15% of the lanes worked (tree A at 300). Writing
-    // during the level is safe: no ray of a level reads a voxel of its own level.
+    // meets no voxel marches out of the box): 15% of the lanes worked (tree A at 300).
+    // Without `cut`, a ray is completed at its cut by the cut voxel's entry of `out` (the sweep
+    // by levels: the places are one level, and no ray of a level reads a voxel of its own level,
+    // so writing during the level is safe); with `cut`, a ray stops at its cut without it, and
+    // the cut voxel's slot is written to cut[slot] (make_sweep's first pass: nothing is read).
     template <class T = krs::packet_f>
-    void sweep_level(const krs::vec3f& l, std::span<const std::uint32_t> places, float* out, sweep_wave& wave) const
+    void sweep_rays(const krs::vec3f& l, std::span<const std::uint32_t> places, float* out, std::uint32_t* cut_slots, sweep_wave& wave) const
     {
         using I = krs::index_lanes<T>;
         using krs::select, krs::max, krs::any;
@@ -804,6 +771,7 @@ private:
             const krs::vec3f q = center_of(volume_.index(c[0], c[1], c[2])); // as shade_bricks shades it
             wave.x[e] = q.x, wave.y[e] = q.y, wave.z[e] = q.z;
             wave.slot[e] = e < n ? bricks_.slot(place) : ~std::uint32_t(0);
+            wave.cut[e] = std::bit_cast<float>(~std::uint32_t(0)); // none (a quiet NaN's bits: moves keep them)
             wave.live[e] = e < n ? 1.0f : 0.0f;
         }
         for (std::size_t a = 0; a < active; a += w) {
@@ -824,7 +792,7 @@ private:
             for (std::size_t first = 0; first < active; first += K * w) {
                 const std::size_t packets = std::min(K, (active - first) / w);
                 std::array<krs::vec3<T>, K> p;
-                std::array<T, K> base, t1, margin0, j, transmittance;
+                std::array<T, K> base, t1, margin0, j, transmittance, cut_bits;
                 std::array<I, K> own;
                 std::array<krs::mask_t<T>, K> running;
                 for (std::size_t k = 0; k < packets; ++k) {
@@ -832,7 +800,7 @@ private:
                     p[k] = {load_f(&wave.x[a]), load_f(&wave.y[a]), load_f(&wave.z[a])};
                     base[k] = load_f(&wave.base[a]), t1[k] = load_f(&wave.t1[a]), margin0[k] = load_f(&wave.margin0[a]);
                     own[k] = load_i(&wave.own[a]);
-                    j[k] = load_f(&wave.j[a]), transmittance[k] = load_f(&wave.transmittance[a]);
+                    j[k] = load_f(&wave.j[a]), transmittance[k] = load_f(&wave.transmittance[a]), cut_bits[k] = load_f(&wave.cut[a]);
                     running[k] = load_f(&wave.live[a]) > zero;
                 }
                 for (int s = 0; s < steps_per_pass; ++s) {
@@ -848,7 +816,12 @@ private:
                         const T alpha = krs::gather(alpha_at, place);
                         transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
                         const auto cut = found.looks & (alpha > zero) & (j[k] >= near) & (krs::index_to_float(found.place - own[k]) != zero);
-                        transmittance[k] = select(cut, transmittance[k] * krs::gather(out, krs::gather(slot_at, place)), transmittance[k]);
+                        if (cut_slots) {
+                            // The cut voxel's slot, its bits in a float lane (krs::index_bits).
+                            if (any(cut)) cut_bits[k] = select(cut, krs::index_bits(krs::gather(slot_at, place)), cut_bits[k]);
+                        } else {
+                            transmittance[k] = select(cut, transmittance[k] * krs::gather(out, krs::gather(slot_at, place)), transmittance[k]);
+                        }
                         running[k] = running[k] & !cut;
                         j[k] = j[k] + found.advance;
                     }
@@ -857,14 +830,17 @@ private:
                 // (A ray still running after its last step is checked against its end at the next pass.)
                 for (std::size_t k = 0; k < packets; ++k) {
                     const std::size_t a = first + k * w;
-                    store_f(&wave.j[a], j[k]), store_f(&wave.transmittance[a], transmittance[k]);
+                    store_f(&wave.j[a], j[k]), store_f(&wave.transmittance[a], transmittance[k]), store_f(&wave.cut[a], cut_bits[k]);
                     store_f(&wave.live[a], select(running[k], one, zero));
                 }
             }
             std::size_t kept = 0;
             for (std::size_t e = 0; e < active; ++e) {
                 if (wave.live[e] > 0.0f) wave.move(kept++, e);
-                else if (wave.slot[e] != ~std::uint32_t(0)) out[wave.slot[e]] = wave.transmittance[e];
+                else if (wave.slot[e] != ~std::uint32_t(0)) {
+                    out[wave.slot[e]] = wave.transmittance[e];
+                    if (cut_slots) cut_slots[wave.slot[e]] = std::bit_cast<std::uint32_t>(wave.cut[e]);
+                }
             }
             active = (kept + w - 1) / w * w;
             for (std::size_t e = kept; e < active; ++e) wave.move(e, 0), wave.live[e] = 0.0f, wave.slot[e] = ~std::uint32_t(0);
