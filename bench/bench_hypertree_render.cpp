@@ -27,9 +27,9 @@
 // 100 and 300, dense store, three ways in alternating rounds: by levels in light order on one
 // thread (as it was first made: volume_marcher::make_sweep_in_light_order), in two passes on one
 // thread and on T threads (make_sweep, what the marcher does with the render's hook); wall and
-// process CPU time (best of 5), each table compared bit for bit with the marcher's. Then the
+// process CPU time (best of 9), each table compared bit for bit with the marcher's. Then the
 // marchers' setups and one packet frame of each shadow method on T threads, and each with its
-// setup.
+// setup (best of 9).
 //
 // Walk (`--only walk`): the brick walk with empty cubes of every level (brick_walk::skips, the
 // default) against the walk of empty bricks and 16^3 blocks only (the one before), trees A-D at
@@ -353,7 +353,7 @@ int main(int argc, char** argv)
                 // this thread, 2 two passes on the pool. Then the setups and frames.
                 double wall[3] = {1e300, 1e300, 1e300}, cpu[3] = {1e300, 1e300, 1e300}, setup[2] = {1e300, 1e300}, frame[2] = {1e300, 1e300};
                 std::size_t differ = 0;
-                for (int round = 0; round < 5; ++round) {
+                for (int round = 0; round < 9; ++round) {
                     for (int m = 0; m < 3; ++m) {
                         light_sweep table;
                         const double cpu0 = process_cpu();
@@ -368,7 +368,7 @@ int main(int argc, char** argv)
                     setup[1] = std::min(setup[1], bench::best_seconds(1, [&] { (void)volume_marcher(store, shape, colors, {}, pool); }));
                 }
                 image img[2];
-                for (int round = 0; round < 5; ++round)
+                for (int round = 0; round < 9; ++round)
                     for (int m = 0; m < 2; ++m)
                         frame[m] = std::min(frame[m], bench::best_seconds(1, [&] { img[m] = render<krs::packet_f>(marchers[m], camera, rs); }));
                 // One frame with its setup: shadow rays' (their marcher: the brick copy), the sweep by
@@ -394,9 +394,9 @@ int main(int argc, char** argv)
                 }
             }
         }
-        std::printf("\n(the sweep alone: wall and process CPU time, best of 5 in alternating rounds, every table compared with the "
+        std::printf("\n(the sweep alone: wall and process CPU time, best of 9 in alternating rounds, every table compared with the "
                     "marcher's bit for bit; rays setup: the marcher with shadow rays, i.e. the brick copy; frame: packet render() on %u "
-                    "thread(s), best of 5; frame + setup: shadow rays, the sweep by levels (rays setup + sweep), the marcher made on "
+                    "thread(s), best of 9; frame + setup: shadow rays, the sweep by levels (rays setup + sweep), the marcher made on "
                     "the pool. One frame with setup, shadow rays over the sweep: worst %.2fx)\nload average after: %s\n\n",
                     threads, worst_gain, bench::load_average().c_str());
     }

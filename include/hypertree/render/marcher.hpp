@@ -24,8 +24,9 @@
 // diffuse and Blinn-Phong specular with the procedural normals of the structure flow, each light's
 // term attenuated by the opacity a shadow ray accumulates toward it (same step, same early exit).
 // By default (march_options::shadow_by = sweep) those shadows come from the light sweep
-// (light_sweep.hpp), computed once when the marcher is made: each voxel's shadow ray is cut at its
-// first non-empty voxel toward the light and completed by that voxel's swept shadow. With `rays`
+// (light_sweep.hpp), computed once when the marcher is made (on the threads of the hook the
+// constructor is given): each voxel's shadow ray is cut at its first non-empty voxel toward the
+// light and completed by that voxel's swept shadow. With `rays`
 // every shaded voxel marches its full shadow ray in every render (the reference; the GLSL marcher
 // always does). By default a sample is shaded at its voxel's center (shade_per_voxel), so a
 // voxel's shading is computed once per render and kept in a table (shade_memo.hpp): either all
