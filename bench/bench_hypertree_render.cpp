@@ -1,7 +1,7 @@
 // bench_hypertree_render: the rendering columns of the hypertree paper's Table 1, and speed
 // against error for the raymarcher's settings (docs/design.md#rule-5).
 //
-//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|walk]
+//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
 // Table: trees A-D (hypertree/presets.hpp) in a 300 x 300 image, at resolution 100 without
@@ -22,6 +22,14 @@
 // spheres, ray cache, voxels shaded as rays meet them instead of ahead, shadow rays instead of the
 // sweep (with the sweep's setup and its RMSE against the shadow rays' image). Each timing is the
 // best of 2 runs.
+//
+// Setup (`--only setup`): the light sweep's table (light_sweep.hpp), trees A-D at resolutions
+// 100 and 300, dense store, three ways in alternating rounds: by levels in light order on one
+// thread (as it was first made: volume_marcher::make_sweep_in_light_order), in two passes on one
+// thread and on T threads (make_sweep, what the marcher does with the render's hook); wall and
+// process CPU time (best of 9), each table compared bit for bit with the marcher's. Then the
+// marchers' setups and one packet frame of each shadow method on T threads, and each with its
+// setup (best of 9).
 //
 // Walk (`--only walk`): the brick walk with empty cubes of every level (brick_walk::skips, the
 // default) against the walk of empty bricks and 16^3 blocks only (the one before), trees A-D at
@@ -134,7 +142,7 @@ int main(int argc, char** argv)
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (i + 1 >= argc) {
-            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|walk]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk]\n", argv[0]);
             return 2;
         }
         const std::string v = argv[++i];
@@ -172,7 +180,7 @@ int main(int argc, char** argv)
                     const auto make = [&](march_options::shadow_method by) {
                         march_options o;
                         o.shadow_by = by;
-                        return volume_marcher(store, shape, depth_colors::tree(tree.branch_depth, tree.tree_depth), o);
+                        return volume_marcher(store, shape, depth_colors::tree(tree.branch_depth, tree.tree_depth), o, rs.parallel_for);
                     };
                     using method = march_options::shadow_method;
                     // Setups and frames of both methods in alternating rounds, the best of 5 each.
@@ -312,6 +320,87 @@ int main(int argc, char** argv)
         }
     }
 
+    if (only.empty() || only == "setup") {
+        std::printf("light sweep: by levels in light order on one thread (as first made) against two passes (rays to their cuts, "
+                    "then the chains of cuts) on one and on %u thread(s); 300x300, dense store, load average %s\n\n",
+                    threads, bench::load_average().c_str());
+        std::printf("%-4s %4s %2s | %8s | %17s | %17s | %17s | %8s %8s | %9s %9s %9s\n", "", "", "", "rays", "sweep by levels", "two passes, 1",
+                    "two passes, T", "frame", "", "frame + setup", "", "");
+        std::printf("%-4s %4s %2s | %8s | %8s %8s | %8s %8s | %8s %8s | %8s %8s | %9s %9s %9s\n", "tree", "res", "s", "setup", "wall", "cpu",
+                    "wall", "cpu", "wall", "cpu", "rays", "sweep", "rays", "levels", "2 pass T");
+        const parallel_for_hook pool = bench::parallel_for(threads);
+        const auto process_cpu = [] {
+            timespec t{};
+            clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+            return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+        };
+        double worst_gain = 1e300;
+        for (auto [res, s] : {std::pair{100, 1}, std::pair{300, 2}}) {
+            for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+                const ifs<> tree = maker(res);
+                const std::vector<stored_voxel> voxels = classified(tree, 1);
+                const tree_shape shape = tree_shape::of(tree.volume, voxels);
+                const dense_store store = dense_store::build(tree.volume, voxels);
+                const krs::pinhole_camera camera = framing_camera(shape.box, 300, 300);
+                const depth_colors colors = depth_colors::tree(tree.branch_depth, tree.tree_depth);
+                render_settings rs;
+                rs.supersampling = s;
+                rs.parallel_for = pool;
+                march_options by_rays;
+                by_rays.shadow_by = march_options::shadow_method::rays;
+                const volume_marcher marchers[2] = {volume_marcher(store, shape, colors, by_rays), volume_marcher(store, shape, colors, {}, pool)};
+                // The sweep alone, three ways, in alternating rounds: 0 by levels, 1 two passes on
+                // this thread, 2 two passes on the pool. Then the setups and frames.
+                double wall[3] = {1e300, 1e300, 1e300}, cpu[3] = {1e300, 1e300, 1e300}, setup[2] = {1e300, 1e300}, frame[2] = {1e300, 1e300};
+                std::size_t differ = 0;
+                for (int round = 0; round < 9; ++round) {
+                    for (int m = 0; m < 3; ++m) {
+                        light_sweep table;
+                        const double cpu0 = process_cpu();
+                        wall[m] = std::min(wall[m], bench::best_seconds(1, [&] {
+                            table = m == 0 ? marchers[0].make_sweep_in_light_order() : marchers[0].make_sweep(m == 2 ? pool : parallel_for_hook{});
+                        }));
+                        cpu[m] = std::min(cpu[m], process_cpu() - cpu0);
+                        for (std::size_t i = 0; round == 0 && i < marchers[1].shading().light_directions().size(); ++i)
+                            differ += std::memcmp(table.toward(i), marchers[1].sweep().toward(i), marchers[1].bricks().voxel_count() * sizeof(float)) != 0;
+                    }
+                    setup[0] = std::min(setup[0], bench::best_seconds(1, [&] { (void)volume_marcher(store, shape, colors, by_rays); }));
+                    setup[1] = std::min(setup[1], bench::best_seconds(1, [&] { (void)volume_marcher(store, shape, colors, {}, pool); }));
+                }
+                image img[2];
+                for (int round = 0; round < 9; ++round)
+                    for (int m = 0; m < 2; ++m)
+                        frame[m] = std::min(frame[m], bench::best_seconds(1, [&] { img[m] = render<krs::packet_f>(marchers[m], camera, rs); }));
+                // One frame with its setup: shadow rays' (their marcher: the brick copy), the sweep by
+                // levels' (the brick copy and that sweep: as the marcher was made before) and the
+                // marcher's now (two passes on the pool).
+                const double with_setup[3] = {setup[0] + frame[0], setup[0] + wall[0] + frame[1], setup[1] + frame[1]};
+                worst_gain = std::min(worst_gain, with_setup[0] / with_setup[2]);
+                std::printf("%-4s %4d %2d | %6.1fms | %6.1fms %6.1fms | %6.1fms %6.1fms | %6.1fms %6.1fms | %6.1fms %6.1fms | %7.1fms %7.1fms "
+                            "%7.1fms%s\n",
+                            tree.name.c_str(), res, s, setup[0] * 1e3, wall[0] * 1e3, cpu[0] * 1e3, wall[1] * 1e3, cpu[1] * 1e3, wall[2] * 1e3,
+                            cpu[2] * 1e3, frame[0] * 1e3, frame[1] * 1e3, with_setup[0] * 1e3, with_setup[1] * 1e3, with_setup[2] * 1e3,
+                            differ ? "  TABLES DIFFER" : "");
+                const std::string prefix = "setup," + tree.name + ',' + std::to_string(res) + ',' + std::to_string(s) + ",dense,";
+                const char* names[3] = {"sweep_by_levels", "two_passes_1_thread", "two_passes_threads"};
+                for (int m = 0; m < 3; ++m) {
+                    csv << prefix << "sweep_wall," << names[m] << ',' << wall[m] << ",," << differ << ",\n";
+                    csv << prefix << "sweep_cpu," << names[m] << ',' << cpu[m] << ",,,\n";
+                }
+                for (int m = 0; m < 2; ++m) {
+                    const char* method_name = m == 0 ? "rays" : "sweep";
+                    csv << prefix << "setup," << method_name << ',' << setup[m] << ",,,\n";
+                    csv << prefix << "packet," << method_name << ',' << frame[m] << ',' << img[m].lookups << ",,\n";
+                }
+            }
+        }
+        std::printf("\n(the sweep alone: wall and process CPU time, best of 9 in alternating rounds, every table compared with the "
+                    "marcher's bit for bit; rays setup: the marcher with shadow rays, i.e. the brick copy; frame: packet render() on %u "
+                    "thread(s), best of 9; frame + setup: shadow rays, the sweep by levels (rays setup + sweep), the marcher made on "
+                    "the pool. One frame with setup, shadow rays over the sweep: worst %.2fx)\nload average after: %s\n\n",
+                    threads, worst_gain, bench::load_average().c_str());
+    }
+
     if (only.empty() || only == "walk") {
         std::printf("brick walk: empty cubes of every level against empty bricks and 16^3 blocks only; 300x300, dense store, "
                     "load average %s\n\n", bench::load_average().c_str());
@@ -331,7 +420,7 @@ int main(int argc, char** argv)
                 const std::array<brick_walk::skips, 2> kinds{brick_walk::skips::every_level, brick_walk::skips::bricks_and_blocks};
                 const std::array<const char*, 2> names{"levels", "blocks"};
                 std::vector<volume_marcher> marchers;
-                for (auto k : kinds) marchers.emplace_back(store, shape, colors, march_options{}, k);
+                for (auto k : kinds) marchers.emplace_back(store, shape, colors, march_options{}, parallel_for_hook{}, k);
                 std::array<shade_memo, 2> memos{marchers[0].new_shade_memo(), marchers[1].new_shade_memo()};
                 for (std::size_t m = 0; m < 2; ++m) {
                     marchers[m].shade_bricks(memos[m], 0, marchers[m].bricks().brick_count());

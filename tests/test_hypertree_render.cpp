@@ -650,7 +650,7 @@ TEST_CASE("hypertree render: the walk of empty cubes of every level gives the re
         INFO(name);
         const tree_shape shape = tree_shape::of(store);
         const depth_colors colors = depth_colors::tree(3, 6);
-        const volume_marcher levels(store, shape, colors), blocks(store, shape, colors, march_options{}, brick_walk::skips::bricks_and_blocks);
+        const volume_marcher levels(store, shape, colors), blocks(store, shape, colors, march_options{}, {}, brick_walk::skips::bricks_and_blocks);
         const krs::pinhole_camera camera = framing_camera(shape.box, 40, 32);
         for (bool ahead : {true, false}) {
             render_settings s;

@@ -14,13 +14,17 @@
 // then marches to its first non-empty neighbour toward the light (a few samples, empty bricks
 // skipped) instead of through the crown, and one pass gives every voxel its light.
 //
-// The order makes w come first. A ray toward l moves every cell coordinate monotonically in the
+// The cuts form no cycle. A ray toward l moves every cell coordinate monotonically in the
 // direction of sign(l_a) (its float positions are monotone in t), so along it the key
-// sum_a sign(l_a) c_a never decreases, and grows strictly whenever the cell changes. Visiting the
-// voxels by decreasing key (nearest the light first, `sweep_order`), every w a cut lands on has a
-// larger key than v and is already swept; voxels of one key never see each other, so a level's
-// voxels go in packets in any order and the result does not depend on it. The table is a pure
-// function of the voxels, options and light: the same on every run and thread count.
+// sum_a sign(l_a) c_a never decreases, and grows strictly whenever the cell changes: w has a
+// larger key than v. The sweep as first made visited the voxels by decreasing key (nearest the
+// light first, `sweep_order`), so every w was swept before v, on one thread
+// (volume_marcher::make_sweep_in_light_order, kept as the reference). The marcher now makes the
+// table in two passes (volume_marcher::make_sweep): every voxel's ray to its cut, in memory order
+// and in any order of tasks on the caller's threads, keeping the product P(v) and the cut w; then
+// T(v) = P(v) T(w) along each chain of cuts (chains end, since keys grow). Each value is the same
+// product in the same order either way. The table is a pure function of the voxels, options and
+// light: the same on every run and thread count, and by both ways (tested, bit for bit).
 //
 // Rendering reads the table instead of marching: shading at a voxel's center takes T(v) as it is;
 // a point elsewhere (shading per sample) marches to its own cut and takes the tail there. The

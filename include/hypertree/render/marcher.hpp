@@ -24,8 +24,9 @@
 // diffuse and Blinn-Phong specular with the procedural normals of the structure flow, each light's
 // term attenuated by the opacity a shadow ray accumulates toward it (same step, same early exit).
 // By default (march_options::shadow_by = sweep) those shadows come from the light sweep
-// (light_sweep.hpp), computed once when the marcher is made: each voxel's shadow ray is cut at its
-// first non-empty voxel toward the light and completed by that voxel's swept shadow. With `rays`
+// (light_sweep.hpp), computed once when the marcher is made (on the threads of the hook the
+// constructor is given): each voxel's shadow ray is cut at its first non-empty voxel toward the
+// light and completed by that voxel's swept shadow. With `rays`
 // every shaded voxel marches its full shadow ray in every render (the reference; the GLSL marcher
 // always does). By default a sample is shaded at its voxel's center (shade_per_voxel), so a
 // voxel's shading is computed once per render and kept in a table (shade_memo.hpp): either all
@@ -94,9 +95,11 @@ class volume_marcher {
 public:
     // Validates the options for this tree (march_options::validate) before copying the store.
     // `skipping` picks the brick walk's empty space (brick_walk::skips): the same pixels either way.
+    // `parallel_for` runs the light sweep (light_sweep.hpp, shadow_method::sweep) on the caller's
+    // threads (empty: on this one); the table is the same, bit for bit, whatever the threads.
     template <voxel_store S>
     volume_marcher(const S& store, tree_shape shape, depth_colors colors, march_options options = {},
-                   brick_walk::skips skipping = brick_walk::skips::every_level)
+                   const parallel_for_hook& parallel_for = {}, brick_walk::skips skipping = brick_walk::skips::every_level)
         : volume_(validated(store.volume(), shape, options)), options_(std::move(options)), shape_(std::move(shape)),
           bricks_(store), walk_(volume_, options_.step_factor * float(volume_.smallest_voxel_side()), skipping),
           shading_(options_, shape_, colors)
@@ -107,7 +110,7 @@ public:
             alpha_at_[place] = shading_.opacity()[bricks_.at_place(place).density];
         box_lo_ = krs::vec3f(shape_.box.lo);
         box_hi_ = krs::vec3f(shape_.box.hi);
-        if (options_.shadows && options_.shadow_by == march_options::shadow_method::sweep && !shading_.light_directions().empty()) sweep_lights();
+        if (options_.shadows && options_.shadow_by == march_options::shadow_method::sweep && !shading_.light_directions().empty()) sweep_lights(parallel_for);
     }
 
     const march_options& options() const { return options_; }
@@ -122,6 +125,74 @@ public:
     // The swept transmittances (light_sweep.hpp), made with the marcher under shadow_method::sweep;
     // empty under rays.
     const light_sweep& sweep() const { return swept_; }
+    // The sweep's table as the constructor makes it, in two passes, the first on the caller's
+    // threads (`parallel_for`; empty: this thread).
+    //
+    // A voxel's swept transmittance is P(v) T(w): P(v) the product of (1 - alpha) over its ray's
+    // samples up to and including its cut w (light_sweep.hpp), T(w) the cut voxel's own. Only the
+    // last factor depends on another voxel's result, and only through one multiply. So the first
+    // pass marches every voxel's ray to its cut, with no order at all: the voxels of runs of
+    // sweep_bricks bricks per task, in memory order, so a packet's 16 rays start side by side and
+    // read the same bricks (the level order of the first sweep spread a packet over a diagonal
+    // plane of the tree); it writes P(v) to the table and w (or none) to a list. The second pass,
+    // on this thread, completes T(v) = P(v) T(w) along each chain of cuts: from each voxel it
+    // follows the cuts to the first voxel already complete (a voxel with no cut is complete), then
+    // completes the chain backwards. Cuts go to strictly larger keys (light_sweep.hpp), so a chain
+    // ends; each voxel is completed once. Every voxel's value is the same product in the same order
+    // as in the sweep by levels (make_sweep_in_light_order): the tables are equal to the bit, on
+    // any number of threads (tested).
+    light_sweep make_sweep(const parallel_for_hook& parallel_for = {}) const
+    {
+        const std::vector<krs::vec3f>& lights = shading_.light_directions();
+        light_sweep table(bricks_.voxel_count(), lights.size());
+        constexpr std::uint32_t none = ~std::uint32_t(0);
+        std::vector<std::uint32_t> cut(bricks_.voxel_count() * lights.size(), none);
+        const std::size_t runs = (bricks_.brick_count() + sweep_bricks - 1) / sweep_bricks;
+        run_tasks(parallel_for, runs * lights.size(), [&](std::size_t task) {
+            const std::size_t light = task / runs, first = task % runs * sweep_bricks;
+            const std::size_t last = std::min(bricks_.brick_count(), first + sweep_bricks);
+            std::vector<std::uint32_t> places;
+            for (std::size_t b = first; b < last; ++b)
+                for (std::uint64_t m = bricks_.mask(b); m != 0; m &= m - 1)
+                    places.push_back(std::uint32_t(b * voxel_bricks::brick_voxels + std::size_t(std::countr_zero(m))));
+            if (places.empty()) return;
+            sweep_wave wave;
+            sweep_rays(lights[light], places, table.toward(light), cut.data() + light * bricks_.voxel_count(), wave);
+        });
+        std::vector<std::uint32_t> chain;
+        for (std::size_t light = 0; light < lights.size(); ++light) {
+            float* out = table.toward(light);
+            std::uint32_t* next = cut.data() + light * bricks_.voxel_count();
+            for (std::size_t v = 0; v < bricks_.voxel_count(); ++v) {
+                chain.clear();
+                for (std::uint32_t u = std::uint32_t(v); next[u] != none; u = next[u]) chain.push_back(u);
+                for (std::size_t i = chain.size(); i-- > 0;) {
+                    const std::uint32_t u = chain[i];
+                    out[u] = out[u] * out[next[u]]; // (as sweep_rays multiplies at the cut)
+                    next[u] = none;
+                }
+            }
+        }
+        return table;
+    }
+    // The sweep's table as it was first made (the reference): per light, the levels of
+    // sweep_order in turn, nearest the light first, each level's rays completed at their cuts from
+    // the levels before. One thread.
+    light_sweep make_sweep_in_light_order() const
+    {
+        const std::vector<krs::vec3f>& lights = shading_.light_directions();
+        light_sweep table(bricks_.voxel_count(), lights.size());
+        sweep_wave wave;
+        for (std::size_t i = 0; i < lights.size(); ++i) {
+            const sweep_order order = sweep_order::toward(bricks_, lights[i]);
+            for (std::size_t level = 0; level < order.levels(); ++level)
+                sweep_rays(lights[i], std::span(order.places).subspan(order.level[level], order.level[level + 1] - order.level[level]),
+                           table.toward(i), nullptr, wave);
+        }
+        return table;
+    }
+    // Bricks per task of make_sweep's first pass (tree A at resolution 300: about 750 voxels).
+    static constexpr std::size_t sweep_bricks = 64;
     // An empty shading memo sized for this marcher (its voxel count and lights), for one render:
     // all its threads may share it.
     shade_memo new_shade_memo() const { return shade_memo(bricks_.voxel_count(), 3 + shading_.light_directions().size()); }
@@ -634,46 +705,38 @@ private:
         return lit(q, level, shadows);
     }
 
-    // Fills the sweep's table (light_sweep.hpp): per light, the levels of sweep_order in turn, each
-    // a wavefront (sweep_level).
-    void sweep_lights()
-    {
-        const std::vector<krs::vec3f>& lights = shading_.light_directions();
-        swept_ = light_sweep(bricks_.voxel_count(), lights.size());
-        sweep_wave wave;
-        for (std::size_t i = 0; i < lights.size(); ++i) {
-            const sweep_order order = sweep_order::toward(bricks_, lights[i]);
-            for (std::size_t level = 0; level < order.levels(); ++level)
-                sweep_level(lights[i], std::span(order.places).subspan(order.level[level], order.level[level + 1] - order.level[level]),
-                            swept_.toward(i), wave);
-        }
-    }
+    // Fills the sweep's table (light_sweep.hpp) in two passes (make_sweep).
+    void sweep_lights(const parallel_for_hook& parallel_for) { swept_ = make_sweep(parallel_for); }
 
     // The state of one level's shadow rays, an entry per voxel (struct of arrays).
     struct sweep_wave {
         std::vector<float> x, y, z, base, t1, margin0, j, transmittance, live;
+        std::vector<float> cut; // the cut voxel's slot as bits (krs::index_bits), ~0: none (yet)
         std::vector<std::int32_t> own;
         std::vector<std::uint32_t> slot; // ~0: padding
         void resize(std::size_t n)
         {
-            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live}) v->resize(n);
+            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live, &cut}) v->resize(n);
             own.resize(n), slot.resize(n);
         }
         void move(std::size_t to, std::size_t from)
         {
-            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live}) (*v)[to] = (*v)[from];
+            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live, &cut}) (*v)[to] = (*v)[from];
             own[to] = own[from], slot[to] = slot[from];
         }
     };
 
-    // The cut shadow rays of one level's voxels (shadow_transmittances with `swept`, the same
+    // The cut shadow rays of the voxels at `places` (shadow_transmittances with `swept`, the same
     // operations per ray), marched as a wavefront: packets of live rays take a few steps each,
     // then the finished rays leave the wave (their transmittance is written) and the rest close
     // ranks, so packets stay full. Packets of fixed voxels waited on their longest ray (one that
-    // meets no voxel marches out of the box): 15% of the lanes worked (tree A at 300). Writing
-    // during the level is safe: no ray of a level reads a voxel of its own level.
+    // meets no voxel marches out of the box): 15% of the lanes worked (tree A at 300).
+    // Without `cut`, a ray is completed at its cut by the cut voxel's entry of `out` (the sweep
+    // by levels: the places are one level, and no ray of a level reads a voxel of its own level,
+    // so writing during the level is safe); with `cut`, a ray stops at its cut without it, and
+    // the cut voxel's slot is written to cut[slot] (make_sweep's first pass: nothing is read).
     template <class T = krs::packet_f>
-    void sweep_level(const krs::vec3f& l, std::span<const std::uint32_t> places, float* out, sweep_wave& wave) const
+    void sweep_rays(const krs::vec3f& l, std::span<const std::uint32_t> places, float* out, std::uint32_t* cut_slots, sweep_wave& wave) const
     {
         using I = krs::index_lanes<T>;
         using krs::select, krs::max, krs::any;
@@ -709,6 +772,7 @@ private:
             const krs::vec3f q = center_of(volume_.index(c[0], c[1], c[2])); // as shade_bricks shades it
             wave.x[e] = q.x, wave.y[e] = q.y, wave.z[e] = q.z;
             wave.slot[e] = e < n ? bricks_.slot(place) : ~std::uint32_t(0);
+            wave.cut[e] = std::bit_cast<float>(~std::uint32_t(0)); // none (a quiet NaN's bits: moves keep them)
             wave.live[e] = e < n ? 1.0f : 0.0f;
         }
         for (std::size_t a = 0; a < active; a += w) {
@@ -729,7 +793,7 @@ private:
             for (std::size_t first = 0; first < active; first += K * w) {
                 const std::size_t packets = std::min(K, (active - first) / w);
                 std::array<krs::vec3<T>, K> p;
-                std::array<T, K> base, t1, margin0, j, transmittance;
+                std::array<T, K> base, t1, margin0, j, transmittance, cut_bits;
                 std::array<I, K> own;
                 std::array<krs::mask_t<T>, K> running;
                 for (std::size_t k = 0; k < packets; ++k) {
@@ -737,7 +801,7 @@ private:
                     p[k] = {load_f(&wave.x[a]), load_f(&wave.y[a]), load_f(&wave.z[a])};
                     base[k] = load_f(&wave.base[a]), t1[k] = load_f(&wave.t1[a]), margin0[k] = load_f(&wave.margin0[a]);
                     own[k] = load_i(&wave.own[a]);
-                    j[k] = load_f(&wave.j[a]), transmittance[k] = load_f(&wave.transmittance[a]);
+                    j[k] = load_f(&wave.j[a]), transmittance[k] = load_f(&wave.transmittance[a]), cut_bits[k] = load_f(&wave.cut[a]);
                     running[k] = load_f(&wave.live[a]) > zero;
                 }
                 for (int s = 0; s < steps_per_pass; ++s) {
@@ -753,7 +817,12 @@ private:
                         const T alpha = krs::gather(alpha_at, place);
                         transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
                         const auto cut = found.looks & (alpha > zero) & (j[k] >= near) & (krs::index_to_float(found.place - own[k]) != zero);
-                        transmittance[k] = select(cut, transmittance[k] * krs::gather(out, krs::gather(slot_at, place)), transmittance[k]);
+                        if (cut_slots) {
+                            // The cut voxel's slot, its bits in a float lane (krs::index_bits).
+                            if (any(cut)) cut_bits[k] = select(cut, krs::index_bits(krs::gather(slot_at, place)), cut_bits[k]);
+                        } else {
+                            transmittance[k] = select(cut, transmittance[k] * krs::gather(out, krs::gather(slot_at, place)), transmittance[k]);
+                        }
                         running[k] = running[k] & !cut;
                         j[k] = j[k] + found.advance;
                     }
@@ -762,14 +831,17 @@ private:
                 // (A ray still running after its last step is checked against its end at the next pass.)
                 for (std::size_t k = 0; k < packets; ++k) {
                     const std::size_t a = first + k * w;
-                    store_f(&wave.j[a], j[k]), store_f(&wave.transmittance[a], transmittance[k]);
+                    store_f(&wave.j[a], j[k]), store_f(&wave.transmittance[a], transmittance[k]), store_f(&wave.cut[a], cut_bits[k]);
                     store_f(&wave.live[a], select(running[k], one, zero));
                 }
             }
             std::size_t kept = 0;
             for (std::size_t e = 0; e < active; ++e) {
                 if (wave.live[e] > 0.0f) wave.move(kept++, e);
-                else if (wave.slot[e] != ~std::uint32_t(0)) out[wave.slot[e]] = wave.transmittance[e];
+                else if (wave.slot[e] != ~std::uint32_t(0)) {
+                    out[wave.slot[e]] = wave.transmittance[e];
+                    if (cut_slots) cut_slots[wave.slot[e]] = std::bit_cast<std::uint32_t>(wave.cut[e]);
+                }
             }
             active = (kept + w - 1) / w * w;
             for (std::size_t e = kept; e < active; ++e) wave.move(e, 0), wave.live[e] = 0.0f, wave.slot[e] = ~std::uint32_t(0);

@@ -413,6 +413,15 @@ inline xsimd::batch<float, A> index_pow2(const xsimd::batch<std::int32_t, A>& e)
 {
     return xsimd::bitwise_cast<xsimd::batch<float, A>>((e + xsimd::batch<std::int32_t, A>(127)) << 23);
 }
+// An index's 32 bits carried in a float lane, unchanged (no conversion): so that a float mask
+// can select between indices (masks do not cross domains, above). Only moves and selects may
+// touch such a lane; std::bit_cast gives the index back.
+inline float index_bits(std::int32_t i) noexcept { return std::bit_cast<float>(i); }
+template <class A>
+inline xsimd::batch<float, A> index_bits(const xsimd::batch<std::int32_t, A>& i) noexcept
+{
+    return xsimd::bitwise_cast<xsimd::batch<float, A>>(i);
+}
 inline std::int32_t index_min(std::int32_t a, std::int32_t b) noexcept { return std::min(a, b); }
 inline std::int32_t index_max(std::int32_t a, std::int32_t b) noexcept { return std::max(a, b); }
 template <class A>
