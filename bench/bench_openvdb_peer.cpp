@@ -368,7 +368,7 @@ int main(int argc, char** argv)
                 sink = sink + s;
             });
             std::optional<volume_marcher> marcher;
-            r.setup_ms = bench::best_seconds(1, [&] { marcher.emplace(store, shape, white, options); }) * 1e3;
+            r.setup_ms = bench::best_seconds(1, [&] { marcher.emplace(store, shape, white, options, settings.parallel_for); }) * 1e3;
             r.accelerator = marcher->memory_bytes();
             image scalar, packet;
             r.scalar_ms = bench::best_seconds(4, [&] { scalar = render<float>(*marcher, camera, settings); }) * 1e3;
@@ -398,7 +398,7 @@ int main(int argc, char** argv)
             std::optional<volume_marcher> marcher;
             r.setup_ms = 1e300;
             for (int k = 0; k < 2; ++k)
-                r.setup_ms = std::min(r.setup_ms, bench::best_seconds(1, [&] { marcher.emplace(store, flowless, white, lit_options); }) * 1e3);
+                r.setup_ms = std::min(r.setup_ms, bench::best_seconds(1, [&] { marcher.emplace(store, flowless, white, lit_options, settings.parallel_for); }) * 1e3);
             r.accelerator = marcher->memory_bytes();
             image scalar, packet;
             r.scalar_ms = bench::best_seconds(4, [&] { scalar = render<float>(*marcher, camera, settings); }) * 1e3;

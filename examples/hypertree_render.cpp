@@ -100,13 +100,14 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     const tree_shape shape = tree_shape::of(volume, voxels);
     march_options mo;
     mo.density_scale = o.density_scale;
-    const volume_marcher marcher(store, shape, colors, mo);
+    const int threads = example::thread_count(o.threads);
+    // The marcher sweeps the lights through the voxels once (light_sweep.hpp), on these threads.
+    const volume_marcher marcher(store, shape, colors, mo, parallel_with_progress(threads, "light sweep"));
 
     const krs::pinhole_camera camera = framing_camera(shape.box, o.width, o.height);
 
     render_settings rs;
     rs.supersampling = o.supersampling > 0 ? o.supersampling : std::min(4, supersampling_for(camera, shape, volume));
-    const int threads = example::thread_count(o.threads);
     rs.parallel_for = parallel_with_progress(threads, "render");
     const auto t1 = clock_type::now();
     const image img = render<krs::packet_f>(marcher, camera, rs);
