@@ -192,6 +192,10 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
                                          std::to_string(bricks.grid[2]) + " grid, volume " + std::to_string(grid[0]) + "x" +
                                          std::to_string(grid[1]) + "x" + std::to_string(grid[2]));
     options.validate(v, shape.box);
+    // (The GLSL normal is the structure flow's; box and line-flow normals are CPU-only so far.)
+    if (options.normals_by != normal_method::structure_flow)
+        throw krs::invalid_parameter("march_options.normals_by", "the GLSL marcher has normal_method::structure_flow only",
+                                     std::to_string(int(options.normals_by)));
     const voxel_shading shading(options, shape, colors);
     const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
     const std::string n = glsl.prefix + glsl.name;
