@@ -6,6 +6,7 @@
 // density. Every expected value is computed here, in double, from the formula; the code under
 // test only supplies what is compared.
 
+#include "hypertree/ifs.hpp"
 #include "hypertree/render/glsl.hpp"
 #include "hypertree/render/marcher.hpp"
 #include "hypertree/store/index_list_store.hpp"
@@ -382,6 +383,40 @@ TEST_CASE("shading law: the line-generator flow is radial about the lines' direc
     const krs::vec3<krs::packet_d> pp{krs::packet_d(18.0), krs::packet_d(17.0), krs::packet_d(16.0)};
     const auto lanes = krs::lanes_of(shape.normal_at(pp, normal_method::line_flow).x);
     CHECK(lanes[0] == shape.normal_at(krs::vec3d{18, 17, 16}, normal_method::line_flow).x);
+}
+
+TEST_CASE("shading law: the line flow of an IFS runs along each first-level transformation's image of the generator")
+{
+    // Transformation 0 turns by 90 degrees about z (the vertical generator becomes horizontal, along
+    // -x), transformation 1 by 30 degrees about x (along (0, cos 30, sin 30)); both scale by 1/2
+    // and lift, which a direction ignores. Parts 1 and 2 are two rods, both along y, so their
+    // covariance axes are y and only the line flow can tell them apart; part 0 (the trunk) keeps y.
+    ifs<> t;
+    t.transforms.push_back({runtime_pipeline({scale(0.5), rotate({0, 0, 1}, std::numbers::pi / 2), translate(0, 0.5, 0)}), 1.0});
+    t.transforms.push_back({runtime_pipeline({scale(0.5), rotate({1, 0, 0}, std::numbers::pi / 6), translate(0, 0.3, 0)}), 1.0});
+    t.generator = generator_shape::line({0, -0.025, 0}, {0, 0.025, 0});
+    const drawn_ifs<runtime_pipeline> drawn(t, 7);
+    std::vector<cell> cells = rod_cells(4, 4, 4, 28, 0);
+    for (const cell& c : rod_cells(14, 4, 4, 28, 1)) cells.push_back(c);
+    for (const cell& c : rod_cells(24, 4, 4, 28, 2)) cells.push_back(c);
+    tree_shape shape = cells_shape(cells);
+    REQUIRE(shape.flows.size() == 3);
+    shape.set_line_flow_of(drawn);
+    const double c30 = std::cos(std::numbers::pi / 6), s30 = std::sin(std::numbers::pi / 6);
+    // (A rotation's direction: the sign of sin depends on the handedness convention; compare
+    // up to the sign of each component but insist on which components are non-zero and their size.)
+    CHECK(std::abs(shape.flows[0].line_axis.y) == doctest::Approx(1.0).epsilon(1e-12));
+    CHECK(std::abs(shape.flows[1].line_axis.x) == doctest::Approx(1.0).epsilon(1e-12));
+    CHECK(shape.flows[1].line_axis.y == doctest::Approx(0.0).epsilon(1e-12));
+    CHECK(shape.flows[2].line_axis.x == doctest::Approx(0.0).epsilon(1e-12));
+    CHECK(std::abs(shape.flows[2].line_axis.y) == doctest::Approx(c30).epsilon(1e-12));
+    CHECK(std::abs(shape.flows[2].line_axis.z) == doctest::Approx(s30).epsilon(1e-12));
+    // Near rod 1 (centroid (15, 16, 5)) the line flow is radial about x: a point above it gets +y.
+    const krs::vec3d n = shape.normal_at(krs::vec3d{15, 17, 5}, normal_method::line_flow);
+    CHECK(n.y > 0.99);
+    // A point generator carries no direction.
+    t.generator = generator_shape::point();
+    CHECK_THROWS_AS(shape.set_line_flow_of(drawn_ifs<runtime_pipeline>(t, 7)), krs::invalid_parameter);
 }
 
 TEST_CASE("shading law: bad normal options are refused by name")

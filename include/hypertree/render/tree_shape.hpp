@@ -48,6 +48,7 @@ struct part_flow {
     vec3d axis{0, 1, 0};
     double weight_radius = 1; // softens 1/d^2 near the centroid: the part's RMS extent
     vec3d line_axis{0, 1, 0}; // the line generators' direction in this part (normal_method::line_flow)
+    int part = 0;             // the voxels' part byte: 0 the trunk, 1 + j transformation j's
 };
 
 // Which normal the shading uses (section 8.3; see tree_shape below).
@@ -98,6 +99,7 @@ struct tree_shape {
             f.axis = principal_axis(cov);
             f.weight_radius = std::max(std::sqrt(std::max(cov[0] + cov[3] + cov[5], 0.0)), volume.smallest_voxel_side());
             f.line_axis = f.axis;
+            f.part = p;
             shape.flows.push_back(f);
             index_box part_box = index_box::nothing();
             for (const voxel_index i : part_indices[std::size_t(p)]) part_box.include(volume.coordinates(i));
@@ -126,6 +128,25 @@ struct tree_shape {
             if (!(len > 0) || !std::isfinite(len))
                 throw krs::invalid_parameter("tree_shape.set_line_flow", "directions must be finite and non-zero", "direction " + std::to_string(i));
             flows[i].line_axis = directions[i] / len;
+        }
+    }
+
+    // The line flow of a drawn IFS (drawn_ifs, ifs.hpp) with a line generator: part 1 + j runs
+    // along transformation j's first-level chain applied to the generator, chain(end) - chain(start)
+    // (shears included). The trunk (part 0, grown from the condensation) keeps its covariance axis,
+    // as does a part whose image of the segment is shorter than 1e-12 of its length. Throws
+    // invalid_parameter for a point generator, which has no direction to carry.
+    template <class Drawn>
+    void set_line_flow_of(const Drawn& drawn)
+    {
+        const auto& g = drawn.definition().generator;
+        if (g.is_point()) throw krs::invalid_parameter("tree_shape.set_line_flow_of", "needs an IFS with a line generator", "a point generator");
+        for (part_flow& f : flows) {
+            if (f.part < 1 || std::size_t(f.part - 1) >= drawn.transform_count()) continue;
+            const auto& chain = drawn.chain_of(std::size_t(f.part - 1), 1);
+            const vec3d d = chain(g.end) - chain(g.start);
+            const double len = krs::length(d);
+            if (len > 1e-12 * g.length() && std::isfinite(len)) f.line_axis = d / len;
         }
     }
 
