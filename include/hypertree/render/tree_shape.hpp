@@ -23,17 +23,18 @@
 //   the nearest box and the face it lies beyond most). Flat, faceted, and exact on a box.
 // - Line-generator flow: a tree grown from line segments knows the direction each first-level
 //   part's segments run in (the generator pushed through the part's transform), which for a part
-//   wider than it is long differs from the covariance axis. set_line_flow() gives those
-//   directions; the normal is then the structure-flow blend about them instead of the covariance
-//   axes (until it is called, the line axes are the covariance axes).
+//   wider than it is long differs from the covariance axis. set_line_flow_of(drawn_ifs) computes
+//   those directions (set_line_flow takes them as given); the normal is then the structure-flow
+//   blend about them instead of the covariance axes (until one is called, the line axes are the
+//   covariance axes, and line_flow is the structure flow).
 
 #include "hypertree/store/store.hpp"
 #include "krs/core/bounds.hpp"
 #include "krs/core/lanes.hpp"
 #include "krs/core/validate.hpp"
 
-#include <array>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <concepts>
 #include <limits>
@@ -182,19 +183,19 @@ struct tree_shape {
         vec3d inside_n{}, outside_n{};
         for (const world_box& b : part_boxes) {
             const double lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
-            double near = std::numeric_limits<double>::infinity(), beyond = -near, out2 = 0;
+            double nearest = std::numeric_limits<double>::infinity(), beyond = -nearest, out2 = 0;
             int near_axis = 0, near_sign = -1, beyond_axis = 0, beyond_sign = -1;
             for (int a = 0; a < 3; ++a) {
                 const double below = lo[a] - pc[a], above = pc[a] - hi[a]; // > 0: beyond that face
-                if (-below < near) near = -below, near_axis = a, near_sign = -1;
-                if (-above < near) near = -above, near_axis = a, near_sign = 1;
+                if (-below < nearest) nearest = -below, near_axis = a, near_sign = -1;
+                if (-above < nearest) nearest = -above, near_axis = a, near_sign = 1;
                 if (below > beyond) beyond = below, beyond_axis = a, beyond_sign = -1;
                 if (above > beyond) beyond = above, beyond_axis = a, beyond_sign = 1;
                 const double e = std::max({below, above, 0.0});
                 out2 += e * e;
             }
             if (beyond <= 0) {
-                if (near < best_inside) best_inside = near, inside_n = axis_normal(near_axis, near_sign);
+                if (nearest < best_inside) best_inside = nearest, inside_n = axis_normal(near_axis, near_sign);
             } else if (out2 < best_outside) {
                 best_outside = out2, outside_n = axis_normal(beyond_axis, beyond_sign);
             }
