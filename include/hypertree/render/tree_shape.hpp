@@ -176,22 +176,24 @@ struct tree_shape {
     // Inside a box, the face distances are p - lo and hi - p per axis, the smallest wins (ties: x
     // before y before z, lo before hi), and among the boxes holding p the one whose nearest face
     // is nearest. Outside every box: the nearest box (Euclidean), and the face p is farthest beyond.
+    // In float, as the GLSL marcher computes it (glsl.hpp), so both pick the same face at a tie.
     vec3d box_normal_at(const vec3d& p) const
     {
-        const double pc[3] = {p.x, p.y, p.z};
-        double best_inside = std::numeric_limits<double>::infinity(), best_outside = best_inside;
+        constexpr float big = std::numeric_limits<float>::max();
+        const float pc[3] = {float(p.x), float(p.y), float(p.z)};
+        float best_inside = big, best_outside = big;
         vec3d inside_n{}, outside_n{};
         for (const world_box& b : part_boxes) {
-            const double lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
-            double nearest = std::numeric_limits<double>::infinity(), beyond = -nearest, out2 = 0;
+            const float lo[3] = {float(b.lo.x), float(b.lo.y), float(b.lo.z)}, hi[3] = {float(b.hi.x), float(b.hi.y), float(b.hi.z)};
+            float nearest = big, beyond = -big, out2 = 0;
             int near_axis = 0, near_sign = -1, beyond_axis = 0, beyond_sign = -1;
             for (int a = 0; a < 3; ++a) {
-                const double below = lo[a] - pc[a], above = pc[a] - hi[a]; // > 0: beyond that face
+                const float below = lo[a] - pc[a], above = pc[a] - hi[a]; // > 0: beyond that face
                 if (-below < nearest) nearest = -below, near_axis = a, near_sign = -1;
                 if (-above < nearest) nearest = -above, near_axis = a, near_sign = 1;
                 if (below > beyond) beyond = below, beyond_axis = a, beyond_sign = -1;
                 if (above > beyond) beyond = above, beyond_axis = a, beyond_sign = 1;
-                const double e = std::max({below, above, 0.0});
+                const float e = std::max(std::max(below, above), 0.0f);
                 out2 += e * e;
             }
             if (beyond <= 0) {
@@ -200,7 +202,7 @@ struct tree_shape {
                 best_outside = out2, outside_n = axis_normal(beyond_axis, beyond_sign);
             }
         }
-        return best_inside < std::numeric_limits<double>::infinity() ? inside_n : outside_n;
+        return best_inside < big ? inside_n : outside_n;
     }
 
     // The blended outward normal at p (zero when there is no flow). One template for a point
