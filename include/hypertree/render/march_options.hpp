@@ -55,7 +55,7 @@ struct march_options {
     float shininess = 24.0f;
     // The normal of Lambert and Blinn-Phong (8.3, tree_shape.hpp): the first-level structure flow
     // (the paper's recommended procedural normal), the part boxes' faces (Hart and DeFanti), or
-    // the flow of line generators (tree_shape::set_line_flow). The GLSL marcher has the first only.
+    // the flow of line generators (tree_shape::set_line_flow_of), on the CPU and in GLSL alike.
     normal_method normals_by = normal_method::structure_flow;
     std::vector<directional_light> lights{directional_light{}};
 
