@@ -39,7 +39,8 @@
 // sizes and offsets, the step, the opacity per density byte, the color per level, the lights and
 // the shading weights (all from voxel_shading, the C++ values the CPU uses), each axis's voxel
 // centers (as the float the CPU rounds its double centers to, so per-voxel shadow rays start from
-// the same point), the part spheres, the structure flows. A tree with other options is new code;
+// the same point), the part spheres, the structure flows (or the line axes, or the part boxes, as
+// march_options::normals_by picks the normal). A tree with other options is new code;
 // the bricks stay.
 //
 // Rays and shadow rays walk the bricks as the CPU's do (brick_walk::glsl, emitted from the walk's
