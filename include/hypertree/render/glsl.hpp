@@ -39,7 +39,8 @@
 // sizes and offsets, the step, the opacity per density byte, the color per level, the lights and
 // the shading weights (all from voxel_shading, the C++ values the CPU uses), each axis's voxel
 // centers (as the float the CPU rounds its double centers to, so per-voxel shadow rays start from
-// the same point), the part spheres, the structure flows. A tree with other options is new code;
+// the same point), the part spheres, the structure flows (or the line axes, or the part boxes, as
+// march_options::normals_by picks the normal). A tree with other options is new code;
 // the bricks stay.
 //
 // Rays and shadow rays walk the bricks as the CPU's do (brick_walk::glsl, emitted from the walk's
@@ -245,7 +246,8 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
         std::vector<float> soft;
         for (const part_flow& f : shape.flows) {
             centroids.push_back({float(f.centroid.x), float(f.centroid.y), float(f.centroid.z)});
-            axes.push_back({float(f.axis.x), float(f.axis.y), float(f.axis.z)});
+            const vec3d& a = options.normals_by == normal_method::line_flow ? f.line_axis : f.axis; // (tree_shape::normal_at)
+            axes.push_back({float(a.x), float(a.y), float(a.z)});
             soft.push_back(float(f.weight_radius * f.weight_radius * 0.05));
         }
         s += krs::glsl::vec3_array(n + "_flow_centroid", centroids);
@@ -331,6 +333,46 @@ float $_shadow_transmittance(vec3 p, vec3 l) {
 
 )",
                            n);
+    if (options.normals_by == normal_method::part_boxes) {
+        // tree_shape::box_normal_at, in float as the CPU computes it.
+        const std::string big = float_literal(std::numeric_limits<float>::max());
+        if (!shape.part_boxes.empty()) {
+            std::vector<krs::vec3f> lo, hi;
+            for (const world_box& b : shape.part_boxes) lo.push_back(krs::vec3f(b.lo)), hi.push_back(krs::vec3f(b.hi));
+            s += krs::glsl::vec3_array(n + "_part_box_lo", lo);
+            s += krs::glsl::vec3_array(n + "_part_box_hi", hi);
+        }
+        s += krs::glsl::with_name("// tree_shape::box_normal_at: the outward normal of the nearest face of the part box p lies in.\n"
+                                  "vec3 $_normal(vec3 p) {\n"
+                                  "    float best_inside = " + big + ", best_outside = " + big + ";\n"
+                                  "    vec3 inside_n = vec3(0.0), outside_n = vec3(0.0);\n", n);
+        if (!shape.part_boxes.empty()) {
+            std::string loop = "    for (int i = 0; i < " + integer(shape.part_boxes.size()) + "; ++i) {\n" +
+                               krs::glsl::with_name(R"(        vec3 lo = $_part_box_lo[i], hi = $_part_box_hi[i];
+        float nearest = BIG, beyond = -BIG, out2 = 0.0;
+        vec3 near_n = vec3(-1.0, 0.0, 0.0), beyond_n = vec3(-1.0, 0.0, 0.0);
+        for (int a = 0; a < 3; ++a) {
+            vec3 e_a = vec3(a == 0 ? 1.0 : 0.0, a == 1 ? 1.0 : 0.0, a == 2 ? 1.0 : 0.0);
+            float below = lo[a] - p[a], above = p[a] - hi[a];
+            if (-below < nearest) { nearest = -below; near_n = -e_a; }
+            if (-above < nearest) { nearest = -above; near_n = e_a; }
+            if (below > beyond) { beyond = below; beyond_n = -e_a; }
+            if (above > beyond) { beyond = above; beyond_n = e_a; }
+            float e = max(max(below, above), 0.0);
+            out2 += e * e;
+        }
+        if (beyond <= 0.0) {
+            if (nearest < best_inside) { best_inside = nearest; inside_n = near_n; }
+        } else if (out2 < best_outside) {
+            best_outside = out2; outside_n = beyond_n;
+        }
+    }
+)", n);
+            for (std::string::size_type i; (i = loop.find("BIG")) != std::string::npos;) loop.replace(i, 3, big);
+            s += loop;
+        }
+        s += "    return best_inside < " + big + " ? inside_n : outside_n;\n}\n\n";
+    } else {
     s += krs::glsl::with_name(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
 vec3 $_normal(vec3 p) {
     vec3 n = vec3(0.0);
@@ -352,6 +394,7 @@ vec3 $_normal(vec3 p) {
 
 )",
                            n);
+    }
     s += shading.glsl_shade(n);
     // The shading point: the voxel's center with shade_per_voxel (the marcher's per-voxel shading),
     // else the sample itself.

@@ -9,6 +9,7 @@
 // other to find out.
 
 #include "hypertree/render/transfer.hpp"
+#include "hypertree/render/tree_shape.hpp"
 #include "hypertree/store/store.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/core/vec3.hpp"
@@ -52,6 +53,10 @@ struct march_options {
     float diffuse = 0.85f;
     float specular = 0.0f;
     float shininess = 24.0f;
+    // The normal of Lambert and Blinn-Phong (8.3, tree_shape.hpp): the first-level structure flow
+    // (the paper's recommended procedural normal), the part boxes' faces (Hart and DeFanti), or
+    // the flow of line generators (tree_shape::set_line_flow_of), on the CPU and in GLSL alike.
+    normal_method normals_by = normal_method::structure_flow;
     std::vector<directional_light> lights{directional_light{}};
 
     // A shading entry holds one shadow per light (shade_memo.hpp) in a fixed-size buffer.
@@ -73,6 +78,9 @@ struct march_options {
         krs::require_non_negative("march_options.diffuse", diffuse);
         krs::require_non_negative("march_options.specular", specular);
         krs::require_non_negative("march_options.shininess", shininess);
+        if (normals_by != normal_method::structure_flow && normals_by != normal_method::part_boxes && normals_by != normal_method::line_flow)
+            throw krs::invalid_parameter("march_options.normals_by", "must be normal_method::structure_flow, part_boxes or line_flow",
+                                         std::to_string(int(normals_by)));
         if (shadow_by != shadow_method::rays && shadow_by != shadow_method::sweep)
             throw krs::invalid_parameter("march_options.shadow_by", "must be shadow_method::rays or shadow_method::sweep",
                                          std::to_string(int(shadow_by)));

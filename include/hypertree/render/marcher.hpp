@@ -364,7 +364,7 @@ public:
                     const std::size_t lane = std::min(first + k, count - 1);
                     nx[k] = double(x[lane]), ny[k] = double(y[lane]), nz[k] = double(z[lane]);
                 }
-                const krs::vec3<D> nd = shape_.normal_at(krs::vec3<D>{load<D>(nx), load<D>(ny), load<D>(nz)});
+                const krs::vec3<D> nd = shape_.normal_at(krs::vec3<D>{load<D>(nx), load<D>(ny), load<D>(nz)}, options_.normals_by);
                 const auto ox = krs::lanes_of(nd.x), oy = krs::lanes_of(nd.y), oz = krs::lanes_of(nd.z);
                 for (std::size_t k = 0; k < m && first + k < count; ++k) normal[first + k] = {ox[k], oy[k], oz[k]};
             }
@@ -678,7 +678,7 @@ private:
         }
         const rgb lit{entry[0], entry[1], entry[2]};
         if (!(options_.specular > 0)) return lit;
-        const krs::vec3d nd = shape_.normal_at(krs::vec3d(point()));
+        const krs::vec3d nd = shape_.normal_at(krs::vec3d(point()), options_.normals_by);
         if (nd.x == 0 && nd.y == 0 && nd.z == 0) return lit;
         return shading_.with_specular(lit, {float(nd.x), float(nd.y), float(nd.z)}, view, shadows);
     }
@@ -852,7 +852,7 @@ private:
     // at q (computed only when there is a light to use it).
     rgb lit(const krs::vec3f& q, int level, const float* shadows) const
     {
-        return shading_.lit(q, level, shadows, shading_.light_directions().empty() ? krs::vec3d{} : shape_.normal_at(krs::vec3d(q)));
+        return shading_.lit(q, level, shadows, shading_.light_directions().empty() ? krs::vec3d{} : shape_.normal_at(krs::vec3d(q), options_.normals_by));
     }
 
     hypervolume volume_;

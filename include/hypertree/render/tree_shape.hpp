@@ -15,13 +15,30 @@
 // normal at a point is its offset from the nearby axes, made perpendicular to each axis and
 // blended with weights 1 / (distance to the centroid)^2: outward from the branch structure, smooth,
 // and defined for point generators that carry no direction of their own.
+//
+// The paper allows two more normals (8.3), chosen by march_options::normals_by (normal_method):
+// - Box normals (after Hart and DeFanti): each first-level part keeps its secondary bounding box
+//   (the box of its voxels' cells), and the normal at p is the outward normal of the face of that
+//   box nearest to p, in the box holding p whose nearest face is nearest (a point in no box takes
+//   the nearest box and the face it lies beyond most). Flat, faceted, and exact on a box.
+// - Line-generator flow: a tree grown from line segments knows the direction each first-level
+//   part's segments run in (the generator pushed through the part's transform), which for a part
+//   wider than it is long differs from the covariance axis. set_line_flow_of(drawn_ifs) computes
+//   those directions (set_line_flow takes them as given); the normal is then the structure-flow
+//   blend about them instead of the covariance axes (until one is called, the line axes are the
+//   covariance axes, and line_flow is the structure flow).
 
 #include "hypertree/store/store.hpp"
 #include "krs/core/bounds.hpp"
 #include "krs/core/lanes.hpp"
+#include "krs/core/validate.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <concepts>
+#include <limits>
+#include <string>
 #include <span>
 #include <vector>
 
@@ -31,12 +48,18 @@ struct part_flow {
     vec3d centroid{};
     vec3d axis{0, 1, 0};
     double weight_radius = 1; // softens 1/d^2 near the centroid: the part's RMS extent
+    vec3d line_axis{0, 1, 0}; // the line generators' direction in this part (normal_method::line_flow)
+    int part = 0;             // the voxels' part byte: 0 the trunk, 1 + j transformation j's
 };
+
+// Which normal the shading uses (section 8.3; see tree_shape below).
+enum class normal_method { structure_flow, part_boxes, line_flow };
 
 struct tree_shape {
     world_box box{};                           // of the non-empty voxels' cells
     std::vector<krs::bounding_sphere> spheres; // per first-level part (empty: box only)
     std::vector<part_flow> flows;
+    std::vector<world_box> part_boxes; // per first-level part, in the order of flows: its secondary bounding box
     krs::bounding_sphere crown{}; // the whole tree: its "outer shell" for ambient attenuation
 
     // From a sorted stored-voxel list (parts as classify or a partitioned store keep them).
@@ -76,7 +99,12 @@ struct tree_shape {
             f.centroid = c;
             f.axis = principal_axis(cov);
             f.weight_radius = std::max(std::sqrt(std::max(cov[0] + cov[3] + cov[5], 0.0)), volume.smallest_voxel_side());
+            f.line_axis = f.axis;
+            f.part = p;
             shape.flows.push_back(f);
+            index_box part_box = index_box::nothing();
+            for (const voxel_index i : part_indices[std::size_t(p)]) part_box.include(volume.coordinates(i));
+            shape.part_boxes.push_back(world_bounds(volume, part_box));
         }
         const vec3d lo = shape.box.lo, hi = shape.box.hi;
         shape.crown = krs::bound_around((lo + hi) * 0.5, krs::length(hi - lo) * 0.5);
@@ -89,17 +117,118 @@ struct tree_shape {
         return of(store.volume(), voxels);
     }
 
+    // The line generators' direction in each first-level part, in the order of `flows` (one per
+    // part, finite and non-zero; made unit). Throws invalid_parameter otherwise.
+    void set_line_flow(std::span<const vec3d> directions)
+    {
+        if (directions.size() != flows.size())
+            throw krs::invalid_parameter("tree_shape.set_line_flow", "needs one direction per first-level part (" + std::to_string(flows.size()) + ")",
+                                         std::to_string(directions.size()));
+        for (std::size_t i = 0; i < flows.size(); ++i) {
+            const double len = krs::length(directions[i]);
+            if (!(len > 0) || !std::isfinite(len))
+                throw krs::invalid_parameter("tree_shape.set_line_flow", "directions must be finite and non-zero", "direction " + std::to_string(i));
+            flows[i].line_axis = directions[i] / len;
+        }
+    }
+
+    // The line flow of a drawn IFS (drawn_ifs, ifs.hpp) with a line generator: part 1 + j runs
+    // along transformation j's first-level chain applied to the generator, chain(end) - chain(start)
+    // (shears included). The trunk (part 0, grown from the condensation) keeps its covariance axis,
+    // as does a part whose image of the segment is shorter than 1e-12 of its length. Throws
+    // invalid_parameter for a point generator, which has no direction to carry.
+    template <class Drawn>
+    void set_line_flow_of(const Drawn& drawn)
+    {
+        const auto& g = drawn.definition().generator;
+        if (g.is_point()) throw krs::invalid_parameter("tree_shape.set_line_flow_of", "needs an IFS with a line generator", "a point generator");
+        for (part_flow& f : flows) {
+            if (f.part < 1 || std::size_t(f.part - 1) >= drawn.transform_count()) continue;
+            const auto& chain = drawn.chain_of(std::size_t(f.part - 1), 1);
+            const vec3d d = chain(g.end) - chain(g.start);
+            const double len = krs::length(d);
+            if (len > 1e-12 * g.length() && std::isfinite(len)) f.line_axis = d / len;
+        }
+    }
+
+    // The normal at p by `method`: structure_flow and line_flow blend about the covariance or the
+    // line axes (normal_at below); part_boxes is box_normal_at, lane by lane for a packet.
+    template <class D = double>
+    krs::vec3<D> normal_at(const krs::vec3<D>& p, normal_method method) const
+    {
+        if (method == normal_method::structure_flow) return normal_at(p);
+        if (method == normal_method::line_flow) return flow_normal_at(p, true);
+        if constexpr (std::floating_point<D>) {
+            const vec3d n = box_normal_at(vec3d{p.x, p.y, p.z});
+            return {D(n.x), D(n.y), D(n.z)};
+        } else {
+            const auto x = krs::lanes_of(p.x), y = krs::lanes_of(p.y), z = krs::lanes_of(p.z);
+            decltype(krs::lanes_of(p.x)) ox{}, oy{}, oz{};
+            for (std::size_t k = 0; k < x.size(); ++k) {
+                const vec3d n = box_normal_at(vec3d{x[k], y[k], z[k]});
+                ox[k] = n.x, oy[k] = n.y, oz[k] = n.z;
+            }
+            return {D::load_unaligned(ox.data()), D::load_unaligned(oy.data()), D::load_unaligned(oz.data())};
+        }
+    }
+
+    // The outward normal of the nearest face of the part box p lies in (zero without boxes).
+    // Inside a box, the face distances are p - lo and hi - p per axis, the smallest wins (ties: x
+    // before y before z, lo before hi), and among the boxes holding p the one whose nearest face
+    // is nearest. Outside every box: the nearest box (Euclidean), and the face p is farthest beyond.
+    // In float, as the GLSL marcher computes it (glsl.hpp), so both pick the same face at a tie.
+    vec3d box_normal_at(const vec3d& p) const
+    {
+        constexpr float big = std::numeric_limits<float>::max();
+        const float pc[3] = {float(p.x), float(p.y), float(p.z)};
+        float best_inside = big, best_outside = big;
+        vec3d inside_n{}, outside_n{};
+        for (const world_box& b : part_boxes) {
+            const float lo[3] = {float(b.lo.x), float(b.lo.y), float(b.lo.z)}, hi[3] = {float(b.hi.x), float(b.hi.y), float(b.hi.z)};
+            float nearest = big, beyond = -big, out2 = 0;
+            int near_axis = 0, near_sign = -1, beyond_axis = 0, beyond_sign = -1;
+            for (int a = 0; a < 3; ++a) {
+                const float below = lo[a] - pc[a], above = pc[a] - hi[a]; // > 0: beyond that face
+                if (-below < nearest) nearest = -below, near_axis = a, near_sign = -1;
+                if (-above < nearest) nearest = -above, near_axis = a, near_sign = 1;
+                if (below > beyond) beyond = below, beyond_axis = a, beyond_sign = -1;
+                if (above > beyond) beyond = above, beyond_axis = a, beyond_sign = 1;
+                const float e = std::max(std::max(below, above), 0.0f);
+                out2 += e * e;
+            }
+            if (beyond <= 0) {
+                if (nearest < best_inside) best_inside = nearest, inside_n = axis_normal(near_axis, near_sign);
+            } else if (out2 < best_outside) {
+                best_outside = out2, outside_n = axis_normal(beyond_axis, beyond_sign);
+            }
+        }
+        return best_inside < big ? inside_n : outside_n;
+    }
+
     // The blended outward normal at p (zero when there is no flow). One template for a point
     // (D = double) and for a packet of points (D = krs::packet_d, a point per lane), each lane
     // computing exactly what the scalar does: square roots and divisions are correctly rounded.
     template <class D = double>
     krs::vec3<D> normal_at(const krs::vec3<D>& p) const
     {
+        return flow_normal_at(p, false);
+    }
+
+private:
+    static vec3d axis_normal(int axis, int sign)
+    {
+        return {axis == 0 ? double(sign) : 0.0, axis == 1 ? double(sign) : 0.0, axis == 2 ? double(sign) : 0.0};
+    }
+
+    template <class D>
+    krs::vec3<D> flow_normal_at(const krs::vec3<D>& p, bool line_axes) const
+    {
         using krs::select, krs::sqrt;
         const D zero(0.0);
         krs::vec3<D> n{zero, zero, zero};
         for (const part_flow& f : flows) {
-            const krs::vec3<D> centroid{D(f.centroid.x), D(f.centroid.y), D(f.centroid.z)}, axis{D(f.axis.x), D(f.axis.y), D(f.axis.z)};
+            const vec3d& a = line_axes ? f.line_axis : f.axis;
+            const krs::vec3<D> centroid{D(f.centroid.x), D(f.centroid.y), D(f.centroid.z)}, axis{D(a.x), D(a.y), D(a.z)};
             const krs::vec3<D> d = p - centroid;
             const krs::vec3<D> radial = d - axis * krs::dot(d, axis);
             const D w = D(1.0) / (krs::dot(d, d) + D(f.weight_radius * f.weight_radius * 0.05));
@@ -115,7 +244,6 @@ struct tree_shape {
         return {select(some, n.x / safe, zero), select(some, n.y / safe, zero), select(some, n.z / safe, zero)};
     }
 
-private:
     // Dominant eigenvector of a symmetric 3x3 matrix by power iteration from the axis with the
     // largest variance (converges unless that start is orthogonal to it, which the choice avoids).
     static vec3d principal_axis(const std::array<double, 6>& c)
