@@ -163,7 +163,7 @@ public:
     void clear_set_aside() { missed_.clear(), invalid_.clear(); }
 
 private:
-    static constexpr std::uint64_t all_lanes = W >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1;
+    static constexpr std::uint64_t all_lanes = low_bits(W);
 
     // Room for one more register at the end, and a register's read past it.
     void room()
@@ -318,7 +318,7 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
             stats.rays += count;
         }
         // Every lane not running takes the queue's next ray, while there are rays.
-        std::uint64_t want = ~active & ((W >= 64) ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1), filled = 0;
+        std::uint64_t want = ~active & low_bits(W), filled = 0;
         while (want != 0 && refill_queue()) {
             const std::size_t need = std::size_t(std::popcount(want));
             const std::uint64_t take = queue.size() >= need ? want : detail::lowest_bits(want, queue.size());

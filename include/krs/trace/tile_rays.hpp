@@ -79,7 +79,7 @@ std::size_t queue_tile_rays(ray_queue<P>& queue, const pinhole_camera& camera, i
         P t0 = prepass.start_for(r), t1(t_max);
         clip.apply(r, t0, t1);
         const std::size_t left = count - first;
-        queue.push(r, t0, t1, id, left >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << left) - 1);
+        queue.push(r, t0, t1, id, low_bits(left));
     }
     return count;
 }
