@@ -934,7 +934,10 @@ TEST_CASE("ray_queue: packets queued in lane order, unusable rays and empty rang
     for (std::size_t i = 0; i < q.size(); ++i) {
         const krs::ray_job a = q.job(i), b = one.job(i);
         REQUIRE(a.id == b.id);
-        REQUIRE((a.r.origin.x == b.r.origin.x && a.r.direction.z == b.r.direction.z && a.t_start == b.t_start && a.t_max == b.t_max));
+        // All 8 floats: a compress that mixed up two arrays would show in any one of them.
+        const float got[8] = {a.r.origin.x, a.r.origin.y, a.r.origin.z, a.r.direction.x, a.r.direction.y, a.r.direction.z, a.t_start, a.t_max};
+        const float want[8] = {b.r.origin.x, b.r.origin.y, b.r.origin.z, b.r.direction.x, b.r.direction.y, b.r.direction.z, b.t_start, b.t_max};
+        for (int c = 0; c < 8; ++c) REQUIRE_MESSAGE(got[c] == want[c], "ray " << i << ", value " << c);
         REQUIRE(a.t_start <= a.t_max);
     }
     // take moves the front rays into the chosen lanes, in lane order, and keeps the others.
