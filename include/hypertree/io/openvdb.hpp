@@ -30,8 +30,8 @@
 //
 // Reading back: density values are turned into densities by round(value * 255), exact for what
 // `save_vdb` wrote; a value outside [0, 1] or not finite is refused (rescale such a grid first),
-// and a value below 0.5 / 255 rounds to an empty voxel. Files are written to "<path>.partial" and
-// renamed, so a failed write never leaves a partial file under the name.
+// and a value below 0.5 / 255 rounds to an empty voxel. Files are written to a new
+// "<path>.partial-<process>-<n>" and renamed, so a failed write never leaves a partial file under the name.
 
 #include "hypertree/io/binary.hpp" // load_error, loaded_voxels
 #include "hypertree/io/grid_files.hpp"
