@@ -667,9 +667,18 @@ public:
             std::lock_guard lock(mutex_);
             t = all_.emplace_back(std::move(made)).get();
         }
+        // Back on the free list however f leaves, an exception included: a table dropped here
+        // would be made again by every later task (its slots still count in read_out).
+        struct give_back {
+            voxel_table_pool& pool;
+            voxel_table* table;
+            ~give_back()
+            {
+                std::lock_guard lock(pool.mutex_);
+                pool.free_.push_back(table);
+            }
+        } guard{*this, t};
         f(*t);
-        std::lock_guard lock(mutex_);
-        free_.push_back(t);
     }
     bool overflowed() const
     {
