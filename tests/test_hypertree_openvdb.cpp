@@ -19,7 +19,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -291,8 +293,28 @@ TEST_CASE("VDB writers and reader refuse bad input by name and leave no file")
         openvdb::io::File((dir.path / "hot.vdb").string()).write(openvdb::GridPtrVec{grid});
     }
     CHECK(refusal([&] { (void)load_vdb<dense_store>(dir.path / "hot.vdb"); }).find("outside [0, 1]") != std::string::npos);
-    // An unwritable target over an existing good file keeps the good file.
-    const auto before = std::filesystem::file_size(dir.path / "t.vdb");
-    CHECK(refusal([&] { save_vdb(empty, dir.path / "t.vdb"); }) != "");
-    CHECK(std::filesystem::file_size(dir.path / "t.vdb") == before);
+    // A write that fails part way, over an existing good file, keeps the good file byte for byte and
+    // leaves no temporary file (the writer writes, then throws, as a full disk would make it).
+    const auto bytes_of = [](const std::filesystem::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const auto files_named = [&](const std::string& stem) {
+        std::size_t n = 0;
+        for (const auto& e : std::filesystem::directory_iterator(dir.path)) n += e.path().filename().string().starts_with(stem);
+        return n;
+    };
+    const std::string good = bytes_of(dir.path / "t.vdb");
+    REQUIRE(good.size() > 100);
+    const std::string failed = refusal([&] {
+        detail::write_then_rename("save_vdb", dir.path / "t.vdb", [&](const std::filesystem::path& partial) {
+            std::ofstream(partial, std::ios::binary) << good.substr(0, good.size() / 2);
+            REQUIRE(std::filesystem::file_size(partial) == good.size() / 2);
+            throw std::runtime_error("no space left on device");
+        });
+    });
+    CHECK(failed.find("save_vdb") != std::string::npos);
+    CHECK(failed.find("no space left on device") != std::string::npos);
+    CHECK(bytes_of(dir.path / "t.vdb") == good);
+    CHECK(files_named("t.vdb") == 1);
 }
