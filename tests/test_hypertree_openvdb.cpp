@@ -317,4 +317,37 @@ TEST_CASE("VDB writers and reader refuse bad input by name and leave no file")
     CHECK(failed.find("no space left on device") != std::string::npos);
     CHECK(bytes_of(dir.path / "t.vdb") == good);
     CHECK(files_named("t.vdb") == 1);
+
+    // The grids of t.vdb, changed one way, written to another file.
+    const auto edited = [&](const std::string& file, const auto& change) {
+        openvdb::io::File in((dir.path / "t.vdb").string());
+        in.open();
+        const openvdb::GridPtrVecPtr grids = in.getGrids();
+        in.close();
+        for (const openvdb::GridBase::Ptr& g : *grids) change(*g);
+        openvdb::io::File((dir.path / file).string()).write(*grids);
+        return dir.path / file;
+    };
+    // A level or part grid placed by another transform than the density's is refused, by name.
+    for (const char* moved : {"level", "part"}) {
+        const auto path = edited(std::string(moved) + "_moved.vdb", [&](openvdb::GridBase& g) {
+            if (g.getName() == moved) g.setTransform(openvdb::math::Transform::createLinearTransform(0.5));
+        });
+        CHECK(refusal([&] { (void)load_vdb<dense_store>(path); }).find("grid \"" + std::string(moved) + "\": its transform differs") !=
+              std::string::npos);
+    }
+    // Active tiles in the density grid: one of 4096^3 voxels (far more than the hypervolume) whose
+    // value rounds to an empty voxel is skipped without a walk; a non-empty one reaching outside
+    // the hypervolume is refused as a tile.
+    const auto faint = edited("faint_tile.vdb", [](openvdb::GridBase& g) {
+        if (g.getName() == "density") static_cast<openvdb::FloatGrid&>(g).tree().addTile(3, openvdb::Coord(8192, 8192, 8192), 0.0001f, true);
+    });
+    const auto back = load_vdb<dense_store>(faint);
+    CHECK(back.volume() == store.volume());
+    CHECK(back.nonempty_count() == store.nonempty_count());
+    const auto outside = edited("outside_tile.vdb", [](openvdb::GridBase& g) {
+        if (g.getName() == "density") static_cast<openvdb::FloatGrid&>(g).tree().addTile(1, openvdb::Coord(-64, -64, -64), 1.0f, true);
+    });
+    CHECK(refusal([&] { (void)load_vdb<dense_store>(outside); }).find("an active tile up to (-57, -57, -57) reaches outside") !=
+          std::string::npos);
 }
