@@ -33,6 +33,7 @@
 #include <chrono>
 #include <ctime>
 #include <memory>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -89,16 +90,34 @@ int main(int argc, char** argv)
             return 2;
         }
         const std::string v = argv[++i];
+        // A whole number in [least, most], or a refusal naming the option (never a default in its place).
+        bool refused = false;
+        const auto whole = [&](long least, long most) {
+            char* end = nullptr;
+            errno = 0;
+            const long n = std::strtol(v.c_str(), &end, 10);
+            if (v.empty() || *end != '\0' || errno != 0 || n < least || n > most) {
+                std::fprintf(stderr, "%s must be a whole number from %ld to %ld (got '%s')\n", a.c_str(), least, most, v.c_str());
+                refused = true;
+            }
+            return int(n);
+        };
         if (a == "--csv") csv_path = v;
-        else if (a == "--resolution") res = std::max(8, std::atoi(v.c_str()));
-        else if (a == "--trees") trees = v;
-        else if (a == "--rounds") rounds = std::max(1, std::atoi(v.c_str()));
+        else if (a == "--resolution") res = whole(8, 1625); // 1625^3 < 2^32: the largest grid of 32-bit voxel indices
+        else if (a == "--trees") {
+            trees = v;
+            if (v.empty() || v.find_first_not_of("ABCD") != std::string::npos) {
+                std::fprintf(stderr, "--trees must be letters of ABCD (got '%s')\n", v.c_str());
+                refused = true;
+            }
+        } else if (a == "--rounds") rounds = whole(1, 1000);
         else if (a == "--dir") dir = v;
-        else if (a == "--tbb-threads") tbb_threads = std::max(1, std::atoi(v.c_str()));
+        else if (a == "--tbb-threads") tbb_threads = whole(1, 1024);
         else {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;
         }
+        if (refused) return 2;
     }
     std::filesystem::create_directories(dir);
     std::unique_ptr<tbb::global_control> tbb_limit;

@@ -232,11 +232,12 @@ int write_slice(const options& opt, const F& field)
         !example::write_png(stem + "_gradient.png", opt.width, opt.height, image.gradient_image()))
         return 1;
     std::printf("slice %s: %dx%d, plane %s at %g, extent %g, iso spacing %g, gradient step %.3g: flagged %zu of %zu "
-                "pixels (slope along the gradient > 1 + %g), max slope %.5g, max |grad| %.4g, %.2f s -> %s_distance.png, "
+                "pixels (slope along the gradient > 1 + %g, or a distance not finite: %zu pixels, magenta), max slope %.5g, "
+                "max |grad| %.4g, %.2f s -> %s_distance.png, "
                 "%s_gradient.png\n",
                 opt.slice.c_str(), opt.width, opt.height, opt.slice_plane.c_str(), double(opt.slice_offset),
                 double(opt.slice_extent), double(opt.slice_spacing), image.step, image.overestimating, image.pixels(),
-                double(settings.lipschitz_tolerance), double(image.max_slope), double(image.max_gradient), seconds,
+                double(settings.lipschitz_tolerance), image.non_finite, double(image.max_slope), double(image.max_gradient), seconds,
                 stem.c_str(), stem.c_str());
     return 0;
 }

@@ -104,6 +104,17 @@ void to_lanes(const V& v, lane_scalar<V>* out)
 #define KRS_COMPRESS_TYPES_WIDE
 #endif
 
+TEST_CASE("low_bits(n) sets bits 0 .. n-1, every bit from 64 on")
+{
+    // Reference: the bits set one at a time, never a shift by the word's width.
+    for (std::size_t n = 0; n <= 70; ++n) {
+        std::uint64_t expected = 0;
+        for (std::size_t i = 0; i < std::min<std::size_t>(n, 64); ++i) expected |= std::uint64_t(1) << i;
+        CHECK_MESSAGE(krs::low_bits(n) == expected, "n = " << n);
+    }
+    static_assert(krs::low_bits(0) == 0 && krs::low_bits(64) == ~std::uint64_t(0));
+}
+
 TEST_CASE_TEMPLATE("compress_store and expand_load equal their lane-by-lane meaning", V, KRS_COMPRESS_TYPES KRS_COMPRESS_TYPES_WIDE)
 {
     using S = lane_scalar<V>;

@@ -46,6 +46,19 @@ krs::slice_plane test_plane()
     return plane;
 }
 
+// A sphere whose distance is NaN where x > 0.5 and +infinity where x < -0.5.
+struct broken_sphere {
+    krs::sphere s;
+    template <class T>
+    T distance(const krs::vec3<T>& p) const
+    {
+        using krs::select;
+        const T d = s.distance(p);
+        return select(p.x > T(0.5f), T(std::numeric_limits<float>::quiet_NaN()),
+                      select(p.x < T(-0.5f), T(std::numeric_limits<float>::infinity()), d));
+    }
+};
+
 const vec3d centre{0.1, -0.2, 0.3};
 constexpr double radius = 0.7;
 
@@ -145,6 +158,47 @@ TEST_CASE("cross_section flags a field that overestimates by 2 at every pixel")
     CHECK(image.max_slope > 1.99f);
     const std::vector<float> grad = image.gradient_image();
     for (std::size_t i = 0; i < image.pixels(); ++i) CHECK((grad[3 * i] == 1.0f && grad[3 * i + 2] < 0.1f)); // red
+}
+
+TEST_CASE("cross_section shows and counts non-finite distances: NaN and infinity are flagged, never hidden")
+{
+    const broken_sphere f{krs::sphere(vec3f(centre), float(radius))};
+    const krs::slice_plane plane = test_plane();
+    const krs::cross_section_image image = krs::cross_section(f, plane);
+    // Reference by position: a pixel past |x| = 0.5 has a non-finite distance itself; one within
+    // 0.5 - 2h has all 9 samples (each within h of it) in the sphere's finite region.
+    const double h = image.step, margin = 0.5 - 2 * h;
+    const std::vector<float> rgb = image.distance_image(), grad = image.gradient_image();
+    std::size_t outer = 0, inner = 0, wrong = 0, not_magenta = 0;
+    for (int row = 0; row < plane.rows; ++row)
+        for (int column = 0; column < plane.columns; ++column) {
+            const std::size_t i = std::size_t(row * plane.columns + column);
+            const double x = plane.point(column, row).x;
+            const bool bad = image.kind[i] == krs::section_pixel::not_finite;
+            if (std::abs(x) > 0.5) {
+                ++outer;
+                wrong += !bad || !image.overestimates(i);
+                for (const std::vector<float>* c : {&rgb, &grad})
+                    not_magenta += !((*c)[3 * i] == 1.0f && (*c)[3 * i + 1] == 0.0f && (*c)[3 * i + 2] == 1.0f);
+            } else if (std::abs(x) < margin) {
+                ++inner;
+                wrong += bad || image.overestimates(i);
+            }
+        }
+    std::size_t counted = 0;
+    for (std::size_t i = 0; i < image.pixels(); ++i) counted += image.kind[i] == krs::section_pixel::not_finite;
+    std::printf("cross_section NaN/inf sphere: %zu non-finite, %zu flagged of %zu pixels (%zu past |x| = 0.5)\n",
+                image.non_finite, image.overestimating, image.pixels(), outer);
+    REQUIRE(outer > 0);
+    REQUIRE(inner > 0);
+    CHECK(wrong == 0);
+    CHECK(not_magenta == 0);
+    CHECK(image.non_finite == counted);
+    CHECK(image.non_finite >= outer);
+    CHECK(image.overestimating == image.non_finite); // the finite part is a true sphere: nothing else flagged
+    CHECK(std::isfinite(image.max_gradient));
+    CHECK(std::isfinite(image.max_slope));
+    CHECK(image.max_slope <= 1.0f + 1e-3f);
 }
 
 TEST_CASE("cross_section does not flag a 1-Lipschitz field at its creases, where |grad| reads above 1")

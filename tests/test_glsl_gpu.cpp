@@ -806,6 +806,15 @@ TEST_CASE("GLSL KIFS colouring matches kifs_colour on llvmpipe")
         std::vector<vec3f> points(16384);
         for (vec3f& p : points) p = {u(random) * c.sample_half.x, u(random) * c.sample_half.y, u(random) * c.sample_half.z};
         const auto gpu = gpu_colours(e.source(), fn, points, e.data());
+        // With the distance in the same shader, the colouring reads the steps' parameters the
+        // distance put in the data (appended once): the data is the distance's plus the traps',
+        // and the colours are the same bit for bit.
+        krs::glsl::emitter both({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, c.name + "_data", 0});
+        (void)both.add(c.field, c.name);
+        const std::size_t distance_floats = both.data().size();
+        const std::string both_fn = both.add_shading(request, c.name + "_colour");
+        CHECK(both.data().size() == distance_floats + request.colouring.trap_count() * 4 * krs::glsl::vec4s_of<krs::orbit_trap>);
+        CHECK(gpu_colours(both.source(), both_fn, points, both.data()) == gpu);
         double worst_trap = 0;
         std::size_t counts_equal = 0, traps_bit_equal = 0, stayed = 0;
         for (std::size_t i = 0; i < points.size(); ++i) {

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <sstream>
 #include <streambuf>
@@ -173,7 +174,8 @@ TEST_CASE_TEMPLATE_DEFINE("hypertree binary round trip of a generated tree", S, 
     const std::filesystem::path file = dir.path / "tree.htree";
     hypertree::save(tree, file);
     CHECK(std::filesystem::file_size(file) == bytes.size());
-    CHECK(!std::filesystem::exists(dir.path / "tree.htree.partial"));
+    // Nothing but the file is left in the directory (no temporary file).
+    CHECK(std::distance(std::filesystem::directory_iterator(dir.path), std::filesystem::directory_iterator()) == 1);
     check_same_voxels(tree, hypertree::load<S>(file), true);
 }
 TEST_CASE_TEMPLATE_APPLY(binary_round_trip, hypertree::store_kinds);
@@ -372,6 +374,21 @@ TEST_CASE("hypertree binary files by path")
         check_same_voxels(store, hypertree::load<hypertree::partitioned_store>(file), true);
         CHECK_THROWS_WITH_AS(hypertree::save(store, dir.path / "missing directory" / "tree.htree"),
                              doctest::Contains("cannot open"), hypertree::save_error);
+    }
+    SUBCASE("saving never touches a file of the user's named like its temporary file, nor leaves one")
+    {
+        // The temporary file was "<path>.partial", overwritten and then renamed away.
+        const std::filesystem::path file = dir.path / "tree.htree", mine = dir.path / "tree.htree.partial";
+        std::ofstream(mine) << "the user's own file";
+        hypertree::save(store, file);
+        hypertree::save(store, file); // over an existing file too
+        check_same_voxels(store, hypertree::load<hypertree::partitioned_store>(file), true);
+        std::ifstream in(mine);
+        CHECK(std::string(std::istreambuf_iterator<char>(in), {}) == "the user's own file");
+        std::size_t entries = 0;
+        for (const auto& e : std::filesystem::directory_iterator(dir.path))
+            entries += e.path().filename().string().starts_with("tree.htree");
+        CHECK(entries == 2);
     }
 }
 

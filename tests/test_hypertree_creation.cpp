@@ -12,6 +12,7 @@
 
 #include <functional>
 #include <map>
+#include <stdexcept>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -214,4 +215,15 @@ TEST_CASE("hypertree creation: the per-voxel table (two tables at once) equals a
         CHECK_THROWS_WITH_AS(t.add(std::vector<hit>{{3, 1, 0}, {16, 1, 0}}), doctest::Contains("voxel_table.hits"), krs::invalid_parameter);
         CHECK_THROWS_WITH_AS(t.add(std::vector<hit>{{3, 64, 0}}), doctest::Contains("level 64"), krs::invalid_parameter);
     });
+    // A task that throws still returns its table: the next task is handed the same one.
+    detail::voxel_table_pool thrown(16, &scratch);
+    const detail::voxel_table* used = nullptr;
+    CHECK_THROWS_AS(thrown.with_table([&](detail::voxel_table& t) {
+        used = &t;
+        throw std::runtime_error("a task failed");
+    }),
+                    std::runtime_error);
+    const detail::voxel_table* handed = nullptr;
+    thrown.with_table([&](detail::voxel_table& t) { handed = &t; });
+    CHECK(handed == used);
 }

@@ -135,14 +135,13 @@ TEST_CASE("hypertree light sweep: lights along an axis give the shadow rays' tra
     }
 }
 
-TEST_CASE("hypertree light sweep: images of trees A-D within RMSE 0.0085 of the shadow rays'")
+TEST_CASE("hypertree light sweep: images of trees A-D within RMSE 0.01 of the shadow rays'")
 {
-    // Measured (resolution 100, 120 x 120, supersampling 1, sweep_near_steps 1): RMSE against the
-    // shadow rays' images 0.0042 / 0.0068 / 0.0045 / 0.0046 per voxel (A / B / C / D) and
-    // 0.0034 / 0.0053 / 0.0034 / 0.0037 per sample. Deterministic, so the margin (1.25 over the
-    // worst, tree B) only covers other compilers' rounding; the issue's bound is 0.01 at resolution
-    // 300, where bench_hypertree_render measures less. A sweep that lets all light through
-    // (transmittance forced to 1) fails it (see the report of issue 27).
+    // The bound is issue 27's: RMSE <= 0.01 against the shadow rays' image. Measured here
+    // (resolution 100, 120 x 120, supersampling 1, sweep_near_steps 1; printed below) up to
+    // 0.0068 (tree B per voxel; docs/benchmarks.md); bench_hypertree_render measures less at
+    // resolution 300. A sweep that lets all light through (transmittance forced to 1) fails it
+    // (see the report of issue 27).
     for (const auto maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
         const ifs<> tree = maker(100);
         const auto store = build_tree<bit_array_store>(tree, 1);
@@ -155,10 +154,12 @@ TEST_CASE("hypertree light sweep: images of trees A-D within RMSE 0.0085 of the 
             const image rays = render<krs::packet_f>(volume_marcher(store, shape, colors, by(method::rays, o)), camera);
             const image sweep = render<krs::packet_f>(volume_marcher(store, shape, colors, by(method::sweep, o)), camera);
             const double error = rmse(sweep, rays);
-            INFO("tree " << tree.name << (per_voxel ? " per voxel" : " per sample") << ": RMSE " << error);
-            MESSAGE("tree " << tree.name << (per_voxel ? " per voxel" : " per sample") << ": RMSE " << error);
-            CHECK(error <= 0.0085);
-            CHECK(error > 0.0); // (the sweep does approximate: the test compares two methods)
+            const std::string which = "tree " + std::string(tree.name) + (per_voxel ? " per voxel" : " per sample");
+            INFO(which << ": RMSE " << error);
+            MESSAGE(which << ": RMSE " << error);
+            CHECK(error <= 0.01);
+            // The sweep approximates the shadow rays; an exact match would be news, not a failure.
+            if (error == 0.0) MESSAGE("the sweep's image equals the shadow rays' exactly");
         }
     }
 }

@@ -19,7 +19,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -117,8 +119,9 @@ TEST_CASE_TEMPLATE_DEFINE("VDB files read by OpenVDB and NanoVDB hold every voxe
         const std::filesystem::path vdb = dir.path / "tree.vdb", nvdb = dir.path / "tree.nvdb";
         save_vdb(store, vdb);
         save_nvdb(store, nvdb);
-        CHECK(!std::filesystem::exists(dir.path / "tree.vdb.partial"));
-        CHECK(!std::filesystem::exists(dir.path / "tree.nvdb.partial"));
+        // No temporary file is left beside them.
+        for (const auto& e : std::filesystem::directory_iterator(dir.path))
+            CHECK(e.path().filename().string().find(".partial") == std::string::npos);
 
         // OpenVDB's reader, fresh from the file.
         openvdb::io::File file(vdb.string());
@@ -290,8 +293,61 @@ TEST_CASE("VDB writers and reader refuse bad input by name and leave no file")
         openvdb::io::File((dir.path / "hot.vdb").string()).write(openvdb::GridPtrVec{grid});
     }
     CHECK(refusal([&] { (void)load_vdb<dense_store>(dir.path / "hot.vdb"); }).find("outside [0, 1]") != std::string::npos);
-    // An unwritable target over an existing good file keeps the good file.
-    const auto before = std::filesystem::file_size(dir.path / "t.vdb");
-    CHECK(refusal([&] { save_vdb(empty, dir.path / "t.vdb"); }) != "");
-    CHECK(std::filesystem::file_size(dir.path / "t.vdb") == before);
+    // A write that fails part way, over an existing good file, keeps the good file byte for byte and
+    // leaves no temporary file (the writer writes, then throws, as a full disk would make it).
+    const auto bytes_of = [](const std::filesystem::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const auto files_named = [&](const std::string& stem) {
+        std::size_t n = 0;
+        for (const auto& e : std::filesystem::directory_iterator(dir.path)) n += e.path().filename().string().starts_with(stem);
+        return n;
+    };
+    const std::string good = bytes_of(dir.path / "t.vdb");
+    REQUIRE(good.size() > 100);
+    const std::string failed = refusal([&] {
+        detail::write_then_rename("save_vdb", dir.path / "t.vdb", [&](const std::filesystem::path& partial) {
+            std::ofstream(partial, std::ios::binary) << good.substr(0, good.size() / 2);
+            REQUIRE(std::filesystem::file_size(partial) == good.size() / 2);
+            throw std::runtime_error("no space left on device");
+        });
+    });
+    CHECK(failed.find("save_vdb") != std::string::npos);
+    CHECK(failed.find("no space left on device") != std::string::npos);
+    CHECK(bytes_of(dir.path / "t.vdb") == good);
+    CHECK(files_named("t.vdb") == 1);
+
+    // The grids of t.vdb, changed one way, written to another file.
+    const auto edited = [&](const std::string& file, const auto& change) {
+        openvdb::io::File in((dir.path / "t.vdb").string());
+        in.open();
+        const openvdb::GridPtrVecPtr grids = in.getGrids();
+        in.close();
+        for (const openvdb::GridBase::Ptr& g : *grids) change(*g);
+        openvdb::io::File((dir.path / file).string()).write(*grids);
+        return dir.path / file;
+    };
+    // A level or part grid placed by another transform than the density's is refused, by name.
+    for (const char* moved : {"level", "part"}) {
+        const auto path = edited(std::string(moved) + "_moved.vdb", [&](openvdb::GridBase& g) {
+            if (g.getName() == moved) g.setTransform(openvdb::math::Transform::createLinearTransform(0.5));
+        });
+        CHECK(refusal([&] { (void)load_vdb<dense_store>(path); }).find("grid \"" + std::string(moved) + "\": its transform differs") !=
+              std::string::npos);
+    }
+    // Active tiles in the density grid: one of 4096^3 voxels (far more than the hypervolume) whose
+    // value rounds to an empty voxel is skipped without a walk; a non-empty one reaching outside
+    // the hypervolume is refused as a tile.
+    const auto faint = edited("faint_tile.vdb", [](openvdb::GridBase& g) {
+        if (g.getName() == "density") static_cast<openvdb::FloatGrid&>(g).tree().addTile(3, openvdb::Coord(8192, 8192, 8192), 0.0001f, true);
+    });
+    const auto back = load_vdb<dense_store>(faint);
+    CHECK(back.volume() == store.volume());
+    CHECK(back.nonempty_count() == store.nonempty_count());
+    const auto outside = edited("outside_tile.vdb", [](openvdb::GridBase& g) {
+        if (g.getName() == "density") static_cast<openvdb::FloatGrid&>(g).tree().addTile(1, openvdb::Coord(-64, -64, -64), 1.0f, true);
+    });
+    CHECK(refusal([&] { (void)load_vdb<dense_store>(outside); }).find("an active tile up to (-57, -57, -57) reaches outside") !=
+          std::string::npos);
 }

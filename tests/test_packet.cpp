@@ -679,6 +679,35 @@ TEST_CASE("a stream of clipped tile rays reports every pixel once, as the scalar
     CHECK(differ <= width * height / 200);
 }
 
+TEST_CASE_TEMPLATE("queue_tile_rays: every pixel's ray and id past 2^23 pixels in one tile", L, float, P)
+{
+    // A tile of 4096 x 2050 = 2^23 + 8192 pixels inside a wider image: in float k + 1/2 rounds to
+    // even from 2^23 on, which put the last pixel of each of the tile's last two rows in the next
+    // row (a ray one row down and the id of a pixel left of the tile). Reference: the pixel's own
+    // row and column in integers and the scalar camera ray through its centre.
+    const int width = 4100, height = 2050, x0 = 2, columns = 4096;
+    const krs::pinhole_camera camera({0, 0, -5}, {0, 0, 0}, {0, 1, 0}, 60.0f, width, height);
+    krs::ray_queue<L> queue;
+    const std::size_t count = krs::queue_tile_rays(queue, camera, x0, 0, x0 + columns, height, krs::tile_prepass{}, 100.0f);
+    REQUIRE(count == std::size_t(columns) * std::size_t(height));
+    REQUIRE(queue.size() == count);
+    // A pixel's angle is about 2.6e-4 here: a ray one pixel off is far outside the tolerance.
+    std::size_t wrong_id = 0, wrong_ray = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        const krs::ray_job job = queue.job(i);
+        const int x = x0 + int(i % std::size_t(columns)), y = int(i / std::size_t(columns));
+        wrong_id += job.id != std::uint32_t(y * width + x);
+        const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+        wrong_ray += krs::length(job.r.direction - r.direction) > 1e-5f;
+    }
+    CHECK(wrong_id == 0);
+    CHECK(wrong_ray == 0);
+    // A tile too wide for exact lane maths is refused, naming the parameter.
+    const krs::pinhole_camera wide({0, 0, -5}, {0, 0, 0}, {0, 1, 0}, 60.0f, (1 << 22) + 1, 1);
+    CHECK_THROWS_WITH_AS(krs::queue_tile_rays(queue, wide, 0, 0, (1 << 22) + 1, 1, krs::tile_prepass{}, 100.0f),
+                         doctest::Contains("queue_tile_rays.x1"), krs::invalid_parameter);
+}
+
 TEST_CASE("box clip: parallel rays, unbounded boxes and huge footprints")
 {
     krs::trace_options o;
@@ -905,7 +934,10 @@ TEST_CASE("ray_queue: packets queued in lane order, unusable rays and empty rang
     for (std::size_t i = 0; i < q.size(); ++i) {
         const krs::ray_job a = q.job(i), b = one.job(i);
         REQUIRE(a.id == b.id);
-        REQUIRE((a.r.origin.x == b.r.origin.x && a.r.direction.z == b.r.direction.z && a.t_start == b.t_start && a.t_max == b.t_max));
+        // All 8 floats: a compress that mixed up two arrays would show in any one of them.
+        const float got[8] = {a.r.origin.x, a.r.origin.y, a.r.origin.z, a.r.direction.x, a.r.direction.y, a.r.direction.z, a.t_start, a.t_max};
+        const float want[8] = {b.r.origin.x, b.r.origin.y, b.r.origin.z, b.r.direction.x, b.r.direction.y, b.r.direction.z, b.t_start, b.t_max};
+        for (int c = 0; c < 8; ++c) REQUIRE_MESSAGE(got[c] == want[c], "ray " << i << ", value " << c);
         REQUIRE(a.t_start <= a.t_max);
     }
     // take moves the front rays into the chosen lanes, in lane order, and keeps the others.

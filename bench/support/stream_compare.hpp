@@ -44,13 +44,39 @@
 
 namespace bench {
 
-inline double nominal_ghz()
+// The clock the cycle figures (lane-lv/cyc) are counted at, and where it was read. The nominal
+// (base) clock where the system gives it: cpufreq's base_frequency, else its cpuinfo_max_freq (the
+// highest, boost included), else the "@ N GHz" of the model name; failing all three (e.g. in a VM),
+// the "cpu MHz" of /proc/cpuinfo, which is the first core's clock at the moment of reading, not a
+// nominal one.
+struct cpu_clock {
+    double ghz = 0.0;
+    const char* source = "unknown";
+};
+inline cpu_clock read_cpu_clock()
 {
+    for (const char* file : {"/sys/devices/system/cpu/cpu0/cpufreq/base_frequency",
+                             "/sys/devices/system/cpu/cpu0/cpufreq/cpuinfo_max_freq"}) {
+        std::ifstream in(file);
+        double khz = 0;
+        if (in >> khz && khz > 0) return {khz * 1e-6, file};
+    }
+    double current = 0.0;
     std::ifstream in("/proc/cpuinfo");
     std::string line;
-    while (std::getline(in, line))
-        if (line.rfind("cpu MHz", 0) == 0) return std::atof(line.substr(line.find(':') + 1).c_str()) * 1e-3;
-    return 0.0;
+    while (std::getline(in, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            const std::size_t at = line.find('@'), unit = line.find("GHz");
+            if (at != std::string::npos && unit != std::string::npos && unit > at) {
+                const double ghz = std::atof(line.substr(at + 1, unit - at - 1).c_str());
+                if (ghz > 0) return {ghz, "the model name"};
+            }
+        }
+        if (current == 0.0 && line.rfind("cpu MHz", 0) == 0)
+            current = std::atof(line.substr(line.find(':') + 1).c_str()) * 1e-3;
+    }
+    if (current > 0) return {current, "cpu MHz of /proc/cpuinfo (the current clock, not the nominal one)"};
+    return {};
 }
 
 // A field that keeps every batch of K packets the stream evaluates together.
@@ -254,7 +280,7 @@ stream_comparison compare_streams(const F& f, const krs::pinhole_camera& camera,
         }
     }
     benchmark::DoNotOptimize(sink);
-    const double ghz = nominal_ghz();
+    const double ghz = read_cpu_clock().ghz;
     if (ghz > 0 && !log.empty()) {
         c.lane_levels_per_cycle = double(evaluations) * double(levels) / (replay * ghz * 1e9);
         c.bound_lane_levels_per_cycle =
@@ -265,6 +291,8 @@ stream_comparison compare_streams(const F& f, const krs::pinhole_camera& camera,
 
 inline void print_stream_header()
 {
+    const cpu_clock clock = read_cpu_clock();
+    std::printf("lane-lv/cyc: cycles at %.3f GHz, read from %s\n", clock.ghz, clock.source);
     std::printf("%-22s %3s %17s %6s %17s %6s %5s %7s %6s %7s %7s %6s %13s\n", "scene", "n", "old / new Mr/s", "ratio",
                 "1 thread: old/new", "ratio", "hit", "evals", "field", "ns out", "queue", "in box", "lane-lv/cyc");
     std::printf("%-22s %3s %17s %6s %17s %6s %5s %7s %6s %7s %7s %6s %13s\n", "", "", "(2 threads)", "", "", "", "diff",

@@ -534,8 +534,9 @@ void merge_bucketed(std::span<const bucketed_chunk> chunks, const direct_buckets
 // (2^21: 128^3, so resolution 100 and below). A hit adds one to its voxel's count and keeps the
 // smaller (level, part) in the slot, a single read-modify-write in a 4 MiB table that the L3
 // cache holds, where bucketing wrote each hit as a key and read it back in the merge: one pass
-// instead of two, and no per-bucket loops (measured on one thread at 100^3: 1.6 to 3x less
-// time than bucket + merge, docs/benchmarks.md). A bit per line of 16 slots marks the lines in
+// instead of two, and no per-bucket loops (measured on one thread at 100^3, the worse of two runs
+// per tree: 1.94x / 2.26x / 2.17x / 2.58x less time than bucket + merge for trees A / B / C / D,
+// docs/benchmarks.md). A bit per line of 16 slots marks the lines in
 // use, so reading the entries out visits only those (a tree at 100^3 touches 1-5% of its grid)
 // and clears them as it goes. The entries come out in voxel order with every voxel's count and
 // minimum, which is what the merge made: the same list whatever order the hits came in.
@@ -666,9 +667,18 @@ public:
             std::lock_guard lock(mutex_);
             t = all_.emplace_back(std::move(made)).get();
         }
+        // Back on the free list however f leaves, an exception included: a table dropped here
+        // would be made again by every later task (its slots still count in read_out).
+        struct give_back {
+            voxel_table_pool& pool;
+            voxel_table* table;
+            ~give_back()
+            {
+                std::lock_guard lock(pool.mutex_);
+                pool.free_.push_back(table);
+            }
+        } guard{*this, t};
         f(*t);
-        std::lock_guard lock(mutex_);
-        free_.push_back(t);
     }
     bool overflowed() const
     {

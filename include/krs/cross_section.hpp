@@ -36,6 +36,10 @@
 //                    line (k = 0) white. Each pixel's class is `kind[i]`.
 //   gradient_image   |grad| as grey (black 0 .. light 1); flagged pixels red, turning yellow as the
 //                    slope reaches 2. Each pixel's flag is `overestimates(i)`.
+// A pixel where the distance or any of the 8 samples of its gradient is NaN or infinite is of kind
+// `not_finite`, magenta in both images, flagged (a tracer cannot step by such a value) and counted
+// in `non_finite`; max_gradient and max_slope are over the other pixels (NaN would vanish in a
+// maximum and an infinite distance gives a NaN gradient, so none of them may hide the problem).
 // Sampling costs 9 scalar distance evaluations per pixel; nothing is cached, no thread started.
 
 #include "krs/core/validate.hpp"
@@ -115,7 +119,7 @@ struct cross_section_options {
     }
 };
 
-enum class section_pixel : unsigned char { outside, inside, iso_line, zero_line };
+enum class section_pixel : unsigned char { outside, inside, iso_line, zero_line, not_finite };
 
 struct cross_section_image {
     slice_plane plane;
@@ -125,11 +129,15 @@ struct cross_section_image {
     std::vector<float> gradient;          // |grad d| per pixel (central differences)
     std::vector<float> slope;             // the quotient along the gradient's direction per pixel
     std::vector<section_pixel> kind;      // the distance image's class per pixel
-    std::size_t overestimating = 0;       // pixels with overestimates(i)
-    float max_gradient = 0, max_slope = 0;
+    std::size_t overestimating = 0;       // pixels with overestimates(i), the non-finite ones included
+    std::size_t non_finite = 0;           // pixels of kind not_finite
+    float max_gradient = 0, max_slope = 0; // over the finite pixels
 
     std::size_t pixels() const { return distance.size(); }
-    bool overestimates(std::size_t i) const { return slope[i] > 1.0f + options.lipschitz_tolerance; }
+    bool overestimates(std::size_t i) const
+    {
+        return kind[i] == section_pixel::not_finite || slope[i] > 1.0f + options.lipschitz_tolerance;
+    }
 
     // Linear RGB, 3 floats per pixel, rows top first (see the top of this file).
     std::vector<float> distance_image() const
@@ -138,7 +146,9 @@ struct cross_section_image {
         for (std::size_t i = 0; i < pixels(); ++i) {
             float r = 1, g = 1, b = 1; // the zero line
             const double d = distance[i];
-            if (kind[i] == section_pixel::iso_line) {
+            if (kind[i] == section_pixel::not_finite) {
+                r = b = 1.0f, g = 0.0f; // magenta
+            } else if (kind[i] == section_pixel::iso_line) {
                 r = g = b = 0.05f;
             } else if (kind[i] != section_pixel::zero_line) {
                 const bool inside = kind[i] == section_pixel::inside;
@@ -159,7 +169,9 @@ struct cross_section_image {
         std::vector<float> rgb(3 * pixels());
         for (std::size_t i = 0; i < pixels(); ++i) {
             const float m = gradient[i];
-            if (overestimates(i)) {
+            if (kind[i] == section_pixel::not_finite) {
+                rgb[3 * i] = rgb[3 * i + 2] = 1.0f, rgb[3 * i + 1] = 0.0f; // magenta
+            } else if (overestimates(i)) {
                 rgb[3 * i] = 1.0f, rgb[3 * i + 1] = 0.9f * std::clamp(slope[i] - 1.0f, 0.0f, 1.0f), rgb[3 * i + 2] = 0.05f;
             } else {
                 const float grey = 0.05f + 0.75f * std::clamp(m, 0.0f, 1.0f);
@@ -193,6 +205,7 @@ cross_section_image cross_section(const F& f, slice_plane plane, const cross_sec
             const std::size_t i = std::size_t(row) * std::size_t(plane.columns) + std::size_t(column);
             const vec3f p = plane.point(column, row);
             const float d = f.distance(p);
+            bool finite = std::isfinite(d);
             double g[3] = {0, 0, 0};
             for (int axis = 0; axis < 3; ++axis) {
                 vec3f a = p, b = p;
@@ -202,26 +215,36 @@ cross_section_image cross_section(const F& f, slice_plane plane, const cross_sec
                 cb -= h;
                 const double taken = double(ca) - double(cb);
                 // A step below the coordinate's ulp moves nothing: no slope is measured on that axis.
-                if (taken > 0) g[axis] = (double(f.distance(a)) - double(f.distance(b))) / taken;
+                const float da = f.distance(a), db = f.distance(b);
+                finite = finite && std::isfinite(da) && std::isfinite(db);
+                if (taken > 0) g[axis] = (double(da) - double(db)) / taken;
             }
             const double magnitude = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
             double slope = 0;
-            if (magnitude > 0) {
+            if (finite && magnitude > 0) {
                 const vec3d u = vec3d{g[0], g[1], g[2]} * (double(h) / magnitude);
                 const vec3f a(vec3d(p) + u), b(vec3d(p) - u);
                 const double taken = length(vec3d(a) - vec3d(b));
-                if (taken > 0) slope = std::abs(double(f.distance(a)) - double(f.distance(b))) / taken;
+                const float da = f.distance(a), db = f.distance(b);
+                finite = finite && std::isfinite(da) && std::isfinite(db);
+                if (taken > 0) slope = std::abs(double(da) - double(db)) / taken;
             }
+            // Finite samples can still give an infinite quotient (differences near FLT_MAX / h).
+            finite = finite && std::isfinite(float(magnitude)) && std::isfinite(float(slope));
             const double dd = d;
             const double k = std::round(dd / spacing);
             section_pixel kind = dd < 0 ? section_pixel::inside : section_pixel::outside;
             if (std::abs(dd - k * spacing) <= half_line) kind = k == 0 ? section_pixel::zero_line : section_pixel::iso_line;
+            if (!finite) kind = section_pixel::not_finite;
             out.distance[i] = d;
             out.gradient[i] = float(magnitude);
             out.slope[i] = float(slope);
             out.kind[i] = kind;
-            out.max_gradient = std::max(out.max_gradient, out.gradient[i]);
-            out.max_slope = std::max(out.max_slope, out.slope[i]);
+            if (finite) {
+                out.max_gradient = std::max(out.max_gradient, out.gradient[i]);
+                out.max_slope = std::max(out.max_slope, out.slope[i]);
+            }
+            out.non_finite += !finite;
             out.overestimating += out.overestimates(i);
         }
     return out;

@@ -37,6 +37,7 @@
 #include "krs/trace/packet_shade.hpp"
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/ray.hpp"
+#include "krs/trace/ray_queue.hpp"
 #include "krs/trace/sphere_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
 #include "krs/trace/tile_rays.hpp"

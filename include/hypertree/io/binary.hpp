@@ -33,11 +33,14 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <istream>
@@ -50,6 +53,11 @@
 #include <system_error>
 #include <utility>
 #include <vector>
+#if defined(_WIN32)
+#include <process.h> // _getpid
+#else
+#include <unistd.h> // getpid
+#endif
 
 namespace hypertree {
 
@@ -84,6 +92,62 @@ class save_error : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
 };
+
+namespace detail {
+
+// A new, empty file beside `path` for a save to write before renaming it over `path`:
+// "<path>.partial-<process id>-<n>", created exclusively (fopen's "x" mode), so that two writers
+// of one path, in one process or several, never share it and a file of the user's that happens
+// to have such a name is never overwritten (n counts up until a name is free).
+inline std::filesystem::path create_partial_file(const std::filesystem::path& path)
+{
+    static std::atomic<std::uint64_t> counter{0};
+#if defined(_WIN32)
+    const long process = long(_getpid());
+#else
+    const long process = long(::getpid());
+#endif
+    for (int attempt = 0; attempt < 1000; ++attempt) {
+        std::filesystem::path partial = path;
+        partial += ".partial-" + std::to_string(process) + "-" + std::to_string(counter.fetch_add(1));
+        if (std::FILE* f = std::fopen(partial.string().c_str(), "wbx")) {
+            std::fclose(f);
+            return partial;
+        }
+        if (errno != EEXIST) break; // a directory that cannot be written: another name will not help
+    }
+    throw save_error(path.string() + ": cannot open a new temporary file beside it: " + std::strerror(errno));
+}
+
+// Calls write(partial) with a new file from create_partial_file, then renames it over path. Any
+// exception from write, or a failed rename, removes the partial file and becomes a save_error
+// naming the caller and the path; a file already at `path` is left as it was.
+template <class Write>
+void write_then_rename(std::string_view caller, const std::filesystem::path& path, Write&& write)
+{
+    const auto message = [&](const std::string& text) { return std::string(caller) + ": " + path.string() + ": " + text; };
+    std::filesystem::path partial;
+    try {
+        partial = create_partial_file(path);
+    } catch (const save_error& e) {
+        throw save_error(std::string(caller) + ": " + e.what());
+    }
+    const auto fail = [&](const std::string& text) {
+        std::error_code ignored;
+        std::filesystem::remove(partial, ignored);
+        return save_error(message(text));
+    };
+    try {
+        write(partial);
+    } catch (const std::exception& e) {
+        throw fail("cannot write " + partial.string() + ": " + e.what());
+    }
+    std::error_code failure;
+    std::filesystem::rename(partial, path, failure);
+    if (failure) throw fail("cannot replace the file: " + failure.message());
+}
+
+} // namespace detail
 
 namespace binary_format {
 inline constexpr std::array<char, 8> magic{'K', 'R', 'S', 'H', 'T', 'R', 'E', 'E'};
@@ -392,32 +456,16 @@ void save(const S& store, std::ostream& out)
     writer.finish();
 }
 
-// Writes to a temporary file beside `path` and renames it over `path` once complete, so a
-// failed save never leaves a truncated file where a good one was.
+// Writes to a temporary file beside `path` (detail::create_partial_file) and renames it over `path`
+// once complete, so a failed save never leaves a truncated file where a good one was.
 template <voxel_store S>
 void save(const S& store, const std::filesystem::path& path)
 {
-    std::filesystem::path partial = path;
-    partial += ".partial";
-    {
+    detail::write_then_rename("hypertree save", path, [&](const std::filesystem::path& partial) {
         std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-        if (!out) throw save_error(path.string() + ": cannot open " + partial.string() + " for writing");
-        try {
-            save(store, out);
-        } catch (const save_error& e) {
-            out.close();
-            std::error_code ignored;
-            std::filesystem::remove(partial, ignored);
-            throw save_error(path.string() + ": " + e.what());
-        }
-    }
-    std::error_code failure;
-    std::filesystem::rename(partial, path, failure);
-    if (failure) {
-        std::error_code ignored;
-        std::filesystem::remove(partial, ignored);
-        throw save_error(path.string() + ": cannot replace the file: " + failure.message());
-    }
+        if (!out) throw save_error("cannot open it for writing");
+        save(store, out);
+    });
 }
 
 // The checked hypervolume and voxel list of a saved tree, without building a store (to convert

@@ -1,9 +1,9 @@
 #pragma once
 // What the OpenVDB and NanoVDB writers (io/openvdb.hpp, io/nanovdb.hpp) share, without either
-// library: the check of grid names and output paths, and the write to "<path>.partial" renamed over
-// the path once complete, so that a failed write never leaves a partial file under the name.
+// library: the check of grid names and output paths. Both write through io/binary.hpp's
+// write_then_rename (a temporary file beside the path, renamed over it once complete).
 
-#include "hypertree/io/binary.hpp" // save_error
+#include "hypertree/io/binary.hpp" // save_error, write_then_rename
 #include "krs/core/validate.hpp"
 
 #include <filesystem>
@@ -42,29 +42,6 @@ inline void require_output_path(std::string_view caller, const std::filesystem::
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         throw krs::invalid_parameter(std::string(caller) + " path", "must name a file, not a directory", path.string());
-}
-
-// Calls write(partial) with partial = path + ".partial", then renames it over path. Any exception
-// from write, or a failed rename, removes the partial file and becomes a save_error naming the
-// caller and the path.
-template <class Write>
-void write_then_rename(std::string_view caller, const std::filesystem::path& path, Write&& write)
-{
-    std::filesystem::path partial = path;
-    partial += ".partial";
-    const auto fail = [&](const std::string& message) {
-        std::error_code ignored;
-        std::filesystem::remove(partial, ignored);
-        return save_error(std::string(caller) + ": " + path.string() + ": " + message);
-    };
-    try {
-        write(partial);
-    } catch (const std::exception& e) {
-        throw fail("cannot write " + partial.string() + ": " + e.what());
-    }
-    std::error_code failure;
-    std::filesystem::rename(partial, path, failure);
-    if (failure) throw fail("cannot replace the file: " + failure.message());
 }
 
 } // namespace hypertree::detail

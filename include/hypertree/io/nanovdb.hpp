@@ -15,7 +15,7 @@
 //
 // A .nvdb file written by `save_nvdb` holds both grids uncompressed (codec NONE), so a reader can
 // copy each grid's buffer to the GPU as it is (NanoVDB's own readGrid). It is written to
-// "<path>.partial" and renamed.
+// a new "<path>.partial-<process>-<n>" and renamed (io/binary.hpp's write_then_rename).
 
 #include "hypertree/io/grid_files.hpp"
 #include "hypertree/store/store.hpp"

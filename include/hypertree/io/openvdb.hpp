@@ -30,8 +30,8 @@
 //
 // Reading back: density values are turned into densities by round(value * 255), exact for what
 // `save_vdb` wrote; a value outside [0, 1] or not finite is refused (rescale such a grid first),
-// and a value below 0.5 / 255 rounds to an empty voxel. Files are written to "<path>.partial" and
-// renamed, so a failed write never leaves a partial file under the name.
+// and a value below 0.5 / 255 rounds to an empty voxel. Files are written to a new
+// "<path>.partial-<process>-<n>" and renamed, so a failed write never leaves a partial file under the name.
 
 #include "hypertree/io/binary.hpp" // load_error, loaded_voxels
 #include "hypertree/io/grid_files.hpp"
@@ -258,6 +258,12 @@ inline loaded_voxels load_vdb_voxels(const std::filesystem::path& path, const vd
         throw load_error(name, std::nullopt, std::string("not a readable OpenVDB file: ") + e.what());
     }
     const detail::vdb_volume where = detail::volume_of(*density, name);
+    // Level and part are read at the density's index coordinates: a grid placed by another
+    // transform would give each voxel another voxel's level or part.
+    for (const openvdb::GridBase* other : {static_cast<const openvdb::GridBase*>(level.get()), static_cast<const openvdb::GridBase*>(part.get())})
+        if (other && other->transform() != density->transform())
+            throw load_error(name, std::nullopt, "grid \"" + other->getName() + "\": its transform differs from the density grid \"" +
+                                                     names.density + "\"'s (its values would land on other voxels)");
     loaded_voxels out;
     out.volume = where.volume;
     const resolution r = where.volume.grid();
@@ -273,10 +279,13 @@ inline loaded_voxels load_vdb_voxels(const std::filesystem::path& path, const vd
         if (v < 0 || v > 255) throw fail(c, std::string("its ") + what + " " + std::to_string(v) + " is outside [0, 255]");
         return std::uint8_t(v);
     };
-    const auto add = [&](const openvdb::Coord& ijk, float value) {
+    const auto density_byte = [&](const openvdb::Coord& ijk, float value) {
         if (!(std::isfinite(value) && value >= 0.0f && value <= 1.0f))
             throw fail(ijk, "density " + std::to_string(value) + " is outside [0, 1] (a fog volume's range; rescale the grid first)");
-        const long d = std::lround(double(value) * 255.0);
+        return std::lround(double(value) * 255.0);
+    };
+    const auto add = [&](const openvdb::Coord& ijk, float value) {
+        const long d = density_byte(ijk, value);
         if (d == 0) return;
         const openvdb::Coord c = ijk - where.offset;
         if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= r.x || c[1] >= r.y || c[2] >= r.z)
@@ -288,8 +297,16 @@ inline loaded_voxels load_vdb_voxels(const std::filesystem::path& path, const vd
         if (it.isVoxelValue()) {
             add(it.getCoord(), *it);
         } else { // an active tile: every voxel under it (a foreign grid; save_vdb writes none)
+            // Checked as a whole before any voxel is walked: a tile whose value rounds to an empty
+            // voxel is skipped at once, and one that is walked lies inside the hypervolume (tiles
+            // do not overlap, so all the walks together visit at most the hypervolume's voxels).
             const openvdb::CoordBBox tile = it.getBoundingBox();
-            if (tile.volume() > where.volume.voxel_count()) throw fail(tile.min(), "an active tile larger than the hypervolume");
+            if (density_byte(tile.min(), *it) == 0) continue;
+            const openvdb::Coord low = tile.min() - where.offset, high = tile.max() - where.offset;
+            if (low[0] < 0 || low[1] < 0 || low[2] < 0 || high[0] >= r.x || high[1] >= r.y || high[2] >= r.z)
+                throw fail(tile.min(), "an active tile up to (" + std::to_string(tile.max()[0]) + ", " + std::to_string(tile.max()[1]) + ", " +
+                                           std::to_string(tile.max()[2]) + ") reaches outside the hypervolume's " + std::to_string(r.x) +
+                                           " x " + std::to_string(r.y) + " x " + std::to_string(r.z) + " voxels");
             for (auto c = tile.begin(); c; ++c) add(*c, *it);
         }
     }

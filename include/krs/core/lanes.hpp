@@ -197,6 +197,13 @@ inline bool mask_lane(const mask_t<T>& m, std::size_t i) noexcept
     }
 }
 
+// The word with bits 0 .. n-1 set (lanes 0 .. n-1 of a lane word): every bit for n >= 64, where
+// the plain (1 << n) - 1 would shift by the word's width (undefined behaviour in C++).
+constexpr std::uint64_t low_bits(std::size_t n) noexcept
+{
+    return n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+}
+
 // A mask as a word of bits (bit i = lane i) and back, for code that keeps per-lane flags between
 // packet operations (a refilling tracer's finished lanes). With AVX-512 the mask register is
 // that word already; other targets go through memory.
@@ -297,7 +304,7 @@ template <class S, class A>
 inline std::size_t compress_store(S* out, const xsimd::batch<S, A>& x, std::uint64_t bits) noexcept
 {
     constexpr std::size_t n = xsimd::batch<S, A>::size;
-    bits &= n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+    bits &= low_bits(n);
     const std::size_t count = std::size_t(std::popcount(bits));
 #if defined(__AVX512F__)
     if constexpr (std::is_base_of_v<xsimd::avx512f, A>) {
@@ -343,7 +350,7 @@ inline xsimd::batch<S, A> expand_load(const xsimd::batch<S, A>& x, std::uint64_t
 {
     using V = xsimd::batch<S, A>;
     constexpr std::size_t n = V::size;
-    bits &= n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+    bits &= low_bits(n);
 #if defined(__AVX512F__)
     if constexpr (std::is_base_of_v<xsimd::avx512f, A>) {
         if constexpr (std::is_same_v<S, float>)

@@ -39,14 +39,17 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <concepts>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <string>
 #include <string_view>
 #include <tuple>
 #include <utility>
+#include <vector>
 
 namespace krs {
 
@@ -269,22 +272,7 @@ public:
     template <class Out>
     void glsl_emit(Out& out, const std::string& name) const
     {
-        std::string program = "vec3 " + name + "_program(vec3 p) {\n";
-        std::size_t index = 0;
-        std::apply(
-            [&](const auto&... step) {
-                (
-                    [&](const auto& s) {
-                        using S = std::remove_cvref_t<decltype(s)>;
-                        out.template library<S>();
-                        const std::size_t at = out.parameters(s, name + " step " + std::to_string(index++));
-                        program += "    p = " + std::string(S::glsl_name) + "_apply(p" +
-                                   out.template arguments<S>(at) + ");\n";
-                    }(step),
-                    ...);
-            },
-            steps_);
-        out.function(program + "    return p;\n}\n");
+        glsl_emit_program(out, name, false);
     }
 
     // GLSL for colouring (krs/fractal/kifs_colour.hpp): `vec3 NAME_program_folds(vec3 p, float i,
@@ -293,7 +281,34 @@ public:
     template <class Out>
     void glsl_emit_counted(Out& out, const std::string& name) const
     {
-        std::string program = "vec3 " + name + "_program_folds(vec3 p, float i, inout float fold_count, inout float last_fold) {\n    vec3 q;\n";
+        glsl_emit_program(out, name, true);
+    }
+
+private:
+    // Both functions above, from one walk over the steps. The steps' parameters go to the data
+    // once per shader: they are recorded under a key made of the steps' GLSL types and their
+    // values' bits, and a second emission of the same program (its distance and its colouring,
+    // under two names) reads the first one's (the data is constant, so equal values may be shared).
+    template <class Out>
+    void glsl_emit_program(Out& out, const std::string& name, bool counted) const
+    {
+        std::string key = "kifs program";
+        std::apply(
+            [&](const auto&... step) {
+                (
+                    [&](const auto& s) {
+                        using S = std::remove_cvref_t<decltype(s)>;
+                        key += " " + std::string(S::glsl_name);
+                        if constexpr (requires { s.glsl_parameters(); })
+                            for (const float v : s.glsl_parameters()) key += ":" + std::to_string(std::bit_cast<std::uint32_t>(v));
+                    }(step),
+                    ...);
+            },
+            steps_);
+        const auto* recorded = out.recorded_kernels(key);
+        std::vector<std::size_t> at;
+        std::string program = counted ? "vec3 " + name + "_program_folds(vec3 p, float i, inout float fold_count, inout float last_fold) {\n    vec3 q;\n"
+                                      : "vec3 " + name + "_program(vec3 p) {\n";
         std::size_t index = 0;
         std::apply(
             [&](const auto&... step) {
@@ -301,9 +316,10 @@ public:
                     [&](const auto& s) {
                         using S = std::remove_cvref_t<decltype(s)>;
                         out.template library<S>();
-                        const std::size_t at = out.parameters(s, name + " step " + std::to_string(index++));
-                        const std::string call = std::string(S::glsl_name) + "_apply(p" + out.template arguments<S>(at) + ")";
-                        if constexpr (counts_as_fold<S>)
+                        const std::size_t k = index++;
+                        at.push_back(recorded ? recorded->first[k] : out.parameters(s, name + " step " + std::to_string(k)));
+                        const std::string call = std::string(S::glsl_name) + "_apply(p" + out.template arguments<S>(at.back()) + ")";
+                        if (counted && counts_as_fold<S>)
                             program += "    q = " + call + ";\n"
                                        "    if (any(notEqual(q, p))) { fold_count += 1.0; last_fold = i; }\n"
                                        "    p = q;\n";
@@ -313,10 +329,10 @@ public:
                     ...);
             },
             steps_);
+        if (!recorded) out.record_kernels(key, std::move(at), {});
         out.function(program + "    return p;\n}\n");
     }
 
-private:
     std::tuple<Steps...> steps_;
 };
 

@@ -135,8 +135,9 @@ struct kifs_colour_glsl {
     kifs_colouring colouring;
 
     // The struct, once per shader, then `krs_kifs_colour NAME(vec3 p)`: the program's iteration
-    // with its fold counts (fold_program::glsl_emit_counted, as NAME_program_folds; its parameters
-    // appended to the data again, so this function may be emitted without the distance), the
+    // with its fold counts (fold_program::glsl_emit_counted, as NAME_program_folds; it reads the
+    // steps' parameters the distance put in the data, or appends them when the distance is not
+    // emitted, so this function may be emitted without it), the
     // traps after every iteration, the escape test as the C++ writes it.
     template <class Out>
     void glsl_shading(Out& out, const std::string& name, const std::string&) const

@@ -10,17 +10,8 @@
 // is `march_advance`, the template the scalar tracer's `march_step` runs: scheduling is the only
 // thing this header adds (docs/design.md#rule-1).
 //
-// Rays wait in a `ray_queue`: structure of arrays (one array per coordinate, start, end, id), so
-// a packet's finished lanes are refilled by one expand per coordinate (krs/core/lanes.hpp's
-// expand_load: the next c rays of the queue go to the c finished lanes, in lane order) and its
-// results leave by one compress per value, never by copying rays lane by lane. A ray is checked
-// once, W at a time, as it is queued: one that cannot be marched (an unusable ray, or an empty
-// range such as a ray that misses the field's box) is set aside as a miss and never takes a lane,
-// so a refilled lane is always active and the refill blends only what a new ray changes. Against
-// the stream that pulled one `ray_job` per lane and blended a whole march_state (issue 23), that
-// is 1.7-2.2x the rays per second per core on bench_embree_peer's scenes at the 0.5 px threshold
-// (about 2 evaluations per ray), with the same hits; where rays take 15 evaluations the field is
-// most of the time and the gain is 1.0-1.2x (bench_packet_trace).
+// Rays wait in a `ray_queue` (krs/trace/ray_queue.hpp): a packet's finished lanes are refilled
+// from it a whole register at a time, and a ray that cannot be marched never takes a lane.
 //
 // `trace_queue(f, queue, more, done, ...)` traces a queue and asks `more(queue)` for more rays
 // when it runs dry (false: there are no more; krs/trace/tile_rays.hpp queues a screen tile's
@@ -29,6 +20,7 @@
 // `done(std::uint32_t id, const hit<float>&)`, in completion order, on the calling thread. The
 // library starts no thread; callers run one stream per thread (e.g. one per tile).
 
+#include "krs/trace/ray_queue.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
 #include <algorithm>
@@ -39,15 +31,6 @@
 #include <vector>
 
 namespace krs {
-
-// One ray of a stream: where it starts (e.g. a tile prepass depth), where it ends, and the
-// caller's id for it (typically the pixel index).
-struct ray_job {
-    ray<float> r{};
-    float t_start = 0.0f;
-    float t_max = 1.0e4f;
-    std::uint32_t id = 0;
-};
 
 // What a stream did, for benchmarks: rays finished, field evaluations used by rays, packet steps
 // executed and how many of their lanes did useful work (utilization = busy_lanes / (steps * W)).
@@ -65,127 +48,6 @@ struct stream_stats {
         rays += o.rays, evaluations += o.evaluations, packet_steps += o.packet_steps, busy_lanes += o.busy_lanes;
         return *this;
     }
-};
-
-// Rays waiting for a stream's lanes, as a structure of arrays, plus the ids of the rays set aside
-// as they were queued (reported as misses without a step). Rays are appended W at a time from
-// packets (`push`, one compress per array) or one at a time (`push(ray_job)`); the stream takes
-// them from the front with `take` (one expand per array). Every array keeps 2 W values of room
-// past its end: a compress writes a whole register at the end, an expand reads one at the front.
-template <class P = packet_f>
-class ray_queue {
-public:
-    static constexpr std::size_t W = lane_count<P>;
-    using ids = index_lanes<P>;
-
-    // Rays waiting (queued, not yet taken).
-    std::size_t size() const { return size_ - head_; }
-    bool empty() const { return size_ == head_; }
-    // Drops every ray, waiting or set aside.
-    void clear()
-    {
-        size_ = head_ = 0;
-        missed_.clear(), invalid_.clear();
-    }
-
-    // Queues the lanes of `lanes` (bit i = lane i) whose ray can be marched, in lane order. The
-    // others are set aside: a ray unusable_ray refuses as invalid, one whose range is empty
-    // (t_start > t_max, or NaN: a ray clipped away) as a plain miss; `id` holds the caller's ids
-    // (as index lanes; an id is any 32-bit value, stored as its bits).
-    void push(const ray<P>& r, const P& t_start, const P& t_max, const ids& id, std::uint64_t lanes)
-    {
-        lanes &= all_lanes;
-        const std::uint64_t bad = mask_bits<P>(unusable_ray(r, t_start)) & lanes;
-        const std::uint64_t keep = mask_bits<P>(t_start <= t_max) & lanes & ~bad;
-        if (keep != lanes) {
-            set_aside(invalid_, id, bad);
-            set_aside(missed_, id, lanes & ~bad & ~keep);
-        }
-        if (keep == 0) return;
-        room();
-        const std::size_t at = size_;
-        compress_store(x_[0].data() + at, r.origin.x, keep);
-        compress_store(x_[1].data() + at, r.origin.y, keep);
-        compress_store(x_[2].data() + at, r.origin.z, keep);
-        compress_store(x_[3].data() + at, r.direction.x, keep);
-        compress_store(x_[4].data() + at, r.direction.y, keep);
-        compress_store(x_[5].data() + at, r.direction.z, keep);
-        compress_store(x_[6].data() + at, t_start, keep);
-        compress_store(x_[7].data() + at, t_max, keep);
-        size_ += compress_store(id_.data() + at, id, keep);
-    }
-    // Queues one ray, set aside as above when it cannot be marched.
-    void push(const ray_job& job)
-    {
-        if (unusable_ray(job.r, job.t_start)) {
-            invalid_.push_back(std::int32_t(job.id));
-            return;
-        }
-        if (!(job.t_start <= job.t_max)) {
-            missed_.push_back(std::int32_t(job.id));
-            return;
-        }
-        room();
-        const float v[8] = {job.r.origin.x,    job.r.origin.y,    job.r.origin.z, job.r.direction.x,
-                            job.r.direction.y, job.r.direction.z, job.t_start,    job.t_max};
-        for (int k = 0; k < 8; ++k) x_[std::size_t(k)][size_] = v[k];
-        id_[size_++] = std::int32_t(job.id);
-    }
-
-    // Moves the next popcount(lanes) rays into the lanes of `lanes` (in lane order), leaving the
-    // other lanes as they are. Precondition: popcount(lanes) <= size().
-    void take(std::uint64_t lanes, ray<P>& r, P& t_start, P& t_max, ids& id)
-    {
-        const std::size_t at = head_;
-        r.origin.x = expand_load(r.origin.x, lanes, x_[0].data() + at);
-        r.origin.y = expand_load(r.origin.y, lanes, x_[1].data() + at);
-        r.origin.z = expand_load(r.origin.z, lanes, x_[2].data() + at);
-        r.direction.x = expand_load(r.direction.x, lanes, x_[3].data() + at);
-        r.direction.y = expand_load(r.direction.y, lanes, x_[4].data() + at);
-        r.direction.z = expand_load(r.direction.z, lanes, x_[5].data() + at);
-        t_start = expand_load(t_start, lanes, x_[6].data() + at);
-        t_max = expand_load(t_max, lanes, x_[7].data() + at);
-        id = expand_load(id, lanes, id_.data() + at);
-        head_ += std::size_t(std::popcount(lanes & all_lanes));
-    }
-
-    // Waiting ray i (0 = the next one) as a job, for callers that hand rays out one at a time.
-    ray_job job(std::size_t i) const
-    {
-        const std::size_t k = head_ + i;
-        return {{{x_[0][k], x_[1][k], x_[2][k]}, {x_[3][k], x_[4][k], x_[5][k]}}, x_[6][k], x_[7][k], std::uint32_t(id_[k])};
-    }
-    void drop_front(std::size_t count) { head_ = std::min(size_, head_ + count); }
-
-    // Ids of the rays set aside since the last clear: misses, and rays that could not be marched.
-    const std::vector<std::int32_t>& missed() const { return missed_; }
-    const std::vector<std::int32_t>& invalid() const { return invalid_; }
-    void clear_set_aside() { missed_.clear(), invalid_.clear(); }
-
-private:
-    static constexpr std::uint64_t all_lanes = W >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1;
-
-    // Room for one more register at the end, and a register's read past it.
-    void room()
-    {
-        const std::size_t need = size_ + 2 * W;
-        if (id_.size() >= need) return;
-        const std::size_t grow = std::max(need, 2 * id_.size());
-        for (auto& a : x_) a.resize(grow);
-        id_.resize(grow);
-    }
-    void set_aside(std::vector<std::int32_t>& list, const ids& id, std::uint64_t lanes)
-    {
-        if (lanes == 0) return;
-        const std::size_t at = list.size();
-        list.resize(at + W);
-        list.resize(at + compress_store(list.data() + at, id, lanes));
-    }
-
-    std::array<std::vector<float>, 8> x_; // origin xyz, direction xyz, start, end
-    std::vector<std::int32_t> id_;
-    std::size_t size_ = 0, head_ = 0;
-    std::vector<std::int32_t> missed_, invalid_;
 };
 
 namespace detail {
@@ -318,7 +180,7 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
             stats.rays += count;
         }
         // Every lane not running takes the queue's next ray, while there are rays.
-        std::uint64_t want = ~active & ((W >= 64) ? ~std::uint64_t(0) : (std::uint64_t(1) << W) - 1), filled = 0;
+        std::uint64_t want = ~active & low_bits(W), filled = 0;
         while (want != 0 && refill_queue()) {
             const std::size_t need = std::size_t(std::popcount(want));
             const std::uint64_t take = queue.size() >= need ? want : detail::lowest_bits(want, queue.size());

@@ -31,12 +31,14 @@
 // queue.
 
 #include "krs/trace/box_clip.hpp"
+#include "krs/core/validate.hpp"
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
 
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace krs {
@@ -56,6 +58,11 @@ std::size_t queue_tile_rays(ray_queue<P>& queue, const pinhole_camera& camera, i
     x1 = std::min(x1, camera.width()), y1 = std::min(y1, camera.height());
     if (x1 <= x0 || y1 <= y0) return 0;
     const int columns = x1 - x0;
+    // The lane maths below is exact while a packet's offsets from its row start stay below 2^23
+    // (columns + W of them); wider tiles are refused rather than given wrong rays and ids.
+    if (columns > (1 << 22))
+        throw invalid_parameter("queue_tile_rays.x1", "the tile must be at most 2^22 pixels wide",
+                                std::to_string(columns) + " columns");
     const std::size_t count = std::size_t(columns) * std::size_t(y1 - y0);
     // Lane i's offset 0 ... W-1 from the packet's first pixel.
     P lane(0.0f);
@@ -68,18 +75,24 @@ std::size_t queue_tile_rays(ray_queue<P>& queue, const pinhole_camera& camera, i
     const ids width(std::int32_t(camera.width()));
     const std::int32_t base = std::int32_t(y0) * std::int32_t(camera.width()) + std::int32_t(x0);
     for (std::size_t first = 0; first < count; first += W) {
-        // Pixel k of the tile is at row floor(k / columns), column k - row * columns: exact in
-        // float for k < 2^24, and (k + 1/2) / columns is at least 1/(2 columns) from an integer,
-        // far more than its rounding error, so the floor is the integer quotient.
-        const P k = P(float(first)) + lane;
-        const P row = lane_floor((k + P(0.5f)) / cols);
-        const P column = k - row * cols;
+        // The packet's first pixel splits into row and column in integers; its lanes are at
+        // k = column + i (k < columns + W <= 2^23 + W) from that row's start. Then k and
+        // k + 1/2 are exact in float (below 2^23 a float holds every half integer; from 2^23 on
+        // k + 1/2 would round to even and the last pixel of a row would land in the next one),
+        // and (k + 1/2) / columns is at least 1/(2 columns) from an integer, far more than its
+        // rounding error, so its floor is the integer quotient: the lane's row past the first.
+        const std::size_t first_row = first / std::size_t(columns);
+        const P k = P(float(first - first_row * std::size_t(columns))) + lane;
+        const P rows_on = lane_floor((k + P(0.5f)) / cols);
+        const P column = k - rows_on * cols;
+        const P row = rows_on + P(float(first_row));
         const ray<P> r = camera.primary_ray(column + P(float(x0) + 0.5f), row + P(float(y0) + 0.5f));
-        const ids id = ids(base) + truncate_to_index(row) * width + truncate_to_index(column);
+        const ids id = ids(base + std::int32_t(first_row) * std::int32_t(camera.width())) +
+                       truncate_to_index(rows_on) * width + truncate_to_index(column);
         P t0 = prepass.start_for(r), t1(t_max);
         clip.apply(r, t0, t1);
         const std::size_t left = count - first;
-        queue.push(r, t0, t1, id, left >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << left) - 1);
+        queue.push(r, t0, t1, id, low_bits(left));
     }
     return count;
 }
