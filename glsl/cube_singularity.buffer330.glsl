@@ -136,21 +136,21 @@ float krs_cube_singularity_scale(float k) {
     }
     return exp(k * krs_cube_singularity_data[70].y);
 }
-float krs_cube_singularity_in_shell(vec3 p, float k) {
-    float scale = krs_cube_singularity_scale(k);
+float krs_cube_singularity_in_shell(vec3 p, float scale) {
     return krs_cube_singularity_shell(p / scale) * scale;
 }
 float krs_cube_singularity(vec3 p) {
     vec4 c = krs_cube_singularity_data[70];
     float r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
     float k = floor(log(max(r, 1e-30)) * c.x);
+    float inner = krs_cube_singularity_scale(k);
+    float outer = inner * c.z;
     float d = c.w * r;
     for (int j = -1; j <= 1; ++j) {
-        float kj = k + float(j);
-        float inner = krs_cube_singularity_scale(kj);
-        float outer = inner * c.z;
-        float to_shell = max(max(inner - r, r - outer), 0.0);
-        d = min(d, max(krs_cube_singularity_in_shell(p, kj), to_shell));
+        float inner_j = j == 0 ? inner : krs_cube_singularity_scale(k + float(j));
+        float outer_j = inner_j * c.z;
+        float to_shell = max(max(inner_j - r, r - outer_j), 0.0);
+        d = min(d, max(krs_cube_singularity_in_shell(p, inner_j), to_shell));
     }
     return d * krs_cube_singularity_data[71].y;
 }

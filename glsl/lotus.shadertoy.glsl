@@ -158,21 +158,21 @@ float krs_lotus_scale(float k) {
     }
     return exp(k * krs_lotus_data[24].y);
 }
-float krs_lotus_in_shell(vec3 p, float k) {
-    float scale = krs_lotus_scale(k);
+float krs_lotus_in_shell(vec3 p, float scale) {
     return krs_lotus_shell(p / scale) * scale;
 }
 float krs_lotus(vec3 p) {
     vec4 c = krs_lotus_data[24];
     float r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
     float k = floor(log(max(r, 1e-30)) * c.x);
+    float inner = krs_lotus_scale(k);
+    float outer = inner * c.z;
     float d = c.w * r;
     for (int j = -1; j <= 1; ++j) {
-        float kj = k + float(j);
-        float inner = krs_lotus_scale(kj);
-        float outer = inner * c.z;
-        float to_shell = max(max(inner - r, r - outer), 0.0);
-        d = min(d, max(krs_lotus_in_shell(p, kj), to_shell));
+        float inner_j = j == 0 ? inner : krs_lotus_scale(k + float(j));
+        float outer_j = inner_j * c.z;
+        float to_shell = max(max(inner_j - r, r - outer_j), 0.0);
+        d = min(d, max(krs_lotus_in_shell(p, inner_j), to_shell));
     }
     return d * krs_lotus_data[25].y;
 }
