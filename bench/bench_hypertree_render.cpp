@@ -101,6 +101,24 @@ std::vector<stored_voxel> classified(const ifs<>& tree, std::uint64_t seed)
     return classify(entries, density_classes(entries, 32), tree.branch_depth);
 }
 
+// One of the paper's trees as the setup and walk tables draw it: its voxels (seed 1), its shape,
+// the 300 x 300 view framing it and its depth colours.
+struct paper_tree {
+    ifs<> tree;
+    std::vector<stored_voxel> voxels;
+    tree_shape shape;
+    krs::pinhole_camera camera;
+    depth_colors colors;
+
+    static paper_tree of(ifs<> tree)
+    {
+        std::vector<stored_voxel> voxels = classified(tree, 1);
+        tree_shape shape = tree_shape::of(tree.volume, voxels);
+        const krs::pinhole_camera camera = framing_camera(shape.box, 300, 300);
+        const depth_colors colors = depth_colors::tree(tree.branch_depth, tree.tree_depth);
+        return {std::move(tree), std::move(voxels), std::move(shape), camera, colors};
+    }
+};
 
 // The primary rays of a view through a marcher's voxels all shaded ahead (as render() marches
 // them, two packets at a time): pixel centres, one thread. Returns the rays that enter the box,
@@ -337,12 +355,9 @@ int main(int argc, char** argv)
         double worst_gain = 1e300;
         for (auto [res, s] : {std::pair{100, 1}, std::pair{300, 2}}) {
             for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
-                const ifs<> tree = maker(res);
-                const std::vector<stored_voxel> voxels = classified(tree, 1);
-                const tree_shape shape = tree_shape::of(tree.volume, voxels);
+                const paper_tree scene = paper_tree::of(maker(res));
+                const auto& [tree, voxels, shape, camera, colors] = scene;
                 const dense_store store = dense_store::build(tree.volume, voxels);
-                const krs::pinhole_camera camera = framing_camera(shape.box, 300, 300);
-                const depth_colors colors = depth_colors::tree(tree.branch_depth, tree.tree_depth);
                 render_settings rs;
                 rs.supersampling = s;
                 rs.parallel_for = pool;
@@ -408,12 +423,9 @@ int main(int argc, char** argv)
                     "primary cpu", "primary", "frame", "pixels!=");
         for (auto [res, s] : {std::pair{100, 1}, std::pair{300, 2}}) {
             for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
-                const ifs<> tree = maker(res);
-                const std::vector<stored_voxel> voxels = classified(tree, 1);
-                const tree_shape shape = tree_shape::of(tree.volume, voxels);
+                const paper_tree scene = paper_tree::of(maker(res));
+                const auto& [tree, voxels, shape, camera, colors] = scene;
                 const dense_store store = dense_store::build(tree.volume, voxels);
-                const krs::pinhole_camera camera = framing_camera(shape.box, 300, 300);
-                const depth_colors colors = depth_colors::tree(tree.branch_depth, tree.tree_depth);
                 render_settings rs;
                 rs.supersampling = s;
                 rs.parallel_for = bench::parallel_for(threads);
