@@ -692,7 +692,7 @@ int compare_boxes(const settings& opt)
     for (const bool unaligned : {false, true}) {
         if ((unaligned && opt.scene == "grid") || (!unaligned && opt.scene == "unaligned")) continue;
         std::printf("\n== %s ==\n", unaligned ? "unaligned (+-10 degrees)" : "grid (axis-normal)");
-        std::printf("%3s %7s | %-17s | %-15s | %-17s %7s | %s\n", "n", "hits", "in box: spheres", "tight",
+        std::printf("%3s %7s | %-17s | %-15s | %-17s %7s | %7s | %s\n", "n", "hits", "in box: spheres", "tight",
                     "Mr/s: spheres", "tight", "speedup", "evals/ray spheres / tight");
         for (int n = 8; n <= opt.max_n; n += 2) {
             framing v;
