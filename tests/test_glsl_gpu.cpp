@@ -34,7 +34,7 @@
 namespace {
 
 using krs_test::buffer, krs_test::compile, krs_test::gpu_result, krs_test::link, krs_test::require_context,
-    krs_test::run_points, krs_test::validate_spirv, krs_test::validate_with_glslang;
+    krs_test::run_point_program, krs_test::run_points, krs_test::validate_spirv, krs_test::validate_with_glslang;
 
 namespace ex = krs::glsl::examples;
 using krs::vec3f;
@@ -737,40 +737,14 @@ namespace {
 std::vector<std::array<float, 7>> gpu_colours(const std::string& snippet, const std::string& name,
                                               const std::vector<vec3f>& points, const std::vector<float>& data)
 {
-    require_context();
-    const std::string text = "#version 430 core\nlayout(local_size_x = 64) in;\n" + snippet +
-                             "layout(std430, binding = 1) readonly buffer krs_points { float points[]; };\n"
-                             "layout(std430, binding = 2) writeonly buffer krs_results { float results[]; };\n"
-                             "uniform uint count;\n"
-                             "void main() {\n"
-                             "    uint i = gl_GlobalInvocationID.x;\n"
-                             "    if (i >= count) return;\n"
-                             "    krs_kifs_colour c = " + name + "(vec3(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]));\n"
-                             "    results[7u * i] = c.trap.x;\n    results[7u * i + 1u] = c.trap.y;\n"
-                             "    results[7u * i + 2u] = c.trap.z;\n    results[7u * i + 3u] = c.trap.w;\n"
-                             "    results[7u * i + 4u] = c.escape_iteration;\n    results[7u * i + 5u] = c.fold_count;\n"
-                             "    results[7u * i + 6u] = c.last_fold;\n"
-                             "}\n";
-    const GLuint program = link({compile(GL_COMPUTE_SHADER, text)});
-    glUseProgram(program);
-    const GLuint data_buffer = buffer(GL_SHADER_STORAGE_BUFFER, data.data(), data.size() * sizeof(float), GL_DYNAMIC_DRAW);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, data_buffer);
-    std::vector<float> packed;
-    for (const vec3f& p : points) packed.insert(packed.end(), {p.x, p.y, p.z});
-    const GLuint in = buffer(GL_SHADER_STORAGE_BUFFER, packed.data(), packed.size() * sizeof(float), GL_STATIC_DRAW);
-    const GLuint out = buffer(GL_SHADER_STORAGE_BUFFER, nullptr, points.size() * 7 * sizeof(float), GL_DYNAMIC_READ);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, in);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, out);
-    glUniform1ui(glGetUniformLocation(program, "count"), GLuint(points.size()));
-    glDispatchCompute(GLuint((points.size() + 63) / 64), 1, 1);
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    const std::string body = "    krs_kifs_colour c = " + name + "(p);\n"
+                             "    results[krs_n * i] = c.trap.x;\n    results[krs_n * i + 1u] = c.trap.y;\n"
+                             "    results[krs_n * i + 2u] = c.trap.z;\n    results[krs_n * i + 3u] = c.trap.w;\n"
+                             "    results[krs_n * i + 4u] = c.escape_iteration;\n    results[krs_n * i + 5u] = c.fold_count;\n"
+                             "    results[krs_n * i + 6u] = c.last_fold;\n";
+    const std::vector<float> raw = run_point_program(snippet, body, 7, points, data, false, "");
     std::vector<std::array<float, 7>> results(points.size());
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, out);
-    glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(results.size() * sizeof(results[0])), results.data());
-    REQUIRE(glGetError() == GL_NO_ERROR);
-    const GLuint buffers[3] = {in, out, data_buffer};
-    glDeleteBuffers(3, buffers);
-    glDeleteProgram(program);
+    std::memcpy(results.data(), raw.data(), raw.size() * sizeof(float));
     return results;
 }
 
