@@ -321,7 +321,7 @@ int main(int argc, char** argv)
             mo.shadow_by = march_options::shadow_method::rays;
             measure("shading per sample with shadow rays", store, shape, mo, one);
             mo = defaults;
-            mo.use_spheres = true;
+            mo.bounds_by = bound_method::spheres;
             measure("bounding spheres", store, shape, mo, one);
             render_settings rs = one;
             rs.ray_cache = true;
