@@ -163,8 +163,12 @@ primary_counts march_primary(const volume_marcher& marcher, const krs::pinhole_c
 // The stored voxels whose cell no volume of `by` holds whole (spheres: all 8 corners inside; boxes:
 // both extreme corners), in double from the shape's own volumes: the bound's containment by brute
 // force. (Half a side less 1e-9 of it: cell centers and box faces are computed apart.)
-std::size_t cells_outside(const hypervolume& v, std::span<const stored_voxel> voxels, const tree_shape& shape, bound_method by)
+// `needed`: for sphere bounds, the smallest factor every radius could be scaled by (about its
+// center) with every cell still held (a box holding a cell holds it at any factor): below 1 the
+// spheres have room to spare, above 1 they leave cells out.
+std::size_t cells_outside(const hypervolume& v, std::span<const stored_voxel> voxels, const tree_shape& shape, bound_method by, double& needed)
 {
+    needed = 0;
     std::vector<krs::bounding_sphere> spheres;
     std::vector<world_box> boxes;
     if (by == bound_method::spheres) spheres = shape.spheres;
@@ -174,18 +178,21 @@ std::size_t cells_outside(const hypervolume& v, std::span<const stored_voxel> vo
     std::size_t outside = 0;
     for (const stored_voxel& sv : voxels) {
         const krs::vec3d c = v.voxel_center(sv.index), h = v.voxel_size() * (0.5 - 1e-9), lo = c - h, hi = c + h;
-        bool held = false;
+        bool held = false, in_box = false;
+        double scale = std::numeric_limits<double>::infinity();
         for (const auto& s : spheres) {
-            bool all = true;
-            for (int k = 0; k < 8 && all; ++k)
-                all = krs::length(krs::vec3d{k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z} - krs::vec3d(s.center)) <= double(s.radius);
-            if ((held = all)) break;
+            double farthest = 0;
+            for (int k = 0; k < 8; ++k)
+                farthest = std::max(farthest, krs::length(krs::vec3d{k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z} - krs::vec3d(s.center)));
+            held = held || farthest <= double(s.radius);
+            scale = std::min(scale, farthest / double(s.radius));
         }
-        for (std::size_t i = 0; i < boxes.size() && !held; ++i) {
+        for (std::size_t i = 0; i < boxes.size() && !in_box; ++i) {
             const world_box& b = boxes[i];
-            held = lo.x >= b.lo.x && lo.y >= b.lo.y && lo.z >= b.lo.z && hi.x <= b.hi.x && hi.y <= b.hi.y && hi.z <= b.hi.z;
+            in_box = lo.x >= b.lo.x && lo.y >= b.lo.y && lo.z >= b.lo.z && hi.x <= b.hi.x && hi.y <= b.hi.y && hi.z <= b.hi.z;
         }
-        outside += !held;
+        if (!in_box && !spheres.empty()) needed = std::max(needed, scale);
+        outside += !(held || in_box);
     }
     return outside;
 }
@@ -541,8 +548,8 @@ int main(int argc, char** argv)
         std::printf("bounding volumes (the paper's Table 2): trees A-D, resolution 300, 300x300, s = 1, dense store, packet marcher on %u "
                     "thread(s), best of 5 in alternating rounds; load average %s\n\n",
                     threads, bench::load_average().c_str());
-        std::printf("%-4s %-14s %9s %9s %11s %11s %11s %10s %11s %9s %9s\n", "tree", "bound", "volumes", "setup", "frame sweep", "frame rays",
-                    "lookups/ray", "probes/ray", "paper looks", "cells out", "pixels!=");
+        std::printf("%-4s %-14s %9s %9s %11s %11s %11s %10s %11s %9s %8s %9s\n", "tree", "bound", "volumes", "setup", "frame sweep", "frame rays",
+                    "lookups/ray", "probes/ray", "paper looks", "cells out", "radius x", "pixels!=");
         const std::array<bound_method, 4> bounds{bound_method::box, bound_method::spheres, bound_method::paper_spheres, bound_method::part_boxes};
         const std::array<const char*, 4> names{"AABB only", "fitted spheres", "paper spheres", "secondary AABB"};
         for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
@@ -583,12 +590,14 @@ int main(int argc, char** argv)
                 for (std::size_t i = 0; i < images[0].rgb.size(); i += 3)
                     differ += std::memcmp(&images[0].rgb[i], &images[b].rgb[i], 3 * sizeof(float)) != 0 ||
                               std::memcmp(&ray_images[0].rgb[i], &ray_images[b].rgb[i], 3 * sizeof(float)) != 0;
-                const std::size_t outside = cells_outside(tree.volume, scene.voxels, shape, bounds[b]);
+                double needed = 0;
+                const std::size_t outside = cells_outside(tree.volume, scene.voxels, shape, bounds[b], needed);
                 const double volumes = b == 2 ? shape_seconds + paper_seconds : shape_seconds;
                 const double paper_looks = samples_in_bound(shape, scene.camera, sweep[b].step(), bounds[b], 3);
-                std::printf("%-4s %-14s %7.3fms %7.1fms %9.1fms %9.1fms %11.2f %10.2f %11.1f %9zu %9zu\n", tree.name.c_str(), names[b],
+                std::printf("%-4s %-14s %7.3fms %7.1fms %9.1fms %9.1fms %11.2f %10.2f %11.1f %9zu %8.3f %9zu\n", tree.name.c_str(), names[b],
                             volumes * 1e3, setup[b] * 1e3, frame_sweep[b] * 1e3, frame_rays[b] * 1e3, counts.lookups / counts.rays,
-                            counts.probes / counts.rays, paper_looks, outside, differ);
+                            counts.probes / counts.rays, paper_looks, outside, needed, differ);
+                csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_radius_needed,," << needed << ",,\n";
                 csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_paper_lookups_per_ray,," << paper_looks << ",,\n";
                 csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_frame_sweep," << frame_sweep[b] << ','
                     << counts.lookups / counts.rays << ',' << differ << ",\n";
@@ -600,7 +609,8 @@ int main(int argc, char** argv)
         std::printf("\n(volumes: making the bounds, the shape's one pass over the voxels, plus the paper's spheres where used; setup: the "
                     "marcher's; frame: render() with the light sweep and with shadow rays; lookups and probes per primary ray entering "
                     "the box; paper looks: samples per ray in box and bound, what the paper's marcher without empty-space skipping looks "
-                    "up (every 3rd row and column); cells out: stored voxels whose cell no volume of the bound holds whole, by brute force; pixels!=: pixels "
+                    "up (every 3rd row and column); cells out: stored voxels whose cell no volume of the bound holds whole, by brute force; radius x: the factor the "
+                    "spheres' radii could be scaled by and still hold every cell a sphere must hold (> 1: cells out); pixels!=: pixels "
                     "not bit-equal to AABB only's in either frame)\nload average after: %s\n",
                     bench::load_average().c_str());
     }
