@@ -133,21 +133,27 @@ TEST_CASE("hypertree bounds: every secondary bound holds every stored voxel's ce
 
 TEST_CASE("hypertree bounds: every secondary bound gives the box-only march's pixels, with fewer lookups")
 {
-    const scene s(small_tree(presets::tree_d(48), 40000), 3);
+    // Trees D (shears) and A (dummies: transformations with no part of their own), with shadow rays
+    // (which test the bound too) and with the light sweep.
     const krs::pinhole_camera camera({0.2f, 0.7f, -2.3f}, {0, 0.6f, 0}, {0, 1, 0}, 45, 64, 56);
-    march_options box;
-    box.shadow_by = march_options::shadow_method::rays; // shadow rays test the bound too
-    const volume_marcher reference(s.store, s.shape, depth_colors::tree(3, 6), box);
-    const image packets = render<krs::packet_f>(reference, camera), scalar = render<float>(reference, camera);
-    for (const bound_method by : all_bounds) {
-        INFO("bound " << int(by));
-        march_options o = box;
-        o.bounds_by = by;
-        const volume_marcher m(s.store, s.shape, depth_colors::tree(3, 6), o);
-        const image p = render<krs::packet_f>(m, camera), f = render<float>(m, camera);
-        CHECK(max_difference(p, packets) == 0.0);
-        CHECK(max_difference(f, scalar) == 0.0);
-        CHECK(p.lookups < packets.lookups);
+    for (const ifs<>& t : {small_tree(presets::tree_d(48), 40000), small_tree(presets::tree_a(48), 40000)}) {
+        const scene s(t, 3);
+        for (const auto shadows : {march_options::shadow_method::rays, march_options::shadow_method::sweep}) {
+            march_options box;
+            box.shadow_by = shadows;
+            const volume_marcher reference(s.store, s.shape, depth_colors::tree(3, 6), box);
+            const image packets = render<krs::packet_f>(reference, camera), scalar = render<float>(reference, camera);
+            for (const bound_method by : all_bounds) {
+                INFO("tree " << t.name << ", shadows " << int(shadows) << ", bound " << int(by));
+                march_options o = box;
+                o.bounds_by = by;
+                const volume_marcher m(s.store, s.shape, depth_colors::tree(3, 6), o);
+                const image p = render<krs::packet_f>(m, camera), f = render<float>(m, camera);
+                CHECK(max_difference(p, packets) == 0.0);
+                CHECK(max_difference(f, scalar) == 0.0);
+                CHECK(p.lookups < packets.lookups);
+            }
+        }
     }
 }
 
