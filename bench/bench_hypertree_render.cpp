@@ -1,7 +1,7 @@
 // bench_hypertree_render: the rendering columns of the hypertree paper's Table 1, and speed
 // against error for the raymarcher's settings (docs/design.md#rule-5).
 //
-//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk]
+//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
 // Table: trees A-D (hypertree/presets.hpp) in a 300 x 300 image, at resolution 100 without
@@ -40,6 +40,14 @@
 // leaves out the time the thread waited for a core), the
 // frame's time on T threads (render() with march_options' defaults; best of 7), and the
 // pixels that differ between the two walks' frames (the walks look at the same samples: 0).
+//
+// Bounds (`--only bounds`): the paper's Table 2 (section 8.2): trees A-D at resolution 300, dense
+// store, with each march_options::bounds_by: AABB only, the part spheres fitted to the voxels,
+// the paper's spheres derived through the transformations, the secondary AABBs (part boxes).
+// Per bound: the time to make the bounding volumes, the marcher's setup, the frame (render() on T
+// threads, with the light sweep and with shadow rays; best of 5, the bounds in alternating
+// rounds), lookups and probes per primary ray, the stored voxels the bound leaves outside (brute
+// force) and the pixels not bit-equal to AABB only's (0 whenever nothing is left outside).
 
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
@@ -59,6 +67,8 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <limits>
+#include <span>
 #include <vector>
 
 namespace {
@@ -150,6 +160,67 @@ primary_counts march_primary(const volume_marcher& marcher, const krs::pinhole_c
         }
     return c;
 }
+// The stored voxels whose cell no volume of `by` holds whole (spheres: all 8 corners inside; boxes:
+// both extreme corners), in double from the shape's own volumes: the bound's containment by brute
+// force. (Half a side less 1e-9 of it: cell centers and box faces are computed apart.)
+// `needed`: for sphere bounds, the smallest factor every radius could be scaled by (about its
+// center) with every cell still held (a box holding a cell holds it at any factor): below 1 the
+// spheres have room to spare, above 1 they leave cells out.
+std::size_t cells_outside(const hypervolume& v, std::span<const stored_voxel> voxels, const tree_shape& shape, bound_method by, double& needed)
+{
+    needed = 0;
+    std::vector<krs::bounding_sphere> spheres;
+    std::vector<world_box> boxes;
+    if (by == bound_method::spheres) spheres = shape.spheres;
+    if (by == bound_method::paper_spheres) spheres = shape.paper_spheres, boxes = shape.trunk_box;
+    if (by == bound_method::part_boxes) boxes = shape.part_boxes;
+    if (by == bound_method::box) return 0; // the box is fitted to the cells
+    std::size_t outside = 0;
+    for (const stored_voxel& sv : voxels) {
+        const krs::vec3d c = v.voxel_center(sv.index), h = v.voxel_size() * (0.5 - 1e-9), lo = c - h, hi = c + h;
+        bool held = false, in_box = false;
+        double scale = std::numeric_limits<double>::infinity();
+        for (const auto& s : spheres) {
+            double farthest = 0;
+            for (int k = 0; k < 8; ++k)
+                farthest = std::max(farthest, krs::length(krs::vec3d{k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z} - krs::vec3d(s.center)));
+            held = held || farthest <= double(s.radius);
+            scale = std::min(scale, farthest / double(s.radius));
+        }
+        for (std::size_t i = 0; i < boxes.size() && !in_box; ++i) {
+            const world_box& b = boxes[i];
+            in_box = lo.x >= b.lo.x && lo.y >= b.lo.y && lo.z >= b.lo.z && hi.x <= b.hi.x && hi.y <= b.hi.y && hi.z <= b.hi.z;
+        }
+        if (!in_box && !spheres.empty()) needed = std::max(needed, scale);
+        outside += !(held || in_box);
+    }
+    return outside;
+}
+// What the paper's marcher looks up: it steps every sample of a ray across the tree's box (no
+// empty-space skipping) and looks up those inside the bound. Per ray entering the box, over the
+// pixel centres of every `stride`-th row and column, the samples t0 + (k + 1/2) ds in the box
+// and in the bound (bound_test, as the marcher tests them).
+double samples_in_bound(const tree_shape& shape, const krs::pinhole_camera& camera, float ds, bound_method by, int stride)
+{
+    const bound_test test = bound_test::of(shape, by);
+    const krs::vec3f lo(shape.box.lo), hi(shape.box.hi);
+    double samples = 0, rays = 0;
+    for (int y = 0; y < camera.height(); y += stride)
+        for (int x = 0; x < camera.width(); x += stride) {
+            const krs::ray<float> r = camera.primary_ray(float(x) + 0.5f, float(y) + 0.5f);
+            float t0 = 0, t1 = std::numeric_limits<float>::infinity();
+            const float o[3] = {r.origin.x, r.origin.y, r.origin.z}, d[3] = {r.direction.x, r.direction.y, r.direction.z};
+            const float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+            for (int a = 0; a < 3; ++a) {
+                const float inv = 1.0f / d[a], ta = (l[a] - o[a]) * inv, tb = (h[a] - o[a]) * inv;
+                t0 = std::max(t0, std::min(ta, tb)), t1 = std::min(t1, std::max(ta, tb));
+            }
+            if (!(t0 + 0.5f * ds < t1)) continue;
+            rays += 1;
+            for (float k = 0; t0 + (k + 0.5f) * ds < t1; k += 1) samples += test.holds(r.origin + r.direction * (t0 + (k + 0.5f) * ds));
+        }
+    return samples / std::max(rays, 1.0);
+}
 } // namespace
 
 int main(int argc, char** argv)
@@ -160,7 +231,7 @@ int main(int argc, char** argv)
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (i + 1 >= argc) {
-            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds]\n", argv[0]);
             return 2;
         }
         const std::string v = argv[++i];
@@ -321,7 +392,7 @@ int main(int argc, char** argv)
             mo.shadow_by = march_options::shadow_method::rays;
             measure("shading per sample with shadow rays", store, shape, mo, one);
             mo = defaults;
-            mo.use_spheres = true;
+            mo.bounds_by = bound_method::spheres;
             measure("bounding spheres", store, shape, mo, one);
             render_settings rs = one;
             rs.ray_cache = true;
@@ -470,6 +541,78 @@ int main(int argc, char** argv)
                     "ahead, CPU and wall time; frame: render() on %u thread(s); pixels!=: pixels of the two frames not bit-equal)\n"
                     "load average after: %s\n",
                     threads, bench::load_average().c_str());
+    }
+    if (only.empty() || only == "bounds") {
+        // The paper's Table 2: AABB only, (secondary) spheres, secondary AABBs; here also the
+        // spheres fitted to the parts' voxels (tree_shape.hpp).
+        std::printf("bounding volumes (the paper's Table 2): trees A-D, resolution 300, 300x300, s = 1, dense store, packet marcher on %u "
+                    "thread(s), best of 5 in alternating rounds; load average %s\n\n",
+                    threads, bench::load_average().c_str());
+        std::printf("%-4s %-14s %9s %9s %11s %11s %11s %10s %11s %9s %8s %9s\n", "tree", "bound", "volumes", "setup", "frame sweep", "frame rays",
+                    "lookups/ray", "probes/ray", "paper looks", "cells out", "radius x", "pixels!=");
+        const std::array<bound_method, 4> bounds{bound_method::box, bound_method::spheres, bound_method::paper_spheres, bound_method::part_boxes};
+        const std::array<const char*, 4> names{"AABB only", "fitted spheres", "paper spheres", "secondary AABB"};
+        for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+            paper_tree scene = paper_tree::of(maker(300));
+            const ifs<>& tree = scene.tree;
+            const dense_store store = dense_store::build(tree.volume, scene.voxels);
+            // Creation: the shape (box, fitted spheres, part boxes and flows all in one pass over
+            // the voxels) and the paper's spheres from the drawn IFS (best of 5 each).
+            const double shape_seconds = bench::best_seconds(5, [&] { (void)tree_shape::of(tree.volume, scene.voxels); });
+            const drawn_ifs<runtime_pipeline> drawn(tree, 1);
+            const double paper_seconds = bench::best_seconds(5, [&] { scene.shape.set_paper_spheres_of(drawn); });
+            const tree_shape& shape = scene.shape;
+            render_settings rs;
+            rs.parallel_for = bench::parallel_for(threads);
+            std::vector<volume_marcher> sweep, rays;
+            std::array<double, 4> setup{}, frame_sweep{}, frame_rays{};
+            for (std::size_t b = 0; b < 4; ++b) {
+                march_options mo;
+                mo.bounds_by = bounds[b];
+                setup[b] = bench::best_seconds(1, [&] { sweep.emplace_back(store, shape, scene.colors, mo, rs.parallel_for); });
+                mo.shadow_by = march_options::shadow_method::rays;
+                rays.emplace_back(store, shape, scene.colors, mo, rs.parallel_for);
+                frame_sweep[b] = frame_rays[b] = 1e300;
+            }
+            std::array<image, 4> images, ray_images;
+            for (int round = 0; round < 5; ++round)
+                for (std::size_t b = 0; b < 4; ++b) {
+                    frame_sweep[b] = std::min(frame_sweep[b], bench::best_seconds(1, [&] { images[b] = render<krs::packet_f>(sweep[b], scene.camera, rs); }));
+                    frame_rays[b] = std::min(frame_rays[b], bench::best_seconds(1, [&] { ray_images[b] = render<krs::packet_f>(rays[b], scene.camera, rs); }));
+                }
+            for (std::size_t b = 0; b < 4; ++b) {
+                shade_memo memo = sweep[b].new_shade_memo();
+                sweep[b].shade_bricks(memo, 0, sweep[b].bricks().brick_count());
+                memo.seal();
+                const primary_counts counts = march_primary(sweep[b], scene.camera, memo);
+                // Pixels not bit-equal to AABB only's, in either shadow method's frame.
+                std::size_t differ = 0;
+                for (std::size_t i = 0; i < images[0].rgb.size(); i += 3)
+                    differ += std::memcmp(&images[0].rgb[i], &images[b].rgb[i], 3 * sizeof(float)) != 0 ||
+                              std::memcmp(&ray_images[0].rgb[i], &ray_images[b].rgb[i], 3 * sizeof(float)) != 0;
+                double needed = 0;
+                const std::size_t outside = cells_outside(tree.volume, scene.voxels, shape, bounds[b], needed);
+                const double volumes = b == 2 ? shape_seconds + paper_seconds : shape_seconds;
+                const double paper_looks = samples_in_bound(shape, scene.camera, sweep[b].step(), bounds[b], 3);
+                std::printf("%-4s %-14s %7.3fms %7.1fms %9.1fms %9.1fms %11.2f %10.2f %11.1f %9zu %8.3f %9zu\n", tree.name.c_str(), names[b],
+                            volumes * 1e3, setup[b] * 1e3, frame_sweep[b] * 1e3, frame_rays[b] * 1e3, counts.lookups / counts.rays,
+                            counts.probes / counts.rays, paper_looks, outside, needed, differ);
+                csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_radius_needed,," << needed << ",,\n";
+                csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_paper_lookups_per_ray,," << paper_looks << ",,\n";
+                csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_frame_sweep," << frame_sweep[b] << ','
+                    << counts.lookups / counts.rays << ',' << differ << ",\n";
+                csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_frame_rays," << frame_rays[b] << ",,,\n";
+                csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_volumes," << volumes << ",,,\n";
+                csv << "bounds," << tree.name << ",300,1,dense,packet," << names[b] << "_cells_outside," << outside << ",,,\n";
+            }
+        }
+        std::printf("\n(volumes: making the bounds, the shape's one pass over the voxels, plus the paper's spheres where used; setup: the "
+                    "marcher's; frame: render() with the light sweep and with shadow rays; lookups and probes per primary ray entering "
+                    "the box; paper looks: samples per ray in box and bound, what the paper's marcher without empty-space skipping looks "
+                    "up (every 3rd row and column); cells out: stored voxels whose cell no volume of the bound holds whole, by brute force; radius x: the factor the "
+                    "spheres' radii could be scaled by and still hold every cell a sphere must hold (> 1: cells out); pixels!=: pixels "
+                    "not bit-equal to AABB only's in either frame)\nload average after: %s\n",
+                    bench::load_average().c_str());
     }
     std::printf("\nload average after: %s\nwrote %s\n", bench::load_average().c_str(), csv_path.c_str());
     return 0;

@@ -94,7 +94,7 @@ march_options varied_options()
     march_options o;
     o.step_factor = 0.7f;
     o.density_scale = 1.5f;
-    o.use_spheres = true;
+    o.bounds_by = bound_method::spheres;
     o.shade_per_voxel = false;
     o.specular = 0.35f;
     o.shininess = 16.0f;
@@ -307,7 +307,7 @@ TEST_CASE("hypertree GLSL reads back every voxel of the texture at its cell")
     const small_tree& t = tree();
     const hypervolume& hv = t.dense.volume();
     march_options o;
-    o.use_spheres = false;
+    o.bounds_by = bound_method::box;
     const packed_bricks bricks = pack_bricks(t.dense);
     const std::string code = hypertree_glsl(hv, bricks, t.shape, t.colors, o);
     require_context();
@@ -388,7 +388,7 @@ TEST_CASE("hypertree GLSL walks the brick-walk test's rays probe for probe as th
     for (float step_factor : {1.0f, 0.7f, 1.9f}) {
         march_options o;
         o.step_factor = step_factor;
-        o.use_spheres = false;
+        o.bounds_by = bound_method::box;
         const std::string code = hypertree_glsl(v, bricks, shape, depth_colors{}, o, {"walk"});
         const float ds = step_factor * float(v.smallest_voxel_side()); // the marcher's step
         const brick_walk w(v, ds);

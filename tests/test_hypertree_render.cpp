@@ -324,8 +324,8 @@ TEST_CASE("hypertree render bounding spheres and the ray cache change no pixel")
     const auto shape = tree_shape::of(scene.parts);
     REQUIRE(shape.spheres.size() > 3);
     march_options with, without;
-    with.use_spheres = true;
-    without.use_spheres = false;
+    with.bounds_by = bound_method::spheres;
+    without.bounds_by = bound_method::box;
     const volume_marcher a(scene.list, shape, depth_colors::tree(3, 6), with);
     const volume_marcher b(scene.list, shape, depth_colors::tree(3, 6), without);
     const krs::pinhole_camera camera({0.0f, 0.7f, -2.2f}, {0, 0.6f, 0}, {0, 1, 0}, 45, 64, 56);
@@ -556,7 +556,7 @@ TEST_CASE("hypertree shadow rays: a packet of points gives each lane the scalar 
     const auto shape = tree_shape::of(scene.list);
     for (bool spheres : {false, true}) {
         march_options o;
-        o.use_spheres = spheres;
+        o.bounds_by = spheres ? bound_method::spheres : bound_method::box;
         const volume_marcher m(scene.list, shape, depth_colors::tree(3, 6), o);
         const hypervolume& v = scene.list.volume();
         constexpr std::size_t n = krs::lane_count<krs::packet_f>;
@@ -606,7 +606,7 @@ TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of
     march_options two_lights;
     two_lights.lights.push_back({{-0.7f, 0.3f, -0.2f}, {0.3f, 0.4f, 0.9f}});
     march_options spheres;
-    spheres.use_spheres = true;
+    spheres.bounds_by = bound_method::spheres;
     march_options rays, rays_two_lights = two_lights;
     rays.shadow_by = rays_two_lights.shadow_by = march_options::shadow_method::rays;
     const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 48, 40);

@@ -51,7 +51,9 @@
 // pixel, so the GPU computes the same values directly. Shadows are always shadow rays, whatever
 // march_options::shadow_by: the CPU's default light sweep (light_sweep.hpp) is a table made with
 // the marcher, which the GPU does not get; its CPU counterpart is shadow_method::rays. The part-sphere test is kept
-// (use_spheres): it also changes no pixel, but it is the paper's traversal.
+// (bound_method::spheres): it also changes no pixel, but it is the paper's traversal. The other
+// secondary bounds (the paper's derived spheres, the part boxes) are CPU options: asked of the
+// GLSL emitter, they are refused (invalid_parameter naming march_options.bounds_by).
 //
 // Names: every global the code declares starts with the prefix (default krs_, checked by
 // krs::glsl::is_prefix as the KRS snippets' is) and then the tree's name: <prefix><name>_*, and
@@ -193,6 +195,10 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
                                          std::to_string(bricks.grid[2]) + " grid, volume " + std::to_string(grid[0]) + "x" +
                                          std::to_string(grid[1]) + "x" + std::to_string(grid[2]));
     options.validate(v, shape.box);
+    // (The GPU keeps the fitted spheres only: the paper's spheres and the part boxes are CPU options.)
+    if (options.bounds_by != bound_method::box && options.bounds_by != bound_method::spheres)
+        throw krs::invalid_parameter("march_options.bounds_by", "the GLSL marcher takes bound_method::box or spheres",
+                                     std::to_string(int(options.bounds_by)));
     const voxel_shading shading(options, shape, colors);
     const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
     const std::string n = glsl.prefix + glsl.name;
@@ -229,7 +235,7 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
             s += krs::glsl::float_array(n + "_center_" + axes[a], centers.data(), centers.size());
         }
     }
-    const bool spheres = options.use_spheres && !shape.spheres.empty();
+    const bool spheres = options.bounds_by == bound_method::spheres && !shape.spheres.empty();
     if (spheres) {
         // center and radius^2 (the float product the marcher compares with)
         const std::size_t count = shape.spheres.size();
@@ -293,7 +299,7 @@ uvec2 $_voxel_at(int place) {
 )",
                            n);
     s += walk.glsl(n);
-    s += "// Whether p lies in a part sphere (use_spheres; else always).\n";
+    s += "// Whether p lies in a part sphere (bound_method::spheres; else always).\n";
     if (spheres) {
         s += krs::glsl::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
              krs::glsl::with_name(R"(; ++i) {

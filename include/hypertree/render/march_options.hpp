@@ -1,6 +1,6 @@
 #pragma once
 // What a march of a hypertree is asked to do (paper section 8): the step, the opacity law's
-// scale, the early exit, the part spheres, and the shading weights and lights of section 8.3.
+// scale, the early exit, the secondary bounds, and the shading weights and lights of section 8.3.
 //
 // `validate()` checks the options alone and names the first bad field; `validate(volume, box)`
 // adds the one bound that depends on the tree: how many samples a ray may take across its box.
@@ -29,11 +29,14 @@ struct march_options {
     float step_factor = 1.0f;           // ds = step_factor * smallest voxel side
     float density_scale = 1.0f;         // k of alpha = 1 - (1 - mu)^(k ds / side)
     float min_transmittance = 1.0f / 256.0f;
-    // Skip lookups outside the secondary bounding spheres (8.2). Off by default: the brick
-    // occupancy bits already skip empty space, and testing every sphere at every sample then costs
-    // more than it saves (bench_hypertree_render: ~20% slower with them on tree A). The paper saw
-    // the same spread, "from 40% faster to twice slower".
-    bool use_spheres = false;
+    // Skip lookups outside a secondary bound (8.2, tree_shape.hpp): the part spheres fitted to
+    // the voxels, the paper's spheres derived through the transformations (needs
+    // tree_shape::set_paper_spheres_of), or the part boxes. `box` (the default) clips to the tree's
+    // box only: the brick occupancy bits already skip empty space, and testing every bound at
+    // every sample then costs more than it saves (bench_hypertree_render --only bounds, Table 2).
+    // The paper saw the same spread, "from 40% faster to twice slower". The GLSL marcher takes
+    // box and spheres only.
+    bound_method bounds_by = bound_method::box;
     bool shadows = true;
     // How a voxel's shadow is found (light_sweep.hpp): `rays` marches a shadow ray toward each
     // light from every shaded voxel in every render (the paper's method, and the reference);
@@ -81,6 +84,10 @@ struct march_options {
         if (normals_by != normal_method::structure_flow && normals_by != normal_method::part_boxes && normals_by != normal_method::line_flow)
             throw krs::invalid_parameter("march_options.normals_by", "must be normal_method::structure_flow, part_boxes or line_flow",
                                          std::to_string(int(normals_by)));
+        if (bounds_by != bound_method::box && bounds_by != bound_method::spheres && bounds_by != bound_method::paper_spheres &&
+            bounds_by != bound_method::part_boxes)
+            throw krs::invalid_parameter("march_options.bounds_by", "must be bound_method::box, spheres, paper_spheres or part_boxes",
+                                         std::to_string(int(bounds_by)));
         if (shadow_by != shadow_method::rays && shadow_by != shadow_method::sweep)
             throw krs::invalid_parameter("march_options.shadow_by", "must be shadow_method::rays or shadow_method::sweep",
                                          std::to_string(int(shadow_by)));

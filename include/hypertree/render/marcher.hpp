@@ -17,8 +17,9 @@
 // to the exit of the largest empty aligned cube around it (4^3 voxels up to the whole grid), so it
 // takes exactly the samples it would have stepped through. (The walk of empty bricks and 16^3
 // blocks only, the one before, is kept as a reference: the constructor's `skipping`.)
-// Optionally, samples outside every secondary bounding sphere are not looked up either
-// (tree_shape.hpp: the spheres hold every non-empty cell). Neither changes a pixel, only the work.
+// Optionally (march_options::bounds_by), samples outside every secondary bound (part spheres,
+// the paper's derived spheres, or part boxes: tree_shape.hpp) are not looked up either. Neither
+// changes a pixel while the bound holds every non-empty cell, only the work.
 //
 // Shading (8.3, voxel_shading.hpp): ambient light attenuated toward the interior, wrapped Lambert
 // diffuse and Blinn-Phong specular with the procedural normals of the structure flow, each light's
@@ -399,14 +400,14 @@ private:
         return volume;
     }
 
-    // The brick walk's probe, and with use_spheres the part spheres' test on top.
+    // The brick walk's probe, and with a secondary bound (bounds_by) its test on top.
     template <class T>
     [[gnu::always_inline]] brick_walk::probe_result<T> probe(const brick_walk& walk, const voxel_bricks::view& view, const krs::vec3<T>& p,
                                                              const T (&slope)[3], const krs::mask_t<T>& running, const T& margin,
                                                              const brick_walk::exit_faces& faces) const
     {
         brick_walk::probe_result<T> found = walk.probe(view, p, slope, running, margin, faces);
-        if (options_.use_spheres) found.looks = found.looks & inside_a_sphere(p);
+        if (!bounds_.everything()) found.looks = found.looks & bounds_.holds(p);
         return found;
     }
 
@@ -555,30 +556,6 @@ private:
             active = active & (t0 + (k + half) * ds < t1) & (out.transmittance >= T(options_.min_transmittance));
         }
         return out;
-    }
-
-    bool inside_a_sphere(const krs::vec3f& p) const
-    {
-        if (shape_.spheres.empty()) return true;
-        for (const auto& s : shape_.spheres) {
-            const krs::vec3f d = p - s.center;
-            if (krs::dot(d, d) <= s.radius * s.radius) return true;
-        }
-        return false;
-    }
-    template <class T>
-    krs::mask_t<T> inside_a_sphere(const krs::vec3<T>& p) const
-    {
-        if constexpr (std::floating_point<T>) {
-            return inside_a_sphere(krs::vec3f(p));
-        } else {
-            krs::mask_t<T> inside(shape_.spheres.empty());
-            for (const auto& s : shape_.spheres) {
-                const krs::vec3<T> d{p.x - T(s.center.x), p.y - T(s.center.y), p.z - T(s.center.z)};
-                inside = inside | (d.x * d.x + d.y * d.y + d.z * d.z <= T(s.radius * s.radius));
-            }
-            return inside;
-        }
     }
 
     // The most samples a ray can take through the box (the paper's cache size q).
@@ -858,6 +835,7 @@ private:
     hypervolume volume_;
     march_options options_;
     tree_shape shape_;
+    bound_test bounds_ = bound_test::of(shape_, options_.bounds_by); // (after shape_ and options_)
     voxel_bricks bricks_;
     brick_walk walk_;
     voxel_shading shading_;

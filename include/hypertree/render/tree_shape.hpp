@@ -3,12 +3,25 @@
 // its bounding box, the secondary bounding spheres of its first-level subparts, and the structure
 // flow of those subparts for procedural normals.
 //
-// Bounding volumes (8.2): rays are clipped to the box of the non-empty voxels, and a sample is
-// only looked up when it lies in one of the part spheres. The paper derives the secondary spheres
-// by pushing the primary sphere through each IFS transformation (radius scaled by (1 + dmax/r)^2
-// for shears, grown by the perturbation amplitude); with per-level parameters that is only
-// approximately conservative, so here each sphere is fitted to the voxels its part actually
-// holds: it holds every cell of them, and skipping samples outside all spheres changes no pixel.
+// Bounding volumes (8.2, chosen by march_options::bounds_by, bound_method below): rays are always
+// clipped to the box of the non-empty voxels (the paper's AABB), and with a secondary bound a
+// sample is only looked up when it lies in one of the first-level parts' bounds:
+// - `spheres`: each part's sphere fitted to the voxels it holds (detail::cell_bounding_sphere):
+//   it holds every cell of them, so skipping samples outside all spheres changes no pixel.
+// - `paper_spheres`: the paper's derivation. The primary sphere (`crown`, around the box) is pushed
+//   through each transformation's level-1 chain: the center is mapped, the radius scaled by each
+//   affine map's spectral norm and, at a shear of maximum displacement dmax (the length of its two
+//   displacements), replaced by r (1 + dmax / r)^2 = r + 2 dmax + dmax^2 / r, r being the radius
+//   as the shear receives it. (A shear moves every point by f dmax along one direction, f in
+//   [0, 1], so two points' offsets differ by at most dmax: r + dmax would do; the paper's rule is
+//   wider.) Then grown by the perturbation amplitude (as the paper says) and by one cell diagonal
+//   (not in the paper: the sphere bounds generator points, the marcher needs their whole cells).
+//   The trunk is bounded by the condensation's box (part 0's cell box), as the paper does. This
+//   holds every voxel only if the part's subtree lies in the primary sphere, which level-dependent
+//   parameters (3.4) and dummy transformations do not promise: bench_hypertree_render --only
+//   bounds counts the voxels left outside for trees A-D, and the pixels that then differ.
+// - `part_boxes`: the secondary bounding boxes, each part's box of its voxels' cells (the paper's
+//   "determined during generation" variant), the trunk's among them.
 //
 // Structure flow (8.3, figure 4): each first-level subpart has a centroid and a principal axis
 // (the dominant eigenvector of its voxels' covariance: the direction its branch grows). The
@@ -40,6 +53,7 @@
 #include <limits>
 #include <string>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace hypertree {
@@ -55,12 +69,21 @@ struct part_flow {
 // Which normal the shading uses (section 8.3; see tree_shape below).
 enum class normal_method { structure_flow, part_boxes, line_flow };
 
+// Which bound, besides the tree's box, a sample must lie in to be looked up (section 8.2; see the
+// head of this file): none (`box`, the paper's "AABB" row), the fitted part spheres, the paper's
+// derived spheres, or the part boxes (the paper's "secondary AABB" row).
+enum class bound_method { box, spheres, paper_spheres, part_boxes };
+
 struct tree_shape {
     world_box box{};                           // of the non-empty voxels' cells
     std::vector<krs::bounding_sphere> spheres; // per first-level part (empty: box only)
     std::vector<part_flow> flows;
     std::vector<world_box> part_boxes; // per first-level part, in the order of flows: its secondary bounding box
     krs::bounding_sphere crown{}; // the whole tree: its "outer shell" for ambient attenuation
+    // The paper's secondary spheres (bound_method::paper_spheres), one per transformation that
+    // records a first-level part, and the trunk's box; empty until set_paper_spheres_of is called.
+    std::vector<krs::bounding_sphere> paper_spheres;
+    std::vector<world_box> trunk_box; // none or one: part 0's cell box
 
     // From a sorted stored-voxel list (parts as classify or a partitioned store keep them).
     static tree_shape of(const hypervolume& volume, std::span<const stored_voxel> voxels)
@@ -130,6 +153,43 @@ struct tree_shape {
                 throw krs::invalid_parameter("tree_shape.set_line_flow", "directions must be finite and non-zero", "direction " + std::to_string(i));
             flows[i].line_axis = directions[i] / len;
         }
+    }
+
+    // The paper's secondary bounding spheres of a drawn IFS (section 8.2, the rule at the head of
+    // this file): transformation j's level-1 chain applied to the primary sphere `crown`.
+    // Transformations recording no first-level part (dummy_from == 1) get none.
+    template <class Drawn>
+    void set_paper_spheres_of(const Drawn& drawn)
+    {
+        const auto& definition = drawn.definition();
+        const double margin = krs::length(definition.volume.voxel_size()) + krs::length(definition.perturb.amplitude);
+        paper_spheres.clear();
+        for (std::size_t j = 0; j < drawn.transform_count(); ++j) {
+            if (drawn.dummies_from()[j] <= 1) continue;
+            const auto [c, r] = paper_sphere_through(drawn.chain_of(j, 1), vec3d(crown.center), double(crown.radius));
+            paper_spheres.push_back(krs::bound_around(c, r + margin));
+        }
+        trunk_box.clear();
+        for (std::size_t i = 0; i < flows.size(); ++i)
+            if (flows[i].part == 0) trunk_box.push_back(part_boxes[i]);
+    }
+
+    // The sphere (c, r) through a canonical chain by the paper's rule (no margin): centers mapped,
+    // radii scaled by the affine maps' norms and by (1 + dmax / r)^2 at each shear.
+    template <class Chain>
+    static std::pair<vec3d, double> paper_sphere_through(const Chain& chain, vec3d c, double r)
+    {
+        for (int k = 0; k < chain.shears; ++k) {
+            c = chain.affine[std::size_t(k)](c);
+            r *= chain.affine[std::size_t(k)].lipschitz();
+            const auto& s = chain.shear[std::size_t(k)];
+            const double dmax = std::hypot(s.dmax_first, s.dmax_second);
+            c = s(c);
+            r = r > 0 ? r * (1 + dmax / r) * (1 + dmax / r) : 2 * dmax; // (r -> 0: the limit is 2 dmax)
+        }
+        c = chain.affine[std::size_t(chain.shears)](c);
+        r *= chain.affine[std::size_t(chain.shears)].lipschitz();
+        return {c, r};
     }
 
     // The line flow of a drawn IFS (drawn_ifs, ifs.hpp) with a line generator: part 1 + j runs
@@ -257,6 +317,67 @@ private:
             v = w / len;
         }
         return v.y < 0 ? -v : v; // branches grow upward-ish: a stable sign
+    }
+};
+
+// A bound_method made ready for the march: float spheres (center, radius^2) and float boxes
+// rounded outward, so the float test never rejects a point the double bound holds. holds(p) is
+// one template for a point (T = float) and a packet (one point per lane), the same operations
+// in the same order, so scalar and packet marchers skip the same samples.
+struct bound_test {
+    bound_method by = bound_method::box;
+    std::vector<std::array<float, 4>> spheres; // x, y, z, radius^2
+    std::vector<std::array<float, 6>> boxes;   // lo x, y, z, hi x, y, z
+
+    // Throws invalid_parameter when `by` needs what the shape does not hold (paper_spheres before
+    // tree_shape::set_paper_spheres_of) or is not a bound_method.
+    static bound_test of(const tree_shape& shape, bound_method by)
+    {
+        bound_test t;
+        t.by = by;
+        const auto add_sphere = [&](const krs::bounding_sphere& s) { t.spheres.push_back({s.center.x, s.center.y, s.center.z, s.radius * s.radius}); };
+        const auto add_box = [&](const world_box& b) {
+            const auto down = [](double v) { float f = float(v); return double(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f; };
+            const auto up = [](double v) { float f = float(v); return double(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f; };
+            t.boxes.push_back({down(b.lo.x), down(b.lo.y), down(b.lo.z), up(b.hi.x), up(b.hi.y), up(b.hi.z)});
+        };
+        switch (by) {
+        case bound_method::box: break;
+        case bound_method::spheres:
+            for (const auto& s : shape.spheres) add_sphere(s);
+            break;
+        case bound_method::paper_spheres:
+            if (shape.paper_spheres.empty() && shape.trunk_box.empty() && !shape.flows.empty())
+                throw krs::invalid_parameter("march_options.bounds_by", "paper_spheres needs tree_shape::set_paper_spheres_of(drawn ifs) first",
+                                             "bound_method::paper_spheres");
+            for (const auto& s : shape.paper_spheres) add_sphere(s);
+            for (const auto& b : shape.trunk_box) add_box(b);
+            break;
+        case bound_method::part_boxes:
+            for (const auto& b : shape.part_boxes) add_box(b);
+            break;
+        default:
+            throw krs::invalid_parameter("march_options.bounds_by", "must be bound_method::box, spheres, paper_spheres or part_boxes",
+                                         std::to_string(int(by)));
+        }
+        return t;
+    }
+
+    // Whether the test rejects nothing (no secondary bound, or an empty tree's).
+    bool everything() const { return spheres.empty() && boxes.empty(); }
+
+    template <class T>
+    krs::mask_t<T> holds(const krs::vec3<T>& p) const
+    {
+        if (everything()) return krs::mask_t<T>(true);
+        krs::mask_t<T> inside(false);
+        for (const auto& s : spheres) {
+            const T dx = p.x - T(s[0]), dy = p.y - T(s[1]), dz = p.z - T(s[2]);
+            inside = inside | (dx * dx + dy * dy + dz * dz <= T(s[3]));
+        }
+        for (const auto& b : boxes)
+            inside = inside | ((p.x >= T(b[0])) & (p.y >= T(b[1])) & (p.z >= T(b[2])) & (p.x <= T(b[3])) & (p.y <= T(b[4])) & (p.z <= T(b[5])));
+        return inside;
     }
 };
 
