@@ -24,6 +24,7 @@
 // (then generators that leave the hypervolume are only counted).
 
 #include "hypertree/random.hpp"
+#include "hypertree/region.hpp"
 #include "hypertree/transform/condensation.hpp"
 #include "hypertree/transform/pipeline.hpp"
 #include "hypertree/volume.hpp"
@@ -48,7 +49,14 @@ struct generator_shape {
 };
 
 // Noise perturbation of generator positions (section 3.5): each recorded generator moves by
-// amplitude * (n(f p), n(f p + o1), n(f p + o2)) componentwise, n being value noise in [-1, 1].
+// amplitude * (n(f p), n(f p + o1), n(f p + o2)) componentwise, n being value noise in [-1, 1],
+// so no generator moves more than amplitude.x, .y, .z along each axis (tested by brute force over
+// every generated point). The shift is a smooth function of the unperturbed position (a
+// continuous distortion, not jitter: nearby generators move alike). It is applied to recorded
+// generators only and does not feed back into the iteration: the next transformation starts from
+// the unperturbed point, so the noise bends the tree without being contracted away or amplified.
+// The same field at the other two stages the paper names: perturb_voxels (post-process, ops on
+// stores: perturb.hpp) and march_options::displacement (render time).
 struct perturbation {
     vec3d amplitude{};
     double frequency = 8;
@@ -78,6 +86,9 @@ struct ifs {
     generator_shape generator;
     perturbation perturb;
     hypervolume volume{{-1, 0, -1}, {2, 2, 2}, resolution::cube(100)};
+    // Trimming as a constraint of the IFS (section 7, region.hpp): voxels whose centers lie in any
+    // of these regions are locked, so no hit on them is recorded while the tree is generated.
+    std::vector<trim_region> trim;
     bool require_contraction = true;
 
     void validate() const
@@ -111,8 +122,13 @@ struct ifs {
         if (iterations < 1) throw invalid_parameter("ifs.iterations", "must be >= 1", "0");
         krs::require_finite("ifs.generator.start", generator.start);
         krs::require_finite("ifs.generator.end", generator.end);
-        krs::require_finite("ifs.perturb.amplitude", perturb.amplitude);
+        // Amplitudes are sizes (a negative one is the same noise mirrored: refused rather than
+        // silently meaning that); all finite (an infinite frequency made every shift NaN).
+        krs::require_non_negative("ifs.perturb.amplitude.x", perturb.amplitude.x);
+        krs::require_non_negative("ifs.perturb.amplitude.y", perturb.amplitude.y);
+        krs::require_non_negative("ifs.perturb.amplitude.z", perturb.amplitude.z);
         krs::require_non_negative("ifs.perturb.frequency", perturb.frequency);
+        validate_trim_regions("ifs.trim", trim, volume);
     }
 };
 
