@@ -171,14 +171,6 @@ struct no_observer {
     void operator()(const generator_event&) const {}
 };
 
-inline vec3d perturbed(const perturbation& perturb, const vec3d& p)
-{
-    const vec3d q = p * perturb.frequency;
-    return {p.x + perturb.amplitude.x * krs::value_noise(q),
-            p.y + perturb.amplitude.y * krs::value_noise(vec3d{q.x + 31.7, q.y - 17.3, q.z + 5.9}),
-            p.z + perturb.amplitude.z * krs::value_noise(vec3d{q.x - 11.1, q.y + 23.9, q.z - 41.3})};
-}
-
 // A generator in flight: its two ends (equal for points).
 struct segment {
     vec3d a, b;
@@ -256,7 +248,7 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, random_stream 
             // The whole generator moves with its midpoint, so a line keeps its length. Only
             // recorded generators move: the noise costs more than a mispredicted branch.
             if (counts) {
-                const vec3d mid = Line ? (a + b) * 0.5 : a, shift = perturbed(def.perturb, mid) - mid;
+                const vec3d mid = Line ? (a + b) * 0.5 : a, shift = def.perturb.displaced(mid) - mid;
                 a += shift;
                 if constexpr (Line) b += shift;
             }

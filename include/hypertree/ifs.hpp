@@ -23,6 +23,7 @@
 // chain must have a Lipschitz bound below 1 at every level, unless `require_contraction` is off
 // (then generators that leave the hypervolume are only counted).
 
+#include "hypertree/perturbation.hpp"
 #include "hypertree/random.hpp"
 #include "hypertree/region.hpp"
 #include "hypertree/transform/condensation.hpp"
@@ -48,20 +49,11 @@ struct generator_shape {
     double length() const { return krs::length(end - start); }
 };
 
-// Noise perturbation of generator positions (section 3.5): each recorded generator moves by
-// amplitude * (n(f p), n(f p + o1), n(f p + o2)) componentwise, n being value noise in [-1, 1],
-// so no generator moves more than amplitude.x, .y, .z along each axis (tested by brute force over
-// every generated point). The shift is a smooth function of the unperturbed position (a
-// continuous distortion, not jitter: nearby generators move alike). It is applied to recorded
-// generators only and does not feed back into the iteration: the next transformation starts from
-// the unperturbed point, so the noise bends the tree without being contracted away or amplified.
-// The same field at the other two stages the paper names: perturb_voxels (post-process, ops on
-// stores: perturb.hpp) and march_options::displacement (render time).
-struct perturbation {
-    vec3d amplitude{};
-    double frequency = 8;
-    bool enabled() const { return amplitude.x != 0 || amplitude.y != 0 || amplitude.z != 0; }
-};
+// Noise perturbation of generator positions (section 3.5, perturbation.hpp): each recorded
+// generator moves by the field's shift, at most amplitude.x, .y, .z along each axis (tested by
+// brute force over every generated point). The shift is applied to recorded generators only and
+// does not feed back into the iteration: the next transformation starts from the unperturbed
+// point, so the noise bends the tree without being contracted away or amplified.
 
 inline constexpr int max_tree_depth = 64;
 inline constexpr int max_transforms = 254; // a voxel's part is a byte: 0 = trunk, 1 + transform index
@@ -122,12 +114,7 @@ struct ifs {
         if (iterations < 1) throw invalid_parameter("ifs.iterations", "must be >= 1", "0");
         krs::require_finite("ifs.generator.start", generator.start);
         krs::require_finite("ifs.generator.end", generator.end);
-        // Amplitudes are sizes (a negative one is the same noise mirrored: refused rather than
-        // silently meaning that); all finite (an infinite frequency made every shift NaN).
-        krs::require_non_negative("ifs.perturb.amplitude.x", perturb.amplitude.x);
-        krs::require_non_negative("ifs.perturb.amplitude.y", perturb.amplitude.y);
-        krs::require_non_negative("ifs.perturb.amplitude.z", perturb.amplitude.z);
-        krs::require_non_negative("ifs.perturb.frequency", perturb.frequency);
+        perturb.validate("ifs.perturb");
         validate_trim_regions("ifs.trim", trim, volume);
     }
 };

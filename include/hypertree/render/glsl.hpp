@@ -193,6 +193,10 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
                                          std::to_string(bricks.grid[2]) + " grid, volume " + std::to_string(grid[0]) + "x" +
                                          std::to_string(grid[1]) + "x" + std::to_string(grid[2]));
     options.validate(v, shape.box);
+    // Render-time noise is CPU only (march_options.hpp): refused rather than silently dropped.
+    if (options.displacement.enabled())
+        throw krs::invalid_parameter("march_options.displacement", "is not supported by the GLSL marcher (amplitude must be 0 there; the CPU marcher takes it)",
+                                     krs::detail::to_text(options.displacement.amplitude));
     const voxel_shading shading(options, shape, colors);
     const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
     const std::string n = glsl.prefix + glsl.name;
