@@ -299,3 +299,65 @@ TEST_CASE("hypertree render-time noise is validated by name, and the GLSL marche
     refused_naming("march_options.displacement", [&] { (void)hypertree_glsl(store, shape, depth_colors{}, with({{0.5f, 0, 0}, 1})); });
     CHECK_NOTHROW((void)hypertree_glsl(store, shape, depth_colors{}, with({{0, 0, 0}, 1})));
 }
+
+// ---- the definition file: TRIM, VOXELPERTURB, RENDERPERTURB --------------------------------------
+
+TEST_CASE("hypertree io definition files set trim regions and the three noise stages")
+{
+    const parsed_tree t = parse_definition(R"(RESOLUTION 32
+ITERATIONS 2000
+HYPERVOLUME 2 2 2
+DISPLACEMENT 1 0 1
+PERTURB 0.01 0.02 0.03 4
+VOXELPERTURB 0.04 0.05 0.06 3
+RENDERPERTURB 0.25 0.5 0.75
+TRIM BOX -0.2 0.2 -0.2 0.2 0.5 0.2
+trim sphere 0.2 0.9 0 0.25
+TRIM HALFSPACE 0 1.2 0 0 2 0
+TRANSFORM 1 0
+  TRANSLATE 0 0.5 0
+  SCALE 0.5
+)",
+                                           "trim.tree");
+    CHECK(t.ifs.perturb.amplitude.y == 0.02);
+    REQUIRE(t.voxel_perturb.has_value());
+    CHECK(t.voxel_perturb->amplitude.z == 0.06);
+    CHECK(t.voxel_perturb->frequency == 3);
+    REQUIRE(t.render_perturb.has_value());
+    CHECK(t.render_perturb->amplitude.y == 0.5f);
+    CHECK(t.render_perturb->frequency == 8.0f); // the default
+    REQUIRE(t.ifs.trim.size() == 3);
+    CHECK(std::get<box_region>(t.ifs.trim[0]).hi.y == 0.5);
+    CHECK(std::get<sphere_region>(t.ifs.trim[1]).radius == 0.25);
+    CHECK(std::get<half_space_region>(t.ifs.trim[2]).normal.y == 1.0); // normalized
+    // Without them: none.
+    const parsed_tree plain = parse_definition("TRANSFORM 1 0\n SCALE 0.5\n", "plain.tree");
+    CHECK(!plain.voxel_perturb);
+    CHECK(!plain.render_perturb);
+    CHECK(plain.ifs.trim.empty());
+}
+
+TEST_CASE("hypertree io definition files refuse bad trim regions and noise at their line")
+{
+    const std::string tail = "TRANSFORM 1 0\n SCALE 0.5\n";
+    const auto refused = [&](const std::string& head, const char* where, const char* what) {
+        CAPTURE(head);
+        try {
+            (void)parse_definition(head + tail, "t.tree");
+            FAIL("accepted");
+        } catch (const definition_error& e) {
+            CHECK_MESSAGE(std::string(e.what()).find(where) != std::string::npos, e.what());
+            CHECK_MESSAGE(std::string(e.what()).find(what) != std::string::npos, e.what());
+        }
+    };
+    refused("TRIM CUBE 0 0 0 1 1 1\n", "t.tree:1:", "BOX, SPHERE or HALFSPACE");
+    refused("TRIM BOX 0 0 0 -1 1 1\n", "t.tree:1:", "box_region.hi");
+    refused("TRIM SPHERE 0 0 0 -1\n", "t.tree:1:", "expected a number > 0");
+    refused("TRIM HALFSPACE 0 0 0 0 0 0\n", "t.tree:1:", "half_space_region.normal");
+    // Empty: outside the hypervolume (the default box [-1, 1] x [0, 2] x [-1, 1]), at its own line.
+    refused("NAME x\nTRIM SPHERE 0 1 0 0.2\nTRIM BOX 5 5 5 6 6 6\n", "t.tree:3:", "ifs.trim[1]");
+    refused("VOXELPERTURB -0.1 0 0\n", "t.tree:1:", "expected a number >= 0");
+    refused("RENDERPERTURB 0.1 0.1 0.1 -1\n", "t.tree:1:", "expected a number >= 0");
+    refused("PERTURB -0.1 0 0\n", "t.tree:1:", "expected a number >= 0");
+    refused("VOXELPERTURB 0 0 0\nVOXELPERTURB 0 0 0\n", "t.tree:2:", "given twice");
+}
