@@ -215,6 +215,23 @@ TEST_CASE("hypertree render-time noise of amplitude 0 gives today's pixels")
     }
 }
 
+TEST_CASE("hypertree render-time noise: packets give the scalar pixels")
+{
+    const auto store = build_tree<partitioned_store>(small_tree(), 4);
+    const auto shape = tree_shape::of(store);
+    march_options o;
+    const float side = float(store.volume().smallest_voxel_side());
+    o.displacement = {{2 * side, 2 * side, 2 * side}, 3.0f};
+    const volume_marcher m(store, shape, depth_colors::tree(1, 6), o), plain(store, shape, depth_colors::tree(1, 6));
+    const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 40, 32);
+    const image scalar = render<float>(m, camera), packet = render<krs::packet_f>(m, camera);
+    CHECK(scalar.rgb == packet.rgb);
+    std::size_t changed = 0;
+    const image undisplaced = render<float>(plain, camera);
+    for (std::size_t k = 0; k < scalar.rgb.size(); ++k) changed += std::abs(scalar.rgb[k] - undisplaced.rgb[k]) > 1e-3f;
+    CHECK(changed > scalar.rgb.size() / 50); // the displacement shows
+}
+
 TEST_CASE("hypertree render-time noise: the transmittance of a march through the displaced samples, sample by sample")
 {
     // The reference marches each ray here in double: the slab test against the tree's box widened

@@ -515,7 +515,8 @@ private:
         for (std::size_t i = 0; i < lanes<T>; ++i) walk_.slopes_of(krs::vec3f{dx[i], dy[i], dz[i]}, slope[i]), faces[i] = brick_walk::faces_of(slope[i]);
         while (any(active)) {
             const T t = t0 + (k + half) * ds;
-            const krs::vec3<T> p = ray.origin + ray.direction * t;
+            // (Render-time noise: the sample's displaced position, all lanes at once.)
+            const krs::vec3<T> p = displaced ? options_.displacement.displaced(ray.origin + ray.direction * t) : ray.origin + ray.direction * t;
             // Per lane: the voxel, its opacity for one step, and its shaded color if it is not
             // empty; or, in an empty brick, how many samples to skip.
             std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{}, advance{};
@@ -526,7 +527,7 @@ private:
             for (std::size_t i = 0; i < lanes<T>; ++i) {
                 advance[i] = 1.0f;
                 if (!((running >> i) & 1u)) continue;
-                const krs::vec3f pi = displaced ? options_.displacement.displaced(krs::vec3f{px[i], py[i], pz[i]}) : krs::vec3f{px[i], py[i], pz[i]};
+                const krs::vec3f pi{px[i], py[i], pz[i]};
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
                 const brick_walk::probe_result<float> found = probe<float>(walk, view, pi, slope[i], true, margin[i], faces[i]);
                 if (!found.looks) {
