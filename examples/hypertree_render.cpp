@@ -75,7 +75,7 @@ auto parallel_with_progress(int threads, const char* what)
 
 template <voxel_store S>
 int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>& voxels, const depth_colors& colors,
-                     const settings& o, double creation_seconds)
+                     const sample_displacement& displacement, const settings& o, double creation_seconds)
 {
     const auto t0 = clock_type::now();
     const S store = S::build(volume, voxels);
@@ -100,6 +100,7 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     const tree_shape shape = tree_shape::of(volume, voxels);
     march_options mo;
     mo.density_scale = o.density_scale;
+    mo.displacement = displacement; // the definition file's RENDERPERTURB (render-time noise)
     const int threads = example::thread_count(o.threads);
     // The marcher sweeps the lights through the voxels once (light_sweep.hpp), on these threads.
     const volume_marcher marcher(store, shape, colors, mo, parallel_with_progress(threads, "light sweep"));
@@ -184,6 +185,7 @@ int main(int argc, char** argv)
         hypervolume volume;
         std::vector<stored_voxel> voxels;
         depth_colors colors;
+        sample_displacement displacement;
         const auto t0 = clock_type::now();
         if (!o.forest_file.empty()) {
             loaded_forest forest = load_forest(o.forest_file);
@@ -206,10 +208,13 @@ int main(int argc, char** argv)
             const density_classes classes(entries, tree.density_class_count.value_or(options.density_class_count));
             voxels = classify(entries, classes, tree.ifs.branch_depth);
             volume = tree.ifs.volume;
+            // VOXELPERTURB: the post-process noise, shifting the built tree's voxels (perturbation.hpp).
+            if (tree.voxel_perturb) voxels = perturb_voxels(index_list_store::build(volume, voxels), *tree.voxel_perturb);
+            if (tree.render_perturb) displacement = *tree.render_perturb;
             colors = tree.colors();
         }
         const double creation = seconds_since(t0);
-        return with_store(o.store, [&]<class S>() { return render_and_write<S>(volume, voxels, colors, o, creation); });
+        return with_store(o.store, [&]<class S>() { return render_and_write<S>(volume, voxels, colors, displacement, o, creation); });
     } catch (const std::exception& e) {
         std::fprintf(stderr, "%s: %s\n", args.program().c_str(), e.what());
         return 1;

@@ -8,7 +8,9 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -785,4 +787,252 @@ TEST_CASE("hypertree hard cases: resolution 1 and a dense store over the budget"
     small_budget.generation.budget.bytes = std::size_t(64) << 20;
     CHECK_THROWS_WITH_AS(build_tree<dense_store>(big, 1, small_budget), doctest::Contains("dense_store"), krs::invalid_parameter);
     CHECK_NOTHROW(build_tree<index_list_store>(big, 1, small_budget));
+}
+
+// ---- noise at generation (section 3.5) and trimming during generation (section 7) ----------------
+
+TEST_CASE("hypertree generation noise: no generator moves more than its amplitude per axis, and they do move")
+{
+    // The same seed with and without noise: the noise draws no random numbers, so the runs make
+    // the same generators in the same order and each event pairs with its unperturbed twin. The
+    // bound is checked by brute force over every generator, per axis (z has amplitude 0 and must
+    // not move at all).
+    for (const bool line : {false, true}) {
+        CAPTURE(line);
+        auto plain = small_tree();
+        plain.iterations = 30000;
+        if (line) plain.generator = generator_shape::line({0, -0.02, 0}, {0, 0.02, 0});
+        auto noisy = plain;
+        noisy.perturb.amplitude = {0.01, 0.03, 0.0};
+        noisy.perturb.frequency = 6;
+        std::vector<generator_event> a, b;
+        std::vector<vec3d> a_ends, b_ends;
+        const auto keep = [](std::vector<generator_event>& events, std::vector<vec3d>& ends) {
+            return [&](const generator_event& e) {
+                events.push_back(e);
+                ends.push_back(e.end);
+            };
+        };
+        generate(plain, 9, {}, keep(a, a_ends));
+        const generated_hits noisy_hits = generate(noisy, 9, {}, keep(b, b_ends));
+        REQUIRE(a.size() == b.size());
+        REQUIRE(a.size() > 20000);
+        vec3d most{0, 0, 0};
+        std::size_t moved = 0, recorded = 0;
+        std::set<voxel_index> voxels_of_points;
+        for (std::size_t k = 0; k < a.size(); ++k) {
+            REQUIRE(a[k].depth == b[k].depth);
+            const vec3d d = b[k].start - a[k].start, de = b_ends[k] - a_ends[k];
+            // A line moves whole: both ends by the same shift.
+            CHECK(krs::length(d - de) < 1e-12);
+            if (!a[k].recorded) {
+                CHECK(krs::length(d) == 0.0); // only recorded generators move
+                continue;
+            }
+            ++recorded;
+            most = krs::max(most, vec3d{std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+            moved += krs::length(d) > 1e-4;
+            if (!line)
+                if (const auto v = noisy.volume.voxel_at(b[k].start)) voxels_of_points.insert(*v);
+        }
+        CHECK(most.x <= 0.01);
+        CHECK(most.y <= 0.03);
+        CHECK(most.z == 0.0);
+        // Value noise reaches well past half its range somewhere among thousands of generators.
+        CHECK(most.x > 0.005);
+        CHECK(most.y > 0.015);
+        CHECK(moved > recorded * 9 / 10);
+        if (!line) {
+            // The recorded voxels are those of the perturbed points (not of the unperturbed ones).
+            const std::set<voxel_index> hit_voxels = [&] {
+                std::set<voxel_index> s;
+                for (const hit& h : noisy_hits.hits) s.insert(h.voxel);
+                return s;
+            }();
+            CHECK(hit_voxels == voxels_of_points);
+        }
+    }
+}
+
+TEST_CASE("hypertree generation noise: amplitudes and frequency are validated by name")
+{
+    const auto refused = [](auto change, const char* name) {
+        auto t = small_tree();
+        change(t);
+        try {
+            t.validate();
+            FAIL("accepted a bad ", name);
+        } catch (const krs::invalid_parameter& e) {
+            CHECK(std::string(e.what()).find(name) != std::string::npos);
+        }
+    };
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    refused([&](auto& t) { t.perturb.amplitude.x = -0.01; }, "ifs.perturb.amplitude.x");
+    refused([&](auto& t) { t.perturb.amplitude.y = nan; }, "ifs.perturb.amplitude.y");
+    refused([&](auto& t) { t.perturb.amplitude.z = inf; }, "ifs.perturb.amplitude.z");
+    refused([&](auto& t) { t.perturb.frequency = -1; }, "ifs.perturb.frequency");
+    refused([&](auto& t) { t.perturb.frequency = inf; }, "ifs.perturb.frequency");
+    refused([&](auto& t) { t.perturb.frequency = nan; }, "ifs.perturb.frequency");
+}
+
+namespace {
+// Inside tests written out from the regions' definitions, not through their contains().
+struct inside_reference {
+    std::vector<std::function<bool(const vec3d&)>> tests;
+    bool operator()(const vec3d& p) const
+    {
+        for (const auto& t : tests)
+            if (t(p)) return true;
+        return false;
+    }
+};
+} // namespace
+
+TEST_CASE("hypertree trimming during generation: no hit and no voxel inside a region, everything else as untrimmed")
+{
+    auto plain = small_tree();
+    plain.iterations = 40000;
+    // A box around the stem's middle, a ball on the crown and everything above a tilted plane.
+    const vec3d box_lo{-0.2, 0.2, -0.2}, box_hi{0.2, 0.5, 0.2}, ball{0.2, 0.9, 0.0};
+    const double ball_radius = 0.25;
+    const vec3d plane_point{0, 1.2, 0}, plane_normal = krs::normalize(vec3d{0.3, 1, 0});
+    struct trial {
+        std::string name;
+        std::vector<trim_region> regions;
+        inside_reference inside;
+    };
+    const auto in_box = [=](const vec3d& p) {
+        return box_lo.x <= p.x && p.x <= box_hi.x && box_lo.y <= p.y && p.y <= box_hi.y && box_lo.z <= p.z && p.z <= box_hi.z;
+    };
+    const auto in_ball = [=](const vec3d& p) {
+        const vec3d d = p - ball;
+        return d.x * d.x + d.y * d.y + d.z * d.z <= ball_radius * ball_radius;
+    };
+    const auto above = [=](const vec3d& p) {
+        const vec3d d = p - plane_point;
+        return d.x * plane_normal.x + d.y * plane_normal.y + d.z * plane_normal.z >= 0;
+    };
+    const std::vector<trial> trials = {
+        {"box", {box_region(box_lo, box_hi)}, {{in_box}}},
+        {"sphere", {sphere_region(ball, ball_radius)}, {{in_ball}}},
+        {"half-space", {half_space_region(plane_point, plane_normal)}, {{above}}},
+        {"all three", {box_region(box_lo, box_hi), sphere_region(ball, ball_radius), half_space_region(plane_point, plane_normal)}, {{in_box, in_ball, above}}},
+    };
+    const generated_hits untrimmed = generate(plain, 5);
+    for (const trial& t : trials) {
+        CAPTURE(t.name);
+        auto trimmed = plain;
+        trimmed.trim = t.regions;
+        // The reference: the untrimmed hits, in order, less those whose voxel center is inside.
+        std::vector<hit> expected;
+        for (const hit& h : untrimmed.hits)
+            if (!t.inside(plain.volume.voxel_center(h.voxel))) expected.push_back(h);
+        const std::size_t inside = untrimmed.hits.size() - expected.size();
+        CHECK(inside > 500); // each region does lock something of this tree
+        for (const bool lanes : {true, false}) {
+            CAPTURE(lanes);
+            generation_options options;
+            options.vector_lanes = lanes;
+            const generated_hits got = generate(trimmed, 5, options);
+            CHECK(got.stats.locked == inside);
+            // Lanes in step may order hits differently within a chunk: compare as sorted lists.
+            auto sorted = [](std::vector<hit> v) {
+                std::sort(v.begin(), v.end(), [](const hit& a, const hit& b) {
+                    return std::tie(a.voxel, a.level, a.part) < std::tie(b.voxel, b.level, b.part);
+                });
+                return v;
+            };
+            const auto g = sorted(got.hits), e = sorted(expected);
+            REQUIRE(g.size() == e.size());
+            bool same = true;
+            for (std::size_t k = 0; k < g.size(); ++k) same = same && g[k].voxel == e[k].voxel && g[k].level == e[k].level && g[k].part == e[k].part;
+            CHECK(same);
+        }
+        // The built store: brute force over every voxel, none inside a region is stored.
+        const auto store = build_tree<index_list_store>(trimmed, 5);
+        std::size_t stored_inside = 0;
+        for_each_stored(store, [&](const stored_voxel& v) { stored_inside += t.inside(plain.volume.voxel_center(v.index)); });
+        CHECK(stored_inside == 0);
+        CHECK(store.nonempty_count() > 300);
+    }
+}
+
+TEST_CASE("hypertree trimming during generation differs from clearing afterwards in densities, not in voxels")
+{
+    // Density classes are placed on the population of hit voxels (density.hpp). Clearing a region
+    // afterwards keeps the classes the region's voxels helped place; locking them during generation
+    // places the classes on what is left. So: the same voxels and levels either way, densities that
+    // differ, and the trimmed tree's densities are those of classifying the untrimmed hits outside
+    // the region (the reference, built from generate(), compact() and classify()).
+    auto plain = small_tree();
+    plain.iterations = 60000;
+    plain.branch_depth = 0; // every voxel's density from its class (branch voxels are always full)
+    const sphere_region crown({0.0, 0.85, 0.0}, 0.35); // the dense crown: many voxels, many hits
+    auto trimmed = plain;
+    trimmed.trim = {crown};
+    build_options options;
+    options.density_class_count = 8;
+    const auto whole = build_tree<index_list_store>(plain, 13, options);
+    const auto cleared = clear_store(whole, crown);
+    const auto locked = build_tree<index_list_store>(trimmed, 13, options);
+
+    const auto a = stored_voxels(cleared), b = stored_voxels(locked);
+    REQUIRE(a.size() == b.size());
+    REQUIRE(whole.nonempty_count() > a.size() + 200); // the region held many voxels
+    std::size_t differ = 0;
+    bool same_voxels = true;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        same_voxels = same_voxels && a[k].index == b[k].index && a[k].value.level == b[k].value.level && a[k].part == b[k].part;
+        differ += a[k].value.density != b[k].value.density;
+    }
+    CHECK(same_voxels);
+    MESSAGE("trimming during generation vs clearing afterwards: " << differ << " of " << a.size() << " voxels differ in density");
+    CHECK(differ > a.size() / 20);
+
+    std::vector<hit> outside;
+    for (const hit& h : generate(plain, 13).hits)
+        if (krs::length(plain.volume.voxel_center(h.voxel) - vec3d{0.0, 0.85, 0.0}) > 0.35) outside.push_back(h);
+    const auto entries = compact(outside);
+    const auto expected = classify(entries, density_classes(entries, 8), plain.branch_depth);
+    REQUIRE(expected.size() == b.size());
+    std::size_t mismatched = 0;
+    for (std::size_t k = 0; k < b.size(); ++k)
+        mismatched += expected[k].index != b[k].index || expected[k].value.density != b[k].value.density || expected[k].value.level != b[k].value.level;
+    CHECK(mismatched == 0);
+}
+
+TEST_CASE("hypertree trim regions are validated by name: NaN, negative and empty regions")
+{
+    const auto refused = [](std::vector<trim_region> regions, std::function<void(trim_region&)> spoil, const char* name) {
+        auto t = small_tree();
+        t.trim = std::move(regions);
+        if (spoil) spoil(t.trim.back());
+        try {
+            t.validate();
+            FAIL("accepted a bad ", name);
+        } catch (const krs::invalid_parameter& e) {
+            CHECK_MESSAGE(std::string(e.what()).find(name) != std::string::npos, e.what());
+        }
+    };
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const box_region box({-0.1, 0.2, -0.1}, {0.1, 0.4, 0.1});
+    const sphere_region ball({0, 0.5, 0}, 0.2);
+    const half_space_region plane({0, 1.5, 0}, {0, 1, 0});
+    refused({box}, [&](trim_region& r) { std::get<box_region>(r).lo.x = nan; }, "ifs.trim[0].lo");
+    refused({box}, [&](trim_region& r) { std::get<box_region>(r).hi.y = 0.0; }, "ifs.trim[0].hi");
+    refused({box, ball}, [&](trim_region& r) { std::get<sphere_region>(r).radius = -1; }, "ifs.trim[1].radius");
+    refused({ball}, [&](trim_region& r) { std::get<sphere_region>(r).center.z = nan; }, "ifs.trim[0].center");
+    refused({plane}, [&](trim_region& r) { std::get<half_space_region>(r).normal = {0, 0, 0}; }, "ifs.trim[0].normal");
+    refused({plane}, [&](trim_region& r) { std::get<half_space_region>(r).normal = {0, 2, 0}; }, "ifs.trim[0].normal");
+    refused({plane}, [&](trim_region& r) { std::get<half_space_region>(r).point.x = nan; }, "ifs.trim[0].point");
+    // Empty: a ball between voxel centers, a box outside the volume, a half-space beyond it.
+    const hypervolume v = small_tree().volume;
+    const vec3d corner = v.origin(); // a voxel corner: its nearest centers are half a diagonal away
+    refused({sphere_region(corner + v.voxel_size() * 1.0, 0.1 * v.smallest_voxel_side())}, {}, "ifs.trim[0]");
+    refused({box_region({5, 5, 5}, {6, 6, 6})}, {}, "ifs.trim[0]");
+    refused({box, half_space_region({0, 3, 0}, {0, 1, 0})}, {}, "ifs.trim[1]");
+    // A region that holds a voxel passes.
+    auto t = small_tree();
+    t.trim = {box, ball, plane};
+    CHECK_NOTHROW(t.validate());
 }

@@ -61,6 +61,7 @@ struct generation_stats {
     std::uint64_t generators = 0; // generated (including dummies)
     std::uint64_t recorded = 0;   // recorded (not dummy)
     std::uint64_t escaped = 0;    // recorded generators with an end outside the hypervolume
+    std::uint64_t locked = 0;     // hits not recorded because their voxel is locked (ifs::trim)
     std::vector<std::uint64_t> recorded_per_depth;
 };
 
@@ -170,14 +171,6 @@ struct no_observer {
     void operator()(const generator_event&) const {}
 };
 
-inline vec3d perturbed(const perturbation& perturb, const vec3d& p)
-{
-    const vec3d q = p * perturb.frequency;
-    return {p.x + perturb.amplitude.x * krs::value_noise(q),
-            p.y + perturb.amplitude.y * krs::value_noise(vec3d{q.x + 31.7, q.y - 17.3, q.z + 5.9}),
-            p.z + perturb.amplitude.z * krs::value_noise(vec3d{q.x - 11.1, q.y + 23.9, q.z - 41.3})};
-}
-
 // A generator in flight: its two ends (equal for points).
 struct segment {
     vec3d a, b;
@@ -255,7 +248,7 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, random_stream 
             // The whole generator moves with its midpoint, so a line keeps its length. Only
             // recorded generators move: the noise costs more than a mispredicted branch.
             if (counts) {
-                const vec3d mid = Line ? (a + b) * 0.5 : a, shift = perturbed(def.perturb, mid) - mid;
+                const vec3d mid = Line ? (a + b) * 0.5 : a, shift = def.perturb.displaced(mid) - mid;
                 a += shift;
                 if constexpr (Line) b += shift;
             }
@@ -343,8 +336,8 @@ void generate_chunk_as(const drawn_ifs<P>& tree, const Map* maps, random_stream 
 
 // Chunk `chunk` of `cycles` cycles: its lanes, in step when they can be, else one by one.
 template <transform_pipeline P, class Observer>
-void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
-                    const lane_tables* lanes_in_step, chunk_output& out, generation_stats& stats, Observer& observer)
+void generate_chunk_unlocked(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
+                             const lane_tables* lanes_in_step, chunk_output& out, generation_stats& stats, Observer& observer)
 {
     constexpr std::uint64_t lanes = cycle_lanes;
     std::uint64_t lane_cycles[cycle_lanes];
@@ -382,6 +375,26 @@ void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t 
         if (!tree.affine_table().empty()) with_maps(tree.affine_table().data());
         else with_maps(tree.chain_table().data());
     }
+}
+
+// ... and with locked voxels (ifs::trim, region.hpp): the chunk's new hits on locked voxels are
+// dropped as soon as the chunk is made, while they are hot in cache and before any other step
+// sees them, so a locked voxel never enters the hit list. Filtering the chunk rather than testing
+// in the record step keeps both generator loops (scalar and lanes in step) unchanged and their
+// hits identical: the lock is a function of the voxel alone, whichever loop found it.
+template <transform_pipeline P, class Observer>
+void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
+                    const lane_tables* lanes_in_step, const voxel_lock* lock, chunk_output& out, generation_stats& stats, Observer& observer)
+{
+    const std::size_t first = out.count;
+    generate_chunk_unlocked(tree, seed, chunk, cycles, lanes_in_step, out, stats, observer);
+    if (lock == nullptr) return;
+    hit* const hits = out.hits.get();
+    std::size_t kept = first;
+    for (std::size_t k = first; k < out.count; ++k)
+        if (!lock->is_locked(hits[k].voxel)) hits[kept++] = hits[k];
+    stats.locked += out.count - kept;
+    out.count = kept;
 }
 
 } // namespace detail
@@ -497,6 +510,7 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
     // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
     const std::optional<lane_tables> lanes_in_step =
         options.vector_lanes && std::is_same_v<Observer, no_observer> ? lane_tables::of(tree) : std::nullopt;
+    const std::optional<voxel_lock> lock = definition.trim.empty() ? std::nullopt : std::optional<voxel_lock>(std::in_place, definition.volume, definition.trim);
     const std::size_t tasks = groups == 0 ? std::size_t(chunks) : std::min<std::size_t>(groups, std::size_t(chunks));
     const auto first_chunk = [&](std::size_t g) {
         // floor(chunks g / tasks) without the product, which could pass 2^64.
@@ -518,7 +532,8 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
         out.chunks[g].from = scratch_or_default(options.scratch);
         out.chunks[g].make_room(room);
         for (std::uint64_t c = begin; c < end; ++c)
-            generate_chunk(tree, seed, c, cycles_of(c), lanes_in_step ? &*lanes_in_step : nullptr, out.chunks[g], chunk_stats[g], observer);
+            generate_chunk(tree, seed, c, cycles_of(c), lanes_in_step ? &*lanes_in_step : nullptr, lock ? &*lock : nullptr, out.chunks[g],
+                           chunk_stats[g], observer);
         after_chunk(g, out.chunks[g]);
     };
     run_tasks(options.parallel_for, tasks, run);
@@ -526,7 +541,7 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
     out.stats.recorded_per_depth.assign(depth, 0);
     for (const generation_stats& s : chunk_stats) {
         out.stats.cycles += s.cycles, out.stats.generators += s.generators;
-        out.stats.recorded += s.recorded, out.stats.escaped += s.escaped;
+        out.stats.recorded += s.recorded, out.stats.escaped += s.escaped, out.stats.locked += s.locked;
         for (std::size_t d = 0; d < depth; ++d) out.stats.recorded_per_depth[d] += s.recorded_per_depth[d];
     }
     return out;

@@ -23,7 +23,9 @@
 // chain must have a Lipschitz bound below 1 at every level, unless `require_contraction` is off
 // (then generators that leave the hypervolume are only counted).
 
+#include "hypertree/perturbation.hpp"
 #include "hypertree/random.hpp"
+#include "hypertree/region.hpp"
 #include "hypertree/transform/condensation.hpp"
 #include "hypertree/transform/pipeline.hpp"
 #include "hypertree/volume.hpp"
@@ -47,13 +49,11 @@ struct generator_shape {
     double length() const { return krs::length(end - start); }
 };
 
-// Noise perturbation of generator positions (section 3.5): each recorded generator moves by
-// amplitude * (n(f p), n(f p + o1), n(f p + o2)) componentwise, n being value noise in [-1, 1].
-struct perturbation {
-    vec3d amplitude{};
-    double frequency = 8;
-    bool enabled() const { return amplitude.x != 0 || amplitude.y != 0 || amplitude.z != 0; }
-};
+// Noise perturbation of generator positions (section 3.5, perturbation.hpp): each recorded
+// generator moves by the field's shift, at most amplitude.x, .y, .z along each axis (tested by
+// brute force over every generated point). The shift is applied to recorded generators only and
+// does not feed back into the iteration: the next transformation starts from the unperturbed
+// point, so the noise bends the tree without being contracted away or amplified.
 
 inline constexpr int max_tree_depth = 64;
 inline constexpr int max_transforms = 254; // a voxel's part is a byte: 0 = trunk, 1 + transform index
@@ -78,6 +78,9 @@ struct ifs {
     generator_shape generator;
     perturbation perturb;
     hypervolume volume{{-1, 0, -1}, {2, 2, 2}, resolution::cube(100)};
+    // Trimming as a constraint of the IFS (section 7, region.hpp): voxels whose centers lie in any
+    // of these regions are locked, so no hit on them is recorded while the tree is generated.
+    std::vector<trim_region> trim;
     bool require_contraction = true;
 
     void validate() const
@@ -111,8 +114,8 @@ struct ifs {
         if (iterations < 1) throw invalid_parameter("ifs.iterations", "must be >= 1", "0");
         krs::require_finite("ifs.generator.start", generator.start);
         krs::require_finite("ifs.generator.end", generator.end);
-        krs::require_finite("ifs.perturb.amplitude", perturb.amplitude);
-        krs::require_non_negative("ifs.perturb.frequency", perturb.frequency);
+        perturb.validate("ifs.perturb");
+        validate_trim_regions("ifs.trim", trim, volume);
     }
 };
 

@@ -13,15 +13,16 @@
 //   clear       empties every voxel of a region (cutting branches off, trimming).
 //   set         gives every voxel of a region one value.
 //
-// A voxel is in a region when its center is. Regions are world-space boxes, spheres and
-// half-spaces (a plane's point and normal; the half the normal points into is inside, so
-// clearing it trims the tree along the plane).
+// A voxel is in a region when its center is. Regions (region.hpp) are world-space boxes, spheres
+// and half-spaces; the same regions trim a tree while it is generated (ifs::trim), which is not
+// the same as clearing them afterwards (region.hpp says how the two differ).
 //
 // Each operation takes stores of any kinds (a and b may differ) and returns the sorted
 // `stored_voxel` list, from which the caller builds the store kind it wants; the `_store`
 // variants build the operands' kind directly. Parts survive where the operands keep them
 // (partitioned_store), as the part of the voxel whose level is kept.
 
+#include "hypertree/region.hpp"
 #include "hypertree/store/store.hpp"
 
 #include <algorithm>
@@ -38,27 +39,6 @@
 namespace hypertree {
 
 namespace detail {
-
-// Conservative index box of the voxels whose centers lie in the world box [lo, hi]: one voxel
-// wider on each side than the exact bound, so rounding can only add candidates, and the exact
-// decision is the region's contains() on each candidate's center.
-inline index_box candidate_box(const hypervolume& volume, const vec3d& lo, const vec3d& hi)
-{
-    const resolution n = volume.grid();
-    const vec3d& o = volume.origin();
-    const vec3d& s = volume.voxel_size();
-    // Center of cell i is o + (i + 0.5) s, so centers in [lo, hi] have i in [(lo - o)/s - 0.5, (hi - o)/s - 0.5].
-    const auto first = [](double lo_, double o_, double s_, int cells) {
-        const double c = std::ceil((lo_ - o_) / s_ - 0.5) - 1;
-        return int(std::clamp(c, 0.0, double(cells)));
-    };
-    const auto last = [](double hi_, double o_, double s_, int cells) {
-        const double c = std::floor((hi_ - o_) / s_ - 0.5) + 1;
-        return int(std::clamp(c, -1.0, double(cells - 1)));
-    };
-    return {{first(lo.x, o.x, s.x, n.x), first(lo.y, o.y, s.y, n.y), first(lo.z, o.z, s.z, n.z)},
-            {last(hi.x, o.x, s.x, n.x), last(hi.y, o.y, s.y, n.y), last(hi.z, o.z, s.z, n.z)}};
-}
 
 inline void require_same_volume(std::string_view operation, const hypervolume& a, const hypervolume& b)
 {
@@ -102,100 +82,6 @@ std::vector<stored_voxel> merge_stores(std::string_view operation, const A& a, c
 }
 
 } // namespace detail
-
-// ---- regions -----------------------------------------------------------------------------------
-
-// What an operation needs of a region: whether a point is inside, and a world-space box that
-// holds every inside point within the hypervolume (so an operation visits only that box).
-template <class R>
-concept voxel_region = requires(const R& region, const vec3d& p, const hypervolume& volume)
-{
-    {
-        region.contains(p)
-        } -> std::same_as<bool>;
-    {
-        region.candidates(volume)
-        } -> std::same_as<index_box>;
-};
-
-// An axis-aligned world-space box, faces included.
-struct box_region {
-    vec3d lo, hi;
-
-    box_region(const vec3d& lo_, const vec3d& hi_) : lo(lo_), hi(hi_)
-    {
-        krs::require_finite("box_region.lo", lo_);
-        krs::require_finite("box_region.hi", hi_);
-        if (!(lo_.x <= hi_.x && lo_.y <= hi_.y && lo_.z <= hi_.z))
-            throw invalid_parameter("box_region.hi", "must be >= lo on every axis",
-                                    krs::detail::to_text(hi_) + " with lo " + krs::detail::to_text(lo_));
-    }
-    bool contains(const vec3d& p) const
-    {
-        return lo.x <= p.x && p.x <= hi.x && lo.y <= p.y && p.y <= hi.y && lo.z <= p.z && p.z <= hi.z;
-    }
-    index_box candidates(const hypervolume& volume) const { return detail::candidate_box(volume, lo, hi); }
-};
-
-// A world-space ball, boundary included.
-struct sphere_region {
-    vec3d center;
-    double radius;
-
-    sphere_region(const vec3d& center_, double radius_) : center(center_), radius(radius_)
-    {
-        krs::require_finite("sphere_region.center", center_);
-        krs::require_non_negative("sphere_region.radius", radius_);
-    }
-    bool contains(const vec3d& p) const { return krs::length_squared(p - center) <= radius * radius; }
-    index_box candidates(const hypervolume& volume) const
-    {
-        const vec3d r{radius, radius, radius};
-        return detail::candidate_box(volume, center - r, center + r);
-    }
-};
-
-// The closed half-space on the side the normal points to: { p : dot(p - point, normal) >= 0 }.
-struct half_space_region {
-    vec3d point;
-    vec3d normal; // unit length
-
-    half_space_region(const vec3d& point_, const vec3d& normal_) : point(point_), normal(normal_)
-    {
-        krs::require_finite("half_space_region.point", point_);
-        normal = krs::require_direction("half_space_region.normal", normal_);
-    }
-    bool contains(const vec3d& p) const { return krs::dot(p - point, normal) >= 0; }
-    // The box of the hypervolume's part inside the half-space: of the box's corners inside and
-    // the points where the plane crosses its edges (the vertices of the clipped box).
-    index_box candidates(const hypervolume& volume) const
-    {
-        const vec3d lo = volume.origin(), hi = volume.maximum();
-        std::array<vec3d, 8> corner;
-        std::array<double, 8> side;
-        for (int c = 0; c < 8; ++c) {
-            corner[c] = {(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z};
-            side[c] = krs::dot(corner[c] - point, normal);
-        }
-        constexpr double inf = std::numeric_limits<double>::infinity();
-        vec3d box_lo{inf, inf, inf}, box_hi{-inf, -inf, -inf};
-        const auto include = [&](const vec3d& p) {
-            box_lo = krs::min(box_lo, p);
-            box_hi = krs::max(box_hi, p);
-        };
-        for (int c = 0; c < 8; ++c) {
-            if (side[c] >= 0) include(corner[c]);
-            for (int axis = 1; axis < 8; axis <<= 1) { // the edges from c to corners above it
-                const int d = c | axis;
-                if (d == c || (side[c] >= 0) == (side[d] >= 0)) continue;
-                const double t = side[c] / (side[c] - side[d]);
-                include(corner[c] + (corner[d] - corner[c]) * t);
-            }
-        }
-        if (!(box_lo.x <= box_hi.x)) return {}; // the half-space misses the box
-        return detail::candidate_box(volume, box_lo, box_hi);
-    }
-};
 
 // ---- operations ----------------------------------------------------------------------------------
 

@@ -27,6 +27,7 @@
 // contraction condition) is reported at the keyword that set it. Nothing half-built escapes.
 
 #include "hypertree/ifs.hpp"
+#include "hypertree/render/march_options.hpp"
 #include "hypertree/render/transfer.hpp"
 #include "hypertree/io/lexer.hpp"
 
@@ -53,6 +54,12 @@ struct parsed_tree {
     hypertree::ifs<runtime_pipeline> ifs;
     std::vector<depth_color_span> depth_colors; // in file order; their depth ranges do not overlap
     std::optional<int> density_class_count; // DENSITYCLASSES; empty: the caller's choice (build_options)
+    // Noise at the two later stages of section 3.5 (perturbation.hpp): VOXELPERTURB, applied to the
+    // built store by perturb_voxels, and RENDERPERTURB, the marcher's sample displacement
+    // (march_options::displacement). Empty: none. (PERTURB, the generation stage, is ifs.perturb;
+    // TRIM regions are ifs.trim.)
+    std::optional<perturbation> voxel_perturb;
+    std::optional<sample_displacement> render_perturb;
 
     // The color the file gives voxels of `depth`, if a DEPTHCOLOR covers it.
     std::optional<rgb> color_of_depth(int depth) const
@@ -80,6 +87,9 @@ enum class definition_keyword {
     depth_color,
     density_classes,
     perturb,
+    voxel_perturb,
+    render_perturb,
+    trim,
     hypervolume,
     displacement,
     point_init,
@@ -109,6 +119,9 @@ inline constexpr keyword_entry definition_keywords[] = {
     {"DEPTHCOLOR", definition_keyword::depth_color, "DEPTHCOLOR first_depth last_depth r0 g0 b0 r1 g1 b1"},
     {"DENSITYCLASSES", definition_keyword::density_classes, "DENSITYCLASSES count"},
     {"PERTURB", definition_keyword::perturb, "PERTURB ax ay az [frequency]"},
+    {"VOXELPERTURB", definition_keyword::voxel_perturb, "VOXELPERTURB ax ay az [frequency]"},
+    {"RENDERPERTURB", definition_keyword::render_perturb, "RENDERPERTURB ax ay az [frequency]"},
+    {"TRIM", definition_keyword::trim, "TRIM BOX x0 y0 z0 x1 y1 z1 | TRIM SPHERE x y z radius | TRIM HALFSPACE px py pz nx ny nz"},
     {"HYPERVOLUME", definition_keyword::hypervolume, "HYPERVOLUME x y z"},
     {"DISPLACEMENT", definition_keyword::displacement, "DISPLACEMENT x y z"},
     {"POINTINIT", definition_keyword::point_init, "POINTINIT x y z"},
@@ -273,10 +286,36 @@ private:
             break;
         case definition_keyword::perturb:
             once(s, k);
-            tree_.perturb.amplitude = vector3(s);
+            tree_.perturb.amplitude = vector3(s, number_rule::non_negative);
             if (!s.at_end()) tree_.perturb.frequency = s.number(number_rule::non_negative);
             s.finish();
             break;
+        case definition_keyword::voxel_perturb: {
+            once(s, k);
+            perturbation p;
+            p.amplitude = vector3(s, number_rule::non_negative);
+            if (!s.at_end()) p.frequency = s.number(number_rule::non_negative);
+            s.finish();
+            checked(s.where(), "VOXELPERTURB", [&] { p.validate("VOXELPERTURB"); });
+            voxel_perturb_ = p;
+            break;
+        }
+        case definition_keyword::render_perturb: {
+            once(s, k);
+            const vec3d a = vector3(s, number_rule::non_negative);
+            sample_displacement d;
+            d.amplitude = {float(a.x), float(a.y), float(a.z)};
+            if (!s.at_end()) d.frequency = float(s.number(number_rule::non_negative));
+            s.finish();
+            checked(s.where(), "RENDERPERTURB", [&] {
+                march_options o;
+                o.displacement = d;
+                o.validate();
+            });
+            render_perturb_ = d;
+            break;
+        }
+        case definition_keyword::trim: read_trim(s); break;
         case definition_keyword::hypervolume:
             once(s, k);
             extent_ = vector3(s, number_rule::positive);
@@ -337,6 +376,31 @@ private:
         }
         depth_colors_.push_back(c);
         depth_color_at_.push_back(s.where());
+    }
+
+    // TRIM BOX lo hi | SPHERE center radius | HALFSPACE point normal: a region locked while the
+    // tree is generated (ifs::trim). Whether it holds a voxel is checked with the hypervolume, at
+    // the end, and reported here.
+    void read_trim(io::statement& s)
+    {
+        using io::number_rule;
+        if (s.accept_word("BOX")) {
+            const vec3d lo = vector3(s), hi = vector3(s);
+            s.finish();
+            tree_.trim.push_back(checked(s.where(), "TRIM BOX", [&] { return trim_region(box_region(lo, hi)); }));
+        } else if (s.accept_word("SPHERE")) {
+            const vec3d c = vector3(s);
+            const double r = s.number(number_rule::positive);
+            s.finish();
+            tree_.trim.push_back(checked(s.where(), "TRIM SPHERE", [&] { return trim_region(sphere_region(c, r)); }));
+        } else if (s.accept_word("HALFSPACE")) {
+            const vec3d p = vector3(s), n = vector3(s);
+            s.finish();
+            tree_.trim.push_back(checked(s.where(), "TRIM HALFSPACE", [&] { return trim_region(half_space_region(p, n)); }));
+        } else {
+            s.expected("BOX, SPHERE or HALFSPACE", "after TRIM");
+        }
+        trim_at_.push_back(s.where());
     }
 
     void read_transform(io::statement& s)
@@ -501,6 +565,10 @@ private:
         if (parameter.starts_with("ifs.iterations")) return at(definition_keyword::iterations);
         if (parameter.starts_with("ifs.generator")) return at(definition_keyword::point_init);
         if (parameter.starts_with("ifs.perturb")) return at(definition_keyword::perturb);
+        if (parameter.starts_with("ifs.trim[")) {
+            const std::size_t j = std::size_t(std::stoul(parameter.substr(9)));
+            if (j < trim_at_.size()) return trim_at_[j];
+        }
         if (parameter.starts_with("hypervolume.resolution")) return at(definition_keyword::resolution);
         if (parameter.starts_with("hypervolume.extent")) return at(definition_keyword::hypervolume);
         return at(definition_keyword::displacement);
@@ -552,7 +620,7 @@ private:
         } catch (const krs::invalid_parameter& e) {
             fail(position_of(e.parameter()), "invalid tree: " + without_library_prefix(e));
         }
-        return {std::move(tree), std::move(depth_colors_), density_class_count_};
+        return {std::move(tree), std::move(depth_colors_), density_class_count_, voxel_perturb_, render_perturb_};
     }
 
     std::string_view text_, file_;
@@ -565,6 +633,9 @@ private:
     std::vector<depth_color_span> depth_colors_;
     std::vector<source_position> depth_color_at_;
     std::optional<int> density_class_count_;
+    std::optional<perturbation> voxel_perturb_;
+    std::optional<sample_displacement> render_perturb_;
+    std::vector<source_position> trim_at_;
     std::array<std::optional<source_position>, std::size_t(definition_keyword::count)> seen_{};
 };
 

@@ -199,6 +199,10 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
     if (options.bounds_by != bound_method::box && options.bounds_by != bound_method::spheres)
         throw krs::invalid_parameter("march_options.bounds_by", "the GLSL marcher takes bound_method::box or spheres",
                                      std::to_string(int(options.bounds_by)));
+    // Render-time noise is CPU only (march_options.hpp): refused rather than silently dropped.
+    if (options.displacement.enabled())
+        throw krs::invalid_parameter("march_options.displacement", "is not supported by the GLSL marcher (amplitude must be 0 there; the CPU marcher takes it)",
+                                     krs::detail::to_text(options.displacement.amplitude));
     const voxel_shading shading(options, shape, colors);
     const brick_walk walk(v, options.step_factor * float(v.smallest_voxel_side())); // the marcher's walk
     const std::string n = glsl.prefix + glsl.name;

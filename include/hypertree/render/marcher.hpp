@@ -223,7 +223,9 @@ public:
     template <class T, std::size_t K>
     std::array<march_result<T>, K> march_packets(const std::array<krs::ray<T>, K>& rays, march_context context = {}) const
     {
-        const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || (std::floating_point<T> && context.rays);
+        // (Displaced samples read voxels off the ray's own path: only the per-lane march displaces.)
+        const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || (std::floating_point<T> && context.rays) ||
+                                options_.displacement.enabled();
         if (!per_sample && context.shading && context.shading->complete() && fits(*context.shading))
             return march_shaded_ahead<T, K>(rays, *context.shading);
         std::array<march_result<T>, K> out;
@@ -496,7 +498,7 @@ private:
         using krs::any; // (unqualified below: packets take xsimd's, found by argument)
         march_result<T> out;
         T t0, t1;
-        enter_box(ray, t0, t1);
+        enter_box(ray, t0, t1, options_.displacement.enabled());
         const T ds(walk_.step()), half(0.5f);
         // Sample k sits at t0 + (k + 1/2) ds, computed from k (not accumulated), so skipping the
         // empty samples of an empty brick lands exactly where stepping would.
@@ -507,13 +509,15 @@ private:
             if (cache && cache->index.size() < max_samples()) cache->index.resize(max_samples(), ~voxel_index(0)), cache->value.resize(max_samples());
         }
         const auto dx = krs::lanes_of(ray.direction.x), dy = krs::lanes_of(ray.direction.y), dz = krs::lanes_of(ray.direction.z);
+        const bool displaced = options_.displacement.enabled();
         float slope[lanes<T>][3];
         std::array<brick_walk::exit_faces, lanes<T>> faces;
         const T margin0 = walk_.margin_at_origin(ray.origin);
         for (std::size_t i = 0; i < lanes<T>; ++i) walk_.slopes_of(krs::vec3f{dx[i], dy[i], dz[i]}, slope[i]), faces[i] = brick_walk::faces_of(slope[i]);
         while (any(active)) {
             const T t = t0 + (k + half) * ds;
-            const krs::vec3<T> p = ray.origin + ray.direction * t;
+            // (Render-time noise: the sample's displaced position, all lanes at once.)
+            const krs::vec3<T> p = displaced ? options_.displacement.displaced(ray.origin + ray.direction * t) : ray.origin + ray.direction * t;
             // Per lane: the voxel, its opacity for one step, and its shaded color if it is not
             // empty; or, in an empty brick, how many samples to skip.
             std::array<float, lanes<T>> alpha{}, r{}, g{}, b{}, lookups{}, advance{};
@@ -528,7 +532,7 @@ private:
                 const krs::vec3f di{dx[i], dy[i], dz[i]};
                 const brick_walk::probe_result<float> found = probe<float>(walk, view, pi, slope[i], true, margin[i], faces[i]);
                 if (!found.looks) {
-                    advance[i] = found.advance;
+                    advance[i] = displaced ? 1.0f : found.advance; // no skips off the ray's path
                     continue;
                 }
                 const std::size_t place = std::size_t(found.place);
@@ -561,7 +565,7 @@ private:
     // The most samples a ray can take through the box (the paper's cache size q).
     std::size_t max_samples() const
     {
-        const krs::vec3f e = box_hi_ - box_lo_;
+        const krs::vec3f e = box_hi_ - box_lo_ + options_.displacement.amplitude * 2.0f; // enter_box's widened box
         return std::size_t(std::ceil(krs::length(e) / walk_.step())) + 2;
     }
 
@@ -579,12 +583,16 @@ private:
 
     // Slab test against the tree's box; t0 >= 0. Rays that miss get t0 >= t1.
     template <class T>
-    void enter_box(const krs::ray<T>& ray, T& t0, T& t1) const
+    void enter_box(const krs::ray<T>& ray, T& t0, T& t1, bool displaced = false) const
     {
         using krs::abs, krs::max, krs::min, krs::select;
         t0 = T(0.0f);
         t1 = T(3.0e38f);
-        const T lo[3] = {T(box_lo_.x), T(box_lo_.y), T(box_lo_.z)}, hi[3] = {T(box_hi_.x), T(box_hi_.y), T(box_hi_.z)};
+        // Primary rays with render-time noise: widened by its amplitude, so samples whose displaced
+        // positions fall in the box are taken (march_options.hpp).
+        const krs::vec3f pad = displaced ? options_.displacement.amplitude : krs::vec3f{0.0f, 0.0f, 0.0f};
+        const T lo[3] = {T(box_lo_.x - pad.x), T(box_lo_.y - pad.y), T(box_lo_.z - pad.z)},
+                hi[3] = {T(box_hi_.x + pad.x), T(box_hi_.y + pad.y), T(box_hi_.z + pad.z)};
         const T o[3] = {ray.origin.x, ray.origin.y, ray.origin.z}, d[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
         for (int a = 0; a < 3; ++a) {
             // A zero direction component becomes tiny, so the division gives a huge finite slope

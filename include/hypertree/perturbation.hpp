@@ -1,0 +1,89 @@
+#pragma once
+// Noise perturbation (paper section 3.5): "The too ideal structure of hypertrees can be distorted
+// with a three-dimensional vector-valued noise or turbulence", injected at one of three stages,
+// all with the same field here:
+//   1. during generation, on generator positions (ifs::perturb, generate.hpp): the paper's "best
+//      solution", exact in position;
+//   2. as a post-process, "a shift operation to the completed hypertree" (perturb_voxels below):
+//      every stored voxel moves, with its density, level and part, to the voxel holding its
+//      shifted center;
+//   3. at render time, on the marcher's sample positions (march_options::displacement,
+//      render/march_options.hpp), which moves no voxel.
+//
+// The field: shift(p) = (ax n(f p), ay n(f p + o1), az n(f p + o2)), n = value noise in [-1, 1]
+// (krs/core/noise.hpp), so |shift_i| <= a_i on each axis. It is smooth (value noise's gradient is
+// at most value_noise_gradient_bound), so nearby points move alike: a continuous distortion.
+//
+// The post-process maps voxels forward (each voxel goes where its center goes), so it is exact
+// for the voxels it keeps and may leave a cell empty where the field stretches the tree by more
+// than a voxel per voxel (where a f value_noise_gradient_bound >= 1); where two voxels land in one
+// cell the denser is kept (then the shallower level, then the smaller part, as unite_max).
+// Voxels whose shifted center leaves the hypervolume are dropped.
+
+#include "hypertree/store/store.hpp"
+#include "krs/core/noise.hpp"
+#include "krs/core/validate.hpp"
+
+#include <algorithm>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hypertree {
+
+struct perturbation {
+    vec3d amplitude{};
+    double frequency = 8;
+    bool enabled() const { return amplitude.x != 0 || amplitude.y != 0 || amplitude.z != 0; }
+
+    // Amplitudes are sizes (a negative one is the same noise mirrored: refused rather than
+    // silently meaning that); all finite (an infinite frequency made every shift NaN).
+    void validate(std::string_view name) const
+    {
+        const std::string n(name);
+        krs::require_non_negative(n + ".amplitude.x", amplitude.x);
+        krs::require_non_negative(n + ".amplitude.y", amplitude.y);
+        krs::require_non_negative(n + ".amplitude.z", amplitude.z);
+        krs::require_non_negative(n + ".frequency", frequency);
+    }
+    // p + shift(p). The offsets decorrelate the three components (three looks into one noise).
+    vec3d displaced(const vec3d& p) const
+    {
+        const vec3d q = p * frequency;
+        return {p.x + amplitude.x * krs::value_noise(q), p.y + amplitude.y * krs::value_noise(vec3d{q.x + 31.7, q.y - 17.3, q.z + 5.9}),
+                p.z + amplitude.z * krs::value_noise(vec3d{q.x - 11.1, q.y + 23.9, q.z - 41.3})};
+    }
+};
+
+// The post-process (stage 2): the store's voxels shifted by the field, as a sorted list any store
+// kind builds from. Amplitude 0 gives the store's own list.
+template <voxel_store S>
+std::vector<stored_voxel> perturb_voxels(const S& store, const perturbation& perturb)
+{
+    perturb.validate("perturb_voxels.perturb");
+    const hypervolume& volume = store.volume();
+    std::vector<stored_voxel> moved;
+    moved.reserve(store.nonempty_count());
+    for_each_stored(store, [&](const stored_voxel& v) {
+        if (const auto to = volume.voxel_at(perturb.displaced(volume.voxel_center(v.index)))) moved.push_back({*to, v.value, v.part});
+    });
+    // Sort by index, the winner of each cell first: denser, then shallower, then smaller part.
+    std::sort(moved.begin(), moved.end(), [](const stored_voxel& a, const stored_voxel& b) {
+        if (a.index != b.index) return a.index < b.index;
+        if (a.value.density != b.value.density) return a.value.density > b.value.density;
+        if (a.value.level != b.value.level) return a.value.level < b.value.level;
+        return a.part < b.part;
+    });
+    moved.erase(std::unique(moved.begin(), moved.end(), [](const stored_voxel& a, const stored_voxel& b) { return a.index == b.index; }),
+                moved.end());
+    return moved;
+}
+
+// ... built as the operand's store kind.
+template <voxel_store S>
+S perturb_voxels_store(const S& store, const perturbation& perturb, memory_budget budget = {})
+{
+    return S::build(store.volume(), perturb_voxels(store, perturb), budget);
+}
+
+} // namespace hypertree
