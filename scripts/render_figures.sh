@@ -41,3 +41,21 @@ for file in "$figures_dir"/figure*.tree "$figures_dir"/figure*.forest; do
     done <<< "$lines"
 done
 echo "render_figures.sh: $count figure image(s) in $out_dir"
+
+# The README's picture (docs/images/hypertree_figures.jpg), when OpenImageIO's oiiotool is there:
+# figures 8, 9 (union, cleared), 10 (diffuse, specular) in the top row; 11 (aliased, antialiased:
+# crops at 1:1, so that resampling does not smooth the aliasing) and 12 (250 voxels, reduced to
+# 100, generated at 100) below, 180 x 180 pixels each.
+if command -v oiiotool > /dev/null 2>&1; then
+    cd "$out_dir"
+    oiiotool figure08_noise.png --cut 224x224+48+48 --resize 180x180 \
+        figure09_union.png --cut 200x200+40+40 --resize 180x180 \
+        figure09_cleared.png --cut 200x200+40+40 --resize 180x180 \
+        figure10_diffuse.png --cut 220x220+30+25 --resize 180x180 \
+        figure10_specular.png --cut 220x220+30+25 --resize 180x180 \
+        figure11_aliased.png --cut 180x180+62+5 figure11_antialiased.png --cut 180x180+62+5 \
+        figure12_lod_250.png --cut 180x180+30+30 figure12_lod_100.png --cut 180x180+30+30 \
+        figure12_direct_100.png --cut 180x180+30+30 \
+        --mosaic 5x2 --attrib Compression jpeg:88 -o figures_8_12.jpg
+    echo "render_figures.sh: montage -> $out_dir/figures_8_12.jpg"
+fi
