@@ -195,10 +195,12 @@ int main(int argc, char** argv)
     };
     args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")->check(grid_file(".vdb"));
     args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")->check(grid_file(".nvdb"));
-    args.integer("--lod", o.lod, 1, 1600, "reduce the tree to N voxels along each axis before rendering (level of detail, section 9)");
+    args.integer("--lod", o.lod, 1, 1600, "reduce the tree to N voxels along each axis before rendering (level of detail, section 9)")
+        ->default_str("off");
     double clear_above = 0;
     CLI::Option* clear_option = args.number("--clear-above", clear_above, -1e6, 1e6, false,
                                             "clear every voxel whose centre is at or above this height, tree units (section 7)");
+    clear_option->default_str("off");
     args.number("--ambient", o.shading.ambient, 0, 10, false, "ambient weight (section 8.3)");
     args.number("--diffuse", o.shading.diffuse, 0, 10, false, "Lambert weight");
     args.number("--specular", o.shading.specular, 0, 10, false, "Blinn-Phong weight (0: diffuse only)");
@@ -206,6 +208,9 @@ int main(int argc, char** argv)
     float elevation = 0, azimuth = 0;
     CLI::Option* elevation_option = args.number("--light-elevation", elevation, -90, 90, false, "the light's height above the horizon, degrees");
     CLI::Option* azimuth_option = args.number("--light-azimuth", azimuth, -360, 360, false, "the light's direction about the y axis, degrees from +x toward +z");
+    // The default light, directional_light{} (march_options.hpp): (0.4, 0.8, 0.45) made unit.
+    elevation_option->default_str("53");
+    azimuth_option->default_str("48.4");
     std::string normals = "structure_flow", shadows = "on";
     args.choice("--normals", normals, {"structure_flow", "part_boxes", "line_flow"}, "the shading normal (section 8.3)");
     args.choice("--shadows", shadows, {"on", "off"}, "self-shadowing");
