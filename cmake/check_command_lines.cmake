@@ -7,7 +7,8 @@
 # status the row must end with and `say` a ;-list of texts the program must print, matched
 # literally. A refusal (status 2) must print them on stderr and nothing on stdout: a command line
 # is refused before any work starts, so nothing is built or rendered first (the old parser took
-# "3x" for 3 and rendered for minutes). Other rows (--help, tiny renders) print them on stdout.
+# "3x" for 3 and rendered for minutes). A failure found while working (status 1) prints them on
+# stderr. Other rows (--help, tiny renders) print them on stdout.
 # "<out>" in an argument stands for WORK_DIR, where rows may write files.
 # Every row runs; the failures are listed together.
 
@@ -47,6 +48,10 @@ function(krs_case program status say)
         if(NOT out STREQUAL "")
             list(APPEND problems "printed on stdout (work started before the refusal?)")
         endif()
+    elseif(status EQUAL 1)
+        # A failure found while working (a setting the tree cannot take): its message on stderr.
+        set(where "${err}")
+        set(stream stderr)
     else()
         set(where "${out}")
         set(stream stdout)

@@ -55,6 +55,31 @@ krs_case(hypertree_render  0 "rendered 16x16, supersampling 10"                 
 krs_case(hypertree_render  0 "rendered 16x16, supersampling 1"                     --preset C --resolution 16 --width 16 --height 16
                                                                                    --supersampling 1 --threads 1 --output <out>/hypertree.png)
 # The grid files: a name ending as the format's do, a directory that exists, a build with OpenVDB.
+# The settings of the paper's figures 8-12 (examples/hypertrees/figure*; what their images show is
+# checked by tests/check_figure_image.cpp).
+krs_case(hypertree_render  2 "--lod;'0';[1, 1600]"                                 --lod 0)
+krs_case(hypertree_render  2 "--clear-above;'nan'"                                 --clear-above nan)
+krs_case(hypertree_render  2 "--specular;'-1';[0, 10]"                             --specular -1)
+krs_case(hypertree_render  2 "--ambient;'inf'"                                     --ambient inf)
+krs_case(hypertree_render  2 "--shininess;'1e4';[0, 1000]"                         --shininess 1e4)
+krs_case(hypertree_render  2 "--light-elevation;'91';[-90, 90]"                    --light-elevation 91)
+krs_case(hypertree_render  2 "--light-azimuth;'x'"                                 --light-azimuth x)
+krs_case(hypertree_render  2 "--normals;'flat';one of structure_flow|part_boxes|line_flow" --normals flat)
+krs_case(hypertree_render  2 "--shadows;'no';one of on|off"                        --shadows no)
+krs_case(hypertree_render  2 "--normals line_flow needs one tree"                  --forest f.forest --normals line_flow)
+krs_case(hypertree_render  1 "--lod 32;must not exceed the tree's resolution (16 x 16 x 16)"
+                                                                                   --preset C --resolution 16 --lod 32 --width 16 --height 16
+                                                                                   --threads 1 --output <out>/hypertree.png)
+krs_case(hypertree_render  1 "nothing is left to render"                           --preset C --resolution 16 --clear-above -10 --width 16
+                                                                                   --height 16 --threads 1 --output <out>/hypertree.png)
+krs_case(hypertree_render  1 "--normals line_flow;generator is a point"            --preset A --resolution 16 --normals line_flow --width 16
+                                                                                   --height 16 --threads 1 --output <out>/hypertree.png)
+krs_case(hypertree_render  0 "rendered 16x16"                                      --preset C --resolution 16 --lod 8 --clear-above 0.5
+                                                                                   --normals line_flow --specular 0.5 --shininess 8 --light-elevation 30
+                                                                                   --light-azimuth -45 --shadows off --width 16 --height 16 --threads 1
+                                                                                   --output <out>/hypertree.png)
+krs_case(hypertree_render  0 "rendered 16x16"                                      --preset B --resolution 16 --normals part_boxes --width 16
+                                                                                   --height 16 --threads 1 --output <out>/hypertree.png)
 krs_case(hypertree_render  2 "--save-vdb;'tree.txt';ending in .vdb"                 --save-vdb tree.txt)
 krs_case(hypertree_render  2 "--save-nvdb;'.nvdb';ending in .nvdb"                  --save-nvdb .nvdb)
 if(KRS_WITH_OPENVDB)

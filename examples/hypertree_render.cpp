@@ -6,6 +6,22 @@
 //                      [--store dense|index_list|bit_array|partitioned] [--width W] [--height H]
 //                      [--supersampling S|auto] [--density-scale K] [--threads N] [--seed N]
 //                      [--output FILE.png] [--save-volume FILE] [--save-vdb FILE.vdb] [--save-nvdb FILE.nvdb]
+//                      [--lod N] [--clear-above Y] [--ambient A] [--diffuse D] [--specular S]
+//                      [--shininess N] [--light-elevation DEG] [--light-azimuth DEG]
+//                      [--normals structure_flow|part_boxes|line_flow] [--shadows on|off]
+//
+// The settings of the paper's figures 8-12 (examples/hypertrees/figure*.tree and .forest, whose
+// `# render` lines scripts/render_figures.sh runs):
+// - --lod N reduces the generated tree to N voxels along each axis (lod.hpp, section 9: densities
+//   averaged by overlap) before it is stored and rendered (figure 12);
+// - --clear-above Y clears every voxel whose centre lies at or above height Y (tree units) after
+//   generation (ops.hpp `clear` with a half-space, section 7: "as if the hypertree has been
+//   horizontally docked", figure 9);
+// - --ambient, --diffuse, --specular, --shininess, one light from --light-elevation and
+//   --light-azimuth, --normals (march_options::normals_by) and --shadows: the shading of section
+//   8.3 (figure 10); --supersampling is the antialiasing of figure 11.
+// The camera is framed on the tree as generated, before --lod or --clear-above, so a reduced or
+// cleared tree is seen from exactly where the whole one is (its images compare pixel by pixel).
 //
 // --save-vdb and --save-nvdb write the store as OpenVDB and NanoVDB grids (hypertree/io/openvdb.hpp,
 // io/nanovdb.hpp): they exist only in a build that found OpenVDB and NanoVDB (KRS_WITH_OPENVDB,
@@ -13,6 +29,8 @@
 
 #include "hypertree/forest.hpp"
 #include "hypertree/hypertree.hpp"
+#include "hypertree/lod.hpp"
+#include "hypertree/ops.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/render/render.hpp"
 #include "support/command_line.hpp"
@@ -31,6 +49,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <memory>
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 #include <optional>
@@ -51,6 +72,9 @@ struct settings {
     int width = 480, height = 480, supersampling = 0, threads = 0; // supersampling 0 = auto
     float density_scale = 4;                                       // k of section 8.1
     std::uint64_t seed = 1;
+    int lod = 0;                          // 0: the generated resolution
+    std::optional<double> clear_above;    // a height in tree units
+    march_options shading;                // ambient, diffuse, specular, shininess, light, normals, shadows
 };
 
 // Runs body(0 .. count-1) on `threads` threads, drawing indices from a shared counter, and reports
@@ -73,9 +97,17 @@ auto parallel_with_progress(int threads, const char* what)
     };
 }
 
+// What the render needs besides the voxels: the box the camera frames (the tree as generated),
+// the line generators' flow when --normals line_flow asks for it, and the render-time noise.
+struct render_extras {
+    world_box frame{};
+    std::function<void(tree_shape&)> adjust_shape;
+    sample_displacement displacement; // the definition file's RENDERPERTURB (render-time noise)
+};
+
 template <voxel_store S>
 int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>& voxels, const depth_colors& colors,
-                     const sample_displacement& displacement, const settings& o, double creation_seconds)
+                     const settings& o, double creation_seconds, const render_extras& extras)
 {
     const auto t0 = clock_type::now();
     const S store = S::build(volume, voxels);
@@ -97,15 +129,18 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     if (!o.save_vdb.empty()) saving("--save-vdb", o.save_vdb, [&] { save_vdb(store, o.save_vdb); });
     if (!o.save_nvdb.empty()) saving("--save-nvdb", o.save_nvdb, [&] { save_nvdb(store, o.save_nvdb); });
 #endif
-    const tree_shape shape = tree_shape::of(volume, voxels);
-    march_options mo;
+    if (store.nonempty_count() == 0)
+        throw std::runtime_error("nothing is left to render (--clear-above cleared every voxel, or the tree is empty)");
+    tree_shape shape = tree_shape::of(volume, voxels);
+    if (extras.adjust_shape) extras.adjust_shape(shape);
+    march_options mo = o.shading;
     mo.density_scale = o.density_scale;
-    mo.displacement = displacement; // the definition file's RENDERPERTURB (render-time noise)
+    mo.displacement = extras.displacement;
     const int threads = example::thread_count(o.threads);
     // The marcher sweeps the lights through the voxels once (light_sweep.hpp), on these threads.
     const volume_marcher marcher(store, shape, colors, mo, parallel_with_progress(threads, "light sweep"));
 
-    const krs::pinhole_camera camera = framing_camera(shape.box, o.width, o.height);
+    const krs::pinhole_camera camera = framing_camera(extras.frame, o.width, o.height);
 
     render_settings rs;
     rs.supersampling = o.supersampling > 0 ? o.supersampling : std::min(4, supersampling_for(camera, shape, volume));
@@ -162,7 +197,39 @@ int main(int argc, char** argv)
     };
     args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")->check(grid_file(".vdb"));
     args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")->check(grid_file(".nvdb"));
+    args.integer("--lod", o.lod, 1, 1600, "reduce the tree to N voxels along each axis before rendering (level of detail, section 9)")
+        ->default_str("off");
+    double clear_above = 0;
+    CLI::Option* clear_option = args.number("--clear-above", clear_above, -1e6, 1e6, false,
+                                            "clear every voxel whose centre is at or above this height, tree units (section 7)");
+    clear_option->default_str("off");
+    args.number("--ambient", o.shading.ambient, 0, 10, false, "ambient weight (section 8.3)");
+    args.number("--diffuse", o.shading.diffuse, 0, 10, false, "Lambert weight");
+    args.number("--specular", o.shading.specular, 0, 10, false, "Blinn-Phong weight (0: diffuse only)");
+    args.number("--shininess", o.shading.shininess, 0, 1000, false, "Blinn-Phong exponent");
+    float elevation = 0, azimuth = 0;
+    CLI::Option* elevation_option = args.number("--light-elevation", elevation, -90, 90, false, "the light's height above the horizon, degrees");
+    CLI::Option* azimuth_option = args.number("--light-azimuth", azimuth, -360, 360, false, "the light's direction about the y axis, degrees from +x toward +z");
+    // The default light, directional_light{} (march_options.hpp): (0.4, 0.8, 0.45) made unit.
+    elevation_option->default_str("53");
+    azimuth_option->default_str("48.4");
+    std::string normals = "structure_flow", shadows = "on";
+    args.choice("--normals", normals, {"structure_flow", "part_boxes", "line_flow"}, "the shading normal (section 8.3)");
+    args.choice("--shadows", shadows, {"on", "off"}, "self-shadowing");
     args.parse(argc, argv);
+    if (clear_option->count() > 0) o.clear_above = clear_above;
+    o.shading.normals_by = normals == "part_boxes" ? normal_method::part_boxes : normals == "line_flow" ? normal_method::line_flow : normal_method::structure_flow;
+    o.shading.shadows = shadows == "on";
+    if (elevation_option->count() > 0 || azimuth_option->count() > 0) {
+        // The default light's angles, for the one of the two not given.
+        const krs::vec3f d = krs::normalize(o.shading.lights.front().direction);
+        const float pi = 3.14159265f;
+        const float el = elevation_option->count() > 0 ? elevation * pi / 180 : std::asin(d.y);
+        const float az = azimuth_option->count() > 0 ? azimuth * pi / 180 : std::atan2(d.z, d.x);
+        o.shading.lights.front().direction = {std::cos(el) * std::cos(az), std::sin(el), std::cos(el) * std::sin(az)};
+    }
+    if (normals == "line_flow" && !o.forest_file.empty())
+        args.fail("--normals line_flow needs one tree with a line generator (--tree or --preset), not a --forest");
     // Refused before the tree is generated, which can take minutes: an output whose folder cannot
     // be made (folders are made as for the PNG).
     for (const auto& [option, path] : {std::pair{"--save-vdb", o.save_vdb}, std::pair{"--save-nvdb", o.save_nvdb}}) {
@@ -185,7 +252,7 @@ int main(int argc, char** argv)
         hypervolume volume;
         std::vector<stored_voxel> voxels;
         depth_colors colors;
-        sample_displacement displacement;
+        render_extras extras;
         const auto t0 = clock_type::now();
         if (!o.forest_file.empty()) {
             loaded_forest forest = load_forest(o.forest_file);
@@ -210,11 +277,35 @@ int main(int argc, char** argv)
             volume = tree.ifs.volume;
             // VOXELPERTURB: the post-process noise, shifting the built tree's voxels (perturbation.hpp).
             if (tree.voxel_perturb) voxels = perturb_voxels(index_list_store::build(volume, voxels), *tree.voxel_perturb);
-            if (tree.render_perturb) displacement = *tree.render_perturb;
+            if (tree.render_perturb) extras.displacement = *tree.render_perturb;
             colors = tree.colors();
+            if (o.shading.normals_by == normal_method::line_flow) {
+                if (tree.ifs.generator.is_point())
+                    throw std::runtime_error("--normals line_flow: the tree's generator is a point; it needs a line (LINEINIT)");
+                // The same draw of the random values as the generation's (one seed).
+                extras.adjust_shape = [drawn = std::make_shared<drawn_ifs<runtime_pipeline>>(tree.ifs, o.seed)](tree_shape& shape) {
+                    shape.set_line_flow_of(*drawn);
+                };
+            }
+        }
+        if (voxels.empty()) throw std::runtime_error("the tree generated no voxels");
+        extras.frame = tree_shape::of(volume, voxels).box;
+        if (o.clear_above) {
+            // Section 7's clear, over the half-space y >= Y (its normal points up).
+            const partitioned_store whole = partitioned_store::build(volume, voxels); // keeps the part bytes
+            voxels = clear(whole, half_space_region({0, *o.clear_above, 0}, {0, 1, 0}));
+        }
+        if (o.lod > 0) {
+            const hypertree::resolution n = volume.grid(), target = hypertree::resolution::cube(o.lod);
+            if (target.x > n.x || target.y > n.y || target.z > n.z)
+                throw std::runtime_error("--lod " + std::to_string(o.lod) + ": must not exceed the tree's resolution (" + std::to_string(n.x) +
+                                         " x " + std::to_string(n.y) + " x " + std::to_string(n.z) + ")");
+            const partitioned_store whole = partitioned_store::build(volume, voxels);
+            voxels = reduce(whole, target);
+            volume = reduced_volume(volume, target);
         }
         const double creation = seconds_since(t0);
-        return with_store(o.store, [&]<class S>() { return render_and_write<S>(volume, voxels, colors, displacement, o, creation); });
+        return with_store(o.store, [&]<class S>() { return render_and_write<S>(volume, voxels, colors, o, creation, extras); });
     } catch (const std::exception& e) {
         std::fprintf(stderr, "%s: %s\n", args.program().c_str(), e.what());
         return 1;

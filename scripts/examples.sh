@@ -26,6 +26,9 @@ fi
 if [ -x "$build_dir/examples/krs_fractals" ]; then
     echo "examples.sh: krs_fractals -> out/{kifs_*,zoom_*}.png"
     "$build_dir/examples/krs_fractals" --output-dir "$out_dir"
+    echo "examples.sh: krs_fractals --slice menger -> out/slice_menger_{distance,gradient}.png"
+    "$build_dir/examples/krs_fractals" --slice menger --slice-plane xz --slice-offset 0.1 --width 320 --height 320 \
+        --output-dir "$out_dir"
     ran=$((ran + 1))
 fi
 if [ -x "$build_dir/examples/hypertree_render" ]; then
@@ -36,6 +39,9 @@ if [ -x "$build_dir/examples/hypertree_render" ]; then
     done
     "$build_dir/examples/hypertree_render" --forest "$repo_root/examples/hypertrees/forest.forest" \
         --width 640 --height 360 --output "$out_dir/hypertree_forest.png"
+    # The paper's figures 8-12: the '# render' lines of examples/hypertrees/figure* (and a montage).
+    echo "examples.sh: hypertree_render -> out/figure{08..12}_*.png, out/figures_8_12.jpg"
+    "$repo_root/scripts/render_figures.sh" "$build_dir/examples/hypertree_render" "$out_dir"
     ran=$((ran + 1))
 fi
 echo "examples.sh: $ran example(s) rendered into $out_dir"
