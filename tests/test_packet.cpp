@@ -845,7 +845,7 @@ void check_tile_queue(int tile_w, int tile_h, int refill_at, float omega, long l
     };
     const krs::stream_stats stats = krs::trace_queue<L, Interleave>(s, queue, more, done, o, refill_at);
     CHECK(stats.rays == width * height);
-    long long evaluations = 0, differ = 0;
+    long long evaluations = 0, steps = 0, differ = 0;
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             const std::size_t id = std::size_t(y * width + x);
@@ -863,6 +863,7 @@ void check_tile_queue(int tile_w, int tile_h, int refill_at, float omega, long l
             }
             ++in_box;
             evaluations += got[id].evaluations;
+            steps += got[id].steps;
 #if defined(KRS_TEST_FP_CONTRACT)
             differ += got[id].found != h.found || std::abs(got[id].steps - h.steps) > 1;
 #else
@@ -873,7 +874,10 @@ void check_tile_queue(int tile_w, int tile_h, int refill_at, float omega, long l
 #endif
         }
     CHECK(differ <= width * height / 500);
+    // The stream counts its lanes' steps per packet step (a popcount of the active lanes), not
+    // per finished ray: the totals must still be the reported rays' sums.
     CHECK(stats.evaluations == evaluations);
+    CHECK(stats.busy_lanes == steps);
 }
 } // namespace
 

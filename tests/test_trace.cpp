@@ -286,3 +286,102 @@ TEST_CASE("Lambert shading and hard shadows: a sphere over a ground plane")
     // Facing away from the light: ambient only, no shadow ray needed.
     CHECK(krs::shade_lambert(s, vec3d{0, 1, 0}, vec3d{0, -1, 0}, sun, m, 1e-4, 100.0).x == doctest::Approx(0.1));
 }
+
+namespace {
+// A unit sphere at the origin whose distance is replaced by `bad` (NaN or +infinity) past the
+// plane z = cut, counting its calls: the march step's treatment of non-finite field values, and
+// its evaluation count, against a loop written out here.
+struct spoiled_sphere {
+    float cut = 0.0f, bad = 0.0f;
+    mutable long long calls = 0;
+    template <class T>
+    T distance(const krs::vec3<T>& p) const
+    {
+        using S = krs::scalar_t<T>;
+        using krs::select, krs::sqrt; // scalars; xsimd's by argument-dependent lookup
+        calls += 1;
+        const T d = sqrt(p.x * p.x + p.y * p.y + p.z * p.z) - T(S(1));
+        return select(p.z > T(S(cut)), T(S(bad)), d);
+    }
+};
+
+// Plain sphere tracing (omega = 1) spelled out: one evaluation per step, a hit where d falls
+// below the threshold, a miss on a non-finite d, past t1 or after max_steps.
+krs::hit<float> march_by_hand(const spoiled_sphere& f, const krs::ray<float>& r, float t0, float t1,
+                              const krs::trace_options& o)
+{
+    krs::hit<float> h;
+    h.t = INFINITY;
+    if (!(t0 <= t1)) return h;
+    float t = t0;
+    for (;;) {
+        ++h.steps, ++h.evaluations;
+        const float d = f.distance(r.origin + r.direction * t);
+        if (d < o.threshold(t)) {
+            h.found = true, h.t = t;
+            return h;
+        }
+        if (!std::isfinite(d)) return h;
+        t = t + d;
+        if (!(t <= t1) || h.steps >= o.max_steps) return h;
+    }
+}
+} // namespace
+
+TEST_CASE("the march step against sphere tracing by hand: NaN and infinite field values end a ray as a miss, one evaluation per step")
+{
+    krs::trace_options o;
+    o.max_steps = 40;
+    o.pixel_footprint = 1e-3f;
+    // Rays toward the sphere from z = -6 (a hit at z = -1) and past it (a miss); the cut spoils
+    // the field before the hit, after it, or never; t1 finite and infinite (an infinite distance
+    // must still end the ray: t + inf <= inf would not).
+    std::mt19937_64 rng(23);
+    int spoiled = 0, hits = 0, total = 0;
+    for (const float bad : {NAN, INFINITY})
+        for (const float cut : {-4.0f, -2.5f, -1.5f, 0.5f, 10.0f})
+            for (const float t1 : {9.0f, INFINITY})
+                for (int k = 0; k < 24; ++k) {
+                    const spoiled_sphere f{cut, bad};
+                    const float off = float(uniform(rng, 0.0, 1.4));
+                    const krs::ray<float> r{{off, 0.3f * off, -6.0f}, krs::normalize(vec3f{0.05f, 0.0f, 1.0f})};
+                    const krs::hit<float> want = march_by_hand(f, r, 0.0f, t1, o);
+                    f.calls = 0;
+                    const krs::hit<float> got = krs::sphere_trace(f, r, 0.0f, t1, o);
+                    INFO("bad " << bad << " cut " << cut << " t1 " << t1 << " offset " << off);
+                    CHECK(got.found == want.found);
+                    CHECK(got.steps == want.steps);
+                    CHECK(got.evaluations == want.evaluations);
+                    CHECK(got.evaluations == f.calls);
+                    CHECK((got.t == want.t || (std::isinf(got.t) && std::isinf(want.t))));
+                    CHECK(!std::isnan(got.t));
+                    spoiled += !want.found && want.steps < o.max_steps && cut < 1.0f;
+                    hits += want.found;
+                    ++total;
+                }
+    // Both outcomes occurred, and rays did end on a spoiled value.
+    CHECK(hits > total / 8);
+    CHECK(spoiled > total / 8);
+
+    // Packets: every lane as the scalar march (lanes with different offsets and spoiled values).
+    using P = krs::packet_f;
+    constexpr std::size_t W = krs::lane_count<P>;
+    for (const float bad : {NAN, INFINITY})
+        for (const float t1 : {9.0f, INFINITY}) {
+            const spoiled_sphere f{-1.5f, bad};
+            alignas(64) float ox[W], oz[W];
+            for (std::size_t i = 0; i < W; ++i) ox[i] = 0.1f * float(i), oz[i] = -6.0f + 0.25f * float(i % 5);
+            const vec3f dir = krs::normalize(vec3f{0.05f, 0.0f, 1.0f});
+            const krs::ray<P> r{{P::load_aligned(ox), P(0.0f), P::load_aligned(oz)}, krs::vec3<P>(dir)};
+            const krs::hit<P> got = krs::sphere_trace(f, r, P(0.0f), P(t1), o);
+            for (std::size_t i = 0; i < W; ++i) {
+                const krs::hit<float> want = march_by_hand(f, krs::ray<float>{{ox[i], 0.0f, oz[i]}, dir}, 0.0f, t1, o);
+                INFO("lane " << i << " bad " << bad << " t1 " << t1);
+                CHECK(krs::mask_lane<P>(got.found, i) == want.found);
+                CHECK(int(krs::lane_at(got.steps, i)) == want.steps);
+                CHECK(int(krs::lane_at(got.evaluations, i)) == want.evaluations);
+                const float t = krs::lane_at(got.t, i);
+                CHECK((t == want.t || (std::isinf(t) && std::isinf(want.t))));
+            }
+        }
+}

@@ -18,6 +18,72 @@ using namespace krs;
 
 namespace old_detail {
 
+// The march state and step as they were before the step was cut down (issue 23, step overhead):
+// copied from krs/trace/sphere_trace.hpp at 639ae0a, so the old stream keeps its old step while
+// the library's changes.
+template <class T>
+struct old_march_state {
+    ray<T> r{};
+    T t{};
+    T t_max{};
+    T accepted_t{};
+    T accepted_d{};
+    T omega{};
+    T threshold_bias{};
+    mask_t<T> active{};
+    hit<T> result{};
+};
+
+template <class T>
+old_march_state<T> old_start_march(const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options)
+{
+    using S = scalar_t<T>;
+    old_march_state<T> m;
+    m.r = r;
+    m.result.invalid = unusable_ray(r, t_start);
+    m.active = !m.result.invalid && t_start <= t_max;
+    m.result.found = m.active && !m.active;
+    m.result.t = T(std::numeric_limits<S>::infinity());
+    m.t = t_start;
+    m.t_max = t_max;
+    m.accepted_t = t_start;
+    m.accepted_d = T(std::numeric_limits<S>::infinity());
+    m.omega = T(options.omega);
+    return m;
+}
+
+template <class T>
+void old_march_advance(old_march_state<T>& m, const T& d, const trace_options& options)
+{
+    const mask_t<T> was_active = m.active;
+    m.result.steps += krs::detail::count_if<T>(was_active);
+    m.result.evaluations += krs::detail::count_if<T>(was_active);
+    const T threshold = options.threshold(m.t) + m.threshold_bias;
+    mask_t<T> accept = was_active, fail = was_active && !was_active;
+    if (options.omega > 1.0f) {
+        const mask_t<T> relaxed = m.omega > T(1);
+        const mask_t<T> overlap = (m.accepted_d + abs(d) - (m.t - m.accepted_t)) >= T(2) * threshold;
+        fail = was_active && relaxed && !overlap;
+        accept = was_active && !fail;
+        m.t = select(fail, m.accepted_t + m.accepted_d, m.t);
+        m.omega = select(fail, T(1), m.omega);
+    }
+    const mask_t<T> close = accept && (d < threshold);
+    m.result.found = m.result.found || close;
+    m.result.t = select(close, m.t, m.result.t);
+    const mask_t<T> advance = accept && !close && is_finite(d);
+    m.accepted_t = select(advance, m.t, m.accepted_t);
+    m.accepted_d = select(advance, d, m.accepted_d);
+    T next = m.t + m.omega * d;
+    if (options.omega > 1.0f) next = select(next > m.t_max, max(m.t + d, m.t_max), next);
+    m.t = select(advance, next, m.t);
+    m.active = (advance || fail) && (m.t <= m.t_max);
+    if constexpr (std::floating_point<T>)
+        m.active = m.active && m.result.steps < options.max_steps;
+    else
+        m.active = m.active && (m.result.steps < T(scalar_t<T>(options.max_steps)));
+}
+
 // SoA staging of one packet's rays, so single lanes can be replaced between steps. Per-lane
 // flags are words of bits (bit i = lane i), so finding the finished lanes is a few word
 // operations rather than a loop over the packet.
@@ -46,11 +112,11 @@ struct packet_lanes {
         dx[i] = job.r.direction.x, dy[i] = job.r.direction.y, dz[i] = job.r.direction.z;
         t0[i] = job.t_start, t1[i] = job.t_max, id[i] = job.id;
     }
-    march_state<P> start(const trace_options& options) const
+    old_march_state<P> start(const trace_options& options) const
     {
         const ray<P> r{{P::load_aligned(ox), P::load_aligned(oy), P::load_aligned(oz)},
                        {P::load_aligned(dx), P::load_aligned(dy), P::load_aligned(dz)}};
-        return start_march(r, P::load_aligned(t0), P::load_aligned(t1), options);
+        return old_start_march(r, P::load_aligned(t0), P::load_aligned(t1), options);
     }
 };
 
@@ -69,7 +135,7 @@ std::array<T, K> distances_of(const F& f, const std::array<vec3<T>, K>& points)
 }
 
 template <class T>
-void blend(const mask_t<T>& m, march_state<T>& into, const march_state<T>& from)
+void blend(const mask_t<T>& m, old_march_state<T>& into, const old_march_state<T>& from)
 {
     into.r.origin = select(m, from.r.origin, into.r.origin);
     into.r.direction = select(m, from.r.direction, into.r.direction);
@@ -119,7 +185,7 @@ krs::stream_stats trace_stream_reference(const F& f, Next&& next, Done&& done, c
     if (refill_at <= 0) refill_at = old_detail::default_refill(f, int(W));
     krs::stream_stats stats;
     std::array<old_detail::packet_lanes<P>, Interleave> lanes;
-    std::array<march_state<P>, Interleave> state;
+    std::array<old_detail::old_march_state<P>, Interleave> state;
     bool queue_open = true;
     // A job with an empty range is a miss without a step, reported as it is pulled (invalid as
     // sphere_trace reports it when the ray itself is unusable).
@@ -138,7 +204,7 @@ krs::stream_stats trace_stream_reference(const F& f, Next&& next, Done&& done, c
     // start (invalid input) finish without a step and are reported like any other.
     auto harvest = [&](int k, bool force) {
         old_detail::packet_lanes<P>& L = lanes[k];
-        march_state<P>& m = state[k];
+        old_detail::old_march_state<P>& m = state[k];
         const std::uint64_t finished = L.live & ~mask_bits<P>(m.active);
         const int count = std::popcount(finished);
         if (count == 0 || (count < refill_at && !force)) return;
@@ -180,7 +246,7 @@ krs::stream_stats trace_stream_reference(const F& f, Next&& next, Done&& done, c
             const std::array<P, Interleave> d = old_detail::distances_of(f, points);
             for (int k = 0; k < Interleave; ++k) {
                 if (!any(state[k].active)) continue;
-                march_advance(state[k], d[std::size_t(k)], options);
+                old_detail::old_march_advance(state[k], d[std::size_t(k)], options);
                 ++stats.packet_steps;
             }
             continue;

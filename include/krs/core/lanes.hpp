@@ -353,10 +353,17 @@ inline xsimd::batch<S, A> expand_load(const xsimd::batch<S, A>& x, std::uint64_t
     bits &= low_bits(n);
 #if defined(__AVX512F__)
     if constexpr (std::is_base_of_v<xsimd::avx512f, A>) {
-        if constexpr (std::is_same_v<S, float>)
-            return V(_mm512_mask_expand_ps(x, __mmask16(bits), _mm512_loadu_ps(in)));
-        else
-            return V(_mm512_mask_expand_epi32(x, __mmask16(bits), _mm512_loadu_si512(in)));
+        // The empty asm keeps the loaded register a register: compilers otherwise fold the load
+        // into the expand, which is then the microcoded memory form (AMD Zen 4).
+        if constexpr (std::is_same_v<S, float>) {
+            __m512 v = _mm512_loadu_ps(in);
+            __asm__("" : "+v"(v));
+            return V(_mm512_mask_expand_ps(x, __mmask16(bits), v));
+        } else {
+            __m512i v = _mm512_loadu_si512(in);
+            __asm__("" : "+v"(v));
+            return V(_mm512_mask_expand_epi32(x, __mmask16(bits), v));
+        }
     } else
 #endif
 #if defined(__AVX2__)

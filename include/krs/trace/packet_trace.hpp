@@ -28,6 +28,7 @@
 #include <bit>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace krs {
@@ -96,30 +97,19 @@ int default_refill(const F& f, int width)
 
 } // namespace detail
 
-// Traces every ray of `queue`, and of what `more(queue)` adds each time the queue runs dry (it
-// returns false when there is nothing more; the queue is cleared before each call), through f
-// with packets of type P, refilling finished lanes. A packet's lanes are refilled once at least
-// `refill_at` of them have finished (default: see above), or when none is left running. Rays
-// the queue set aside are reported as misses (`invalid` for unusable rays) without a step.
-// Results equal per-ray `sphere_trace` calls up to float rounding of the packet math.
-//
-// Per packet the stream keeps a march_state, the lanes' ids (index lanes) and `live`, the lanes
-// holding a ray not yet reported. A harvest compresses the finished lanes' results into a small
-// buffer for `done` and expands the queue's next rays into those lanes; of the state it then
-// resets only what start_march sets differently for a new ray (the ray, t, t_max, counters,
-// found, active; and the over-relaxation's kept sphere and factor where omega > 1). No lane is
-// ever invalid here: the queue set those rays aside.
-template <class P = packet_f, int Interleave = 2, field F, class More, class Done>
-stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& done, const trace_options& options,
-                         int refill_at = 0)
+namespace detail {
+
+// trace_queue's loop, compiled once per form of the step (Relaxed: omega > 1, see march_advance).
+template <bool Relaxed, class P, int Interleave, field F, class More, class Done>
+stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done& done, const trace_options& options,
+                              int refill_at)
 {
-    static_assert(Interleave >= 1, "trace_queue needs at least one packet");
-    options.validate();
     using S = scalar_t<P>;
     using ids = index_lanes<P>;
     constexpr std::size_t W = lane_count<P>;
     if (refill_at <= 0) refill_at = detail::default_refill(f, int(W));
-    const bool relaxed = options.omega > 1.0f;
+    // The options as lane constants, made once: the step reads nothing else from them.
+    const march_limits<P> limits(options);
     const P inf(std::numeric_limits<S>::infinity());
     stream_stats stats;
     // Reports the rays set aside since the queue was last cleared.
@@ -154,27 +144,25 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
     }
 
     // Reports the finished lanes of packet k and refills its idle lanes (the caller calls it when
-    // at least refill_at lanes have finished or none runs). The counters are summed in two
-    // reductions; what is left per ray is `done`.
+    // at least refill_at lanes have finished or none runs). What is left per ray is `done`; the
+    // stream's counters are kept per step (below), not per ray.
     auto harvest = [&](int k, std::uint64_t active) -> std::uint64_t {
         march_state<P>& m = state[k];
         const std::uint64_t finished = live[k] & ~active;
-        const int count = std::popcount(finished);
-        if (count > 0) {
-            const mask_t<P> gone = mask_from_bits<P>(finished);
-            stats.evaluations += (long long)lane_sum(select(gone, P(m.result.evaluations), P(0.0f)));
-            stats.busy_lanes += (long long)lane_sum(select(gone, P(m.result.steps), P(0.0f)));
-            alignas(64) float t[W], found[W], steps[W], evaluations[W];
+        if (finished != 0) {
+            alignas(64) float t[W], steps[W];
             alignas(64) std::int32_t who[W];
-            compress_store(t, m.result.t, finished);
-            compress_store(found, select(m.result.found, P(1.0f), P(0.0f)), finished);
+            const int count = int(compress_store(t, m.result.t, finished));
             compress_store(steps, P(m.result.steps), finished); // count_t<P> is int for scalars
-            compress_store(evaluations, P(m.result.evaluations), finished);
             compress_store(who, id[k], finished);
-            for (int c = 0; c < count; ++c) {
+            // The found flags of the finished lanes, in the same order as the compressed values:
+            // lane i's flag is the lowest set bit of `rest` (i's own bit) in `found`.
+            const std::uint64_t found = mask_bits<P>(m.result.found);
+            int c = 0;
+            for (std::uint64_t rest = finished; rest != 0; rest &= rest - 1, ++c) {
                 hit<float> h;
-                h.t = t[c], h.found = found[c] != 0.0f;
-                h.steps = int(steps[c]), h.evaluations = int(evaluations[c]);
+                h.t = t[c], h.found = (found & rest & (~rest + 1)) != 0;
+                h.steps = h.evaluations = int(steps[c]); // one evaluation per step (march_result)
                 done(std::uint32_t(who[c]), h);
             }
             stats.rays += count;
@@ -185,24 +173,23 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
             const std::size_t need = std::size_t(std::popcount(want));
             const std::uint64_t take = queue.size() >= need ? want : detail::lowest_bits(want, queue.size());
             queue.take(take, m.r, m.t, m.t_max, id[k]);
-            if (relaxed) m.accepted_t = select(mask_from_bits<P>(take), m.t, m.accepted_t);
+            if constexpr (Relaxed) m.accepted_t = select(mask_from_bits<P>(take), m.t, m.accepted_t);
             filled |= take, want &= ~take;
         }
         live[k] = (live[k] & active) | filled;
         if (filled == 0) return active;
         const mask_t<P> fresh = mask_from_bits<P>(filled);
-        if (relaxed) {
+        if constexpr (Relaxed) {
             m.accepted_d = select(fresh, inf, m.accepted_d);
             m.omega = select(fresh, P(options.omega), m.omega);
         }
         m.result.t = select(fresh, inf, m.result.t);
-        if constexpr (std::floating_point<P>) {
-            m.result.steps = 0, m.result.evaluations = 0; // the one lane is fresh
-        } else {
+        if constexpr (std::floating_point<P>)
+            m.result.steps = 0; // the one lane is fresh
+        else
             m.result.steps = select(fresh, P(0.0f), m.result.steps);
-            m.result.evaluations = select(fresh, P(0.0f), m.result.evaluations);
-        }
-        m.result.found = m.result.found && !fresh;
+        // (As words of bits: a mask's `!` is not a single instruction with every xsimd target.)
+        m.result.found = mask_from_bits<P>(mask_bits<P>(m.result.found) & ~filled);
         m.active = m.active || fresh;
         return active | filled;
     };
@@ -221,19 +208,57 @@ stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& do
         // (its sample point may be at infinity), and a packet with no active lane left, near the
         // end of the stream, takes the points of an active one: it rides along at no extra depth
         // of the walk and is not advanced.
-        std::array<vec3<P>, Interleave> points;
-        for (int k = 0; k < Interleave; ++k)
-            if (active[k] != 0) points[std::size_t(k)] = point_at(state[k].r, select(state[k].active, state[k].t, P(0.0f)));
-        for (int k = 0; k < Interleave; ++k)
-            if (active[k] == 0) points[std::size_t(k)] = points[std::size_t(first_running)];
-        const std::array<P, Interleave> d = detail::distances_of(f, points);
+        // (The array is made whole from its points: a default-constructed one was zeroed first,
+        // a call to memset per step.)
+        auto point_of = [&](std::size_t k) {
+            const march_state<P>& m = state[active[k] != 0 ? k : std::size_t(first_running)];
+            return point_at(m.r, select(m.active, m.t, P(0.0f)));
+        };
+        const std::array<P, Interleave> d = detail::distances_of(f, [&]<std::size_t... k>(std::index_sequence<k...>) {
+            return std::array<vec3<P>, Interleave>{point_of(k)...};
+        }(std::make_index_sequence<Interleave>{}));
         for (int k = 0; k < Interleave; ++k) {
             if (active[k] == 0) continue;
-            march_advance(state[k], d[std::size_t(k)], options);
+            march_advance<Relaxed>(state[k], d[std::size_t(k)], limits);
+            // Each active lane took one step and one evaluation: counted here, a popcount per
+            // packet step, instead of summing the finished lanes' counters at each harvest.
+            stats.busy_lanes += std::popcount(active[k]);
             ++stats.packet_steps;
         }
     }
+    stats.evaluations = stats.busy_lanes;
     return stats;
+}
+
+} // namespace detail
+
+// Traces every ray of `queue`, and of what `more(queue)` adds each time the queue runs dry (it
+// returns false when there is nothing more; the queue is cleared before each call), through f
+// with packets of type P, refilling finished lanes. A packet's lanes are refilled once at least
+// `refill_at` of them have finished (default: see above), or when none is left running. Rays
+// the queue set aside are reported as misses (`invalid` for unusable rays) without a step.
+// Results equal per-ray `sphere_trace` calls up to float rounding of the packet math.
+//
+// Per packet the stream keeps a march_state, the lanes' ids (index lanes) and `live`, the lanes
+// holding a ray not yet reported. A harvest compresses the finished lanes' results into a small
+// buffer for `done` and expands the queue's next rays into those lanes; of the state it then
+// resets only what start_march sets differently for a new ray (the ray, t, t_max, the step count,
+// found, active; and the over-relaxation's kept sphere and factor where omega > 1). No lane is
+// ever invalid here: the queue set those rays aside.
+//
+// The step is march_advance with the options made lane constants once (march_limits) and its
+// form (relaxed or plain) fixed per compiled loop; the packets' states stay in memory between
+// field calls (4 packets' rays, ranges and results are more than the 32 vector registers, and a
+// field call that is not inlined keeps none of them), so each step loads and stores only what
+// it reads and changes.
+template <class P = packet_f, int Interleave = 2, field F, class More, class Done>
+stream_stats trace_queue(const F& f, ray_queue<P>& queue, More&& more, Done&& done, const trace_options& options,
+                         int refill_at = 0)
+{
+    static_assert(Interleave >= 1, "trace_queue needs at least one packet");
+    options.validate();
+    if (options.omega > 1.0f) return detail::trace_queue_with<true, P, Interleave>(f, queue, more, done, options, refill_at);
+    return detail::trace_queue_with<false, P, Interleave>(f, queue, more, done, options, refill_at);
 }
 
 // Traces every ray `next` yields (taken a few packets' worth at a time into a ray_queue) through

@@ -82,7 +82,9 @@ inline count_t<T> count_if(const mask_t<T>& m)
 
 // The state of one ray (or one packet of rays) between march steps. Each lane carries its own
 // start, step count and over-relaxation factor, so a packet tracer may refill a finished lane with
-// a new ray while the other lanes go on.
+// a new ray while the other lanes go on. `result.evaluations` is not counted during the march:
+// every step is one evaluation, so it equals `result.steps`, and `march_result` fills it in (one
+// counter less to update per step).
 template <class T>
 struct march_state {
     ray<T> r{};
@@ -99,7 +101,7 @@ struct march_state {
 // Whether a ray cannot be marched (per lane): a non-finite origin, a zero or non-finite direction
 // or a non-finite start. Such a ray is a miss with `invalid` set.
 template <class T>
-mask_t<T> unusable_ray(const ray<T>& r, const T& t_start)
+[[gnu::always_inline]] inline mask_t<T> unusable_ray(const ray<T>& r, const T& t_start)
 {
     return !(is_finite(r.origin) && is_finite(r.direction) && length_squared(r.direction) > T(0) && is_finite(t_start));
 }
@@ -125,6 +127,33 @@ march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, co
     return m;
 }
 
+// What a march step reads from trace_options, converted once per march to the lane type: a
+// tracer that steps in a loop keeps these in registers (or one broadcast away) instead of reading
+// and converting the options at every step. `relaxed` (omega > 1) picks the step's form.
+template <class T>
+struct march_limits {
+    T footprint, floor, omega;
+    count_t<T> max_steps;
+    bool relaxed;
+    explicit march_limits(const trace_options& o)
+        : footprint(o.pixel_footprint), floor(o.threshold_floor), omega(o.omega), max_steps{}, relaxed(o.omega > 1.0f)
+    {
+        if constexpr (std::floating_point<T>)
+            max_steps = o.max_steps;
+        else
+            max_steps = T(scalar_t<T>(o.max_steps)); // float lanes count exactly to 2^24
+    }
+};
+
+// The hit of a march (its evaluations are its steps: see march_state).
+template <class T>
+hit<T> march_result(const march_state<T>& m)
+{
+    hit<T> h = m.result;
+    h.evaluations = h.steps;
+    return h;
+}
+
 // One march step, given the field's value d at the lane's sample point t: the single body every
 // tracer (scalar, packet, refilling packet) runs. With over-relaxation the previous kept sphere (t_a, d_a) and this one must
 // overlap along the ray, with room for the hit threshold: d_a + |d| - (t - t_a) >= 2 threshold(t).
@@ -134,45 +163,66 @@ march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, co
 // back to t_a + d_a (the plain step from the kept sphere) and marches with omega = 1 from there.
 // Lanes that are not active are left untouched (their state freezes through `select`).
 //
+// `Relaxed` is limits.relaxed as a constant, so a tracer's loop is compiled once per form and the
+// plain form (omega = 1, every lane's omega 1: start_march sets it from the options) carries none
+// of the over-relaxation's work: no kept sphere, no multiply by omega. In both forms a lane
+// advances only on a finite d (d < +infinity once d < threshold has taken -infinity: NaN and
+// +infinity end the lane as a miss).
+//
 // march_step evaluates the field at the sample point and advances; a tracer that evaluates
 // several packets' points in one call (krs/trace/packet_trace.hpp) calls march_advance itself.
-template <class T>
-void march_advance(march_state<T>& m, const T& d, const trace_options& options)
+template <bool Relaxed, class T>
+[[gnu::always_inline]] inline void march_advance(march_state<T>& m, const T& d, const march_limits<T>& c)
 {
+    using S = scalar_t<T>;
     const mask_t<T> was_active = m.active;
-    m.result.steps += detail::count_if<T>(was_active);
-    m.result.evaluations += detail::count_if<T>(was_active);
-    const T threshold = options.threshold(m.t) + m.threshold_bias;
-    mask_t<T> accept = was_active, fail = was_active && !was_active;
-    if (options.omega > 1.0f) {
+    if constexpr (std::floating_point<T>)
+        m.result.steps += was_active ? 1 : 0;
+    else
+        m.result.steps = select(was_active, m.result.steps + T(1), m.result.steps);
+    const T threshold = c.footprint * m.t + c.floor + m.threshold_bias;
+    mask_t<T> accept = was_active;
+    if constexpr (Relaxed) {
         const mask_t<T> relaxed = m.omega > T(1);
         const mask_t<T> overlap = (m.accepted_d + abs(d) - (m.t - m.accepted_t)) >= T(2) * threshold;
-        fail = was_active && relaxed && !overlap;
+        const mask_t<T> fail = was_active && relaxed && !overlap;
         accept = was_active && !fail;
         // Step back on failure (accepted_d is finite here: the first sample always overlaps).
         m.t = select(fail, m.accepted_t + m.accepted_d, m.t);
         m.omega = select(fail, T(1), m.omega);
-    }
-    const mask_t<T> close = accept && (d < threshold);
-    m.result.found = m.result.found || close;
-    m.result.t = select(close, m.t, m.result.t);
-    const mask_t<T> advance = accept && !close && is_finite(d);
-    m.accepted_t = select(advance, m.t, m.accepted_t);
-    m.accepted_d = select(advance, d, m.accepted_d);
-    T next = m.t + m.omega * d;
-    if (options.omega > 1.0f) {
+        const mask_t<T> close = accept && (d < threshold);
+        m.result.found = m.result.found || close;
+        m.result.t = select(close, m.t, m.result.t);
+        const mask_t<T> advance = accept && !close && is_finite(d);
+        m.accepted_t = select(advance, m.t, m.accepted_t);
+        m.accepted_d = select(advance, d, m.accepted_d);
+        T next = m.t + m.omega * d;
         // A relaxed step past t_max must not end the lane where the plain step would not: it
         // lands on t_max instead, whose sample the overlap test then checks (a surface between
         // t + d and t_max, the far side of a clipping box, was missed that way).
         next = select(next > m.t_max, max(m.t + d, m.t_max), next);
+        m.t = select(advance, next, m.t);
+        // A lane ends on a hit, a NaN field value, passing t_max, or its step budget.
+        m.active = (advance || fail) && (m.t <= m.t_max) && (m.result.steps < c.max_steps);
+    } else {
+        const mask_t<T> close = accept && (d < threshold);
+        m.result.found = m.result.found || close;
+        m.result.t = select(close, m.t, m.result.t);
+        const mask_t<T> advance = accept && !close && (d < T(std::numeric_limits<S>::infinity()));
+        m.t = select(advance, m.t + d, m.t);
+        m.active = advance && (m.t <= m.t_max) && (m.result.steps < c.max_steps);
     }
-    m.t = select(advance, next, m.t);
-    // A lane ends on a hit, a NaN field value, passing t_max, or its step budget.
-    m.active = (advance || fail) && (m.t <= m.t_max);
-    if constexpr (std::floating_point<T>)
-        m.active = m.active && m.result.steps < options.max_steps;
+}
+
+// The same step with the options as given (the form chosen per call).
+template <class T>
+void march_advance(march_state<T>& m, const T& d, const trace_options& options)
+{
+    const march_limits<T> c(options);
+    if (c.relaxed)
+        march_advance<true>(m, d, c);
     else
-        m.active = m.active && (m.result.steps < T(scalar_t<T>(options.max_steps)));
+        march_advance<false>(m, d, c);
 }
 
 template <field F, class T>
@@ -211,7 +261,7 @@ hit<T> sphere_trace(const F& f, const ray<T>& r, const trace_options& options)
     options.validate();
     march_state<T> m = start_march(r, T(options.min_distance), T(options.max_distance), options);
     while (any(m.active)) march_step(f, m, options);
-    return m.result;
+    return march_result(m);
 }
 
 // The same with a per-lane start (a tile prepass gives every ray its own) and far limit.
@@ -221,7 +271,7 @@ hit<T> sphere_trace(const F& f, const ray<T>& r, const T& t_start, const T& t_ma
     options.validate();
     march_state<T> m = start_march(r, t_start, t_max, options);
     while (any(m.active)) march_step(f, m, options);
-    return m.result;
+    return march_result(m);
 }
 
 } // namespace krs
