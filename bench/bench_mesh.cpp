@@ -78,22 +78,28 @@ public:
                     for (auto i = a[0]; i <= b[0]; ++i) buckets_[key(i, j, k)].push_back(t);
         }
     }
-    // The distance to the nearest triangle within one cell's neighbourhood (infinity if none).
+    // The distance to the nearest triangle: the cells within r of the point's cell, r = 1, 2, ...
+    // until the nearest found is within r cells (then no farther cell can hold a nearer one), up
+    // to 16 cells (infinity beyond: a feature of the fine sampling the mesh does not have at all).
     double distance(const vec3d& p) const
     {
         const auto c = index(p);
         double best = std::numeric_limits<double>::infinity();
-        for (int dk = -1; dk <= 1; ++dk)
-            for (int dj = -1; dj <= 1; ++dj)
-                for (int di = -1; di <= 1; ++di) {
-                    const auto it = buckets_.find(key(c[0] + di, c[1] + dj, c[2] + dk));
-                    if (it == buckets_.end()) continue;
-                    for (std::uint32_t t : it->second) {
-                        const auto& tri = m_.triangles[t];
-                        best = std::min(best, point_triangle_distance(p, vec3d(m_.positions[tri[0]]), vec3d(m_.positions[tri[1]]),
-                                                                      vec3d(m_.positions[tri[2]])));
+        for (int r = 1; r <= 16; ++r) {
+            for (int dk = -r; dk <= r; ++dk)
+                for (int dj = -r; dj <= r; ++dj)
+                    for (int di = -r; di <= r; ++di) {
+                        if (std::max({std::abs(di), std::abs(dj), std::abs(dk)}) != r && r > 1) continue; // the shell only
+                        const auto it = buckets_.find(key(c[0] + di, c[1] + dj, c[2] + dk));
+                        if (it == buckets_.end()) continue;
+                        for (std::uint32_t t : it->second) {
+                            const auto& tri = m_.triangles[t];
+                            best = std::min(best, point_triangle_distance(p, vec3d(m_.positions[tri[0]]), vec3d(m_.positions[tri[1]]),
+                                                                          vec3d(m_.positions[tri[2]])));
+                        }
                     }
-                }
+            if (best <= double(r) * cell_) break;
+        }
         return best;
     }
 
