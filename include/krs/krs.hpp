@@ -19,6 +19,7 @@
 #include "krs/kernels/kernels.hpp"
 #include "krs/io/write_then_rename.hpp"
 #include "krs/mesh/extract.hpp"
+#include "krs/mesh/instances.hpp"
 #include "krs/mesh/mesh.hpp"
 #include "krs/mesh/write.hpp" // krs/mesh/gltf.hpp is not here: it needs tinygltf (target krs::mesh_gltf)
 #include "krs/mirror.hpp"
