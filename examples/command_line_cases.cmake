@@ -169,3 +169,15 @@ krs_case(glsl_export       0 ""                                                 
 # What the PNG holds and what a failed write leaves: cmake/check_glsl_reference.cmake.
 krs_case(glsl_export       0 ""                                                    --scene lotus --target shadertoy --output <out>/lotus.shadertoy.glsl
                                                                                    --reference <out>/lotus.png --width 8 --height 8)
+
+# krs_export
+krs_case(krs_export        2 "--scene;'sky';one of tree|forest|"                   --scene sky --mesh <out>/x.ply)
+krs_case(krs_export        2 "--resolution;'0';[1, 65536]"                          --scene rock --resolution 0 --mesh <out>/x.ply)
+krs_case(krs_export        2 "--resolution;'2.5'"                                   --scene rock --resolution 2.5 --mesh <out>/x.ply)
+krs_case(krs_export        2 "--memory-budget;'0';[1, 1048576]"                     --scene rock --memory-budget 0 --mesh <out>/x.ply)
+krs_case(krs_export        2 "--mesh;'x.stl';.ply, .obj, .glb or .gltf"             --scene rock --mesh x.stl)
+krs_case(krs_export        2 "--mesh;--instances"                                   --scene rock)
+krs_case(krs_export        2 "--instances;'x.ply';.gltf or .glb"                    --scene sponge --instances x.ply)
+krs_case(krs_export        2 "--instance-levels;'-1';[0, 64]"                       --scene sponge --instance-levels -1 --instances <out>/x.gltf)
+krs_case(krs_export        0 "--mesh;--resolution;--instances"                      --help)
+krs_case(krs_export        0 "krs_export: rock: ;triangles;-> "                      --scene rock --resolution 8 --mesh <out>/rock.obj)

@@ -3,9 +3,10 @@
 #   --tests     compiler, CMake, ccache, GLM, xsimd, doctest, Mesa, glslang and spirv-tools (GLSL tests), Python 3
 #               (the check of docs/stability.md's figures), OpenImageIO and CLI11 (a test checks an
 #               example's image, others its command line), OpenVDB and NanoVDB (the VDB export's tests
-#               read its files with both libraries' own readers)
+#               read its files with both libraries' own readers), tinygltf and assimp (the mesh
+#               tests write glTF/GLB through tinygltf and read PLY, OBJ and GLB back with assimp)
 #   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO (and its tools, which its CMake
-#               config names), CLI11
+#               config names), CLI11, tinygltf (krs_export's .glb)
 #   --all       all of the above plus Google Benchmark (the default)
 #   --peers     --all plus the peers the benchmarks compare with: Embree, OpenVDB
 # Only missing packages are installed; apt-get update runs only when something is missing, so a
@@ -16,8 +17,9 @@ mode="${1:---all}"
 
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
 tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools spirv-tools python3
-       libopenvdb-dev libnanovdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev) # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
-examples=(libopenimageio-dev openimageio-tools libcli11-dev)
+       libopenvdb-dev libnanovdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
+       assimp-utils)
+examples=(libopenimageio-dev openimageio-tools libcli11-dev libtinygltf-dev)
 benchmarks=(libbenchmark-dev)
 peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev) # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
 
@@ -27,7 +29,7 @@ case "$mode" in
     --all) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}") ;;
     --peers) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}" "${peers[@]}") ;;
     -h | --help)
-        sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'
+        sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'
         exit 0
         ;;
     *)

@@ -17,6 +17,11 @@
 #include "krs/fractal/log_spherical.hpp"
 #include "krs/glsl/glsl.hpp"
 #include "krs/kernels/kernels.hpp"
+#include "krs/io/write_then_rename.hpp"
+#include "krs/mesh/extract.hpp"
+#include "krs/mesh/instances.hpp"
+#include "krs/mesh/mesh.hpp"
+#include "krs/mesh/write.hpp" // krs/mesh/gltf.hpp is not here: it needs tinygltf (target krs::mesh_gltf)
 #include "krs/mirror.hpp"
 #include "krs/model/coral.hpp"
 #include "krs/model/forest.hpp"

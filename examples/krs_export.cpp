@@ -1,0 +1,166 @@
+// krs_export: an example scene as a triangle mesh, for Blender, Houdini, game engines and any
+// rasterizer (krs/mesh/extract.hpp; the writers krs/mesh/write.hpp and krs/mesh/gltf.hpp).
+//
+//   krs_export --scene NAME [--mesh FILE.ply|FILE.obj|FILE.glb|FILE.gltf] [--resolution N]
+//              [--memory-budget MB] [--projection-steps K]
+//              [--instances FILE.gltf|FILE.glb [--instance-levels K] [--max-instances M]]
+//
+// NAME is one of the scenes of krs/glsl/example_scenes.hpp (tree, forest, terrain, rock, coral,
+// grass, sponge, kifs_square, kifs_cube, kifs_menger, kifs_sierpinski, kifs_koch, lotus,
+// cube_singularity). The mesh covers the scene's bounding box, or for a scene without one (a
+// ground plane) the box its tests sample, with N cells along the box's longest side (default
+// 128). Progress goes to stderr; the summary (triangles, vertices, worst vertex distance to the
+// zero set in cells, time) to stdout. .glb and .gltf need a build with tinygltf (krs::mesh_gltf).
+// A mesh over the memory budget (default 1024 MB) is refused before the file is written, and a
+// failed write leaves no file behind.
+//
+// --instances writes a sequence scene (tree, forest, terrain, rock, grass, sponge) as instanced
+// glTF (krs/mesh/instances.hpp, EXT_mesh_gpu_instancing): every kernel of the top K mirror levels
+// (default 4) meshed once and placed by its instance transforms, the levels below meshed whole
+// and placed 2^K times; more than M instances (default 1048576) is refused.
+
+#include "krs/glsl/example_scenes.hpp"
+#include "krs/mesh/extract.hpp"
+#include "krs/mesh/write.hpp"
+#if defined(KRS_WITH_GLTF)
+#include "krs/mesh/gltf.hpp"
+#endif
+#include "krs/mesh/instances.hpp"
+
+#include "support/command_line.hpp"
+#include "support/progress.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+namespace {
+
+std::string lower_extension(const std::string& path)
+{
+    const auto dot = path.find_last_of('.'), slash = path.find_last_of('/');
+    if (dot == std::string::npos || (slash != std::string::npos && slash > dot)) return "";
+    std::string e = path.substr(dot);
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return e;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    namespace ex = krs::glsl::examples;
+    std::string scene = "tree", mesh;
+    int resolution = 128, steps = 4;
+    long long budget_mb = 1024;
+    example::command_line args("krs_export", "Writes an example scene as a triangle mesh (PLY, OBJ, GLB or glTF).");
+    args.choice("--scene", scene, ex::scene_names(), "the scene");
+    args.text("--mesh", mesh, "the mesh file to write: .ply (binary), .obj, .glb or .gltf", "FILE");
+    args.integer("--resolution", resolution, 1, krs::max_mesh_resolution, "cells along the scene box's longest side (default 128)");
+    args.integer("--projection-steps", steps, 0, 64, "Newton steps moving each vertex onto the surface (default 4)");
+    args.integer("--memory-budget", budget_mb, 1, 1 << 20, "the most the mesh may take while it is built, in MB (default 1024)");
+    std::string instances;
+    int instance_levels = 4;
+    long long max_instances = 1 << 20;
+    args.text("--instances", instances, "a sequence scene as instanced glTF (EXT_mesh_gpu_instancing): .gltf or .glb", "FILE");
+    args.integer("--instance-levels", instance_levels, 0, 64, "mirror levels expanded into instances (default 4)");
+    args.integer("--max-instances", max_instances, 1, 1ll << 40, "the most instances allowed (default 1048576)");
+    args.parse(argc, argv);
+    if (mesh.empty() && instances.empty())
+        args.fail("--mesh: give the file to write (FILE.ply, FILE.obj, FILE.glb or FILE.gltf), or --instances FILE.gltf");
+    const std::string ext = lower_extension(mesh);
+    if (!mesh.empty() && ext != ".ply" && ext != ".obj" && ext != ".glb" && ext != ".gltf")
+        args.fail("--mesh: '" + mesh + "' is not a .ply, .obj, .glb or .gltf file");
+    const std::string iext = lower_extension(instances);
+    if (!instances.empty() && iext != ".glb" && iext != ".gltf") args.fail("--instances: '" + instances + "' is not a .gltf or .glb file");
+#if !defined(KRS_WITH_GLTF)
+    if (!instances.empty()) args.fail("--instances: this build has no glTF writer (it needs tinygltf, libtinygltf-dev)");
+#endif
+#if !defined(KRS_WITH_GLTF)
+    if (ext == ".glb" || ext == ".gltf")
+        args.fail("--mesh: '" + mesh + "': this build has no glTF writer (it needs tinygltf, libtinygltf-dev)");
+#endif
+
+    int status = 1;
+    ex::for_each_scene([&](const auto& s) {
+        if (s.name != scene) return;
+        if (!instances.empty()) {
+#if defined(KRS_WITH_GLTF)
+            krs::instance_options io;
+            io.instance_levels = std::size_t(instance_levels);
+            io.max_instances = std::size_t(max_instances);
+            io.mesh.resolution = resolution;
+            io.mesh.projection_steps = steps;
+            io.mesh.memory_budget = std::size_t(budget_mb) << 20;
+            if (!krs::field_box(s.field).is_bounded()) {
+                const krs::vec3d c(s.sample_center), h(s.sample_half);
+                io.mesh.box = krs::box_around(c - h, c + h); // sets the cell size only
+            }
+            if constexpr (requires { krs::instance_meshes(s.field, io); }) {
+                try {
+                    const auto start = std::chrono::steady_clock::now();
+                    const krs::instanced_scene is = krs::instance_meshes(s.field, io);
+                    krs::save_gltf_instances(is, instances, iext == ".glb");
+                    std::size_t triangles = 0;
+                    for (const auto& p : is.parts) triangles += p.mesh.triangle_count() + p.mirrored.triangle_count();
+                    std::printf("krs_export: %s: %zu parts, %zu instances, %zu stored triangles, %.2f s -> %s\n", scene.c_str(),
+                                is.parts.size(), is.instance_count(), triangles,
+                                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), instances.c_str());
+                } catch (const std::exception& e) {
+                    std::fprintf(stderr, "krs_export: %s\n", e.what());
+                    return;
+                }
+            } else {
+                std::fprintf(stderr, "krs_export: --instances: the scene '%s' is not a sequence (tree, forest, terrain, rock, grass, "
+                                     "sponge are)\n", scene.c_str());
+                return;
+            }
+#endif
+            if (mesh.empty()) {
+                status = 0;
+                return;
+            }
+        }
+        krs::mesh_options o;
+        o.resolution = resolution;
+        o.projection_steps = steps;
+        o.memory_budget = std::size_t(budget_mb) << 20;
+        if (!krs::field_box(s.field).is_bounded()) {
+            const krs::vec3d c(s.sample_center), h(s.sample_half);
+            o.box = krs::box_around(c - h, c + h);
+        }
+        example::progress bar(stderr, "mesh");
+        o.progress = [&](double done) { bar.update(std::size_t(done * 1000), 1000); };
+        try {
+            const auto start = std::chrono::steady_clock::now();
+            krs::mesh_stats stats;
+            const krs::triangle_mesh m = krs::extract_mesh(s.field, o, &stats);
+            bar.finish();
+            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            if (m.triangles.empty()) {
+                std::fprintf(stderr, "krs_export: the scene's surface gave no triangle at resolution %d: raise --resolution\n", resolution);
+                return;
+            }
+            double worst = 0;
+            for (const krs::vec3f& p : m.positions) worst = std::max(worst, std::abs(s.field.distance(krs::vec3d(p))));
+            if (ext == ".ply") krs::save_ply(m, mesh);
+            else if (ext == ".obj") krs::save_obj(m, mesh);
+#if defined(KRS_WITH_GLTF)
+            else if (ext == ".glb") krs::save_glb(m, mesh);
+            else krs::save_gltf(m, mesh);
+#endif
+            std::printf("krs_export: %s: %zu triangles, %zu vertices, cell %.4g, worst vertex |d| %.3g cells, %.2f s "
+                        "(%.0f triangles/s) -> %s\n",
+                        scene.c_str(), m.triangle_count(), m.vertex_count(), stats.cell_size, worst / stats.cell_size, seconds,
+                        double(m.triangle_count()) / seconds, mesh.c_str());
+            status = 0;
+        } catch (const std::exception& e) {
+            bar.finish();
+            std::fprintf(stderr, "krs_export: %s\n", e.what());
+        }
+    });
+    return status;
+}

@@ -1,0 +1,395 @@
+#pragma once
+// Meshes of any field: the zero set as indexed triangles, at a resolution the user chooses, by
+// marching tetrahedra over a cubic grid whose cost follows the surface rather than the volume.
+//
+// The grid. Cells are cubes of side h = (longest side of the box) / resolution over the field's
+// box (`field_box`, or one the user gives), padded by one cell on every side: the outermost
+// corners are then at least h outside the box that holds the surface, where the field is positive,
+// so every surface the box holds comes out closed.
+//
+// Sparse. The grid is visited as an octree of blocks of 2^k cells. A field never overestimates
+// (docs/design.md, rule 2: it is 1-Lipschitz), so with d the distance at a block's centre and r
+// its half-diagonal, |d| > r means every point of the block has the sign of d: no corner of any
+// cell in it changes sign and the block holds no triangle. It is skipped whole, after one
+// evaluation. Only blocks the surface may cross are divided, so the cost grows with the surface's
+// area over h^2 (about 4x per doubling of the resolution), not with the volume (8x). The skip
+// is exact, not a heuristic: the sparse mesh equals the dense one (every cell visited) triangle
+// for triangle (tests/test_mesh.cpp). A float margin of 1e-5 r keeps the rounding of d on the
+// safe side.
+//
+// Triangles. Each cell is cut into the six tetrahedra around its main diagonal (corner 0 to
+// corner 7 along x, y, z in every order: the Kuhn triangulation). A face shared by two cells is
+// cut along the same diagonal from both (from its lowest to its highest corner), so the
+// triangles of neighbouring cells meet edge to edge. Inside is d < 0. A tetrahedron with one (or
+// three) corners inside holds one triangle, with two a quad (two triangles); its vertices lie on
+// the tetrahedron's edges that change sign. A vertex is keyed by its grid edge (lower corner,
+// direction), so every cell that touches an edge finds the same vertex: the mesh is a closed,
+// oriented 2-manifold by construction, whatever the field does between samples (no ambiguous
+// case, unlike marching cubes' face saddles). Orientation is decided exactly, in integers, from
+// the edges' midpoints: the triangle's normal points from the inside corners to the outside ones.
+//
+// Vertices. A vertex is first placed on the zero of d along its edge (the corners' distances
+// have opposite signs and d is continuous, so the edge holds one: bracketed regula falsi, which
+// works for any field, exact distance or bound, creased or smooth). It then takes
+// `projection_steps` Newton steps towards the nearest point of the zero set along the gradient
+// (central differences, step h / 1000, in double):
+//     p <- p - d(p) grad d / |grad d|^2,
+// each kept only if it lowers |d| and stays within h of the edge's point (near a crease, where
+// the gradient jumps, a step may overshoot). Where the field is the exact distance and smooth,
+// each step squares the error. The normal is the gradient there.
+//
+// Budget. The mesh and its edge table grow as the surface is found; `memory_budget` (bytes) is
+// checked after every cell, so an over-fine resolution is refused with an invalid_parameter naming
+// mesh_options.memory_budget and what was reached, before it can take more than one cell's worth
+// (at most 12 triangles) beyond it. A field returning NaN or infinity is refused by name too.
+
+#include "krs/core/bounds.hpp"
+#include "krs/core/validate.hpp"
+#include "krs/field.hpp"
+#include "krs/mesh/mesh.hpp"
+#include "krs/trace/box_clip.hpp" // field_box
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace krs {
+
+// The most cells along the box's longest side: grid corner indices then fit in 17 bits per axis,
+// and an edge key (corner index * 8 + direction) in 64 bits with room to spare.
+inline constexpr int max_mesh_resolution = 1 << 16;
+
+struct mesh_options {
+    int resolution = 64;         // cells along the box's longest side: [1, max_mesh_resolution]
+    int projection_steps = 4;    // Newton steps onto the zero set per vertex: [0, 64]
+    std::size_t memory_budget = std::size_t(1) << 30; // bytes for the mesh and its edge table: > 0
+    bool sparse = true;          // skip blocks by their centre's distance; false visits every cell
+    bounding_box box = bounding_box::unbounded(); // where to mesh; unbounded: the field's own box
+    // Called now and then with the fraction of the grid's volume done, in [0, 1].
+    std::function<void(double)> progress;
+
+    void validate() const
+    {
+        if (resolution < 1 || resolution > max_mesh_resolution)
+            throw invalid_parameter("mesh_options.resolution", "must be in [1, " + std::to_string(max_mesh_resolution) + "]",
+                                    std::to_string(resolution));
+        if (projection_steps < 0 || projection_steps > 64)
+            throw invalid_parameter("mesh_options.projection_steps", "must be in [0, 64]", std::to_string(projection_steps));
+        if (memory_budget == 0) throw invalid_parameter("mesh_options.memory_budget", "must be > 0 bytes", "0");
+    }
+};
+
+// What an extraction did, for benchmarks and tests.
+struct mesh_stats {
+    std::size_t cells_per_axis[3] = {0, 0, 0}; // the padded grid
+    double cell_size = 0;
+    std::size_t blocks_visited = 0;  // octree blocks whose centre was evaluated
+    std::size_t cells_meshed = 0;    // leaf cells whose corners were evaluated
+    std::size_t evaluations = 0;     // field evaluations, projection included
+    std::size_t peak_bytes = 0;      // mesh plus edge table at the end (what the budget counts)
+};
+
+namespace detail {
+
+template <field F>
+class mesh_extractor {
+public:
+    mesh_extractor(const F& f, const mesh_options& o) : f_(f), o_(o)
+    {
+        o.validate();
+        // The default (every side infinite) asks for the field's box; any other is the user's,
+        // checked by name (a NaN or half-infinite box is not quietly replaced).
+        const bounding_box none = bounding_box::unbounded();
+        const bool given = !(o.box.lo.x == none.lo.x && o.box.lo.y == none.lo.y && o.box.lo.z == none.lo.z &&
+                             o.box.hi.x == none.hi.x && o.box.hi.y == none.hi.y && o.box.hi.z == none.hi.z);
+        if (given) check_box(o.box, "mesh_options.box");
+        const bounding_box box = given ? o.box : field_box(f);
+        if (!box.is_bounded())
+            throw invalid_parameter("mesh_options.box", "is needed for a field without a bounded box (the field reports none)");
+        check_box(box, "mesh_options.box");
+        const vec3d lo(box.lo), hi(box.hi), ext = hi - lo;
+        const double longest = std::max({ext.x, ext.y, ext.z});
+        if (!(longest > 0)) throw invalid_parameter("mesh_options.box", "must have a side longer than 0", to_text(box));
+        h_ = longest / double(o.resolution);
+        origin_ = lo - vec3d{h_, h_, h_}; // one cell of padding below
+        const double e[3] = {ext.x, ext.y, ext.z};
+        for (int a = 0; a < 3; ++a) n_[a] = std::int64_t(std::ceil(e[a] / h_ - 1e-9)) + 2; // and above
+        stats_.cell_size = h_;
+        for (int a = 0; a < 3; ++a) stats_.cells_per_axis[a] = std::size_t(n_[a]);
+    }
+
+    triangle_mesh run(mesh_stats* stats)
+    {
+        if (o_.sparse) {
+            std::int64_t size = 1;
+            while (size < n_[0] || size < n_[1] || size < n_[2]) size *= 2;
+            root_ = size;
+            visit(0, 0, 0, size);
+        } else {
+            for (std::int64_t k = 0; k < n_[2]; ++k) {
+                for (std::int64_t j = 0; j < n_[1]; ++j)
+                    for (std::int64_t i = 0; i < n_[0]; ++i) cell(i, j, k);
+                report(double(k + 1) / double(n_[2]));
+            }
+        }
+        project();
+        stats_.peak_bytes = bytes();
+        if (stats) *stats = stats_;
+        return std::move(mesh_);
+    }
+
+private:
+    static std::string to_text(const bounding_box& b) { return detail::to_text(b.lo) + " .. " + detail::to_text(b.hi); }
+    static void check_box(const bounding_box& b, const char* name)
+    {
+        const float v[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+        for (float x : v)
+            if (!std::isfinite(x) || std::abs(x) > max_magnitude)
+                throw invalid_parameter(name, "must have finite corners within " + std::string(max_magnitude_text) + " of 0",
+                                        to_text(b));
+        if (!(b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z))
+            throw invalid_parameter(name, "must have lo <= hi on every axis", to_text(b));
+    }
+
+    vec3d corner_point(std::int64_t i, std::int64_t j, std::int64_t k) const
+    {
+        return {origin_.x + double(i) * h_, origin_.y + double(j) * h_, origin_.z + double(k) * h_};
+    }
+
+    double eval(const vec3d& p)
+    {
+        ++stats_.evaluations;
+        const double d = f_.distance(p);
+        if (!std::isfinite(d)) throw invalid_parameter("field", "returned a distance that is not finite at " + detail::to_text(p), detail::to_text(d));
+        return d;
+    }
+
+    void report(double done)
+    {
+        if (o_.progress && done >= reported_ + 0.01) {
+            reported_ = done;
+            o_.progress(done);
+        }
+    }
+
+    // An octree block of `size` cells per side with its lowest cell at (i, j, k).
+    void visit(std::int64_t i, std::int64_t j, std::int64_t k, std::int64_t size)
+    {
+        if (i >= n_[0] || j >= n_[1] || k >= n_[2]) { // beyond the grid (the root is a power of 2)
+            done_ += double(size) * double(size) * double(size);
+            return;
+        }
+        if (size == 1) {
+            cell(i, j, k);
+        } else {
+            ++stats_.blocks_visited;
+            const double half = 0.5 * double(size) * h_;
+            const vec3d c = corner_point(i, j, k) + vec3d{half, half, half};
+            const double reach = half * std::sqrt(3.0);
+            if (std::abs(eval(c)) > reach * (1.0 + 1e-5)) {
+                done_ += double(size) * double(size) * double(size);
+            } else {
+                const std::int64_t s = size / 2;
+                for (int child = 0; child < 8; ++child)
+                    visit(i + (child & 1 ? s : 0), j + (child & 2 ? s : 0), k + (child & 4 ? s : 0), s);
+                return; // the children counted their own volume
+            }
+        }
+        report(done_ / (double(root_) * double(root_) * double(root_)));
+    }
+
+    std::uint64_t corner_id(std::int64_t i, std::int64_t j, std::int64_t k) const
+    {
+        return std::uint64_t(i) + std::uint64_t(n_[0] + 1) * (std::uint64_t(j) + std::uint64_t(n_[1] + 1) * std::uint64_t(k));
+    }
+
+    void cell(std::int64_t i, std::int64_t j, std::int64_t k)
+    {
+        if (o_.sparse) done_ += 1;
+        ++stats_.cells_meshed;
+        // Corner c (bits x = 1, y = 2, z = 4).
+        std::array<double, 8> d;
+        int inside = 0;
+        for (int c = 0; c < 8; ++c) {
+            d[c] = eval(corner_point(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1)));
+            if (d[c] < 0) inside |= 1 << c;
+        }
+        if (inside == 0 || inside == 0xff) return;
+        static constexpr int axes[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+        for (const auto& perm : axes) {
+            // Corners along the monotone path 0 -> e_a -> e_a + e_b -> 7: each holds the bits of
+            // the ones before it, so every edge of the tetrahedron points up its lower corner.
+            const int t[4] = {0, 1 << perm[0], (1 << perm[0]) | (1 << perm[1]), 7};
+            int in[4], out[4], n_in = 0, n_out = 0;
+            for (int v = 0; v < 4; ++v) (inside >> t[v] & 1 ? in[n_in++] : out[n_out++]) = t[v];
+            if (n_in == 0 || n_out == 0) continue;
+            if (n_in == 1) {
+                triangle(i, j, k, d, {in[0], out[0]}, {in[0], out[1]}, {in[0], out[2]}, in[0], out[0]);
+            } else if (n_out == 1) {
+                triangle(i, j, k, d, {in[0], out[0]}, {in[1], out[0]}, {in[2], out[0]}, in[0], out[0]);
+            } else {
+                // The quad in[0]-out[0], in[0]-out[1], in[1]-out[1], in[1]-out[0] (a cycle).
+                triangle(i, j, k, d, {in[0], out[0]}, {in[0], out[1]}, {in[1], out[1]}, in[0], out[0]);
+                triangle(i, j, k, d, {in[0], out[0]}, {in[1], out[1]}, {in[1], out[0]}, in[0], out[0]);
+            }
+        }
+        check_budget();
+    }
+
+    struct edge {
+        int a, b; // cell corners (bit patterns), one inside and one outside
+    };
+    // Each vertex's edge until it is placed: its lower and upper corner and their distances.
+    struct pending {
+        vec3d p, q;
+        double dp, dq;
+    };
+
+    // The triangle on edges e0, e1, e2 of a tetrahedron in cell (i, j, k), turned so that its
+    // normal points from corner `in` (inside) to corner `out` (outside).
+    void triangle(std::int64_t i, std::int64_t j, std::int64_t k, const std::array<double, 8>& d, edge e0, edge e1, edge e2,
+                  int in, int out)
+    {
+        // Exact orientation: the edges' midpoints, in units of half a cell (2 x corner bits), and
+        // the corners in the same units (4 x bits); the triangle's plane through the midpoints
+        // separates the inside corners of the tetrahedron from the outside ones.
+        const auto mid = [](edge e) {
+            return std::array<std::int64_t, 3>{(e.a & 1) + (e.b & 1), (e.a >> 1 & 1) + (e.b >> 1 & 1), (e.a >> 2 & 1) + (e.b >> 2 & 1)};
+        };
+        const auto m0 = mid(e0), m1 = mid(e1), m2 = mid(e2);
+        const std::int64_t u[3] = {m1[0] - m0[0], m1[1] - m0[1], m1[2] - m0[2]};
+        const std::int64_t v[3] = {m2[0] - m0[0], m2[1] - m0[1], m2[2] - m0[2]};
+        const std::int64_t n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        const std::int64_t w[3] = {2 * ((out & 1) - (in & 1)), 2 * ((out >> 1 & 1) - (in >> 1 & 1)), 2 * ((out >> 2 & 1) - (in >> 2 & 1))};
+        const bool flip = n[0] * w[0] + n[1] * w[1] + n[2] * w[2] < 0;
+        const std::uint32_t a = vertex(i, j, k, d, e0), b = vertex(i, j, k, d, e1), c = vertex(i, j, k, d, e2);
+        mesh_.triangles.push_back(flip ? std::array<std::uint32_t, 3>{a, c, b} : std::array<std::uint32_t, 3>{a, b, c});
+    }
+
+    // The vertex on a cell's edge, shared by every cell that has the edge: keyed by the edge's
+    // lower corner (its grid index) and its direction (the corner bits it adds, 1 to 7).
+    std::uint32_t vertex(std::int64_t i, std::int64_t j, std::int64_t k, const std::array<double, 8>& d, edge e)
+    {
+        const int lo = (e.a & e.b) == e.a ? e.a : e.b, hi = lo == e.a ? e.b : e.a;
+        const std::uint64_t key = corner_id(i + (lo & 1), j + (lo >> 1 & 1), k + (lo >> 2 & 1)) * 8 + std::uint64_t(hi ^ lo);
+        const auto [it, added] = vertex_of_edge_.try_emplace(key, std::uint32_t(mesh_.positions.size()));
+        if (added) {
+            // From the lower corner whichever cell asks: the same numbers give the same point.
+            const vec3d p = corner_point(i + (lo & 1), j + (lo >> 1 & 1), k + (lo >> 2 & 1));
+            const vec3d q = corner_point(i + (hi & 1), j + (hi >> 1 & 1), k + (hi >> 2 & 1));
+            edges_.push_back({p, q, d[lo], d[hi]});
+            mesh_.positions.emplace_back();
+        }
+        return it->second;
+    }
+
+    std::size_t bytes() const
+    {
+        // An unordered_map node: key, value, next pointer and cached hash, plus a bucket pointer.
+        constexpr std::size_t per_edge = sizeof(std::uint64_t) * 2 + sizeof(void*) * 2 + sizeof(std::size_t);
+        return mesh_.bytes() + edges_.size() * sizeof(pending) + mesh_.positions.size() * sizeof(vec3f) // normals to come
+               + vertex_of_edge_.size() * per_edge;
+    }
+
+    void check_budget()
+    {
+        const std::size_t used = bytes();
+        if (used > o_.memory_budget)
+            throw invalid_parameter("mesh_options.memory_budget",
+                                    "exceeded after " + std::to_string(mesh_.triangles.size()) + " triangles and " +
+                                        std::to_string(mesh_.positions.size()) + " vertices at resolution " +
+                                        std::to_string(o_.resolution) + " (" + std::to_string(used) +
+                                        " bytes); raise the budget or lower mesh_options.resolution",
+                                    std::to_string(o_.memory_budget));
+    }
+
+    vec3d gradient(const vec3d& p, double step)
+    {
+        const vec3d ex{step, 0, 0}, ey{0, step, 0}, ez{0, 0, step};
+        return vec3d{eval(p + ex) - eval(p - ex), eval(p + ey) - eval(p - ey), eval(p + ez) - eval(p - ez)} / (2 * step);
+    }
+
+    // The zero of d on the edge from p (d = dp) to q (d = dq, of the other sign): d is continuous,
+    // so the bracket always holds one. Regula falsi with the Illinois rule (the end that stays is
+    // halved in weight, so the bracket shrinks from both sides): superlinear, and never outside
+    // the edge. 16 steps, or until |d| <= 1e-9 h.
+    vec3d root_on_edge(const pending& e)
+    {
+        double a = 0, b = 1, da = e.dp, db = e.dq;
+        int kept = 0; // which end stayed last time: -1 a, +1 b
+        vec3d x = e.p + (e.q - e.p) * std::clamp(da / (da - db), 0.0, 1.0);
+        for (int s = 0; s < 16; ++s) {
+            const double t = std::clamp((a * db - b * da) / (db - da), a, b);
+            x = e.p + (e.q - e.p) * t;
+            const double dx = eval(x);
+            if (std::abs(dx) <= 1e-9 * h_) break;
+            if ((dx < 0) == (da < 0)) {
+                a = t, da = dx;
+                if (kept == 1) db *= 0.5;
+                kept = 1;
+            } else {
+                b = t, db = dx;
+                if (kept == -1) da *= 0.5;
+                kept = -1;
+            }
+        }
+        return x;
+    }
+
+    void project()
+    {
+        const double step = h_ * 1e-3;
+        mesh_.normals.resize(mesh_.positions.size());
+        for (std::size_t v = 0; v < edges_.size(); ++v) {
+            const vec3d start = root_on_edge(edges_[v]);
+            vec3d p = start;
+            double dp = eval(p);
+            vec3d g = gradient(p, step);
+            for (int s = 0; s < o_.projection_steps && dp != 0; ++s) {
+                const double gg = length_squared(g);
+                if (!(gg > 1e-12)) break;
+                const vec3d next = p - g * (dp / gg);
+                if (!(length(next - start) <= h_)) break;
+                const double dn = eval(next);
+                if (!(std::abs(dn) < std::abs(dp))) break;
+                p = next;
+                dp = dn;
+                g = gradient(p, step);
+            }
+            mesh_.positions[v] = vec3f(p);
+            const double gl = length(g);
+            mesh_.normals[v] = gl > 0 ? vec3f(g / gl) : vec3f{0, 0, 1};
+        }
+    }
+
+    const F& f_;
+    const mesh_options& o_;
+    double h_ = 0;
+    vec3d origin_{};
+    std::int64_t n_[3] = {0, 0, 0};
+    std::int64_t root_ = 1;
+    double done_ = 0, reported_ = 0;
+    triangle_mesh mesh_;
+    std::vector<pending> edges_;
+    std::unordered_map<std::uint64_t, std::uint32_t> vertex_of_edge_;
+    mesh_stats stats_;
+};
+
+} // namespace detail
+
+// The zero set of `f` as a closed, oriented triangle mesh (see above). Throws invalid_parameter
+// for bad options, a field without a box when none is given, a non-finite distance, or a mesh
+// that would exceed options.memory_budget.
+template <field F>
+triangle_mesh extract_mesh(const F& f, const mesh_options& options = {}, mesh_stats* stats = nullptr)
+{
+    detail::mesh_extractor<F> x(f, options);
+    return x.run(stats);
+}
+
+} // namespace krs

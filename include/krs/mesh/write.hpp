@@ -1,0 +1,140 @@
+#pragma once
+// Meshes as files every mesh tool reads: PLY (binary, little-endian) and Wavefront OBJ (text).
+// Both hold positions, unit normals and triangles (counter-clockwise seen from outside, as the
+// formats and glTF expect). glTF/GLB is in krs/mesh/gltf.hpp, which needs tinygltf.
+//
+// Every save checks the mesh first (indices within the vertices, finite positions, one normal per
+// vertex or none) and refuses an empty path or a directory (invalid_parameter), then writes a
+// temporary file beside the path and renames it over the path once complete
+// (krs/io/write_then_rename.hpp): a failed save is a save_error naming the path and leaves no
+// file behind.
+//
+// PLY's numbers are written byte by byte in little-endian order, never as a struct's memory, so a
+// file is the same on every machine:
+//     vertex: x y z nx ny nz   float32 each (nx ny nz left out for a mesh without normals)
+//     face:   uint8 3, then three uint32 vertex indices
+// OBJ's numbers are printed with 9 significant digits, which round-trip a float exactly.
+
+#include "krs/core/validate.hpp"
+#include "krs/io/write_then_rename.hpp"
+#include "krs/mesh/mesh.hpp"
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace krs {
+
+namespace detail {
+
+inline void require_mesh(std::string_view caller, const triangle_mesh& m)
+{
+    const std::string name = std::string(caller) + " mesh";
+    if (m.triangles.empty()) throw invalid_parameter(name, "must hold at least one triangle", "0 triangles");
+    if (m.positions.size() > 0xffffffffu)
+        throw invalid_parameter(name, "must have fewer than 2^32 vertices", std::to_string(m.positions.size()));
+    if (!m.normals.empty() && m.normals.size() != m.positions.size())
+        throw invalid_parameter(name, "must have one normal per vertex or none",
+                                std::to_string(m.normals.size()) + " normals for " + std::to_string(m.positions.size()) + " vertices");
+    for (const vec3f& p : m.positions)
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            throw invalid_parameter(name, "must have finite vertex positions", detail::to_text(p));
+    for (const vec3f& n : m.normals)
+        if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
+            throw invalid_parameter(name, "must have finite normals", detail::to_text(n));
+    for (const auto& t : m.triangles)
+        for (std::uint32_t v : t)
+            if (v >= m.positions.size())
+                throw invalid_parameter(name, "must index only its own vertices (< " + std::to_string(m.positions.size()) + ")",
+                                        std::to_string(v));
+}
+
+inline void put_u32(std::string& out, std::uint32_t v)
+{
+    for (int b = 0; b < 4; ++b) out.push_back(char(v >> (8 * b) & 0xff));
+}
+inline void put_f32(std::string& out, float v) { put_u32(out, std::bit_cast<std::uint32_t>(v)); }
+
+inline void write_all(const std::filesystem::path& file, const std::string& bytes)
+{
+    std::ofstream out(file, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot open it for writing");
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+    out.close();
+    if (!out) throw std::runtime_error("writing failed");
+}
+
+} // namespace detail
+
+// The mesh as binary little-endian PLY.
+inline std::string ply_bytes(const triangle_mesh& m)
+{
+    detail::require_mesh("ply_bytes", m);
+    const bool normals = !m.normals.empty();
+    std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by krs (krs/mesh/write.hpp)\n";
+    out += "element vertex " + std::to_string(m.positions.size()) + "\n";
+    out += "property float x\nproperty float y\nproperty float z\n";
+    if (normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
+    out += "element face " + std::to_string(m.triangles.size()) + "\n";
+    out += "property list uchar uint vertex_indices\nend_header\n";
+    out.reserve(out.size() + m.positions.size() * (normals ? 24 : 12) + m.triangles.size() * 13);
+    for (std::size_t v = 0; v < m.positions.size(); ++v) {
+        const vec3f& p = m.positions[v];
+        detail::put_f32(out, p.x), detail::put_f32(out, p.y), detail::put_f32(out, p.z);
+        if (normals) {
+            const vec3f& n = m.normals[v];
+            detail::put_f32(out, n.x), detail::put_f32(out, n.y), detail::put_f32(out, n.z);
+        }
+    }
+    for (const auto& t : m.triangles) {
+        out.push_back(char(3));
+        for (std::uint32_t v : t) detail::put_u32(out, v);
+    }
+    return out;
+}
+
+// The mesh as Wavefront OBJ: "v", "vn" (when it has normals) and "f a//a b//b c//c" (1-based).
+inline std::string obj_text(const triangle_mesh& m)
+{
+    detail::require_mesh("obj_text", m);
+    const bool normals = !m.normals.empty();
+    std::string out = "# written by krs (krs/mesh/write.hpp)\n";
+    char line[128];
+    for (const vec3f& p : m.positions) {
+        std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", double(p.x), double(p.y), double(p.z));
+        out += line;
+    }
+    for (const vec3f& n : m.normals) {
+        std::snprintf(line, sizeof line, "vn %.9g %.9g %.9g\n", double(n.x), double(n.y), double(n.z));
+        out += line;
+    }
+    for (const auto& t : m.triangles) {
+        const unsigned long a = t[0] + 1ul, b = t[1] + 1ul, c = t[2] + 1ul;
+        if (normals) std::snprintf(line, sizeof line, "f %lu//%lu %lu//%lu %lu//%lu\n", a, a, b, b, c, c);
+        else std::snprintf(line, sizeof line, "f %lu %lu %lu\n", a, b, c);
+        out += line;
+    }
+    return out;
+}
+
+inline void save_ply(const triangle_mesh& m, const std::filesystem::path& path)
+{
+    detail::require_output_path("save_ply", path);
+    const std::string bytes = ply_bytes(m); // checks the mesh before any file exists
+    detail::write_then_rename("save_ply", path, [&](const std::filesystem::path& partial) { detail::write_all(partial, bytes); });
+}
+
+inline void save_obj(const triangle_mesh& m, const std::filesystem::path& path)
+{
+    detail::require_output_path("save_obj", path);
+    const std::string text = obj_text(m);
+    detail::write_then_rename("save_obj", path, [&](const std::filesystem::path& partial) { detail::write_all(partial, text); });
+}
+
+} // namespace krs

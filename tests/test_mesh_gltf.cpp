@@ -1,0 +1,291 @@
+// glTF/GLB meshes (krs/mesh/gltf.hpp, target krs::mesh_gltf): read back by tinygltf's own loader
+// (every position, normal and index equal to the mesh's), by Debian's assimp, and validated by the
+// Khronos glTF validator where it is installed (0 errors); bad input leaves no file.
+
+#include "krs/kernels/sphere.hpp"
+#include "krs/kernels/torus.hpp"
+#include "krs/kernels/torus_capsule.hpp"
+#include "krs/expansion.hpp"
+#include "krs/sequence.hpp"
+#include "krs/mesh/extract.hpp"
+#include "krs/mesh/gltf.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <set>
+#include <utility>
+#include <vector>
+#include <string>
+
+#include <unistd.h> // getpid
+
+namespace {
+
+std::filesystem::path temp_path(const std::string& name)
+{
+    return std::filesystem::temp_directory_path() / ("krs_test_gltf_" + std::to_string(::getpid()) + "_" + name);
+}
+
+// The accessor's elements as floats or uint32 (tightly packed, as gltf_model writes them).
+template <class T>
+std::vector<T> accessor_values(const tinygltf::Model& model, int index)
+{
+    const tinygltf::Accessor& a = model.accessors.at(std::size_t(index));
+    const tinygltf::BufferView& v = model.bufferViews.at(std::size_t(a.bufferView));
+    const auto& data = model.buffers.at(std::size_t(v.buffer)).data;
+    const std::size_t per = a.type == TINYGLTF_TYPE_VEC4 ? 4 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 1;
+    std::vector<T> out(a.count * per);
+    REQUIRE(v.byteOffset + a.byteOffset + out.size() * sizeof(T) <= data.size());
+    std::memcpy(out.data(), data.data() + v.byteOffset + a.byteOffset, out.size() * sizeof(T));
+    return out;
+}
+
+std::string run(const std::string& command, int& status)
+{
+    const auto report = temp_path("report.txt");
+    status = std::system((command + " > \"" + report.string() + "\" 2>&1").c_str());
+    std::ifstream in(report);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::filesystem::remove(report);
+    return text;
+}
+
+} // namespace
+
+TEST_CASE("glb and gltf: tinygltf reads back the mesh exactly; assimp and the glTF validator accept the files")
+{
+    const krs::torus t({0, 0, 0}, {0.2f, 0.3f, 1.0f}, 1.0f, 0.3f);
+    krs::mesh_options o;
+    o.resolution = 24;
+    const krs::triangle_mesh m = krs::extract_mesh(t, o);
+    REQUIRE(m.triangle_count() > 1000);
+
+    for (const bool binary : {true, false}) {
+        CAPTURE(binary);
+        const auto file = temp_path(binary ? "torus.glb" : "torus.gltf");
+        if (binary) krs::save_glb(m, file);
+        else krs::save_gltf(m, file);
+
+        tinygltf::Model model;
+        tinygltf::TinyGLTF loader;
+        std::string err, warn;
+        const bool loaded = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, file.string())
+                                   : loader.LoadASCIIFromFile(&model, &err, &warn, file.string());
+        INFO(err, warn);
+        REQUIRE(loaded);
+        REQUIRE(model.meshes.size() == 1);
+        const tinygltf::Primitive& p = model.meshes[0].primitives.at(0);
+        CHECK(p.mode == TINYGLTF_MODE_TRIANGLES);
+        const auto positions = accessor_values<float>(model, p.attributes.at("POSITION"));
+        const auto normals = accessor_values<float>(model, p.attributes.at("NORMAL"));
+        const auto indices = accessor_values<std::uint32_t>(model, p.indices);
+        REQUIRE(positions.size() == 3 * m.vertex_count());
+        REQUIRE(normals.size() == 3 * m.vertex_count());
+        REQUIRE(indices.size() == 3 * m.triangle_count());
+        std::size_t bad = 0;
+        for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+            bad += positions[3 * v] != m.positions[v].x || positions[3 * v + 1] != m.positions[v].y || positions[3 * v + 2] != m.positions[v].z;
+            bad += normals[3 * v] != m.normals[v].x || normals[3 * v + 1] != m.normals[v].y || normals[3 * v + 2] != m.normals[v].z;
+        }
+        for (std::size_t f = 0; f < m.triangle_count(); ++f)
+            for (int c = 0; c < 3; ++c) bad += indices[3 * f + std::size_t(c)] != m.triangles[f][std::size_t(c)];
+        CHECK(bad == 0);
+
+#ifdef KRS_ASSIMP
+        {
+            int status = 0;
+            const std::string text = run(std::string(KRS_ASSIMP) + " info \"" + file.string() + "\"", status);
+            INFO(text);
+            CHECK(status == 0);
+            CHECK(text.find("Faces:              " + std::to_string(m.triangle_count()) + "\n") != std::string::npos);
+        }
+#endif
+#ifdef KRS_GLTF_VALIDATE
+        {
+            int status = 0;
+            const std::string text = run(std::string(KRS_GLTF_VALIDATE) + " \"" + file.string() + "\"", status);
+            INFO(text);
+            CHECK(status == 0);
+            CHECK(text.find(": 0 errors") != std::string::npos);
+            MESSAGE(text);
+        }
+#else
+        MESSAGE("the Khronos glTF validator was not found at configure time (KRS_GLTF_VALIDATOR_DIR)");
+#endif
+        std::filesystem::remove(file);
+    }
+}
+
+TEST_CASE("glb: bad paths and meshes are refused and leave no file behind")
+{
+    const krs::torus t({0, 0, 0}, {0, 0, 1}, 1.0f, 0.3f);
+    krs::mesh_options o;
+    o.resolution = 8;
+    krs::triangle_mesh m = krs::extract_mesh(t, o);
+    const auto missing = std::filesystem::temp_directory_path() / "krs_no_such_directory" / "x.glb";
+    CHECK_THROWS_WITH_AS(krs::save_glb(m, missing), doctest::Contains("save_glb: "), krs::save_error);
+    CHECK_THROWS_WITH_AS(krs::save_glb(m, ""), doctest::Contains("save_glb path"), krs::invalid_parameter);
+    const auto file = temp_path("bad.glb");
+    m.normals.pop_back();
+    CHECK_THROWS_WITH_AS(krs::save_glb(m, file), doctest::Contains("one normal per vertex"), krs::invalid_parameter);
+    CHECK_FALSE(std::filesystem::exists(file));
+    m.normals.clear();
+    m.triangles.clear();
+    CHECK_THROWS_WITH_AS(krs::save_gltf(m, file), doctest::Contains("at least one triangle"), krs::invalid_parameter);
+    CHECK_FALSE(std::filesystem::exists(file));
+}
+
+namespace {
+
+// A sphere and a torus capsule mirrored three times (eight copies of each; they overlap).
+using instanced_sequence = krs::sequence<krs::sphere, krs::torus_capsule>;
+instanced_sequence make_instanced_sequence()
+{
+    instanced_sequence::builder b;
+    b.kernel(krs::sphere({0.6f, 0.5f, 0.1f}, 0.35f));
+    b.mirror(krs::mirror({-1, 0, 0}, 0.0f));
+    b.kernel(krs::torus_capsule({0.2f, 0.2f, 0.0f}, {0.9f, 0.3f, 0.2f}, {0.5f, 0.6f, 0.3f}, 0.12f));
+    b.mirror(krs::mirror::through({0, 0, 0}, {-0.3f, -1.0f, -0.1f}));
+    b.mirror(krs::mirror::through({0, 0, 0.4f}, {0.1f, 0.2f, -1.0f}));
+    return b.build();
+}
+
+krs::vec3d apply(const krs::rigid_motion& m, const krs::vec3d& p)
+{
+    const auto& r = m.rotation;
+    return krs::vec3d{r[0] * p.x + r[1] * p.y + r[2] * p.z, r[3] * p.x + r[4] * p.y + r[5] * p.z, r[6] * p.x + r[7] * p.y + r[8] * p.z} +
+           m.translation;
+}
+
+} // namespace
+
+TEST_CASE("instanced glTF: the instances are the expansion's, every instanced vertex is on its surface, the file validates")
+{
+    const instanced_sequence s = make_instanced_sequence();
+    const auto e = krs::expand(s);
+    for (std::size_t levels : {std::size_t(3), std::size_t(1)}) {
+        CAPTURE(levels);
+        krs::instance_options o;
+        o.instance_levels = levels;
+        o.mesh.resolution = 48;
+        const krs::instanced_scene scene = krs::instance_meshes(s, o);
+        // Levels >= 3 - levels are instanced: the sphere (level 0) 8 times when all three are, the
+        // torus capsule (level 1) 4 times; with one level, the part below level 2 twice plus the
+        // capsule... which is below too: 2 instances of one part.
+        const std::size_t expected = levels == 3 ? 8 + 4 : 2;
+        CHECK(scene.instance_count() == expected);
+        const krs::bounding_box box = s.bound_box();
+        const double cell = std::max({box.hi.x - box.lo.x, box.hi.y - box.lo.y, box.hi.z - box.lo.z}) / 48.0;
+        // Every vertex of every instance, placed in the world, is on the expansion's surface (the
+        // union's distance is <= 0 there: on its own kernel's zero set, maybe inside another).
+        double worst = -1e300;
+        std::size_t vertices = 0;
+        for (const auto& p : scene.parts) {
+            for (const auto& [mesh, instances] : {std::pair{&p.mesh, &p.direct}, std::pair{&p.mirrored, &p.reflected}})
+                for (const auto& i : *instances)
+                    for (const auto& v : mesh->positions) {
+                        worst = std::max(worst, e.distance(apply(i, krs::vec3d(v))));
+                        ++vertices;
+                    }
+        }
+        MESSAGE(vertices << " instanced vertices, largest expansion distance " << worst / cell << " cells");
+        CHECK(vertices > 1000);
+        CHECK(worst <= 1e-4 * cell);
+        if (levels == 3) {
+            // Each kernel instance of the expansion is one of ours: its kernel's box centre lands at the
+            // same world point (a mirrored instance: mirrored mesh, proper rotation).
+            std::multiset<std::array<long long, 3>> ours, theirs;
+            const auto key = [](const krs::vec3d& p) {
+                return std::array<long long, 3>{std::llround(p.x * 1e6), std::llround(p.y * 1e6), std::llround(p.z * 1e6)};
+            };
+            for (std::size_t part = 0; part < scene.parts.size(); ++part) {
+                const auto& p = scene.parts[part];
+                const std::uint32_t kernel = std::uint32_t(std::stoul(p.name.substr(7)));
+                const krs::bounding_box b = std::visit([](const auto& k) { return k.bound_box(); }, s.kernels()[kernel]);
+                const krs::vec3d c = (krs::vec3d(b.lo) + krs::vec3d(b.hi)) * 0.5;
+                for (const auto& i : p.direct) ours.insert(key(apply(i, c)));
+                for (const auto& i : p.reflected) ours.insert(key(apply(i, krs::vec3d{-c.x, c.y, c.z})));
+            }
+            for (const auto& in : e.instances) {
+                const krs::bounding_box b = std::visit([](const auto& k) { return k.bound_box(); }, s.kernels()[in.kernel]);
+                theirs.insert(key(in.to_world.apply((krs::vec3d(b.lo) + krs::vec3d(b.hi)) * 0.5)));
+            }
+            CHECK(ours == theirs);
+        }
+
+        const auto file = temp_path("instances.gltf");
+        krs::save_gltf_instances(scene, file, false);
+        tinygltf::Model model;
+        tinygltf::TinyGLTF loader;
+        std::string err, warn;
+        REQUIRE(loader.LoadASCIIFromFile(&model, &err, &warn, file.string()));
+        CHECK(model.extensionsUsed == std::vector<std::string>{"EXT_mesh_gpu_instancing"});
+        // Every node's rotations, read back as quaternions, give its instances' rotation matrices.
+        std::size_t node_instances = 0, bad = 0;
+        std::size_t node = 0;
+        for (const auto& p : scene.parts)
+            for (const auto* instances : {&p.direct, &p.reflected}) {
+                if (instances->empty()) continue;
+                const auto& ext = model.nodes.at(node++).extensions.at("EXT_mesh_gpu_instancing").Get("attributes");
+                const auto q = accessor_values<float>(model, ext.Get("ROTATION").GetNumberAsInt());
+                const auto t = accessor_values<float>(model, ext.Get("TRANSLATION").GetNumberAsInt());
+                REQUIRE(q.size() == 4 * instances->size());
+                for (std::size_t i = 0; i < instances->size(); ++i, ++node_instances) {
+                    const double x = q[4 * i], y = q[4 * i + 1], z = q[4 * i + 2], w = q[4 * i + 3];
+                    const double m[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - z * w),     2 * (x * z + y * w),
+                                         2 * (x * y + z * w),     1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+                                         2 * (x * z - y * w),     2 * (y * z + x * w),     1 - 2 * (x * x + y * y)};
+                    for (int c = 0; c < 9; ++c) bad += std::abs(m[c] - (*instances)[i].rotation[std::size_t(c)]) > 1e-6;
+                    bad += std::abs(t[3 * i] - (*instances)[i].translation.x) > 1e-6 || std::abs(t[3 * i + 1] - (*instances)[i].translation.y) > 1e-6 ||
+                           std::abs(t[3 * i + 2] - (*instances)[i].translation.z) > 1e-6;
+                }
+            }
+        CHECK(node == model.nodes.size());
+        CHECK(node_instances == scene.instance_count());
+        CHECK(bad == 0);
+#ifdef KRS_GLTF_VALIDATE
+        int status = 0;
+        const std::string text = run(std::string(KRS_GLTF_VALIDATE) + " \"" + file.string() + "\"", status);
+        INFO(text);
+        CHECK(status == 0);
+        CHECK(text.find(": 0 errors") != std::string::npos);
+        MESSAGE(text);
+#endif
+        std::filesystem::remove(file);
+    }
+    // rotation_quaternion on rotations about many axes by many angles (every branch: the trace
+    // positive, and each diagonal entry the largest): the quaternion's matrix is the rotation.
+    std::size_t bad_rotations = 0;
+    for (int axis = 0; axis < 12; ++axis)
+        for (int step = 0; step < 12; ++step) {
+            krs::vec3d u{std::cos(axis * 1.3), std::sin(axis * 0.7), std::cos(axis * 2.1) * 0.8};
+            u = u / krs::length(u);
+            const double a = 0.26 * step + 0.05, c = std::cos(a), sn = std::sin(a), C = 1 - c;
+            const std::array<double, 9> r{c + u.x * u.x * C,        u.x * u.y * C - u.z * sn, u.x * u.z * C + u.y * sn,
+                                          u.y * u.x * C + u.z * sn, c + u.y * u.y * C,        u.y * u.z * C - u.x * sn,
+                                          u.z * u.x * C - u.y * sn, u.z * u.y * C + u.x * sn, c + u.z * u.z * C};
+            const auto q = krs::rotation_quaternion(r);
+            const double x = q[0], y = q[1], z = q[2], w = q[3];
+            const double m[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w), 2 * (x * y + z * w), 1 - 2 * (x * x + z * z),
+                                 2 * (y * z - x * w),     2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)};
+            for (int i = 0; i < 9; ++i) bad_rotations += std::abs(m[i] - r[std::size_t(i)]) > 1e-12;
+        }
+    CHECK(bad_rotations == 0);
+    // Budgets and levels refused by name, before any meshing.
+    krs::instance_options o;
+    o.instance_levels = 4;
+    CHECK_THROWS_WITH_AS((void)krs::instance_meshes(s, o), doctest::Contains("instance_options.instance_levels"), krs::invalid_parameter);
+    o.instance_levels = 3;
+    o.max_instances = 11;
+    CHECK_THROWS_WITH_AS((void)krs::instance_meshes(s, o), doctest::Contains("instance_options.max_instances: exceeded: 12 instances"),
+                         krs::invalid_parameter);
+}
