@@ -3,7 +3,7 @@
 //
 //     bench_openvdb_peer [--csv FILE] [--threads T] [--size N] [--resolution R] [--trees ABCD]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
-//                        [--queries Q] [--step S] [--shade per-sample|per-voxel]
+//                        [--queries Q] [--step S] [--shade per-sample|per-voxel] [--march in-step|each-sample]
 //
 // For each tree (hypertree/presets.hpp, resolution R, default 300) the classified voxel list is
 // built once and copied into every store kind and into two OpenVDB 10 grids: a FloatGrid of
@@ -31,7 +31,10 @@
 // 1/256 (the library's defaults). The library side is volume_marcher + render (scalar and packet
 // marchers), shading per sample by default: with no light there is nothing for the per-voxel
 // shading memo to save but its table lookup per sample (one quiet run on tree A: 64 ms per voxel,
-// 43 ms per sample; --shade per-voxel measures it). The OpenVDB side marches the spans that VolumeRayIntersector reports (runs of active
+// 43 ms per sample; --shade per-voxel measures it). With no light and no ambient falloff the lit
+// color depends on the level alone (voxel_shading::flat), so the packets march in step and gather
+// it by level (march_context::shade_each_sample); `--march each-sample` takes the per-lane march
+// that shades each sample, the one before (same pixels), for side-by-side runs. The OpenVDB side marches the spans that VolumeRayIntersector reports (runs of active
 // leaf nodes, found by its hierarchical DDA) and looks each sample's voxel up with a
 // ValueAccessor; it keeps the same sample positions, so the two images should differ only where
 // float rounding moves a sample across a voxel face. The presets' voxels are not cubic (a fitted
@@ -271,13 +274,13 @@ int main(int argc, char** argv)
     int size = 300, res = 300;
     std::size_t queries = std::size_t(1) << 20;
     float step_factor = 1.0f;
-    bool shade_per_voxel = false;
+    bool shade_per_voxel = false, each_sample = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (i + 1 >= argc) {
             std::fprintf(stderr,
                          "usage: %s [--csv FILE] [--threads T] [--size N] [--resolution R] [--trees ABCD] [--queries Q] [--step S]"
-                         " [--shade per-sample|per-voxel]\n",
+                         " [--shade per-sample|per-voxel] [--march in-step|each-sample]\n",
                          argv[0]);
             return 2;
         }
@@ -290,6 +293,7 @@ int main(int argc, char** argv)
         else if (a == "--queries") queries = std::size_t(std::max(1000L, std::atol(v.c_str())));
         else if (a == "--step") step_factor = float(std::max(0.05, std::atof(v.c_str())));
         else if (a == "--shade" && (v == "per-voxel" || v == "per-sample")) shade_per_voxel = v == "per-voxel";
+        else if (a == "--march" && (v == "in-step" || v == "each-sample")) each_sample = v == "each-sample";
         else {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;
@@ -302,9 +306,10 @@ int main(int argc, char** argv)
     // Per tree: the four store kinds, lit_per_sample, lit_dense, openvdb_float, openvdb_lit, openvdb_uint8.
     constexpr std::size_t per_tree = 9;
     volatile unsigned sink = 0; // keeps the lookups' sums alive
-    std::printf("OpenVDB %s peer: resolution %d, %dx%d view on %u thread(s), step factor %.2f, library shading %s, %zu random lookups\n\n",
+    std::printf("OpenVDB %s peer: resolution %d, %dx%d view on %u thread(s), step factor %.2f, library shading %s, %s, %zu random lookups\n\n",
                 openvdb::getLibraryAbiVersionString(), res, size, size, threads, double(step_factor),
-                shade_per_voxel ? "per voxel" : "per sample", queries);
+                shade_per_voxel ? "per voxel" : "per sample", each_sample ? "lanes shading each sample (the march before)" : "lanes in step (flat shading)",
+                queries);
     std::printf("%-4s %-12s %11s %9s %8s %8s | %8s %9s %9s %8s %7s\n", "tree", "structure", "memory", "+skipping", "ns/hit", "ns/any",
                 "setup", "scalar", "packet", "RMSE", "differ");
 
@@ -348,6 +353,7 @@ int main(int argc, char** argv)
         const depth_colors white({{0, 255, {1, 1, 1}, {1, 1, 1}}});
         render_settings settings;
         settings.background = background;
+        settings.shade_each_sample = each_sample;
         settings.parallel_for = [threads](std::size_t count, const std::function<void(std::size_t)>& body) {
             bench::run_parallel(threads, count, body);
         };

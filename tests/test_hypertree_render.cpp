@@ -620,7 +620,7 @@ TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of
         REQUIRE(scalars.seal());
         const std::size_t values = packets.slots() * packets.stride();
         CHECK(std::equal(packets.values(), packets.values() + values, scalars.values()));
-        // Rays reading a sealed table (march_shaded_ahead) and rays shading as they go (march_shading_as_met).
+        // Rays reading a sealed table (march_in_step) and rays shading as they go (march_shading_as_met).
         render_settings ahead, as_met;
         as_met.shade_ahead = false;
         for (int s : {1, 2}) {
@@ -681,4 +681,77 @@ TEST_CASE("hypertree render: the walk of empty cubes of every level gives the re
     compare(forest.store, "forest");
     INFO(fewer << " of " << rays << " rays took fewer probes");
     CHECK(fewer > rays / 10);
+}
+
+TEST_CASE("krs::gather_byte gives each lane its byte, up to the table's last byte")
+{
+    // 4-byte aligned, a multiple of 4 long (gather_byte's preconditions); every value differs
+    // from its neighbours', so a byte taken from the wrong position in its word shows.
+    alignas(64) std::uint8_t table[256];
+    for (int i = 0; i < 256; ++i) table[i] = std::uint8_t((i * 37 + 11) & 0xff);
+    using I = krs::index_lanes<krs::packet_f>;
+    constexpr std::size_t n = krs::lane_count<krs::packet_f>;
+    for (int first = 0; first + int(n) <= 256; first += 3) {
+        alignas(64) std::int32_t index[n];
+        for (std::size_t k = 0; k < n; ++k) index[k] = std::int32_t((std::size_t(first) + k * 7) % 256);
+        index[n - 1] = 255; // the last byte: its word is the table's last
+        alignas(64) std::int32_t got[n];
+        krs::gather_byte(table, I::load_aligned(index)).store_aligned(got);
+        for (std::size_t k = 0; k < n; ++k) {
+            REQUIRE(got[k] == std::int32_t(table[index[k]]));
+            REQUIRE(krs::gather_byte(table, index[k]) == std::int32_t(table[index[k]]));
+        }
+    }
+}
+
+TEST_CASE("hypertree render: flat shading marched in step, colors gathered by level, gives the per-lane pixels, trees A-D")
+{
+    // No lights and no ambient falloff: the lit color depends on the level alone
+    // (voxel_shading::flat), and packets march in step gathering it by level byte. The per-lane
+    // march that shades each sample (render_settings::shade_each_sample) is the reference: equal
+    // pixels and lookups, scalar and packet, shaded per sample and per voxel, with and without
+    // bounding spheres, several levels of color.
+    march_options flat;
+    flat.shadows = false;
+    flat.lights.clear();
+    flat.ambient = 0.8f;
+    flat.ambient_falloff = 0.0f;
+    march_options lit = flat, falloff = flat;
+    lit.lights = march_options{}.lights;
+    falloff.ambient_falloff = 1.0f;
+    for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+        auto t = maker(40);
+        t.iterations = 30000;
+        INFO(t.name);
+        const dense_store store = build_tree<dense_store>(t, 2);
+        const tree_shape shape = tree_shape::of(store);
+        const depth_colors colors = depth_colors::tree(3, 6);
+        const krs::pinhole_camera camera = framing_camera(shape.box, 40, 32);
+        CHECK_FALSE(volume_marcher(store, shape, colors, lit).shading().flat());
+        CHECK_FALSE(volume_marcher(store, shape, colors, falloff).shading().flat());
+        for (const bool per_voxel : {false, true})
+            for (const bool spheres : {false, true}) {
+                march_options o = flat;
+                o.shade_per_voxel = per_voxel;
+                o.use_spheres = spheres;
+                const volume_marcher m(store, shape, colors, o);
+                REQUIRE(m.shading().flat());
+                for (int s : {1, 2}) {
+                    render_settings in_step, each;
+                    in_step.supersampling = each.supersampling = s;
+                    each.shade_each_sample = true;
+                    const image a = render<krs::packet_f>(m, camera, in_step), b = render<krs::packet_f>(m, camera, each);
+                    const image c = render<float>(m, camera, in_step), d = render<float>(m, camera, each);
+                    CHECK(max_difference(a, b) == 0.0);
+                    CHECK(max_difference(a, c) == 0.0);
+                    CHECK(max_difference(a, d) == 0.0);
+                    CHECK(a.lookups == b.lookups);
+                    CHECK(a.lookups == c.lookups);
+                    CHECK(a.lookups == d.lookups);
+                    CHECK(a.lookups > 0);
+                    // Not the background alone: the tree's colors (several levels) were composited.
+                    CHECK(max_difference(a, render<krs::packet_f>(volume_marcher(store, shape, depth_colors::tree(1, 2), o), camera, in_step)) > 0.0);
+                }
+            }
+    }
 }

@@ -36,7 +36,11 @@
 //
 // Two marches, one accumulation: the loop over samples, the masks and the compositing are written
 // once over T. Rays through voxels all shaded ahead only read: their lanes march in step,
-// gathering places, opacities and colors from the table (march_shaded_ahead). Otherwise each lane
+// gathering places, opacities and colors from the table (march_in_step). So do rays under flat
+// shading (no lights, no ambient falloff: voxel_shading::flat), where a sample's color depends on
+// its voxel's level alone and is gathered by level, shaded per sample or per voxel alike (the
+// OpenVDB comparison's "lighting off"; march_context::shade_each_sample keeps the per-lane march
+// there, the reference). Otherwise each lane
 // looks up and shades what it meets in scalar code, shading (and memoizing) each voxel it is the
 // first to reach (march_shading_as_met). Either way a packet's lanes compute exactly what the
 // scalar marcher computes for the same ray: packet and scalar images, and images shaded ahead or
@@ -90,6 +94,10 @@ struct ray_cache {
 struct march_context {
     ray_cache* rays = nullptr; // scalar marcher only
     shade_memo* shading = nullptr;
+    // Flat shading (voxel_shading::flat) marches in step, gathering colors by level
+    // (march_in_step); true takes the per-lane march instead (march_shading_as_met), the
+    // reference that tests and benchmarks compare with. The same pixels either way.
+    bool shade_each_sample = false;
 };
 
 class volume_marcher {
@@ -216,18 +224,21 @@ public:
     {
         return march_packets<T, 1>({ray}, context)[0];
     }
-    // Marches K packets of rays: through a complete memo with nothing left to compute per sample,
-    // the K packets march in turn within one loop, their lanes in step (march_shaded_ahead);
-    // otherwise each lane of each packet looks up and shades its samples on its own
-    // (march_shading_as_met). Both give the same pixels (tested).
+    // Marches K packets of rays: under flat shading (voxel_shading::flat: no lights, no ambient
+    // falloff), or through a complete memo with nothing left to compute per sample, the K packets
+    // march in turn within one loop, their lanes in step (march_in_step); otherwise each lane of
+    // each packet looks up and shades its samples on its own (march_shading_as_met). Both give
+    // the same pixels (tested).
     template <class T, std::size_t K>
     std::array<march_result<T>, K> march_packets(const std::array<krs::ray<T>, K>& rays, march_context context = {}) const
     {
         // (Displaced samples read voxels off the ray's own path: only the per-lane march displaces.)
-        const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || (std::floating_point<T> && context.rays) ||
-                                options_.displacement.enabled();
+        const bool cached = std::floating_point<T> && context.rays;
+        const bool displaced = options_.displacement.enabled();
+        if (shading_.flat() && !cached && !displaced && !context.shade_each_sample) return march_in_step<T, K, true>(rays, nullptr);
+        const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || cached || displaced;
         if (!per_sample && context.shading && context.shading->complete() && fits(*context.shading))
-            return march_shaded_ahead<T, K>(rays, *context.shading);
+            return march_in_step<T, K, false>(rays, context.shading);
         std::array<march_result<T>, K> out;
         for (std::size_t k = 0; k < K; ++k) out[k] = march_shading_as_met(rays[k], context);
         return out;
@@ -413,14 +424,17 @@ private:
         return found;
     }
 
-    // The march of rays through voxels all shaded ahead (march_packets checks that the table is
-    // complete and fits): per sample, each lane's place in the bricks, its opacity and its
-    // voxel's lit color are gathered, in the accumulation of march_shading_as_met, the same
-    // operations in the same order. K packets march in turn within one loop: a sample's place
-    // comes from gathers that depend on the previous sample's, so one packet alone waits on memory
-    // at every step, and K independent ones give the core other work.
-    template <class T, std::size_t K>
-    std::array<march_result<T>, K> march_shaded_ahead(const std::array<krs::ray<T>, K>& rays, const shade_memo& memo) const
+    // The march of rays whose lanes march in step, gathering what each sample needs: through
+    // voxels all shaded ahead (march_packets checks that the memo is complete and fits), each
+    // lane's place in the bricks, its opacity and its voxel's lit color from the memo; under flat
+    // shading (`flat`, no memo), the color from the flat table by the voxel's level byte (from a
+    // 3 KB table, instead of shading each sample lane by lane). Either way the
+    // accumulation of march_shading_as_met, the same operations in the same order. K packets
+    // march in turn within one loop: a sample's place comes from gathers that depend on the
+    // previous sample's, so one packet alone waits on memory at every step, and K independent
+    // ones give the core other work.
+    template <class T, std::size_t K, bool flat>
+    std::array<march_result<T>, K> march_in_step(const std::array<krs::ray<T>, K>& rays, const shade_memo* memo) const
     {
         using I = krs::index_lanes<T>;
         using krs::any, krs::select;
@@ -429,8 +443,11 @@ private:
         const T ds(walk_.step()), half(0.5f), zero(0.0f), one(1.0f), least(options_.min_transmittance);
         const float* alpha_at = alpha_at_.data();
         const std::int32_t* slot_at = bricks_.slots();
-        const float* lit = memo.values();
-        const I stride(std::int32_t(memo.stride()));
+        // Colors at entry, entry + 1, entry + 2: the memo's at slot x stride, or flat ones at level x 3.
+        const float* colors = flat ? shading_.flat_colors().data() : memo->values();
+        const I stride(flat ? 0 : std::int32_t(memo->stride()));
+        // (levels: 64 bytes per brick, cache-line aligned, as gather_byte requires.)
+        const std::uint8_t* level_at = bricks_.levels().data();
         std::array<march_result<T>, K> out;
         std::array<T, K> t0, t1, k;
         std::array<krs::mask_t<T>, K> active;
@@ -463,10 +480,12 @@ private:
                 if (any(found.looks)) {
                     const I place = krs::index_max(found.place, I(0));
                     const T a = select(found.looks, krs::gather(alpha_at, place), zero);
-                    const I entry = krs::gather(slot_at, place) * stride;
                     o.lookups = o.lookups + select(found.looks, one, zero);
+                    I entry;
+                    if constexpr (flat) entry = krs::gather_byte(level_at, place) * I(3);
+                    else entry = krs::gather(slot_at, place) * stride;
                     if (any(a > zero))
-                        composite(o, a, krs::gather(lit, entry), krs::gather(lit, entry + I(1)), krs::gather(lit, entry + I(2)));
+                        composite(o, a, krs::gather(colors, entry), krs::gather(colors, entry + I(1)), krs::gather(colors, entry + I(2)));
                 }
                 o.probes = o.probes + select(active[r], one, zero);
                 k[r] = k[r] + found.advance;

@@ -41,6 +41,10 @@ struct render_settings {
     // 300: see bench_hypertree_render); a close view of a small part may prefer off. Pixels are
     // the same either way.
     bool shade_ahead = true;
+    // Under flat shading (voxel_shading::flat: no lights, no ambient falloff) packets march in step
+    // and gather colors by level; true shades each sample lane by lane instead (march_context's
+    // shade_each_sample: the reference, for tests and benchmarks). The same pixels either way.
+    bool shade_each_sample = false;
     parallel_for_hook parallel_for;
 };
 
@@ -122,7 +126,10 @@ image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, c
     // which thread renders which row changes nothing.
     const march_options& options = marcher.options();
     std::optional<shade_memo> memo;
-    if (options.shade_per_voxel) memo.emplace(marcher.new_shade_memo());
+    // (Flat shading marching in step reads no memo: its colors come by level.)
+    const bool in_step_flat = marcher.shading().flat() && !settings.shade_each_sample && !(std::floating_point<T> && settings.ray_cache) &&
+                              !options.displacement.enabled(); // (as march_packets chooses)
+    if (options.shade_per_voxel && !in_step_flat) memo.emplace(marcher.new_shade_memo());
     std::atomic<std::uint64_t> shading_lookups{0};
     if (memo && settings.shade_ahead) {
         // Runs of 64 bricks (about 700 voxels in tree A) per task.
@@ -144,14 +151,18 @@ image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, c
             for (int j = 0; j < s * s; ++j) {
                 const std::size_t i = std::size_t(x) * std::size_t(s * s) + std::size_t(j);
                 const int sx = j % s, sy = j / s;
+                if (s == 1) {
+                    px[i] = float(x) + 0.5f, py[i] = float(y) + 0.5f;
+                    continue;
+                }
                 px[i] = float(x) + (float(sx) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 0)) / float(s);
                 py[i] = float(y) + (float(sy) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 1)) / float(s);
-                if (s == 1) px[i] = float(x) + 0.5f, py[i] = float(y) + 0.5f;
             }
         std::vector<float> cr(count), cg(count), cb(count);
         // Packets go to the marcher `group` at a time (marching several at once hides the latency
-        // of each one's lookups: volume_marcher::march_shaded_ahead); the last ones repeat the last ray.
-        constexpr std::size_t group = 2, rays_per_group = group * lanes;
+        // of each one's lookups: volume_marcher::march_in_step; four gave 5-13% less CPU than two
+        // on tree A at resolution 100, one thread); the last ones repeat the last ray.
+        constexpr std::size_t group = 4, rays_per_group = group * lanes;
         for (std::size_t first = 0; first < count; first += rays_per_group) {
             std::array<krs::ray<T>, group> rays;
             for (std::size_t g = 0; g < group; ++g) {
@@ -168,7 +179,8 @@ image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, c
                 rays[g] = camera.primary_ray(tx, ty);
             }
             const std::array<march_result<T>, group> marched =
-                marcher.template march_packets<T, group>(rays, march_context{settings.ray_cache ? &cache : nullptr, memo ? &*memo : nullptr});
+                marcher.template march_packets<T, group>(rays, march_context{settings.ray_cache ? &cache : nullptr, memo ? &*memo : nullptr,
+                                                                           settings.shade_each_sample});
             for (std::size_t g = 0; g < group; ++g) {
                 // Each lane's result, spilled once per packet.
                 const march_result<T>& m = marched[g];

@@ -70,11 +70,25 @@ public:
         : options_(options), crown_(shape.crown), alpha_(opacity_table(options)), light_dirs_(options.light_directions())
     {
         for (int l = 0; l < 256; ++l) level_color_[std::size_t(l)] = colors.at(l);
+        if (flat()) {
+            for (int l = 0; l < 256; ++l) {
+                const rgb c = lit(crown_.center, l, nullptr, {});
+                flat_[3 * std::size_t(l)] = c.r, flat_[3 * std::size_t(l) + 1] = c.g, flat_[3 * std::size_t(l) + 2] = c.b;
+            }
+        }
     }
 
     const std::array<float, 256>& opacity() const { return alpha_; }
     const std::vector<krs::vec3f>& light_directions() const { return light_dirs_; }
     const rgb& level_color(int level) const { return level_color_[std::size_t(std::clamp(level, 0, 255))]; }
+
+    // Whether the lit color is a function of the level alone: no lights (so no diffuse, specular
+    // or shadow) and no ambient falloff. Then lit() at any point q is base x ambient x
+    // exp(-0 x depth), and exp(-0) = 1 exactly (depth is finite and >= 0), so it equals lit() at
+    // the crown's center to the bit; flat_colors() holds that, r, g, b per level byte (level l
+    // at 3 l), for marches that gather it by level instead of shading each sample.
+    bool flat() const { return light_dirs_.empty() && options_.ambient_falloff == 0.0f; }
+    const std::array<float, 3 * 256>& flat_colors() const { return flat_; }
 
     // Base color x (Reeves' attenuated ambient + shadowed, wrapped Lambert) at shading point q,
     // given each light's shadow transmittance and the structure-flow normal there (zero: none).
@@ -190,6 +204,7 @@ private:
     krs::bounding_sphere crown_{};
     std::array<float, 256> alpha_{};
     std::array<rgb, 256> level_color_{};
+    std::array<float, 3 * 256> flat_{}; // lit() per level when flat(), else zeros
     std::vector<krs::vec3f> light_dirs_;
 };
 

@@ -488,4 +488,38 @@ inline xsimd::batch<V, A> gather(const V* table, const xsimd::batch<std::int32_t
     }
 }
 
+// table[i] for a table of bytes, in each lane as an int32 (a gather for packets). The gather reads
+// the aligned 32-bit word that holds the byte and shifts the byte down (a per-lane variable
+// shift: AVX2 and AVX-512 have one, xsimd 8.1 does not), so it never reads past the word of the
+// last byte. Preconditions: every lane indexes the table, whose start is 4-byte aligned and whose
+// length is a multiple of 4 (the last byte's word lies within it); little-endian byte order.
+inline std::int32_t gather_byte(const std::uint8_t* table, std::int32_t i) noexcept
+{
+    return std::int32_t(table[i]);
+}
+template <class A>
+inline xsimd::batch<std::int32_t, A> gather_byte(const std::uint8_t* table, const xsimd::batch<std::int32_t, A>& i) noexcept
+{
+    using I = xsimd::batch<std::int32_t, A>;
+#if defined(__AVX512F__)
+    if constexpr (std::is_base_of_v<xsimd::avx512f, A>) {
+        const I word = _mm512_i32gather_epi32(i >> 2, table, 4);
+        return I(_mm512_srlv_epi32(word, (i & I(3)) << 3)) & I(0xff);
+    } else
+#endif
+#if defined(__AVX2__)
+        if constexpr (std::is_base_of_v<xsimd::avx2, A>) {
+        const I word = _mm256_i32gather_epi32(reinterpret_cast<const int*>(table), i >> 2, 4);
+        return I(_mm256_srlv_epi32(word, (i & I(3)) << 3)) & I(0xff);
+    } else
+#endif
+    {
+        constexpr std::size_t n = I::size;
+        alignas(64) std::int32_t index[n], value[n];
+        i.store_aligned(index);
+        for (std::size_t k = 0; k < n; ++k) value[k] = std::int32_t(table[index[k]]);
+        return I::load_aligned(value);
+    }
+}
+
 } // namespace krs
