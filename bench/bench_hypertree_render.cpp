@@ -1,7 +1,7 @@
 // bench_hypertree_render: the rendering columns of the hypertree paper's Table 1, and speed
 // against error for the raymarcher's settings (docs/design.md#rule-5).
 //
-//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds]
+//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds|setup-cpu]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
 // Table: trees A-D (hypertree/presets.hpp) in a 300 x 300 image, at resolution 100 without
@@ -30,6 +30,10 @@
 // process CPU time (best of 9), each table compared bit for bit with the marcher's. Then the
 // marchers' setups and one packet frame of each shadow method on T threads, and each with its
 // setup (best of 9).
+//
+// Setup CPU (`--only setup-cpu`, not in the default run): each marcher's setup on one thread as
+// its CPU time, trees A-D at 100 and 300, dense, index list and bit array, with a hash of the
+// sweep's table (two builds with equal hashes made equal tables).
 //
 // Walk (`--only walk`): the brick walk with empty cubes of every level (brick_walk::skips, the
 // default) against the walk of empty bricks and 16^3 blocks only (the one before), trees A-D at
@@ -231,7 +235,7 @@ int main(int argc, char** argv)
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (i + 1 >= argc) {
-            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds|setup-cpu]\n", argv[0]);
             return 2;
         }
         const std::string v = argv[++i];
@@ -613,6 +617,53 @@ int main(int argc, char** argv)
                     "spheres' radii could be scaled by and still hold every cell a sphere must hold (> 1: cells out); pixels!=: pixels "
                     "not bit-equal to AABB only's in either frame)\nload average after: %s\n",
                     bench::load_average().c_str());
+    }
+    if (only == "setup-cpu") {
+        // The marcher's setup alone, on this thread, as its CPU time (CLOCK_THREAD_CPUTIME_ID: on a
+        // machine with more runnable threads than cores, wall times of a millisecond varied 10x
+        // between runs); best of 9 at resolution 100, 3 at 300, both shadow methods in alternating
+        // rounds; trees A-D, dense, index list and bit array. `hash`: FNV-1a of the sweep's table
+        // (its float bits in slot order), to compare the values of two builds (equal hashes: equal
+        // tables). Not run by default (only with --only setup-cpu).
+        std::printf("marcher setup on one thread, thread CPU time (best of 9 at 100, 3 at 300), load average %s\n\n",
+                    bench::load_average().c_str());
+        std::printf("%-4s %4s %-12s | %9s %9s | %16s\n", "tree", "res", "store", "rays", "sweep", "sweep table hash");
+        const auto cpu_of = [](const auto& f) {
+            const double t0 = bench::thread_cpu_seconds();
+            f();
+            return bench::thread_cpu_seconds() - t0;
+        };
+        for (const int res : {100, 300}) {
+            for (const auto& maker : {presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}) {
+                const paper_tree scene = paper_tree::of(maker(res));
+                const auto row = [&]<class S>(const char* name, const S& store) {
+                    march_options by_rays;
+                    by_rays.shadow_by = march_options::shadow_method::rays;
+                    double setup[2] = {1e300, 1e300};
+                    for (int round = 0; round < (res == 100 ? 9 : 3); ++round) {
+                        setup[0] = std::min(setup[0], cpu_of([&] { (void)volume_marcher(store, scene.shape, scene.colors, by_rays); }));
+                        setup[1] = std::min(setup[1], cpu_of([&] { (void)volume_marcher(store, scene.shape, scene.colors, {}); }));
+                    }
+                    const volume_marcher marcher(store, scene.shape, scene.colors, {});
+                    std::uint64_t hash = 1469598103934665603ull;
+                    for (std::size_t l = 0; l < marcher.shading().light_directions().size(); ++l)
+                        for (std::size_t i = 0; i < marcher.bricks().voxel_count(); ++i) {
+                            std::uint32_t bits;
+                            std::memcpy(&bits, marcher.sweep().toward(l) + i, sizeof bits);
+                            hash = (hash ^ bits) * 1099511628211ull;
+                        }
+                    std::printf("%-4s %4d %-12s | %7.3fms %7.3fms | %016llx\n", scene.tree.name.c_str(), res, name, setup[0] * 1e3,
+                                setup[1] * 1e3, static_cast<unsigned long long>(hash));
+                    std::fflush(stdout);
+                    const std::string prefix = "setup_cpu," + scene.tree.name + ',' + std::to_string(res) + ",," + name + ",setup,";
+                    csv << prefix << "rays," << setup[0] << ",,,\n";
+                    csv << prefix << "sweep," << setup[1] << ",,,\n";
+                };
+                row("dense", dense_store::build(scene.tree.volume, scene.voxels));
+                row("index_list", index_list_store::build(scene.tree.volume, scene.voxels));
+                row("bit_array", bit_array_store::build(scene.tree.volume, scene.voxels));
+            }
+        }
     }
     std::printf("\nload average after: %s\nwrote %s\n", bench::load_average().c_str(), csv_path.c_str());
     return 0;

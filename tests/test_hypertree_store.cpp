@@ -957,6 +957,49 @@ TEST_CASE("a dense store rebuilt at the same size keeps its memory and clears wh
     CHECK(nonempty == second.size());
 }
 
+TEST_CASE("a dense store visits exactly its non-empty voxels, in index order, through the runs it wrote")
+{
+    // The dense store's for_each reads only the runs of 32 voxels its bits mark as written. The
+    // reference is a scan of every voxel of the grid with at(). The grids end inside a run and
+    // inside a word of run bits (31 x 7 x 5 = 1085 voxels: 33 full runs and 29 voxels over;
+    // 70 x 33 x 29 = 66990 voxels over 33 words of bits), voxels sit on run boundaries and in the
+    // last voxel, and a store rebuilt in a recycled one (the runs of its first list cleared)
+    // visits only its second list.
+    std::mt19937_64 g(29);
+    for (const hypertree::resolution grid : {hypertree::resolution{31, 7, 5}, hypertree::resolution{70, 33, 29}}) {
+        const hypervolume volume({0, 0, 0}, {1, 1, 1}, grid);
+        const voxel_index n = volume.voxel_count();
+        INFO("voxels " << n);
+        const auto scan = [&](const hypertree::dense_store& store) {
+            std::vector<std::pair<voxel_index, voxel>> expected, visited;
+            for (voxel_index i = 0; i < n; ++i)
+                if (store.at(i).density != 0) expected.emplace_back(i, store.at(i));
+            store.for_each([&](voxel_index i, voxel v) { visited.emplace_back(i, v); });
+            CHECK(visited.size() == expected.size());
+            CHECK(visited == expected);
+            return expected.size();
+        };
+        for (const double fill : {0.001, 0.05, 0.5}) {
+            INFO("fill " << fill);
+            std::vector<stored_voxel> voxels = random_voxels(g, volume, fill);
+            // The first and last voxel of runs, and of the grid.
+            std::map<voxel_index, stored_voxel> edges;
+            for (const stored_voxel& v : voxels) edges[v.index] = v;
+            for (const voxel_index i : {voxel_index(0), voxel_index(31), voxel_index(32), voxel_index(63), voxel_index(64 * 32 - 1),
+                                        voxel_index(64 * 32), n - 1})
+                if (i < n) edges[i] = stored_voxel{i, voxel{7, 1}, 0};
+            voxels.clear();
+            for (const auto& [i, v] : edges) voxels.push_back(v);
+            const hypertree::dense_store fresh = hypertree::dense_store::build(volume, voxels);
+            CHECK(scan(fresh) == voxels.size());
+            // Rebuilt over a fuller store: the old runs are cleared and no longer visited.
+            hypertree::dense_store old = hypertree::dense_store::build(volume, random_voxels(g, volume, 0.3));
+            const hypertree::dense_store rebuilt = hypertree::dense_store::build(volume, voxels, {}, std::move(old));
+            CHECK(scan(rebuilt) == voxels.size());
+        }
+    }
+}
+
 TEST_CASE("stores: every kind matches the reference on a sparse 300 cubed tree")
 {
     std::mt19937_64 g(9);

@@ -24,7 +24,9 @@
 // and in any order of tasks on the caller's threads, keeping the product P(v) and the cut w; then
 // T(v) = P(v) T(w) along each chain of cuts (chains end, since keys grow). Each value is the same
 // product in the same order either way. The table is a pure function of the voxels, options and
-// light: the same on every run and thread count, and by both ways (tested, bit for bit).
+// light: the same on every run and thread count, and by both ways (tested, bit for bit). It does
+// not depend on the camera (the lights' directions are the world's, march_options::lights): a
+// marcher made once renders any number of views, and only a new tree or new lights pay the sweep.
 //
 // Rendering reads the table instead of marching: shading at a voxel's center takes T(v) as it is;
 // a point elsewhere (shading per sample) marches to its own cut and takes the tail there. The

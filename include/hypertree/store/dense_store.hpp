@@ -77,24 +77,47 @@ public:
     std::size_t nonempty_count() const { return count_; }
     index_box bounds() const { return bounds_; }
 
-    // Scans only [first, last] non-empty index, not the whole grid, and skips runs of empty
-    // voxels 4 at a time (8 bytes read as one word: most of a sparse tree's grid is empty).
+    // Visits only the runs of 32 voxels (64 bytes) the build wrote, found from their bits in
+    // written_, not the whole grid: every non-empty voxel lies in a written run (fill sets the bit
+    // of each voxel it writes, and nothing else writes the array). A run's non-empty voxels come
+    // from a 32-bit mask of its densities (one compare per voxel, vectorised), then one visit per
+    // set bit, in increasing index order as before. The grid's empty part costs a bit per run
+    // (1/512 of the array): the marcher's brick copy of tree A from a dense store (voxel_bricks.hpp)
+    // read 54 MB at resolution 300 and 2 MB at 100 through the word scan that was here before.
     template <class F>
     void for_each(F&& visit) const
     {
-        static_assert(sizeof(voxel) == 2, "4 voxels per 8-byte word");
+        static_assert(sizeof(voxel) == 2, "32 voxels per 64-byte run");
         if (count_ == 0) return;
         const voxel* v = voxels_.data();
-        std::size_t i = first_;
-        for (; i + 4 <= last_ + 1; i += 4) {
-            std::uint64_t word;
-            std::memcpy(&word, v + i, sizeof word);
-            if (word == 0) continue;
-            for (std::size_t j = i; j < i + 4; ++j)
-                if (v[j].density != 0) visit(voxel_index(j), v[j]);
+        const std::size_t n = voxels_.size();
+        // The runs lie scattered over the array, a cache miss each that the hardware prefetcher
+        // does not foresee: the runs of the next word of bits are prefetched while this word's are
+        // read, so their misses overlap (tree A at 300 from a dense store, the brick copy's CPU time
+        // in runs under load 13: 8.8-9.3 ms by the word scan, 8.1 ms by runs, 6.3-6.4 ms by runs
+        // prefetched; the index list's copy took 2.6-2.8 ms in the same runs).
+        const auto prefetch_word = [&](std::size_t w) {
+            for (std::uint64_t runs = written_[w]; runs != 0; runs &= runs - 1)
+                __builtin_prefetch(v + (w * 64 + std::size_t(std::countr_zero(runs))) * voxels_per_run);
+        };
+        if (!written_.empty()) prefetch_word(0);
+        for (std::size_t w = 0; w < written_.size(); ++w) {
+            if (w + 1 < written_.size()) prefetch_word(w + 1);
+            for (std::uint64_t runs = written_[w]; runs != 0; runs &= runs - 1) {
+                const std::size_t start = (w * 64 + std::size_t(std::countr_zero(runs))) * voxels_per_run;
+                const std::size_t count = std::min(voxels_per_run, n - start);
+                const voxel* run = v + start;
+                std::uint32_t nonempty = 0;
+                if (count == voxels_per_run) // (a fixed trip count: the compares vectorise)
+                    for (std::size_t j = 0; j < voxels_per_run; ++j) nonempty |= std::uint32_t(run[j].density != 0) << j;
+                else
+                    for (std::size_t j = 0; j < count; ++j) nonempty |= std::uint32_t(run[j].density != 0) << j;
+                for (; nonempty != 0; nonempty &= nonempty - 1) {
+                    const std::size_t j = std::size_t(std::countr_zero(nonempty));
+                    visit(voxel_index(start + j), run[j]);
+                }
+            }
         }
-        for (; i <= last_; ++i)
-            if (v[i].density != 0) visit(voxel_index(i), v[i]);
     }
 
 private:
@@ -128,8 +151,6 @@ private:
         }
         count_ = voxels.size();
         bounds_ = detail::bounds_of(volume, voxels);
-        first_ = last_ = 0;
-        if (!voxels.empty()) first_ = voxels.front().index, last_ = voxels.back().index;
     }
     // Sets back to zero the runs the last fill wrote: afterwards the whole block is zero.
     void clear_written()
@@ -147,7 +168,6 @@ private:
     std::vector<std::uint64_t> written_; // bit r: voxels [32 r, 32 r + 32) hold some voxel written
     std::size_t count_ = 0;
     index_box bounds_{};
-    voxel_index first_ = 0, last_ = 0;
 };
 
 static_assert(voxel_store<dense_store>);
