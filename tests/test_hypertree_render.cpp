@@ -733,7 +733,7 @@ TEST_CASE("hypertree render: flat shading marched in step, colors gathered by le
             for (const bool spheres : {false, true}) {
                 march_options o = flat;
                 o.shade_per_voxel = per_voxel;
-                o.use_spheres = spheres;
+                o.bounds_by = spheres ? bound_method::spheres : bound_method::box;
                 const volume_marcher m(store, shape, colors, o);
                 REQUIRE(m.shading().flat());
                 for (int s : {1, 2}) {
