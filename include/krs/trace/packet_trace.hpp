@@ -119,9 +119,12 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
     auto report_set_aside = [&] {
         hit<float> h;
         h.t = std::numeric_limits<float>::infinity();
-        for (const std::int32_t id : queue.missed()) done(std::uint32_t(id), h);
+        // (Bounds in locals, as in report_finished.)
+        for (const std::int32_t *id = queue.missed().data(), *end = id + queue.missed().size(); id != end; ++id)
+            done(std::uint32_t(*id), h);
         h.invalid = true;
-        for (const std::int32_t id : queue.invalid()) done(std::uint32_t(id), h);
+        for (const std::int32_t *id = queue.invalid().data(), *end = id + queue.invalid().size(); id != end; ++id)
+            done(std::uint32_t(*id), h);
         stats.rays += (long long)(queue.missed().size() + queue.invalid().size());
         queue.clear_set_aside();
     };
@@ -159,14 +162,20 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
     std::vector<finished_rays> out_store(1); // on the heap: 16 KiB is too much for the stack
     finished_rays& out = out_store.front();
     std::size_t out_count = 0;
+    // (The count and the arrays are read into locals first: `done` typically stores through a
+    // byte pointer, which may alias anything, so a bound kept in `out_count` was reloaded from
+    // memory at every ray.)
     auto report_finished = [&] {
-        for (std::size_t c = 0; c < out_count; ++c) {
+        const std::size_t n = out_count;
+        const std::int32_t* who = out.id.data();
+        const float *t = out.t.data(), *steps = out.steps.data(), *found = out.found.data();
+        for (std::size_t c = 0; c < n; ++c) {
             hit<float> h;
-            h.t = out.t[c], h.found = out.found[c] != 0.0f;
-            h.steps = h.evaluations = int(out.steps[c]); // one evaluation per step (march_result)
-            done(std::uint32_t(out.id[c]), h);
+            h.t = t[c], h.found = found[c] != 0.0f;
+            h.steps = h.evaluations = int(steps[c]); // one evaluation per step (march_result)
+            done(std::uint32_t(who[c]), h);
         }
-        stats.rays += (long long)out_count;
+        stats.rays += (long long)n;
         out_count = 0;
     };
 

@@ -103,16 +103,22 @@ public:
     // other lanes as they are. Precondition: popcount(lanes) <= size().
     void take(std::uint64_t lanes, ray<P>& r, P& t_start, P& t_max, ids& id)
     {
+        // The arrays' addresses are read before the first expand: a store of a register may alias
+        // anything (the vector types are may_alias), so each one was otherwise reloaded from the
+        // queue after the previous lane state was written.
         const std::size_t at = head_;
-        r.origin.x = expand_load(r.origin.x, lanes, x_[0].data() + at);
-        r.origin.y = expand_load(r.origin.y, lanes, x_[1].data() + at);
-        r.origin.z = expand_load(r.origin.z, lanes, x_[2].data() + at);
-        r.direction.x = expand_load(r.direction.x, lanes, x_[3].data() + at);
-        r.direction.y = expand_load(r.direction.y, lanes, x_[4].data() + at);
-        r.direction.z = expand_load(r.direction.z, lanes, x_[5].data() + at);
-        t_start = expand_load(t_start, lanes, x_[6].data() + at);
-        t_max = expand_load(t_max, lanes, x_[7].data() + at);
-        id = expand_load(id, lanes, id_.data() + at);
+        const float* in[8];
+        for (std::size_t k = 0; k < 8; ++k) in[k] = x_[k].data() + at;
+        const std::int32_t* in_id = id_.data() + at;
+        r.origin.x = expand_load(r.origin.x, lanes, in[0]);
+        r.origin.y = expand_load(r.origin.y, lanes, in[1]);
+        r.origin.z = expand_load(r.origin.z, lanes, in[2]);
+        r.direction.x = expand_load(r.direction.x, lanes, in[3]);
+        r.direction.y = expand_load(r.direction.y, lanes, in[4]);
+        r.direction.z = expand_load(r.direction.z, lanes, in[5]);
+        t_start = expand_load(t_start, lanes, in[6]);
+        t_max = expand_load(t_max, lanes, in[7]);
+        id = expand_load(id, lanes, in_id);
         head_ += std::size_t(std::popcount(lanes & all_lanes));
     }
 
