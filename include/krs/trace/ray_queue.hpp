@@ -8,11 +8,12 @@
 // once, W at a time, as it is queued: one that cannot be marched (an unusable ray, or an empty
 // range such as a ray that misses the field's box) is set aside as a miss and never takes a lane,
 // so a refilled lane is always active and the refill blends only what a new ray changes. Against
-// the stream that pulled one `ray_job` per lane and blended a whole march_state (issue 23), that
-// and the cheaper step (march_limits, krs/trace/sphere_trace.hpp) are 1.9-2.3x the rays per
-// second per core on bench_embree_peer's scenes at the 0.5 px threshold (2-4 evaluations per
-// ray), with the same hits; where rays take 15 evaluations the field is most of the time and the
-// gain is 0.9-1.4x, under Amdahl's ceiling of 1.1-1.9x (bench_packet_trace).
+// the stream that pulled one `ray_job` per lane and blended a whole march_state (issue 23), that,
+// the cheaper step (march_limits, krs/trace/sphere_trace.hpp) and results reported in runs
+// (krs/trace/packet_trace.hpp) are 2.0-2.5x the rays per second per core on bench_embree_peer's
+// scenes at the 0.5 px threshold (2-4 evaluations per ray), with the same hits; where rays take 15
+// evaluations the field is most of the time and the gain is 0.9-1.4x, under Amdahl's ceiling of
+// 1.1-2.1x (bench_packet_trace).
 
 #include "krs/core/lanes.hpp"
 #include "krs/trace/sphere_trace.hpp" // ray, unusable_ray
