@@ -6,7 +6,7 @@
 //     bench_embree_peer [--size N] [--max-n N] [--embree-max-n N] [--budget-gib G] [--tolerance T]
 //                       [--repeat R] [--csv FILE] [--scene grid|unaligned|both] [--krs-floor F]
 //     bench_embree_peer --boxes [--size N] [--max-n N] [--repeat R] [--scene ...]
-//     bench_embree_peer --stream [--size N] [--repeat R] [--scene ...]
+//     bench_embree_peer --stream [--size N] [--max-n N] [--repeat R] [--scene ...]
 //
 // Scenes: a ring (a krs::torus) around a sphere, copied 2^n times by n
 // vertical mirrors (krs::sequence, so krs::expand applies): `grid` with x- and z-normal mirrors,
@@ -666,6 +666,7 @@ int compare_streams(const settings& opt)
     for (const bool unaligned : {false, true}) {
         if ((unaligned && opt.scene == "grid") || (!unaligned && opt.scene == "unaligned")) continue;
         for (int n : {16, 32}) {
+            if (n > opt.max_n) continue; // --max-n 16: the n = 16 rows alone (e.g. to profile them)
             framing v;
             const scene_sequence s = ring_scene(n, unaligned, v);
             const krs::pinhole_camera camera = camera_for(v, opt.size);

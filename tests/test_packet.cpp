@@ -145,6 +145,63 @@ TEST_CASE("refilling packet stream equals the scalar tracer per ray")
     CHECK(refilled > 100);
 }
 
+namespace {
+// Streams the first `count` pixel rays of a 37 x 29 view through trace_stream with lane type L and
+// checks each against the scalar tracer: reported exactly once, before the stream returns, with
+// the same found flag, step count and (for hits) t.
+template <class L, int Interleave>
+void check_stream_of(std::size_t count, long long& hits)
+{
+    const scene s = grove();
+    const int width = 37, height = 29;
+    const krs::pinhole_camera camera = view(2, width, height);
+    const krs::trace_options o = primary_options(camera);
+    std::vector<krs::hit<float>> got(count);
+    std::vector<int> reported(count, 0);
+    std::uint32_t next_id = 0;
+    auto next = [&](krs::ray_job& job) {
+        if (next_id >= count) return false;
+        job.id = next_id++;
+        job.r = camera.primary_ray(float(job.id % width) + 0.5f, float(job.id / width) + 0.5f);
+        job.t_start = o.min_distance, job.t_max = o.max_distance;
+        return true;
+    };
+    auto done = [&](std::uint32_t id, const krs::hit<float>& h) {
+        REQUIRE(id < count);
+        got[id] = h, ++reported[id];
+    };
+    const krs::stream_stats stats = krs::trace_stream<L, Interleave>(s, next, done, o, 1);
+    CHECK(stats.rays == (long long)count);
+    for (std::size_t id = 0; id < count; ++id) {
+        REQUIRE(reported[id] == 1);
+        const krs::ray<float> r = camera.primary_ray(float(id % width) + 0.5f, float(id / width) + 0.5f);
+        const krs::hit<float> h = krs::sphere_trace(s, r, o);
+        REQUIRE(got[id].found == h.found);
+        REQUIRE(got[id].steps == h.steps);
+        REQUIRE(got[id].evaluations == h.evaluations);
+        if (h.found) {
+            REQUIRE(std::abs(got[id].t - h.t) <= o.threshold(h.t));
+            ++hits;
+        }
+    }
+}
+} // namespace
+
+TEST_CASE("stream results leave in runs: every ray once, as the scalar tracer, for any count of rays")
+{
+    // The stream keeps finished rays in a buffer and reports them to `done` in runs of 256 and
+    // when it ends: counts below, at and past one run and several runs, packets and scalars.
+    long long hits = 0;
+    for (std::size_t count : {std::size_t(1), std::size_t(15), std::size_t(255), std::size_t(256), std::size_t(257),
+                              std::size_t(700), std::size_t(37 * 29)}) {
+        CAPTURE(count);
+        check_stream_of<P, 2>(count, hits);
+        check_stream_of<P, 4>(count, hits);
+        check_stream_of<float, 3>(count, hits);
+    }
+    CHECK(hits > 500);
+}
+
 TEST_CASE("plain packets with partial lanes at the image edge equal the scalar tracer")
 {
     const scene s = grove();

@@ -17,8 +17,11 @@
 // when it runs dry (false: there are no more; krs/trace/tile_rays.hpp queues a screen tile's
 // rays in packets). `trace_stream(f, next, done, ...)` takes rays one at a time from
 // `next(ray_job&) -> bool` instead and queues them itself. Results leave through
-// `done(std::uint32_t id, const hit<float>&)`, in completion order, on the calling thread. The
-// library starts no thread; callers run one stream per thread (e.g. one per tile).
+// `done(std::uint32_t id, const hit<float>&)`, in completion order, on the calling thread, in
+// runs: finished rays wait in a buffer of a few hundred and are reported when it is full and
+// before the stream returns (so `done` may see a ray after `more` was asked for the next rays;
+// every ray is reported exactly once, before trace_queue returns). The library starts no thread;
+// callers run one stream per thread (e.g. one per tile).
 
 #include "krs/trace/ray_queue.hpp"
 #include "krs/trace/sphere_trace.hpp"
@@ -116,9 +119,12 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
     auto report_set_aside = [&] {
         hit<float> h;
         h.t = std::numeric_limits<float>::infinity();
-        for (const std::int32_t id : queue.missed()) done(std::uint32_t(id), h);
+        // (Bounds in locals, as in report_finished.)
+        for (const std::int32_t *id = queue.missed().data(), *end = id + queue.missed().size(); id != end; ++id)
+            done(std::uint32_t(*id), h);
         h.invalid = true;
-        for (const std::int32_t id : queue.invalid()) done(std::uint32_t(id), h);
+        for (const std::int32_t *id = queue.invalid().data(), *end = id + queue.invalid().size(); id != end; ++id)
+            done(std::uint32_t(*id), h);
         stats.rays += (long long)(queue.missed().size() + queue.invalid().size());
         queue.clear_set_aside();
     };
@@ -143,29 +149,49 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
         id[k] = ids(0);
     }
 
-    // Reports the finished lanes of packet k and refills its idle lanes (the caller calls it when
-    // at least refill_at lanes have finished or none runs). What is left per ray is `done`; the
-    // stream's counters are kept per step (below), not per ray.
+    // Finished rays wait in `out` (structure of arrays, filled by one compress per value and
+    // packet) and leave through `done` in runs of up to report_run: calling `done` lane by lane
+    // at each harvest cost a loop whose trip count (the lanes that finished, 4-8) changes from
+    // one harvest to the next, so its exit was mispredicted about once per harvest; a run of a
+    // few hundred ends once. Found is kept as a value (1 or 0) beside t and the step count.
+    constexpr std::size_t report_run = 256;
+    struct finished_rays {
+        alignas(64) std::array<std::int32_t, report_run + W> id;
+        alignas(64) std::array<float, report_run + W> t, steps, found;
+    };
+    std::vector<finished_rays> out_store(1); // on the heap: 16 KiB is too much for the stack
+    finished_rays& out = out_store.front();
+    std::size_t out_count = 0;
+    // (The count and the arrays are read into locals first: `done` typically stores through a
+    // byte pointer, which may alias anything, so a bound kept in `out_count` was reloaded from
+    // memory at every ray.)
+    auto report_finished = [&] {
+        const std::size_t n = out_count;
+        const std::int32_t* who = out.id.data();
+        const float *t = out.t.data(), *steps = out.steps.data(), *found = out.found.data();
+        for (std::size_t c = 0; c < n; ++c) {
+            hit<float> h;
+            h.t = t[c], h.found = found[c] != 0.0f;
+            h.steps = h.evaluations = int(steps[c]); // one evaluation per step (march_result)
+            done(std::uint32_t(who[c]), h);
+        }
+        stats.rays += (long long)n;
+        out_count = 0;
+    };
+
+    // Moves the finished lanes of packet k to `out` and refills its idle lanes (the caller calls
+    // it when at least refill_at lanes have finished or none runs). The stream's counters are
+    // kept per step (below), not per ray.
     auto harvest = [&](int k, std::uint64_t active) -> std::uint64_t {
         march_state<P>& m = state[k];
         const std::uint64_t finished = live[k] & ~active;
         if (finished != 0) {
-            alignas(64) float t[W], steps[W];
-            alignas(64) std::int32_t who[W];
-            const int count = int(compress_store(t, m.result.t, finished));
-            compress_store(steps, P(m.result.steps), finished); // count_t<P> is int for scalars
-            compress_store(who, id[k], finished);
-            // The found flags of the finished lanes, in the same order as the compressed values:
-            // lane i's flag is the lowest set bit of `rest` (i's own bit) in `found`.
-            const std::uint64_t found = mask_bits<P>(m.result.found);
-            int c = 0;
-            for (std::uint64_t rest = finished; rest != 0; rest &= rest - 1, ++c) {
-                hit<float> h;
-                h.t = t[c], h.found = (found & rest & (~rest + 1)) != 0;
-                h.steps = h.evaluations = int(steps[c]); // one evaluation per step (march_result)
-                done(std::uint32_t(who[c]), h);
-            }
-            stats.rays += count;
+            const std::size_t at = out_count;
+            compress_store(out.t.data() + at, m.result.t, finished);
+            compress_store(out.steps.data() + at, P(m.result.steps), finished); // count_t<P> is int for scalars
+            compress_store(out.found.data() + at, select(m.result.found, P(1.0f), P(0.0f)), finished);
+            out_count += compress_store(out.id.data() + at, id[k], finished);
+            if (out_count >= report_run) report_finished();
         }
         // Every lane not running takes the queue's next ray, while there are rays.
         std::uint64_t want = ~active & low_bits(W), filled = 0;
@@ -226,6 +252,7 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
             ++stats.packet_steps;
         }
     }
+    report_finished();
     stats.evaluations = stats.busy_lanes;
     return stats;
 }
@@ -240,8 +267,8 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
 // Results equal per-ray `sphere_trace` calls up to float rounding of the packet math.
 //
 // Per packet the stream keeps a march_state, the lanes' ids (index lanes) and `live`, the lanes
-// holding a ray not yet reported. A harvest compresses the finished lanes' results into a small
-// buffer for `done` and expands the queue's next rays into those lanes; of the state it then
+// holding a ray not yet reported. A harvest compresses the finished lanes' results into the
+// report buffer (reported to `done` a run at a time) and expands the queue's next rays into those lanes; of the state it then
 // resets only what start_march sets differently for a new ray (the ray, t, t_max, the step count,
 // found, active; and the over-relaxation's kept sphere and factor where omega > 1). No lane is
 // ever invalid here: the queue set those rays aside.

@@ -8,11 +8,12 @@
 // once, W at a time, as it is queued: one that cannot be marched (an unusable ray, or an empty
 // range such as a ray that misses the field's box) is set aside as a miss and never takes a lane,
 // so a refilled lane is always active and the refill blends only what a new ray changes. Against
-// the stream that pulled one `ray_job` per lane and blended a whole march_state (issue 23), that
-// and the cheaper step (march_limits, krs/trace/sphere_trace.hpp) are 1.9-2.3x the rays per
-// second per core on bench_embree_peer's scenes at the 0.5 px threshold (2-4 evaluations per
-// ray), with the same hits; where rays take 15 evaluations the field is most of the time and the
-// gain is 0.9-1.4x, under Amdahl's ceiling of 1.1-1.9x (bench_packet_trace).
+// the stream that pulled one `ray_job` per lane and blended a whole march_state (issue 23), that,
+// the cheaper step (march_limits, krs/trace/sphere_trace.hpp) and results reported in runs
+// (krs/trace/packet_trace.hpp) are 2.0-2.5x the rays per second per core on bench_embree_peer's
+// scenes at the 0.5 px threshold (2-4 evaluations per ray), with the same hits; where rays take 15
+// evaluations the field is most of the time and the gain is 0.9-1.4x, under Amdahl's ceiling of
+// 1.1-2.1x (bench_packet_trace).
 
 #include "krs/core/lanes.hpp"
 #include "krs/trace/sphere_trace.hpp" // ray, unusable_ray
@@ -103,16 +104,22 @@ public:
     // other lanes as they are. Precondition: popcount(lanes) <= size().
     void take(std::uint64_t lanes, ray<P>& r, P& t_start, P& t_max, ids& id)
     {
+        // The arrays' addresses are read before the first expand: a store of a register may alias
+        // anything (the vector types are may_alias), so each one was otherwise reloaded from the
+        // queue after the previous lane state was written.
         const std::size_t at = head_;
-        r.origin.x = expand_load(r.origin.x, lanes, x_[0].data() + at);
-        r.origin.y = expand_load(r.origin.y, lanes, x_[1].data() + at);
-        r.origin.z = expand_load(r.origin.z, lanes, x_[2].data() + at);
-        r.direction.x = expand_load(r.direction.x, lanes, x_[3].data() + at);
-        r.direction.y = expand_load(r.direction.y, lanes, x_[4].data() + at);
-        r.direction.z = expand_load(r.direction.z, lanes, x_[5].data() + at);
-        t_start = expand_load(t_start, lanes, x_[6].data() + at);
-        t_max = expand_load(t_max, lanes, x_[7].data() + at);
-        id = expand_load(id, lanes, id_.data() + at);
+        const float* in[8];
+        for (std::size_t k = 0; k < 8; ++k) in[k] = x_[k].data() + at;
+        const std::int32_t* in_id = id_.data() + at;
+        r.origin.x = expand_load(r.origin.x, lanes, in[0]);
+        r.origin.y = expand_load(r.origin.y, lanes, in[1]);
+        r.origin.z = expand_load(r.origin.z, lanes, in[2]);
+        r.direction.x = expand_load(r.direction.x, lanes, in[3]);
+        r.direction.y = expand_load(r.direction.y, lanes, in[4]);
+        r.direction.z = expand_load(r.direction.z, lanes, in[5]);
+        t_start = expand_load(t_start, lanes, in[6]);
+        t_max = expand_load(t_max, lanes, in[7]);
+        id = expand_load(id, lanes, in_id);
         head_ += std::size_t(std::popcount(lanes & all_lanes));
     }
 
