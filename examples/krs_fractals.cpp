@@ -1,10 +1,10 @@
 // krs_fractals: KIFS fold programs and log-spherical self-similarity, written to PNG files:
 //
 //     kifs_square.png, kifs_cube.png, kifs_menger.png, kifs_sierpinski.png, kifs_koch.png
-//         the KIFS gallery (krs/fractal/kifs.hpp): the document's square-on-square fractal as a
+//         the KIFS gallery (krs/fractal/kifs_presets.hpp): the document's square-on-square fractal as a
 //         relief, its cube analogue, the Menger sponge, the Sierpinski tetrahedron, a Koch curve
 //     zoom_0.png ... zoom_6.png
-//         a zoom into the cube singularity (krs/fractal/log_spherical.hpp) at scales 10^0 ...
+//         a zoom into the cube singularity (krs/fractal/shell_presets.hpp) at scales 10^0 ...
 //         10^-6: the same detail at every scale, with no loop in the distance function
 //
 // The KIFS frames are coloured by their orbits (krs/fractal/kifs_colour.hpp): a point trap and the
@@ -32,7 +32,8 @@
 #include "krs/cross_section.hpp"
 #include "krs/fractal/kifs.hpp"
 #include "krs/fractal/kifs_colour.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/shell_presets.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/shade/normal.hpp"
 #include "krs/trace/camera.hpp"

@@ -2,8 +2,12 @@
 // log-polar / log-spherical warps and the similar shell: Lipschitz bounds measured on close random
 // pairs, finiteness at the singularity and far away, packet lanes against scalars, validation.
 
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/log_tilings.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/sequence.hpp"
 #include "krs/trace/camera.hpp"

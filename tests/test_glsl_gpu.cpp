@@ -6,9 +6,13 @@
 // KRS_GLSL_TESTS=OFF leaves it out. A context that cannot be created FAILS the test.
 
 #include "krs/compose.hpp"
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
 #include "krs/fractal/kifs_colour.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/log_tilings.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus.hpp"
