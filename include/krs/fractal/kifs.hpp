@@ -11,27 +11,21 @@
 //     repeat N times:  d = min(d, k(p) / s);  p = program(p);  s *= program.scale()
 //     d = min(d, k(p) / s)
 //
-// A *fold step* is a type with `template <class T> vec3<T> apply(const vec3<T>&) const` and
-// `double scale() const`, whose map stretches no distance by more than scale():
-// |apply(a) - apply(b)| <= scale() |a - b|. Reflections, abs and sort folds and rotations are
-// isometries or folds (scale 1); `scale_about` scales by its factor. A `fold_program<Steps...>`
-// applies its steps in order and its scale is their product, so after i iterations the point has
-// been stretched by at most s_i = scale()^i and k(p_i) / s_i is 1-Lipschitz: the field is the
-// minimum of 1-Lipschitz functions and never overestimates the distance to its own zero set, with
-// no declared bound needed. (Where a kernel crosses a fold plane the field describes the clipped
-// geometry, as a KRS does.)
+// The program is a fold_program of fold steps (krs/fractal/fold_steps.hpp), each of which stretches
+// no distance by more than its scale(), so after i iterations the point has been stretched by at
+// most s_i = scale()^i and k(p_i) / s_i is 1-Lipschitz: the field is the minimum of 1-Lipschitz
+// functions and never overestimates the distance to its own zero set, with no declared bound
+// needed. (Where a kernel crosses a fold plane the field describes the clipped geometry, as a KRS
+// does.)
 //
 // `kifs_taps::every_iteration` takes the kernel at every level (the square-on-square fractal: the
 // union of all generations); `kifs_taps::last_iteration` only at the end (Menger sponge,
 // Sierpinski tetrahedron: only the finest generation). A KRS (sequence.hpp) is the special case
-// of identity-or-reflect folds with scale 1: `plane_fold` built from a `krs::mirror` folds exactly
-// as Algorithm 1 does.
+// of identity-or-reflect folds with scale 1. The steps are the same for every lane, so a packet
+// runs the loop in lockstep.
 //
-// Every step is a template over the lane type; the steps are the same for every lane, so a packet
-// runs the loop in lockstep and only min/max/abs/select act per lane.
-//
-// The fold steps are in krs/fractal/fold_steps.hpp, the presets (square-on-square, cube, Menger
-// sponge, Sierpinski tetrahedron, Koch curve) in krs/fractal/kifs_presets.hpp.
+// The presets (square-on-square, cube, Menger sponge, Sierpinski tetrahedron, Koch curve) are in
+// krs/fractal/kifs_presets.hpp.
 
 #include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
