@@ -4,6 +4,7 @@
 // lanes equal the scalar result, and validation.
 
 #include "krs/fractal/kifs_colour.hpp"
+#include "krs/fractal/kifs_presets.hpp"
 #include "krs/kernels/sphere.hpp"
 
 #include <doctest/doctest.h>
