@@ -19,6 +19,7 @@
 
 #include "support/gl_context.hpp"
 #include "support/gpu_points.hpp"
+#include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
 
@@ -616,12 +617,7 @@ TEST_CASE("glslangValidator accepts every fractal preset for every target")
     int files = 0;
     for_each_kifs_preset([&](const auto& c) { files += validate_fractal(dir, c.name, c.field); });
     // Every KIFS step kind and both taps: a rotate and a translate step in one program too.
-    using spiral_program = krs::fold_program<krs::abs_fold<krs::fold_x | krs::fold_z>, krs::rotate_step,
-                                             krs::translate_step, krs::scale_about>;
-    const krs::kifs<spiral_program, krs::sphere> spiral(
-        spiral_program({}, krs::rotate_step({0.0f, 1.0f, 0.0f}, 0.4f), krs::translate_step({0.1f, 0.0f, -0.2f}),
-                       krs::scale_about(1.5f, {1.0f, 0.5f, 0.0f})),
-        krs::sphere({0.0f, 0.0f, 0.0f}, 0.5f), 6);
+    const krs_test::spiral_kifs spiral = krs_test::spiral();
     files += validate_fractal(dir, "spiral", spiral);
     for_each_log_spherical_preset([&](const std::string& name, const char* label, const auto& f) {
         std::string id = name + "_" + label;

@@ -14,6 +14,7 @@
 
 #include "krs/field.hpp"
 #include "krs/kernels/kernels.hpp"
+#include "support/random.hpp"
 
 #include <doctest/doctest.h>
 
@@ -43,7 +44,7 @@ constexpr double float_ulp = FLT_EPSILON;
 struct random_source {
     std::mt19937_64 engine;
     explicit random_source(unsigned seed) : engine(seed) {}
-    double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(engine); }
+    double uniform(double lo, double hi) { return krs_test::uniform(engine, lo, hi); }
     vec3d unit()
     {
         for (;;) {
