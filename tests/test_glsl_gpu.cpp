@@ -19,6 +19,7 @@
 
 #include "support/gl_context.hpp"
 #include "support/gpu_points.hpp"
+#include "support/random.hpp"
 #include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
@@ -51,8 +52,8 @@ using krs::vec3f;
 template <class S>
 std::vector<vec3f> sample_points(const ex::scene<S>& s, std::size_t count)
 {
-    std::mt19937 random(12345);
-    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::mt19937_64 random(12345);
+    const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -1, 1)); };
     std::vector<vec3f> points(count);
     for (vec3f& p : points)
         p = s.sample_center + vec3f{u(random) * s.sample_half.x, u(random) * s.sample_half.y, u(random) * s.sample_half.z};
@@ -636,8 +637,8 @@ TEST_CASE("glslangValidator accepts every fractal preset for every target")
 TEST_CASE("GLSL KIFS presets match the C++ field on llvmpipe")
 {
     for_each_kifs_preset([&](const auto& c) {
-        std::mt19937 random(777);
-        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::mt19937_64 random(777);
+        const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -1, 1)); };
         std::vector<vec3f> points(16384);
         for (vec3f& p : points) p = {u(random) * c.sample_half.x, u(random) * c.sample_half.y, u(random) * c.sample_half.z};
         for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
@@ -775,8 +776,8 @@ TEST_CASE("GLSL KIFS colouring matches kifs_colour on llvmpipe")
         }
         krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, c.name + "_data", 0});
         const std::string fn = e.add_shading(request, c.name + "_colour");
-        std::mt19937 random(31);
-        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::mt19937_64 random(31);
+        const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -1, 1)); };
         std::vector<vec3f> points(16384);
         for (vec3f& p : points) p = {u(random) * c.sample_half.x, u(random) * c.sample_half.y, u(random) * c.sample_half.z};
         const auto gpu = gpu_colours(e.source(), fn, points, e.data());
