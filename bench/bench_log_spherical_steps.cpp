@@ -21,7 +21,8 @@
 //     both hit.
 // The load average before and after is printed: above the core count, other work shared the cores.
 
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/sphere_trace.hpp"
 #include "support/text.hpp"

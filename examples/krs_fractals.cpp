@@ -1,10 +1,11 @@
 // krs_fractals: KIFS fold programs and log-spherical self-similarity, written to PNG files:
 //
 //     kifs_square.png, kifs_cube.png, kifs_menger.png, kifs_sierpinski.png, kifs_koch.png
-//         the KIFS gallery (krs/fractal/kifs.hpp): the document's square-on-square fractal as a
-//         relief, its cube analogue, the Menger sponge, the Sierpinski tetrahedron, a Koch curve
+//         the KIFS gallery (krs/fractal/kifs_presets.hpp): the document's square-on-square
+//         fractal as a relief, its cube analogue, the Menger sponge, the Sierpinski tetrahedron,
+//         a Koch curve
 //     zoom_0.png ... zoom_6.png
-//         a zoom into the cube singularity (krs/fractal/log_spherical.hpp) at scales 10^0 ...
+//         a zoom into the cube singularity (krs/fractal/shell_presets.hpp) at scales 10^0 ...
 //         10^-6: the same detail at every scale, with no loop in the distance function
 //
 // The KIFS frames are coloured by their orbits (krs/fractal/kifs_colour.hpp): a point trap and the
@@ -27,12 +28,14 @@
 // normal, and prints how many pixels overestimate. FIELD is one of sphere (a reference: none may),
 // square, cube, menger, sierpinski, koch, lotus, cube_singularity.
 //
-// Threads render 16x16 tiles taken from a shared counter; the library itself starts no threads.
+// Threads render 16x16 tiles taken from a shared counter (support/tiles.hpp); the library itself
+// starts no threads.
 
 #include "krs/cross_section.hpp"
 #include "krs/fractal/kifs.hpp"
 #include "krs/fractal/kifs_colour.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/shell_presets.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/shade/normal.hpp"
 #include "krs/trace/camera.hpp"
@@ -40,16 +43,15 @@
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/tiles.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace {
@@ -147,26 +149,18 @@ double render(const options& opt, const std::string& name,
               const std::function<vec3f(float, float, ray_counts&)>& pixel)
 {
     std::vector<float> pixels(std::size_t(opt.width) * std::size_t(opt.height) * 3);
-    constexpr int tile = 16;
-    const int tiles_x = (opt.width + tile - 1) / tile, tiles_y = (opt.height + tile - 1) / tile;
-    std::atomic<int> next{0};
+    example::tile_queue tiles(opt.width, opt.height);
     std::vector<ray_counts> counts(std::size_t(opt.threads));
-    auto worker = [&](ray_counts& mine) {
-        for (int k; (k = next.fetch_add(1)) < tiles_x * tiles_y;) {
-            const int x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
-            for (int y = y0; y < std::min(y0 + tile, opt.height); ++y)
-                for (int x = x0; x < std::min(x0 + tile, opt.width); ++x) {
+    const double seconds = example::run_threads(opt.threads, [&](int thread) {
+        ray_counts& mine = counts[std::size_t(thread)];
+        for (example::tile t; tiles.take(t);)
+            for (int y = t.y0; y < t.y1; ++y)
+                for (int x = t.x0; x < t.x1; ++x) {
                     const vec3f c = pixel(float(x), float(y), mine);
                     float* out = &pixels[(std::size_t(y) * std::size_t(opt.width) + std::size_t(x)) * 3];
                     out[0] = c.x, out[1] = c.y, out[2] = c.z;
                 }
-        }
-    };
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<std::thread> pool;
-    for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker, std::ref(counts[std::size_t(i)]));
-    for (std::thread& t : pool) t.join();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    });
     ray_counts total;
     for (const ray_counts& c : counts) total.rays += c.rays, total.steps += c.steps;
 

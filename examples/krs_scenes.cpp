@@ -24,7 +24,8 @@
 //     krs_scenes [--width W] [--height H] [--threads N] [--seed S] [--only NAME] [--output-dir DIR]
 //                [--reflectivity F0]
 //
-// Threads render 16x16 tiles taken from a shared counter; the library itself starts no threads.
+// Threads render 16x16 tiles taken from a shared counter (support/tiles.hpp); the library itself
+// starts no threads.
 
 #include "krs/compose.hpp"
 #include "krs/kernels/capsule.hpp"
@@ -43,18 +44,16 @@
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/tiles.hpp"
 
 #include <algorithm>
 #include <filesystem>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
 #include <random>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace {
@@ -211,19 +210,16 @@ double render(const options& opt, const std::string& name, const complexity& sce
               const std::function<lit(float, float, ray_counts&)>& pixel, const lighting& light)
 {
     std::vector<float> pixels(std::size_t(opt.width) * opt.height * 3);
-    constexpr int tile = 16;
-    const int tiles_x = (opt.width + tile - 1) / tile, tiles_y = (opt.height + tile - 1) / tile;
-    const int tiles = tiles_x * tiles_y;
-    std::atomic<int> next{0};
+    example::tile_queue tiles(opt.width, opt.height);
     std::vector<ray_counts> counts(std::size_t(opt.threads));
-    auto worker = [&](ray_counts& mine) {
+    const double seconds = example::run_threads(opt.threads, [&](int thread) {
+        ray_counts& mine = counts[std::size_t(thread)];
         std::vector<lit> shaded;
         std::vector<float*> out;
-        for (int k; (k = next.fetch_add(1)) < tiles;) {
-            const int x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
+        for (example::tile t; tiles.take(t);) {
             shaded.clear(), out.clear();
-            for (int y = y0; y < std::min(y0 + tile, opt.height); ++y)
-                for (int x = x0; x < std::min(x0 + tile, opt.width); ++x) {
+            for (int y = t.y0; y < t.y1; ++y)
+                for (int x = t.x0; x < t.x1; ++x) {
                     shaded.push_back(pixel(float(x), float(y), mine));
                     out.push_back(&pixels[(std::size_t(y) * opt.width + x) * 3]);
                 }
@@ -264,12 +260,7 @@ double render(const options& opt, const std::string& name, const complexity& sce
                 out[i][0] = c.x, out[i][1] = c.y, out[i][2] = c.z;
             }
         }
-    };
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<std::thread> pool;
-    for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker, std::ref(counts[std::size_t(i)]));
-    for (std::thread& t : pool) t.join();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    });
     ray_counts total;
     for (const ray_counts& c : counts) total.add(c);
 

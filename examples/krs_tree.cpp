@@ -20,6 +20,7 @@
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
 #include "support/progress.hpp"
+#include "support/tiles.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -107,11 +108,10 @@ int main(int argc, char** argv)
     trace.validate();
     std::vector<float> pixels(std::size_t(opt.width) * opt.height * 3);
     std::vector<float> depth(std::size_t(opt.width) * opt.height, INFINITY);
-    constexpr int tile = 16;
-    const int tiles_x = (opt.width + tile - 1) / tile, tiles_y = (opt.height + tile - 1) / tile;
-    const int tiles = tiles_x * tiles_y;
     // Tiles are traced (phase 0) and then shaded (phase 1); `done` counts both for the progress bar.
-    std::atomic<int> next_trace{0}, next_shade{0}, done{0};
+    example::tile_queue trace_tiles(opt.width, opt.height), shade_tiles(opt.width, opt.height);
+    const int tiles = trace_tiles.count();
+    std::atomic<int> done{0};
     std::atomic<long long> traced_rays{0};
     std::atomic<long long> steps{0}, hits{0};
     using P = krs::packet_f;
@@ -119,17 +119,14 @@ int main(int argc, char** argv)
 
     // Rays are clipped to the tree's bounding box (a miss outside it costs no field evaluation).
     const krs::box_clip clip(krs::field_box(tree), camera.eye(), trace);
-    auto worker = [&] {
+    auto worker = [&](int) {
         // Phase 0: one ray stream per thread over the tiles it takes; a tile's rays start at its
         // prepass depth.
-        int x0 = 0, y0 = 0, x1 = 0, y1 = 0, k = -1;
+        example::tile traced;
         krs::tile_prepass pre;
         auto take_tile = [&] {
-            k = next_trace.fetch_add(1);
-            if (k >= tiles) return false;
-            x0 = (k % tiles_x) * tile, y0 = (k / tiles_x) * tile;
-            x1 = std::min(x0 + tile, opt.width), y1 = std::min(y0 + tile, opt.height);
-            pre = krs::prepass_tile(tree, camera, x0, y0, x1, y1, trace);
+            if (!trace_tiles.take(traced)) return false;
+            pre = krs::prepass_tile(tree, camera, traced.x0, traced.y0, traced.x1, traced.y1, trace);
             done.fetch_add(1);
             return true;
         };
@@ -137,7 +134,7 @@ int main(int argc, char** argv)
         auto next = [&](krs::ray_job& job) {
             while (!rays.pop(job)) {
                 if (!take_tile()) return false;
-                rays.fill(camera, x0, y0, x1, y1, pre, trace.max_distance, clip);
+                rays.fill(camera, traced.x0, traced.y0, traced.x1, traced.y1, pre, trace.max_distance, clip);
             }
             return true;
         };
@@ -154,9 +151,8 @@ int main(int argc, char** argv)
         while (traced_rays.load() < (long long)opt.width * opt.height) std::this_thread::yield();
 
         // Phase 1: shade tiles W pixels at a time.
-        for (int j; (j = next_shade.fetch_add(1)) < tiles; done.fetch_add(1)) {
-            const int sx0 = (j % tiles_x) * tile, sy0 = (j / tiles_x) * tile;
-            const int sx1 = std::min(sx0 + tile, opt.width), sy1 = std::min(sy0 + tile, opt.height);
+        for (example::tile shaded; shade_tiles.take(shaded); done.fetch_add(1)) {
+            const int sx0 = shaded.x0, sy0 = shaded.y0, sx1 = shaded.x1, sy1 = shaded.y1;
             const int count = (sx1 - sx0) * (sy1 - sy0);
             for (int first = 0; first < count; first += int(W)) {
                 alignas(64) float xs[W], ys[W], ts[W];
@@ -201,17 +197,14 @@ int main(int argc, char** argv)
         }
     };
 
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<std::thread> pool;
-    for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
     // Progress goes to stderr (stdout carries the results): a bar on a terminal, tenths in a log.
     example::progress shown(stderr, "render");
-    while (done.load() < 2 * tiles) {
-        shown.update(std::size_t(done.load()), std::size_t(2 * tiles));
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    for (std::thread& t : pool) t.join();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = example::run_threads(opt.threads, worker, [&] {
+        while (done.load() < 2 * tiles) {
+            shown.update(std::size_t(done.load()), std::size_t(2 * tiles));
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+    });
     const double rays = double(opt.width) * opt.height;
     shown.update(std::size_t(2 * tiles), std::size_t(2 * tiles));
     shown.finish();

@@ -13,8 +13,12 @@
 
 #include "fuzz_input.hpp"
 
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/log_tilings.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus_capsule.hpp"
 

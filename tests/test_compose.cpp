@@ -125,6 +125,38 @@ void check_warp(const F& f, const W& w, double radius)
     CHECK(undivided_worst > 0.0);
 }
 
+// A forest on its folded terrain and a rock-like sphere among the trees, as one union: three
+// components of different kinds whose silhouettes overlap (the union tracer tests below).
+struct union_rays_scene {
+    krs::model::forest forest;
+    krs::model::plane_sequence ground;
+    krs::sphere boulder;
+    krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u;
+    krs::trace_options o;
+};
+union_rays_scene union_scene()
+{
+    krs::model::forest_parameters fp;
+    fp.tree.levels = 6;
+    fp.tree.leaves_per_twig = 2;
+    fp.tree.leaf_radius = 0.1f;
+    fp.doublings = 3;
+    fp.ground_height.reset();
+    krs::model::forest forest = krs::model::build_forest(fp);
+    krs::model::terrain_parameters tp;
+    tp.levels = 8;
+    tp.size = 4.0f;
+    tp.slope = 0.3f;
+    krs::model::plane_sequence ground = krs::model::build_forest_ground(fp, forest, tp);
+    const krs::sphere boulder({forest.bound.center.x, 0.3f, forest.bound.center.z - 0.5f * forest.bound.radius}, 0.8f);
+    krs::trace_options o;
+    o.pixel_footprint = 2e-4f;
+    o.threshold_floor = 1e-5f;
+    o.max_steps = 4000;
+    o.max_distance = 6 * forest.bound.radius;
+    krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u(forest.sequence, ground, boulder);
+    return {std::move(forest), std::move(ground), boulder, std::move(u), o};
+}
 } // namespace
 
 TEST_CASE("union_of equals the min of its components")
@@ -185,26 +217,11 @@ TEST_CASE("the union tracer finds the nearest of the components' own first hits"
     // A forest on its folded terrain, and a rock-like sphere among the trees: three components of
     // different kinds whose silhouettes overlap. Reference: each component traced alone by
     // plain sphere tracing, the nearest first hit taken.
-    krs::model::forest_parameters fp;
-    fp.tree.levels = 6;
-    fp.tree.leaves_per_twig = 2;
-    fp.tree.leaf_radius = 0.1f;
-    fp.doublings = 3;
-    fp.ground_height.reset();
-    const krs::model::forest forest = krs::model::build_forest(fp);
-    krs::model::terrain_parameters tp;
-    tp.levels = 8;
-    tp.size = 4.0f;
-    tp.slope = 0.3f;
-    const krs::model::plane_sequence ground = krs::model::build_forest_ground(fp, forest, tp);
-    const krs::sphere boulder({forest.bound.center.x, 0.3f, forest.bound.center.z - 0.5f * forest.bound.radius}, 0.8f);
-    const krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u(forest.sequence, ground,
-                                                                                              boulder);
-    krs::trace_options o;
-    o.pixel_footprint = 2e-4f;
-    o.threshold_floor = 1e-5f;
-    o.max_steps = 4000;
-    o.max_distance = 6 * forest.bound.radius;
+    const union_rays_scene scene = union_scene();
+    const krs::model::forest& forest = scene.forest;
+    const krs::sphere& boulder = scene.boulder;
+    const auto& u = scene.u;
+    const krs::trace_options& o = scene.o;
     std::mt19937_64 g(33);
     const vec3d c(forest.bound.center);
     const double radius = forest.bound.radius;
@@ -338,37 +355,6 @@ void require_same_union_hit(const H& h, const previous_union_hit& old)
         REQUIRE(int(h.component_evaluations[i]) == old.component_evaluations[i]);
 }
 
-// The forest, its ground and a boulder of the test above, with rays aimed at each.
-struct union_rays_scene {
-    krs::model::forest forest;
-    krs::model::plane_sequence ground;
-    krs::sphere boulder;
-    krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u;
-    krs::trace_options o;
-};
-union_rays_scene union_scene()
-{
-    krs::model::forest_parameters fp;
-    fp.tree.levels = 6;
-    fp.tree.leaves_per_twig = 2;
-    fp.tree.leaf_radius = 0.1f;
-    fp.doublings = 3;
-    fp.ground_height.reset();
-    krs::model::forest forest = krs::model::build_forest(fp);
-    krs::model::terrain_parameters tp;
-    tp.levels = 8;
-    tp.size = 4.0f;
-    tp.slope = 0.3f;
-    krs::model::plane_sequence ground = krs::model::build_forest_ground(fp, forest, tp);
-    const krs::sphere boulder({forest.bound.center.x, 0.3f, forest.bound.center.z - 0.5f * forest.bound.radius}, 0.8f);
-    krs::trace_options o;
-    o.pixel_footprint = 2e-4f;
-    o.threshold_floor = 1e-5f;
-    o.max_steps = 4000;
-    o.max_distance = 6 * forest.bound.radius;
-    krs::union_of<krs::model::tree_sequence, krs::model::plane_sequence, krs::sphere> u(forest.sequence, ground, boulder);
-    return {std::move(forest), std::move(ground), boulder, std::move(u), o};
-}
 krs::ray<double> union_scene_ray(const union_rays_scene& s, std::mt19937_64& g, int k)
 {
     const vec3d c(s.forest.bound.center);

@@ -4,6 +4,7 @@
 #include "krs/core/bounds.hpp"
 #include "krs/core/glm_interop.hpp"
 #include "krs/core/validate.hpp"
+#include "support/random.hpp"
 
 #include <doctest/doctest.h>
 
@@ -34,8 +35,8 @@ TEST_CASE_TEMPLATE("packet vocabulary equals the scalar one lane by lane", P, kr
 {
     using S = krs::scalar_t<P>;
     constexpr std::size_t n = krs::lane_count<P>;
-    std::mt19937 g(1);
-    std::uniform_real_distribution<double> u(-10, 10);
+    std::mt19937_64 g(1);
+    const auto u = [](std::mt19937_64& e) { return krs_test::uniform(e, -10, 10); };
     for (int round = 0; round < 200; ++round) {
         S a[n], b[n], c[n];
         for (std::size_t i = 0; i < n; ++i) a[i] = S(u(g)), b[i] = S(u(g)), c[i] = S(u(g));
@@ -175,8 +176,8 @@ TEST_CASE("scalar vocabulary and finiteness")
 
 TEST_CASE("vec3 algebra agrees with GLM and round-trips through it")
 {
-    std::mt19937 g(2);
-    std::uniform_real_distribution<float> u(-5, 5);
+    std::mt19937_64 g(2);
+    const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -5, 5)); };
     for (int k = 0; k < 1000; ++k) {
         const glm::vec3 a{u(g), u(g), u(g)}, b{u(g), u(g), u(g)};
         const krs::vec3f ka = krs::from_glm(a), kb = krs::from_glm(b);
@@ -218,8 +219,9 @@ TEST_CASE("validation helpers name the parameter and say what was allowed")
 
 TEST_CASE("enclose holds both spheres and is tight for disjoint ones")
 {
-    std::mt19937 g(3);
-    std::uniform_real_distribution<float> u(-10, 10), r(0, 3);
+    std::mt19937_64 g(3);
+    const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -10, 10)); };
+    const auto r = [](std::mt19937_64& e) { return float(krs_test::uniform(e, 0, 3)); };
     for (int k = 0; k < 10000; ++k) {
         const krs::bounding_sphere a{{u(g), u(g), u(g)}, r(g)}, b{{u(g), u(g), u(g)}, r(g)};
         const krs::bounding_sphere e = krs::enclose(a, b);

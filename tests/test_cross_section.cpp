@@ -5,7 +5,7 @@
 // flagged where its |grad| reads above 1, the images' colours per class, and validation.
 
 #include "krs/cross_section.hpp"
-#include "krs/fractal/kifs.hpp"
+#include "krs/fractal/kifs_presets.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 

@@ -2,14 +2,19 @@
 // log-polar / log-spherical warps and the similar shell: Lipschitz bounds measured on close random
 // pairs, finiteness at the singularity and far away, packet lanes against scalars, validation.
 
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/log_tilings.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/sequence.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
 #include "support/parity.hpp"
+#include "support/random.hpp"
 
 #include <doctest/doctest.h>
 
@@ -27,15 +32,8 @@ namespace {
 using krs::vec3d;
 using krs::vec3f;
 
-double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
-vec3d random_direction(std::mt19937_64& g)
-{
-    for (;;) {
-        const vec3d v{uniform(g, -1, 1), uniform(g, -1, 1), uniform(g, -1, 1)};
-        const double l = krs::length(v);
-        if (l > 0.1 && l <= 1) return v / l;
-    }
-}
+using krs_test::random_direction;
+using krs_test::uniform;
 
 // Exact signed distance of an axis-aligned box, written out for the naive unions.
 double box_distance(const vec3d& p, const vec3d& c, const vec3d& h)

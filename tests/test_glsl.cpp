@@ -2,8 +2,10 @@
 // back as the same floats, only the kinds a scene uses are emitted, and pack() agrees with the
 // emitter's layout. (Execution on llvmpipe: test_glsl_gpu.cpp.)
 
-#include "krs/fractal/kifs.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/fold_steps.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/glsl/example_scenes.hpp"
 
 #include <doctest/doctest.h>

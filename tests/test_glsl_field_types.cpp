@@ -9,11 +9,15 @@
 // case ran: a new field type cannot ship without being run here.
 
 #include "krs/compose.hpp"
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
+#include "krs/fractal/log_tilings.hpp"
 #include "krs/fractal/orbit_trap.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/glsl/emitter.hpp"
 #include "krs/kernels/kernels.hpp"
+#include "krs/kernels/tetrahedron.hpp"
 #include "krs/sequence.hpp"
 
 #include "support/gl_context.hpp"

@@ -6,15 +6,21 @@
 // KRS_GLSL_TESTS=OFF leaves it out. A context that cannot be created FAILS the test.
 
 #include "krs/compose.hpp"
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
 #include "krs/fractal/kifs_colour.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/log_tilings.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus.hpp"
 
 #include "support/gl_context.hpp"
 #include "support/gpu_points.hpp"
+#include "support/random.hpp"
+#include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
 
@@ -46,8 +52,8 @@ using krs::vec3f;
 template <class S>
 std::vector<vec3f> sample_points(const ex::scene<S>& s, std::size_t count)
 {
-    std::mt19937 random(12345);
-    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::mt19937_64 random(12345);
+    const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -1, 1)); };
     std::vector<vec3f> points(count);
     for (vec3f& p : points)
         p = s.sample_center + vec3f{u(random) * s.sample_half.x, u(random) * s.sample_half.y, u(random) * s.sample_half.z};
@@ -612,12 +618,7 @@ TEST_CASE("glslangValidator accepts every fractal preset for every target")
     int files = 0;
     for_each_kifs_preset([&](const auto& c) { files += validate_fractal(dir, c.name, c.field); });
     // Every KIFS step kind and both taps: a rotate and a translate step in one program too.
-    using spiral_program = krs::fold_program<krs::abs_fold<krs::fold_x | krs::fold_z>, krs::rotate_step,
-                                             krs::translate_step, krs::scale_about>;
-    const krs::kifs<spiral_program, krs::sphere> spiral(
-        spiral_program({}, krs::rotate_step({0.0f, 1.0f, 0.0f}, 0.4f), krs::translate_step({0.1f, 0.0f, -0.2f}),
-                       krs::scale_about(1.5f, {1.0f, 0.5f, 0.0f})),
-        krs::sphere({0.0f, 0.0f, 0.0f}, 0.5f), 6);
+    const krs_test::spiral_kifs spiral = krs_test::spiral();
     files += validate_fractal(dir, "spiral", spiral);
     for_each_log_spherical_preset([&](const std::string& name, const char* label, const auto& f) {
         std::string id = name + "_" + label;
@@ -636,8 +637,8 @@ TEST_CASE("glslangValidator accepts every fractal preset for every target")
 TEST_CASE("GLSL KIFS presets match the C++ field on llvmpipe")
 {
     for_each_kifs_preset([&](const auto& c) {
-        std::mt19937 random(777);
-        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::mt19937_64 random(777);
+        const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -1, 1)); };
         std::vector<vec3f> points(16384);
         for (vec3f& p : points) p = {u(random) * c.sample_half.x, u(random) * c.sample_half.y, u(random) * c.sample_half.z};
         for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
@@ -775,8 +776,8 @@ TEST_CASE("GLSL KIFS colouring matches kifs_colour on llvmpipe")
         }
         krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, c.name + "_data", 0});
         const std::string fn = e.add_shading(request, c.name + "_colour");
-        std::mt19937 random(31);
-        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::mt19937_64 random(31);
+        const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -1, 1)); };
         std::vector<vec3f> points(16384);
         for (vec3f& p : points) p = {u(random) * c.sample_half.x, u(random) * c.sample_half.y, u(random) * c.sample_half.z};
         const auto gpu = gpu_colours(e.source(), fn, points, e.data());

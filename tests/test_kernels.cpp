@@ -14,6 +14,7 @@
 
 #include "krs/field.hpp"
 #include "krs/kernels/kernels.hpp"
+#include "support/random.hpp"
 
 #include <doctest/doctest.h>
 
@@ -43,7 +44,7 @@ constexpr double float_ulp = FLT_EPSILON;
 struct random_source {
     std::mt19937_64 engine;
     explicit random_source(unsigned seed) : engine(seed) {}
-    double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(engine); }
+    double uniform(double lo, double hi) { return krs_test::uniform(engine, lo, hi); }
     vec3d unit()
     {
         for (;;) {
@@ -564,6 +565,28 @@ std::vector<ring_case> ring_cases()
             ring_case({1000, 1000.5f, 999}, {0.2f, 1, 0.1f}, 1.0f, 0.3f, "ring far from the origin")};
 }
 
+
+// The regular tetrahedron's four faces, sampled uniformly (barycentric, folded into the triangle).
+// Its distance is a bound, exact only inside and over the faces, so there is no brute-force
+// reference to match: the properties are that its zero set is this surface, that it never
+// overestimates, and that its normal and bounds hold.
+struct tetrahedron_case {
+    krs::tetrahedron kernel;
+    std::string name = "regular tetrahedron";
+    std::vector<vec3d> surface(random_source& rng, int n) const
+    {
+        const vec3d v[4] = {{1, 1, 1}, {-1, -1, 1}, {1, -1, -1}, {-1, 1, -1}};
+        std::vector<vec3d> out;
+        for (int s = 0; s < n; ++s) {
+            const int skip = s % 4; // the face opposite vertex `skip`
+            const vec3d a = v[(skip + 1) % 4], b = v[(skip + 2) % 4], c = v[(skip + 3) % 4];
+            double u = rng.uniform(0, 1), w = rng.uniform(0, 1);
+            if (u + w > 1) u = 1 - u, w = 1 - w;
+            out.push_back(a + (b - a) * u + (c - a) * w);
+        }
+        return out;
+    }
+};
 } // namespace
 
 // ---- plane ----------------------------------------------------------------------------------------
@@ -974,6 +997,31 @@ TEST_CASE("torus: invalid parameters are named")
     expect_invalid([] { krs::torus({0, 0, 0}, {0, inf_f, 0}, 1.0f, 0.1f); }, "torus.axis");
 }
 
+// ---- tetrahedron ----------------------------------------------------------------------------------
+
+TEST_CASE_TEMPLATE("tetrahedron: zero set is the surface, never overestimates, normal", T, float, double)
+{
+    const tetrahedron_case c;
+    check_never_overestimates<T>(c);
+    check_normal<T>(c);
+}
+
+TEST_CASE("tetrahedron: bounds hold the surface; packet lanes equal the scalar path")
+{
+    const tetrahedron_case c;
+    check_bound(c);
+    const krs::bounding_box box = c.kernel.bound_box();
+    REQUIRE(box.is_bounded());
+    random_source rng(6);
+    int outside = 0;
+    for (const vec3d& s : c.surface(rng, 20000))
+        if (!(s.x >= box.lo.x && s.y >= box.lo.y && s.z >= box.lo.z && s.x <= box.hi.x && s.y <= box.hi.y &&
+              s.z <= box.hi.z))
+            ++outside;
+    CHECK(outside == 0);
+    check_lanes_all(c);
+}
+
 // Every kernel satisfies the kernel concept (checked when this file compiles).
 static_assert(krs::kernel<krs::torus>);
 static_assert(krs::kernel<krs::plane>);
@@ -981,3 +1029,4 @@ static_assert(krs::kernel<krs::capsule>);
 static_assert(krs::kernel<krs::box>);
 static_assert(krs::kernel<krs::torus_capsule>);
 static_assert(krs::kernel<krs::sphere>);
+static_assert(krs::kernel<krs::tetrahedron>);

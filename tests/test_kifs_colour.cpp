@@ -4,7 +4,10 @@
 // lanes equal the scalar result, and validation.
 
 #include "krs/fractal/kifs_colour.hpp"
+#include "krs/fractal/kifs_presets.hpp"
 #include "krs/kernels/sphere.hpp"
+#include "support/random.hpp"
+#include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
 
@@ -124,8 +127,8 @@ template <class Fractal>
 int check_against_brute_force(const Fractal& f, const char* name, float half, float radius)
 {
     const trap_set traps = make_traps(radius);
-    std::mt19937 g(99);
-    std::uniform_real_distribution<float> u(-half, half);
+    std::mt19937_64 g(99);
+    const auto u = [half](std::mt19937_64& e) { return float(krs_test::uniform(e, -half, half)); };
     int compared = 0, near_escape = 0, escaped = 0, stayed = 0, folded = 0;
     double worst_trap = 0;
     bool counts_equal = true;
@@ -180,12 +183,7 @@ TEST_CASE("kifs_colour traps and counts equal a brute-force walk of the fold pro
     stayed += check_against_brute_force(krs::make_koch_curve(5), "koch", 1.3f, 3.0f);
     stayed += check_against_brute_force(krs::make_square_fractal(5), "square", 3.0f, 6.0f);
     stayed += check_against_brute_force(krs::make_cube_fractal(4), "cube", 3.0f, 6.0f);
-    using spiral_program = krs::fold_program<krs::abs_fold<krs::fold_x | krs::fold_z>, krs::rotate_step,
-                                             krs::translate_step, krs::scale_about>;
-    const krs::kifs<spiral_program, krs::sphere> spiral(
-        spiral_program({}, krs::rotate_step({0.0f, 1.0f, 0.0f}, 0.4f), krs::translate_step({0.1f, 0.0f, -0.2f}),
-                       krs::scale_about(1.5f, {1.0f, 0.5f, 0.0f})),
-        krs::sphere({0.0f, 0.0f, 0.0f}, 0.5f), 6);
+    const krs_test::spiral_kifs spiral = krs_test::spiral();
     stayed += check_against_brute_force(spiral, "spiral", 2.0f, 4.0f);
     CHECK(stayed >= 500);
 }
@@ -225,8 +223,8 @@ TEST_CASE("kifs_colour packet lanes equal the scalar result")
     constexpr std::size_t W = krs::lane_count<P>;
     const krs::sierpinski_tetrahedron f = krs::make_sierpinski_tetrahedron(8);
     const trap_set traps = make_traps(4.0f);
-    std::mt19937 g(5);
-    std::uniform_real_distribution<float> u(-1.6f, 1.6f);
+    std::mt19937_64 g(5);
+    const auto u = [](std::mt19937_64& e) { return float(krs_test::uniform(e, -1.6, 1.6)); };
     int mismatches = 0;
     for (int n = 0; n < 500; ++n) {
         alignas(64) float xs[W], ys[W], zs[W];

@@ -12,6 +12,8 @@
 #include "krs/trace/tile_prepass.hpp"
 #include "krs/trace/tile_rays.hpp"
 #include "support/grid.hpp"
+#include "support/random.hpp"
+#include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
 
@@ -28,24 +30,10 @@ using krs::vec3f;
 using P = krs::packet_f;
 constexpr std::size_t lanes = krs::lane_count<P>;
 
-double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
+using krs_test::uniform;
 
-using scene = krs::sequence<krs::sphere, krs::torus_capsule, krs::plane>;
-// Trees of curved branches and leaves on a 2 x 2 grid of mirrors, over a ground plane: rays end
-// on leaves, on the ground, graze branches, or miss, so lanes finish at very different steps.
-scene grove(bool ground = true)
-{
-    scene::builder b;
-    b.kernel(krs::sphere({0.3f, 1.2f, 0.1f}, 0.25f));
-    b.kernel(krs::torus_capsule({0, 0, 0}, {0.3f, 1.0f, 0.1f}, {0.05f, 0.5f, 0.1f}, 0.06f));
-    b.mirror(krs::mirror({1, 0, 0.2f}, 0.8f));
-    b.mirror(krs::mirror({0.1f, 0, 1}, 0.9f));
-    b.kernel(krs::sphere({0, -0.5f, 0}, 0.2f));
-    b.mirror(krs::mirror({1, 0, -0.3f}, 2.5f));
-    b.mirror(krs::mirror({-0.2f, 0, 1}, 2.6f));
-    if (ground) b.kernel(krs::plane({0, 1, 0}, -0.6f));
-    return b.build();
-}
+using scene = krs_test::grove_scene;
+using krs_test::grove;
 
 krs::pinhole_camera view(int k, int width, int height)
 {

@@ -9,6 +9,7 @@
 #include "krs/model/grass.hpp"
 #include "krs/model/terrain.hpp"
 #include "krs/trace/sphere_trace.hpp"
+#include "support/random.hpp"
 
 #include <doctest/doctest.h>
 
@@ -22,7 +23,7 @@ namespace {
 using krs::vec3d;
 using krs::vec3f;
 
-double uniform(std::mt19937_64& g, double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; }
+using krs_test::uniform;
 
 // Runs `build` and requires an invalid_parameter naming `name`.
 void require_rejects(const std::function<void()>& build, const std::string& name)

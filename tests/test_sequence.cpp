@@ -12,6 +12,7 @@
 #include "support/grid.hpp"
 
 #include "support/parity.hpp"
+#include "support/random.hpp"
 #include "support/swept_samples.hpp"
 
 #include <doctest/doctest.h>
@@ -33,22 +34,9 @@ using test_sequence = krs::sequence<krs::sphere, krs::torus_capsule>;
 struct random_source {
     std::mt19937_64 engine;
     explicit random_source(std::uint64_t seed) : engine(seed) {}
-    double uniform(double lo, double hi) { return lo + (hi - lo) * double(engine() >> 11) * 0x1.0p-53; }
-    vec3d in_ball(double radius)
-    {
-        for (;;) {
-            const vec3d v{uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)};
-            if (krs::length_squared(v) <= 1.0) return v * radius;
-        }
-    }
-    vec3d direction()
-    {
-        for (;;) {
-            const vec3d v = in_ball(1.0);
-            const double l = krs::length(v);
-            if (l > 0.1) return v / l;
-        }
-    }
+    double uniform(double lo, double hi) { return krs_test::uniform(engine, lo, hi); }
+    vec3d in_ball(double radius) { return krs_test::in_ball(engine, radius); }
+    vec3d direction() { return krs_test::random_direction(engine); }
 };
 
 vec3f to_f(const vec3d& v) { return {float(v.x), float(v.y), float(v.z)}; }

@@ -6,8 +6,12 @@
 // inside and just outside, and the fuzzers' crashers as named regression tests.
 
 #include "krs/expansion.hpp"
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/log_tilings.hpp"
+#include "krs/fractal/shell_presets.hpp"
+#include "krs/fractal/similar_shell.hpp"
 #include "krs/kernels/kernels.hpp"
 #include "krs/model/coral.hpp"
 #include "krs/model/forest.hpp"

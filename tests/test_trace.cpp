@@ -10,6 +10,7 @@
 #include "krs/trace/tile_prepass.hpp"
 
 #include "support/random.hpp"
+#include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
 
@@ -35,18 +36,6 @@ double ray_sphere(const vec3d& o, const vec3d& d, const vec3d& c, double r)
 }
 
 using scene = krs::sequence<krs::sphere, krs::torus_capsule>;
-scene small_forest()
-{
-    scene::builder b;
-    b.kernel(krs::sphere({0.3f, 1.2f, 0.1f}, 0.25f));
-    b.kernel(krs::torus_capsule({0, 0, 0}, {0.3f, 1.0f, 0.1f}, {0.05f, 0.5f, 0.1f}, 0.06f));
-    b.mirror(krs::mirror({1, 0, 0.2f}, 0.8f));
-    b.mirror(krs::mirror({0.1f, 0, 1}, 0.9f));
-    b.kernel(krs::sphere({0, -0.5f, 0}, 0.2f));
-    b.mirror(krs::mirror({1, 0, -0.3f}, 2.5f));
-    b.mirror(krs::mirror({-0.2f, 0, 1}, 2.6f));
-    return b.build();
-}
 
 } // namespace
 
@@ -82,7 +71,7 @@ TEST_CASE_TEMPLATE("sphere tracing a sphere matches the closed-form intersection
 
 TEST_CASE("tracing a KRS finds the first intersection of its expansion")
 {
-    const scene s = small_forest();
+    const krs_test::grove_scene s = krs_test::grove(false);
     const auto e = krs::expand(s);
     krs::trace_options o;
     o.pixel_footprint = 2e-4f;
@@ -126,7 +115,7 @@ TEST_CASE("tracing a KRS finds the first intersection of its expansion")
 
 TEST_CASE("packet tracing gives every lane the scalar result")
 {
-    const scene s = small_forest();
+    const krs_test::grove_scene s = krs_test::grove(false);
     const krs::pinhole_camera camera({1, 3, -10}, {1, 0.3f, 1}, {0, 1, 0}, 50.0f, 64, 48);
     krs::trace_options o;
     o.pixel_footprint = camera.pixel_footprint();

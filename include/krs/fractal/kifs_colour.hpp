@@ -29,6 +29,7 @@
 //                                    //     fold_count, last_fold; }
 // with the same loop; unused trap components hold the largest float, as in C++.
 
+#include "krs/fractal/fold_steps.hpp"
 #include "krs/fractal/kifs.hpp"
 #include "krs/fractal/orbit_trap.hpp"
 

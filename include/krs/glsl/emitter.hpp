@@ -428,7 +428,7 @@ struct krs_kernel_shading {
     // Records where a sequence named `name` put its kernels' parameters (the index of each one's
     // first vec4) and each one's kind (its index in the type list), for requests that read them.
     // A KIFS program records its steps' parameters the same way under a key with spaces (no name
-    // has one), so that its distance and its colouring share them (krs/fractal/kifs.hpp).
+    // has one), so that its distance and its colouring share them (krs/fractal/fold_steps.hpp).
     void record_kernels(const std::string& name, std::vector<std::size_t> at, std::vector<std::size_t> kinds)
     {
         kernels_at_[name] = {std::move(at), std::move(kinds)};

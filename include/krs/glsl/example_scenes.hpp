@@ -3,7 +3,7 @@
 // examples: the tree of krs_tree; from krs_scenes the forest, terrain, rock, coral, grass and
 // sponge (not its mirrors figure, two clouds of spheres side by side); from krs_fractals the five
 // KIFS presets (kifs_square, kifs_cube, kifs_menger, kifs_sierpinski, kifs_koch) and the cube
-// singularity; and the recursive lotus of krs/fractal/log_spherical.hpp. Each is built with the
+// singularity; and the recursive lotus of krs/fractal/shell_presets.hpp. Each is built with the
 // model function and, where practical, the parameters of its example, with a camera and light for
 // its Shadertoy program and the region the tests sample. Where an example puts a scene on a
 // ground plane, bounds it for speed or textures it with noise, the shipped scene is the model
@@ -20,11 +20,11 @@
 // examples/glsl_export.cpp writes the files from these; a test regenerates them in memory and
 // compares bytes, so the files cannot go stale.
 
-#include "krs/fractal/kifs.hpp"
-#include "krs/fractal/log_spherical.hpp"
+#include "krs/compose/warp.hpp"
+#include "krs/fractal/kifs_presets.hpp"
+#include "krs/fractal/shell_presets.hpp"
 #include "krs/glsl/emitter.hpp"
 #include "krs/glsl/shadertoy.hpp"
-#include "krs/compose/warp.hpp"
 #include "krs/model/coral.hpp"
 #include "krs/model/forest.hpp"
 #include "krs/model/grass.hpp"

@@ -5,5 +5,6 @@
 #include "krs/kernels/capsule.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
+#include "krs/kernels/tetrahedron.hpp"
 #include "krs/kernels/torus.hpp"
 #include "krs/kernels/torus_capsule.hpp"
