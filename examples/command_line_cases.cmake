@@ -181,3 +181,10 @@ krs_case(krs_export        2 "--instances;'x.ply';.gltf or .glb"                
 krs_case(krs_export        2 "--instance-levels;'-1';[0, 64]"                       --scene sponge --instance-levels -1 --instances <out>/x.gltf)
 krs_case(krs_export        0 "--mesh;--resolution;--instances"                      --help)
 krs_case(krs_export        0 "krs_export: rock: ;triangles;-> "                      --scene rock --resolution 8 --mesh <out>/rock.obj)
+if(KRS_WITH_GLTF)
+    # Scenes with planes (the tree's ground, the rock's and terrain's facets) export as instances:
+    # their planes are meshed within the scene's box.
+    krs_case(krs_export    0 "krs_export: tree: ;instances"                          --scene tree --resolution 8 --instances <out>/tree.glb)
+    krs_case(krs_export    0 "krs_export: rock: ;instances"                          --scene rock --resolution 8 --instances <out>/rock.glb)
+    krs_case(krs_export    0 "krs_export: terrain: ;instances"                       --scene terrain --resolution 8 --instances <out>/terrain.gltf)
+endif()

@@ -17,7 +17,9 @@
 // --instances writes a sequence scene (tree, forest, terrain, rock, grass, sponge) as instanced
 // glTF (krs/mesh/instances.hpp, EXT_mesh_gpu_instancing): every kernel of the top K mirror levels
 // (default 4) meshed once and placed by its instance transforms, the levels below meshed whole
-// and placed 2^K times; more than M instances (default 1048576) is refused.
+// and placed 2^K times; more than M instances (default 1048576) is refused. Unbounded kernels (the
+// tree's ground, the rock's and terrain's facet planes) are meshed within the scene's box (the
+// sequence's own, or the box its tests sample), so every sequence scene exports.
 
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/mesh/extract.hpp"

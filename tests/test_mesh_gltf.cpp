@@ -2,9 +2,11 @@
 // (every position, normal and index equal to the mesh's), by Debian's assimp, and validated by the
 // Khronos glTF validator where it is installed (0 errors); bad input leaves no file.
 
+#include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus.hpp"
 #include "krs/kernels/torus_capsule.hpp"
+#include "krs/compose/zones.hpp"
 #include "krs/expansion.hpp"
 #include "krs/sequence.hpp"
 #include "krs/mesh/extract.hpp"
@@ -288,4 +290,76 @@ TEST_CASE("instanced glTF: the instances are the expansion's, every instanced ve
     o.max_instances = 11;
     CHECK_THROWS_WITH_AS((void)krs::instance_meshes(s, o), doctest::Contains("instance_options.max_instances: exceeded: 12 instances"),
                          krs::invalid_parameter);
+}
+
+TEST_CASE("instanced glTF: unbounded kernels (planes) are meshed within the scene's box, on the expansion's surface")
+{
+    // A tilted plane at level 0 (folded into a valley by the mirror above it), a sphere at level 1,
+    // a ground plane at the top: the tree's ground and the rock's facets in small.
+    using plane_scene = krs::sequence<krs::sphere, krs::plane>;
+    plane_scene::builder b;
+    b.kernel(krs::plane({0.3f, 1.0f, 0.1f}, -0.3f));
+    b.mirror(krs::mirror({-1, 0, 0}, 0.0f));
+    b.kernel(krs::sphere({0.5f, 0.2f, 0.3f}, 0.3f));
+    b.mirror(krs::mirror::through({0, 0, 0}, {-0.2f, 0.1f, -1.0f}));
+    b.kernel(krs::plane({0, 1, 0}, -0.6f));
+    const plane_scene s = b.build();
+    REQUIRE_FALSE(s.bound_box().is_bounded());
+    const auto e = krs::expand(s);
+    const krs::bounding_box box{{-1.5f, -1.0f, -1.2f}, {1.5f, 1.0f, 1.2f}};
+    for (std::size_t levels : {std::size_t(2), std::size_t(1), std::size_t(0)}) {
+        CAPTURE(levels);
+        krs::instance_options o;
+        o.instance_levels = levels;
+        o.mesh.resolution = 40;
+        o.mesh.box = box;
+        const krs::instanced_scene scene = krs::instance_meshes(s, o);
+        const double cell = 3.0 / 40.0;
+        double worst = -1e300;
+        std::size_t vertices = 0;
+        // The world box of the vertices lying on the ground plane (y = -0.6) and inside B: the
+        // ground's mesh covers B's extent in x and z (to a cell).
+        krs::vec3d ground_lo{1e300, 1e300, 1e300}, ground_hi{-1e300, -1e300, -1e300};
+        for (const auto& p : scene.parts)
+            for (const auto& [mesh, instances] : {std::pair{&p.mesh, &p.direct}, std::pair{&p.mirrored, &p.reflected}})
+                for (const auto& i : *instances)
+                    for (const auto& v : mesh->positions) {
+                        const krs::vec3d w = apply(i, krs::vec3d(v));
+                        worst = std::max(worst, e.distance(w));
+                        ++vertices;
+                        if (std::abs(w.y + 0.6) < 1e-4 && w.x >= box.lo.x && w.x <= box.hi.x && w.z >= box.lo.z && w.z <= box.hi.z) {
+                            ground_lo = {std::min(ground_lo.x, w.x), std::min(ground_lo.y, w.y), std::min(ground_lo.z, w.z)};
+                            ground_hi = {std::max(ground_hi.x, w.x), std::max(ground_hi.y, w.y), std::max(ground_hi.z, w.z)};
+                        }
+                    }
+        MESSAGE(scene.parts.size() << " parts, " << vertices << " instanced vertices, largest expansion distance " << worst / cell
+                                   << " cells");
+        CHECK(vertices > 1000);
+        CHECK(worst <= 1e-4 * cell);
+        CHECK(ground_lo.x <= box.lo.x + cell);
+        CHECK(ground_hi.x >= box.hi.x - cell);
+        CHECK(ground_lo.z <= box.lo.z + cell);
+        CHECK(ground_hi.z >= box.hi.z - cell);
+        const auto file = temp_path("plane_instances.glb");
+        krs::save_gltf_instances(scene, file, true);
+#ifdef KRS_GLTF_VALIDATE
+        int status = 0;
+        const std::string text = run(std::string(KRS_GLTF_VALIDATE) + " \"" + file.string() + "\"", status);
+        INFO(text);
+        CHECK(status == 0);
+        CHECK(text.find(": 0 errors") != std::string::npos);
+#endif
+        std::filesystem::remove(file);
+    }
+    // Without a box, a sequence holding a plane has none to mesh it in: refused by name.
+    krs::instance_options no_box;
+    no_box.instance_levels = 2;
+    CHECK_THROWS_WITH_AS((void)krs::instance_meshes(s, no_box), doctest::Contains("instance_options.mesh.box"), krs::invalid_parameter);
+    // A bounded<> wrapper's sphere gives the box.
+    const krs::bounded<plane_scene> wrapped(s, krs::bounding_sphere{{0, 0, 0}, 1.4f}, 0.1f);
+    krs::instance_options o;
+    o.instance_levels = 2;
+    o.mesh.resolution = 24;
+    const krs::instanced_scene scene = krs::instance_meshes(wrapped, o);
+    CHECK(scene.instance_count() == 4 + 2 + 1);
 }
