@@ -38,6 +38,14 @@
 // the gradient jumps, a step may overshoot). Where the field is the exact distance and smooth,
 // each step squares the error. The normal is the gradient there.
 //
+// Attributes. `attributes` asks for per-vertex uv (mesh_attribute::uv) and colour by kernel
+// (mesh_attribute::kernel_color), for a field with a `locate` (a sequence: the nearest kernel and
+// the point in its own space, Algorithm 1 recording where the minimum was found). Each placed
+// vertex is located (in double, from its stored float position, so a reader who locates the
+// written vertex finds the same kernel); its uv is that kernel's uv() at the kernel-space point
+// ((0, 0) for kinds without one), its colour kernel_color(index). A field without `locate` asking
+// for attributes is refused by name before any work.
+//
 // Budget. The mesh and its edge table grow as the surface is found; `memory_budget` (bytes) is
 // checked after every cell, so an over-fine resolution is refused with an invalid_parameter naming
 // mesh_options.memory_budget and what was reached, before it can take more than one cell's worth
@@ -56,6 +64,7 @@
 #include <functional>
 #include <string>
 #include <unordered_map>
+#include <variant>
 #include <vector>
 
 namespace krs {
@@ -64,10 +73,18 @@ namespace krs {
 // and an edge key (corner index * 8 + direction) in 64 bits with room to spare.
 inline constexpr int max_mesh_resolution = 1 << 16;
 
+// Per-vertex attributes mesh_options::attributes can ask for (bits, combined with |).
+namespace mesh_attribute {
+inline constexpr unsigned uv = 1;           // the kernel's (u, v) at the vertex: triangle_mesh::uvs
+inline constexpr unsigned kernel_color = 2; // kernel_color(kernel index): triangle_mesh::colors
+inline constexpr unsigned all = uv | kernel_color;
+} // namespace mesh_attribute
+
 struct mesh_options {
     int resolution = 64;         // cells along the box's longest side: [1, max_mesh_resolution]
     int projection_steps = 4;    // Newton steps onto the zero set per vertex: [0, 64]
     std::size_t memory_budget = std::size_t(1) << 30; // bytes for the mesh and its edge table: > 0
+    unsigned attributes = 0;     // mesh_attribute bits; any needs a field with locate (a sequence)
     bool sparse = true;          // skip blocks by their centre's distance; false visits every cell
     bounding_box box = bounding_box::unbounded(); // where to mesh; unbounded: the field's own box
     // Called now and then with the fraction of the grid's volume done, in [0, 1].
@@ -81,6 +98,9 @@ struct mesh_options {
         if (projection_steps < 0 || projection_steps > 64)
             throw invalid_parameter("mesh_options.projection_steps", "must be in [0, 64]", std::to_string(projection_steps));
         if (memory_budget == 0) throw invalid_parameter("mesh_options.memory_budget", "must be > 0 bytes", "0");
+        if (attributes & ~mesh_attribute::all)
+            throw invalid_parameter("mesh_options.attributes", "must combine mesh_attribute::uv (1) and kernel_color (2)",
+                                    std::to_string(attributes));
     }
 };
 
@@ -102,6 +122,10 @@ public:
     mesh_extractor(const F& f, const mesh_options& o) : f_(f), o_(o)
     {
         o.validate();
+        if (o.attributes != 0 && !locates)
+            throw invalid_parameter("mesh_options.attributes",
+                                    "needs a field that locates its kernels (a sequence: uv and kernel colours come from its kernels)",
+                                    std::to_string(o.attributes));
         // The default (every side infinite) asks for the field's box; any other is the user's,
         // checked by name (a NaN or half-infinite box is not quietly replaced).
         const bounding_box none = bounding_box::unbounded();
@@ -138,12 +162,43 @@ public:
             }
         }
         project();
+        if constexpr (locates) add_attributes();
         stats_.peak_bytes = bytes();
         if (stats) *stats = stats_;
         return std::move(mesh_);
     }
 
 private:
+    static constexpr bool locates = requires(const F& f, const vec3d& p) {
+        { f.locate(p).kernel_point } -> std::convertible_to<vec3d>;
+        f.kernels()[f.locate(p).kernel];
+    };
+
+    void add_attributes()
+    {
+        if constexpr (locates) {
+            const bool uv = (o_.attributes & mesh_attribute::uv) != 0, color = (o_.attributes & mesh_attribute::kernel_color) != 0;
+            if (uv) mesh_.uvs.resize(mesh_.positions.size());
+            if (color) mesh_.colors.resize(mesh_.positions.size());
+            for (std::size_t v = 0; v < mesh_.positions.size() && (uv || color); ++v) {
+                const auto where = f_.locate(vec3d(mesh_.positions[v]));
+                ++stats_.evaluations;
+                if (color) mesh_.colors[v] = kernel_color(where.kernel);
+                if (uv)
+                    mesh_.uvs[v] = std::visit(
+                        [&](const auto& kernel) -> std::array<float, 2> {
+                            if constexpr (requires { kernel.uv(where.kernel_point); }) {
+                                const auto t = kernel.uv(where.kernel_point);
+                                return {float(t.u), float(t.v)};
+                            } else {
+                                return {0.0f, 0.0f};
+                            }
+                        },
+                        f_.kernels()[where.kernel]);
+            }
+        }
+    }
+
     static std::string to_text(const bounding_box& b) { return detail::to_text(b.lo) + " .. " + detail::to_text(b.hi); }
     static void check_box(const bounding_box& b, const char* name)
     {
