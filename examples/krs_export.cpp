@@ -2,7 +2,7 @@
 // rasterizer (krs/mesh/extract.hpp; the writers krs/mesh/write.hpp and krs/mesh/gltf.hpp).
 //
 //   krs_export --scene NAME [--mesh FILE.ply|FILE.obj|FILE.glb|FILE.gltf] [--resolution N]
-//              [--memory-budget MB] [--projection-steps K]
+//              [--memory-budget MB] [--projection-steps K] [--uv] [--kernel-colors]
 //              [--instances FILE.gltf|FILE.glb [--instance-levels K] [--max-instances M]]
 //
 // NAME is one of the scenes of krs/glsl/example_scenes.hpp (tree, forest, terrain, rock, coral,
@@ -12,12 +12,17 @@
 // 128). Progress goes to stderr; the summary (triangles, vertices, worst vertex distance to the
 // zero set in cells, time) to stdout. .glb and .gltf need a build with tinygltf (krs::mesh_gltf).
 // A mesh over the memory budget (default 1024 MB) is refused before the file is written, and a
-// failed write leaves no file behind.
+// failed write leaves no file behind. --uv and --kernel-colors add per-vertex uv (the kernel's
+// own, at the vertex's kernel-space point) and a colour per kernel, for sequence scenes
+// (krs/mesh/extract.hpp's mesh_options::attributes). A refusal found while meshing names the
+// option typed (--memory-budget, --resolution, ...), not the library's field.
 //
 // --instances writes a sequence scene (tree, forest, terrain, rock, grass, sponge) as instanced
 // glTF (krs/mesh/instances.hpp, EXT_mesh_gpu_instancing): every kernel of the top K mirror levels
 // (default 4) meshed once and placed by its instance transforms, the levels below meshed whole
-// and placed 2^K times; more than M instances (default 1048576) is refused.
+// and placed 2^K times; more than M instances (default 1048576) is refused. Unbounded kernels (the
+// tree's ground, the rock's and terrain's facet planes) are meshed within the scene's box (the
+// sequence's own, or the box its tests sample), so every sequence scene exports.
 
 #include "krs/glsl/example_scenes.hpp"
 #include "krs/mesh/extract.hpp"
@@ -35,9 +40,43 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
+#include <utility>
 
 namespace {
+
+// A library refusal in the words of the command line: every mesh_options or instance_options field
+// this program sets from an option is named as that option (a user who typed --memory-budget 64
+// should not read about mesh_options.memory_budget), and the budget in the MB the user gave. Other
+// messages pass through unchanged.
+std::string in_option_words(const std::exception& e, long long budget_mb, std::size_t budget_bytes)
+{
+    std::string text = e.what();
+    if (!dynamic_cast<const krs::invalid_parameter*>(&e)) return text;
+    static const std::pair<const char*, const char*> names[] = {
+        {"instance_options.mesh.memory_budget", "--memory-budget"},
+        {"instance_options.mesh.resolution", "--resolution"},
+        {"instance_options.mesh.projection_steps", "--projection-steps"},
+        {"instance_options.mesh.attributes", "--uv / --kernel-colors"},
+        {"mesh_options.memory_budget", "--memory-budget"},
+        {"mesh_options.resolution", "--resolution"},
+        {"mesh_options.projection_steps", "--projection-steps"},
+        {"mesh_options.attributes", "--uv / --kernel-colors"},
+        {"instance_options.instance_levels", "--instance-levels"},
+        {"instance_options.max_instances", "--max-instances"},
+        {"at instance_levels", "at --instance-levels"},
+    };
+    for (const auto& [from, to] : names)
+        for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + std::strlen(to)))
+            text.replace(at, std::strlen(from), to);
+    const std::string bytes = "(got " + std::to_string(budget_bytes) + ")";
+    if (text.find("--memory-budget") != std::string::npos) {
+        const auto at = text.rfind(bytes);
+        if (at != std::string::npos) text.replace(at, bytes.size(), "(got " + std::to_string(budget_mb) + " MB)");
+    }
+    return text;
+}
 
 std::string lower_extension(const std::string& path)
 {
@@ -68,7 +107,13 @@ int main(int argc, char** argv)
     args.text("--instances", instances, "a sequence scene as instanced glTF (EXT_mesh_gpu_instancing): .gltf or .glb", "FILE");
     args.integer("--instance-levels", instance_levels, 0, 64, "mirror levels expanded into instances (default 4)");
     args.integer("--max-instances", max_instances, 1, 1ll << 40, "the most instances allowed (default 1048576)");
+    bool uv = false, kernel_colors = false;
+    args.app().add_flag("--uv", uv, "per-vertex uv of each vertex's kernel (sequence scenes; --mesh only)");
+    args.app().add_flag("--kernel-colors", kernel_colors, "per-vertex colour by kernel (sequence scenes; --mesh only)");
     args.parse(argc, argv);
+    const std::size_t budget_bytes = std::size_t(budget_mb) << 20;
+    const unsigned attributes = (uv ? krs::mesh_attribute::uv : 0u) | (kernel_colors ? krs::mesh_attribute::kernel_color : 0u);
+    if (attributes != 0 && mesh.empty()) args.fail("--uv, --kernel-colors: only with --mesh");
     if (mesh.empty() && instances.empty())
         args.fail("--mesh: give the file to write (FILE.ply, FILE.obj, FILE.glb or FILE.gltf), or --instances FILE.gltf");
     const std::string ext = lower_extension(mesh);
@@ -94,7 +139,7 @@ int main(int argc, char** argv)
             io.max_instances = std::size_t(max_instances);
             io.mesh.resolution = resolution;
             io.mesh.projection_steps = steps;
-            io.mesh.memory_budget = std::size_t(budget_mb) << 20;
+            io.mesh.memory_budget = budget_bytes;
             if (!krs::field_box(s.field).is_bounded()) {
                 const krs::vec3d c(s.sample_center), h(s.sample_half);
                 io.mesh.box = krs::box_around(c - h, c + h); // sets the cell size only
@@ -110,7 +155,7 @@ int main(int argc, char** argv)
                                 is.parts.size(), is.instance_count(), triangles,
                                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), instances.c_str());
                 } catch (const std::exception& e) {
-                    std::fprintf(stderr, "krs_export: %s\n", e.what());
+                    std::fprintf(stderr, "krs_export: %s\n", in_option_words(e, budget_mb, budget_bytes).c_str());
                     return;
                 }
             } else {
@@ -127,7 +172,8 @@ int main(int argc, char** argv)
         krs::mesh_options o;
         o.resolution = resolution;
         o.projection_steps = steps;
-        o.memory_budget = std::size_t(budget_mb) << 20;
+        o.memory_budget = budget_bytes;
+        o.attributes = attributes;
         if (!krs::field_box(s.field).is_bounded()) {
             const krs::vec3d c(s.sample_center), h(s.sample_half);
             o.box = krs::box_around(c - h, c + h);
@@ -159,7 +205,7 @@ int main(int argc, char** argv)
             status = 0;
         } catch (const std::exception& e) {
             bar.finish();
-            std::fprintf(stderr, "krs_export: %s\n", e.what());
+            std::fprintf(stderr, "krs_export: %s\n", in_option_words(e, budget_mb, budget_bytes).c_str());
         }
     });
     return status;

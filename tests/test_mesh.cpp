@@ -206,6 +206,35 @@ TEST_CASE("mesh: sparse extraction gives the dense grid's triangles exactly from
     check(t);
 }
 
+TEST_CASE("mesh: shared corners give the per-cell mesh vertex for vertex from fewer evaluations")
+{
+    const small_sequence seq = make_small_sequence();
+    const krs::torus t({0.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.2f}, 1.0f, 0.25f);
+    for (int resolution : {7, 40}) { // odd: 2-blocks at the grid's edge hold cells beyond it
+        CAPTURE(resolution);
+        krs::mesh_options shared, per_cell;
+        shared.resolution = per_cell.resolution = resolution;
+        per_cell.share_corners = false;
+        krs::mesh_stats ss, ps;
+        const auto check = [&](const auto& f) {
+            const krs::triangle_mesh a = krs::extract_mesh(f, shared, &ss), b = krs::extract_mesh(f, per_cell, &ps);
+            REQUIRE(a.triangle_count() > 10);
+            CHECK(a.triangles == b.triangles);
+            bool same = a.positions.size() == b.positions.size();
+            for (std::size_t v = 0; same && v < a.positions.size(); ++v)
+                same = a.positions[v].x == b.positions[v].x && a.positions[v].y == b.positions[v].y && a.positions[v].z == b.positions[v].z;
+            CHECK(same);
+            CHECK(ss.cells_meshed == ps.cells_meshed);
+            // Per surface cell 27 / 8 corner evaluations instead of 8 (projection costs the same).
+            const std::size_t corner_saving = ps.cells_meshed * 8 - ss.cells_meshed * 27 / 8;
+            MESSAGE("evaluations: shared " << ss.evaluations << ", per cell " << ps.evaluations);
+            CHECK(ps.evaluations - ss.evaluations >= corner_saving * 9 / 10);
+        };
+        check(seq);
+        check(t);
+    }
+}
+
 TEST_CASE("mesh: the triangle count grows about 4x per doubling of the resolution")
 {
     const krs::torus t({0.0f, 0.0f, 0.0f}, {0.2f, 0.3f, 1.0f}, 1.0f, 0.3f);

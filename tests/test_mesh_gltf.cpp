@@ -2,13 +2,16 @@
 // (every position, normal and index equal to the mesh's), by Debian's assimp, and validated by the
 // Khronos glTF validator where it is installed (0 errors); bad input leaves no file.
 
+#include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus.hpp"
 #include "krs/kernels/torus_capsule.hpp"
+#include "krs/compose/zones.hpp"
 #include "krs/expansion.hpp"
 #include "krs/sequence.hpp"
 #include "krs/mesh/extract.hpp"
 #include "krs/mesh/gltf.hpp"
+#include "krs/mesh/write.hpp"
 
 #include <doctest/doctest.h>
 
@@ -22,6 +25,7 @@
 #include <iterator>
 #include <limits>
 #include <set>
+#include <sstream>
 #include <utility>
 #include <vector>
 #include <string>
@@ -42,7 +46,7 @@ std::vector<T> accessor_values(const tinygltf::Model& model, int index)
     const tinygltf::Accessor& a = model.accessors.at(std::size_t(index));
     const tinygltf::BufferView& v = model.bufferViews.at(std::size_t(a.bufferView));
     const auto& data = model.buffers.at(std::size_t(v.buffer)).data;
-    const std::size_t per = a.type == TINYGLTF_TYPE_VEC4 ? 4 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 1;
+    const std::size_t per = a.type == TINYGLTF_TYPE_VEC4 ? 4 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : a.type == TINYGLTF_TYPE_VEC2 ? 2 : 1;
     std::vector<T> out(a.count * per);
     REQUIRE(v.byteOffset + a.byteOffset + out.size() * sizeof(T) <= data.size());
     std::memcpy(out.data(), data.data() + v.byteOffset + a.byteOffset, out.size() * sizeof(T));
@@ -288,4 +292,239 @@ TEST_CASE("instanced glTF: the instances are the expansion's, every instanced ve
     o.max_instances = 11;
     CHECK_THROWS_WITH_AS((void)krs::instance_meshes(s, o), doctest::Contains("instance_options.max_instances: exceeded: 12 instances"),
                          krs::invalid_parameter);
+}
+
+TEST_CASE("instanced glTF: unbounded kernels (planes) are meshed within the scene's box, on the expansion's surface")
+{
+    // A tilted plane at level 0 (folded into a valley by the mirror above it), a sphere at level 1,
+    // a ground plane at the top: the tree's ground and the rock's facets in small.
+    using plane_scene = krs::sequence<krs::sphere, krs::plane>;
+    plane_scene::builder b;
+    b.kernel(krs::plane({0.3f, 1.0f, 0.1f}, -0.3f));
+    b.mirror(krs::mirror({-1, 0, 0}, 0.0f));
+    b.kernel(krs::sphere({0.5f, 0.2f, 0.3f}, 0.3f));
+    b.mirror(krs::mirror::through({0, 0, 0}, {-0.2f, 0.1f, -1.0f}));
+    b.kernel(krs::plane({0, 1, 0}, -0.6f));
+    const plane_scene s = b.build();
+    REQUIRE_FALSE(s.bound_box().is_bounded());
+    const auto e = krs::expand(s);
+    const krs::bounding_box box{{-1.5f, -1.0f, -1.2f}, {1.5f, 1.0f, 1.2f}};
+    for (std::size_t levels : {std::size_t(2), std::size_t(1), std::size_t(0)}) {
+        CAPTURE(levels);
+        krs::instance_options o;
+        o.instance_levels = levels;
+        o.mesh.resolution = 40;
+        o.mesh.box = box;
+        const krs::instanced_scene scene = krs::instance_meshes(s, o);
+        const double cell = 3.0 / 40.0;
+        double worst = -1e300;
+        std::size_t vertices = 0;
+        // The world box of the vertices lying on the ground plane (y = -0.6) and inside B: the
+        // ground's mesh covers B's extent in x and z (to a cell).
+        krs::vec3d ground_lo{1e300, 1e300, 1e300}, ground_hi{-1e300, -1e300, -1e300};
+        for (const auto& p : scene.parts)
+            for (const auto& [mesh, instances] : {std::pair{&p.mesh, &p.direct}, std::pair{&p.mirrored, &p.reflected}})
+                for (const auto& i : *instances)
+                    for (const auto& v : mesh->positions) {
+                        const krs::vec3d w = apply(i, krs::vec3d(v));
+                        worst = std::max(worst, e.distance(w));
+                        ++vertices;
+                        if (std::abs(w.y + 0.6) < 1e-4 && w.x >= box.lo.x && w.x <= box.hi.x && w.z >= box.lo.z && w.z <= box.hi.z) {
+                            ground_lo = {std::min(ground_lo.x, w.x), std::min(ground_lo.y, w.y), std::min(ground_lo.z, w.z)};
+                            ground_hi = {std::max(ground_hi.x, w.x), std::max(ground_hi.y, w.y), std::max(ground_hi.z, w.z)};
+                        }
+                    }
+        MESSAGE(scene.parts.size() << " parts, " << vertices << " instanced vertices, largest expansion distance " << worst / cell
+                                   << " cells");
+        CHECK(vertices > 1000);
+        CHECK(worst <= 1e-4 * cell);
+        CHECK(ground_lo.x <= box.lo.x + cell);
+        CHECK(ground_hi.x >= box.hi.x - cell);
+        CHECK(ground_lo.z <= box.lo.z + cell);
+        CHECK(ground_hi.z >= box.hi.z - cell);
+        const auto file = temp_path("plane_instances.glb");
+        krs::save_gltf_instances(scene, file, true);
+#ifdef KRS_GLTF_VALIDATE
+        int status = 0;
+        const std::string text = run(std::string(KRS_GLTF_VALIDATE) + " \"" + file.string() + "\"", status);
+        INFO(text);
+        CHECK(status == 0);
+        CHECK(text.find(": 0 errors") != std::string::npos);
+#endif
+        std::filesystem::remove(file);
+    }
+    // Without a box, a sequence holding a plane has none to mesh it in: refused by name.
+    krs::instance_options no_box;
+    no_box.instance_levels = 2;
+    CHECK_THROWS_WITH_AS((void)krs::instance_meshes(s, no_box), doctest::Contains("instance_options.mesh.box"), krs::invalid_parameter);
+    // A bounded<> wrapper's sphere gives the box.
+    const krs::bounded<plane_scene> wrapped(s, krs::bounding_sphere{{0, 0, 0}, 1.4f}, 0.1f);
+    krs::instance_options o;
+    o.instance_levels = 2;
+    o.mesh.resolution = 24;
+    const krs::instanced_scene scene = krs::instance_meshes(wrapped, o);
+    CHECK(scene.instance_count() == 4 + 2 + 1);
+}
+
+TEST_CASE("mesh attributes: each vertex's uv is its kernel's uv and its colour its kernel's; PLY, OBJ, glTF carry them")
+{
+    const instanced_sequence s = make_instanced_sequence();
+    krs::mesh_options o;
+    o.resolution = 40;
+    o.attributes = krs::mesh_attribute::uv | krs::mesh_attribute::kernel_color;
+    const krs::triangle_mesh m = krs::extract_mesh(s, o);
+    REQUIRE(m.uvs.size() == m.vertex_count());
+    REQUIRE(m.colors.size() == m.vertex_count());
+    // Independently, in double: Algorithm 1's walk written out (from the top mirror down, a point
+    // on a mirror's positive side is reflected through it, by the reflection's isometry; the nearest
+    // kernel over all levels, in the space of its level), and the kernel's own uv there. Vertices
+    // within 1e-6 of a mirror or with two kernels within 1e-5 of each other (a crease) may go either
+    // way and are skipped.
+    const std::size_t n = s.mirror_count();
+    std::size_t checked = 0, bad_uv = 0, bad_color = 0;
+    double worst_uv = 0;
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+        krs::vec3d q(m.positions[v]);
+        double best = 1e300, second = 1e300, nearest_mirror = 1e300;
+        std::uint32_t nearest = 0;
+        krs::vec3d nearest_point{};
+        for (std::size_t level = n + 1; level-- > 0;) {
+            if (level < n) {
+                const auto& mi = s.mirrors()[level];
+                const double side = krs::dot(krs::vec3d(mi.normal), q) - double(mi.offset);
+                nearest_mirror = std::min(nearest_mirror, std::abs(side));
+                if (side > 0) q = krs::isometry::reflection(mi).apply(q);
+            }
+            for (std::uint32_t k = s.level_begin(level); k < s.level_begin(level + 1); ++k) {
+                const double d = std::visit([&](const auto& kern) { return double(kern.distance(q)); }, s.kernels()[k]);
+                if (d < best) second = best, best = d, nearest = k, nearest_point = q;
+                else if (d < second) second = d;
+            }
+        }
+        if (nearest_mirror < 1e-6 || second - best < 1e-5) continue;
+        const krs::vec3d q0 = nearest_point;
+        ++checked;
+        const auto [u, w] = std::visit(
+            [&](const auto& k) -> std::array<double, 2> {
+                if constexpr (requires { k.uv(q0); }) {
+                    const auto t = k.uv(q0);
+                    return {double(t.u), double(t.v)};
+                } else {
+                    return {0.0, 0.0};
+                }
+            },
+            s.kernels()[nearest]);
+        const double du = std::abs(u - m.uvs[v][0]), dv0 = std::abs(w - m.uvs[v][1]), dv = std::min(dv0, 1 - dv0); // v wraps
+        worst_uv = std::max({worst_uv, du, dv});
+        bad_uv += du > 1e-4 || dv > 1e-4;
+        const krs::vec3f c = krs::kernel_color(nearest);
+        bad_color += m.colors[v].x != c.x || m.colors[v].y != c.y || m.colors[v].z != c.z;
+    }
+    MESSAGE(checked << " of " << m.vertex_count() << " vertices checked; largest uv difference " << worst_uv);
+    CHECK(checked > m.vertex_count() * 9 / 10);
+    CHECK(bad_uv == 0);
+    CHECK(bad_color == 0);
+    // Both kernels' colours appear (the sphere's uv is (0, 0): it has none).
+    CHECK(std::count_if(m.colors.begin(), m.colors.end(), [&](const krs::vec3f& c) { return c.x == krs::kernel_color(0).x; }) > 0);
+    CHECK(std::count_if(m.colors.begin(), m.colors.end(), [&](const krs::vec3f& c) { return c.x == krs::kernel_color(1).x; }) > 0);
+
+    // glTF: tinygltf reads TEXCOORD_0 and COLOR_0 back exactly; the validator accepts the file.
+    for (const bool binary : {true, false}) {
+        const auto file = temp_path(binary ? "attributes.glb" : "attributes.gltf");
+        if (binary) krs::save_glb(m, file);
+        else krs::save_gltf(m, file);
+        tinygltf::Model model;
+        tinygltf::TinyGLTF loader;
+        std::string err, warn;
+        REQUIRE((binary ? loader.LoadBinaryFromFile(&model, &err, &warn, file.string())
+                        : loader.LoadASCIIFromFile(&model, &err, &warn, file.string())));
+        const tinygltf::Primitive& prim = model.meshes.at(0).primitives.at(0);
+        const int uv_accessor = prim.attributes.at("TEXCOORD_0"), color_accessor = prim.attributes.at("COLOR_0");
+        CHECK(model.accessors.at(std::size_t(uv_accessor)).type == TINYGLTF_TYPE_VEC2);
+        const auto uvs = accessor_values<float>(model, uv_accessor);
+        const auto colors = accessor_values<float>(model, color_accessor);
+        REQUIRE(uvs.size() == 2 * m.vertex_count());
+        REQUIRE(colors.size() == 3 * m.vertex_count());
+        std::size_t bad = 0;
+        for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+            bad += uvs[2 * v] != m.uvs[v][0] || uvs[2 * v + 1] != m.uvs[v][1];
+            bad += colors[3 * v] != m.colors[v].x || colors[3 * v + 1] != m.colors[v].y || colors[3 * v + 2] != m.colors[v].z;
+        }
+        CHECK(bad == 0);
+#ifdef KRS_GLTF_VALIDATE
+        int status = 0;
+        const std::string text = run(std::string(KRS_GLTF_VALIDATE) + " \"" + file.string() + "\"", status);
+        INFO(text);
+        CHECK(status == 0);
+        CHECK(text.find(": 0 errors") != std::string::npos);
+#endif
+        std::filesystem::remove(file);
+    }
+    // PLY and OBJ: assimp reads one texture-coordinate channel and one colour channel from each.
+    const auto ply = temp_path("attributes.ply"), obj = temp_path("attributes.obj");
+    krs::save_ply(m, ply);
+    krs::save_obj(m, obj);
+    {
+        // The OBJ's "vt" lines are the uvs, to 9 significant digits: read back as the same floats.
+        std::ifstream in(obj);
+        std::string word;
+        std::size_t read = 0, bad = 0;
+        while (in >> word)
+            if (word == "vt") {
+                float a = 0, b = 0;
+                in >> a >> b;
+                bad += read >= m.vertex_count() || a != m.uvs[read][0] || b != m.uvs[read][1];
+                ++read;
+            }
+        CHECK(read == m.vertex_count());
+        CHECK(bad == 0);
+    }
+#ifdef KRS_ASSIMP
+    // assimp's own dump (its XML form) of each file: a texture-coordinate set and a colour set with
+    // one entry per vertex it made, each that of the mesh's vertex it came from (the PLY's in the
+    // file's order; the OBJ's unrolled face by face, corner by corner). PLY colours are bytes.
+    for (const auto& file : {ply, obj}) {
+        CAPTURE(file.string());
+        const bool is_ply = file.extension() == ".ply";
+        const auto xml = temp_path("dump.xml");
+        int status = 0;
+        const std::string log = run(std::string(KRS_ASSIMP) + " dump \"" + file.string() + "\" \"" + xml.string() + "\"", status);
+        INFO(log);
+        REQUIRE(status == 0);
+        std::ifstream in(xml);
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        std::filesystem::remove(xml);
+        const auto values = [&](const std::string& tag, std::size_t per) {
+            const auto at = text.find("<" + tag + " num=\"");
+            REQUIRE(at != std::string::npos);
+            const std::size_t count = std::stoul(text.substr(at + tag.size() + 7));
+            std::istringstream numbers(text.substr(text.find('>', at) + 1));
+            std::vector<double> out(count * per);
+            for (double& x : out) numbers >> x;
+            return out;
+        };
+        const auto uv = values("TextureCoords", 2), rgba = values("Colors", 4);
+        const std::size_t made = uv.size() / 2;
+        REQUIRE(made == (is_ply ? m.vertex_count() : 3 * m.triangle_count()));
+        REQUIRE(rgba.size() == 4 * made);
+        std::size_t bad = 0;
+        for (std::size_t i = 0; i < made; ++i) {
+            const std::size_t v = is_ply ? i : m.triangles[i / 3][i % 3];
+            bad += std::abs(uv[2 * i] - m.uvs[v][0]) > 1e-6 || std::abs(uv[2 * i + 1] - m.uvs[v][1]) > 1e-6;
+            const double tolerance = is_ply ? 0.5 / 255 + 1e-6 : 1e-6;
+            bad += std::abs(rgba[4 * i] - m.colors[v].x) > tolerance || std::abs(rgba[4 * i + 1] - m.colors[v].y) > tolerance ||
+                   std::abs(rgba[4 * i + 2] - m.colors[v].z) > tolerance;
+        }
+        CHECK(bad == 0);
+    }
+#else
+    MESSAGE("assimp not found at configure time: the PLY and OBJ attributes were not read by assimp");
+#endif
+    std::filesystem::remove(ply);
+    std::filesystem::remove(obj);
+    // A field that cannot locate its kernels is refused by name.
+    const krs::torus t({0, 0, 0}, {0, 0, 1}, 1.0f, 0.3f);
+    CHECK_THROWS_WITH_AS((void)krs::extract_mesh(t, o), doctest::Contains("mesh_options.attributes"), krs::invalid_parameter);
+    o.attributes = 4;
+    CHECK_THROWS_WITH_AS((void)krs::extract_mesh(s, o), doctest::Contains("mesh_options.attributes"), krs::invalid_parameter);
 }

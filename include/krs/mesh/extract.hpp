@@ -28,6 +28,12 @@
 // case, unlike marching cubes' face saddles). Orientation is decided exactly, in integers, from
 // the edges' midpoints: the triangle's normal points from the inside corners to the outside ones.
 //
+// Shared corners. Each corner of the grid belongs to up to 8 cells; evaluated per cell, a surface
+// cell costs 8 evaluations where its share is about 1. A block of 2 x 2 x 2 cells that is not
+// skipped has every cell meshed, so it evaluates its 27 corners once (64 per cell before) and
+// meshes its cells from that table in the same order as before: the same numbers at the same
+// points give the same mesh, vertex for vertex (tests/test_mesh.cpp, bench_mesh).
+//
 // Vertices. A vertex is first placed on the zero of d along its edge (the corners' distances
 // have opposite signs and d is continuous, so the edge holds one: bracketed regula falsi, which
 // works for any field, exact distance or bound, creased or smooth). It then takes
@@ -37,6 +43,14 @@
 // each kept only if it lowers |d| and stays within h of the edge's point (near a crease, where
 // the gradient jumps, a step may overshoot). Where the field is the exact distance and smooth,
 // each step squares the error. The normal is the gradient there.
+//
+// Attributes. `attributes` asks for per-vertex uv (mesh_attribute::uv) and colour by kernel
+// (mesh_attribute::kernel_color), for a field with a `locate` (a sequence: the nearest kernel and
+// the point in its own space, Algorithm 1 recording where the minimum was found). Each placed
+// vertex is located (in double, from its stored float position, so a reader who locates the
+// written vertex finds the same kernel); its uv is that kernel's uv() at the kernel-space point
+// ((0, 0) for kinds without one), its colour kernel_color(index). A field without `locate` asking
+// for attributes is refused by name before any work.
 //
 // Budget. The mesh and its edge table grow as the surface is found; `memory_budget` (bytes) is
 // checked after every cell, so an over-fine resolution is refused with an invalid_parameter naming
@@ -56,6 +70,7 @@
 #include <functional>
 #include <string>
 #include <unordered_map>
+#include <variant>
 #include <vector>
 
 namespace krs {
@@ -64,11 +79,21 @@ namespace krs {
 // and an edge key (corner index * 8 + direction) in 64 bits with room to spare.
 inline constexpr int max_mesh_resolution = 1 << 16;
 
+// Per-vertex attributes mesh_options::attributes can ask for (bits, combined with |).
+namespace mesh_attribute {
+inline constexpr unsigned uv = 1;           // the kernel's (u, v) at the vertex: triangle_mesh::uvs
+inline constexpr unsigned kernel_color = 2; // kernel_color(kernel index): triangle_mesh::colors
+inline constexpr unsigned all = uv | kernel_color;
+} // namespace mesh_attribute
+
 struct mesh_options {
     int resolution = 64;         // cells along the box's longest side: [1, max_mesh_resolution]
     int projection_steps = 4;    // Newton steps onto the zero set per vertex: [0, 64]
     std::size_t memory_budget = std::size_t(1) << 30; // bytes for the mesh and its edge table: > 0
+    unsigned attributes = 0;     // mesh_attribute bits; any needs a field with locate (a sequence)
     bool sparse = true;          // skip blocks by their centre's distance; false visits every cell
+    bool share_corners = true;   // sparse: a block of 2^3 cells evaluates its 27 corners once (false:
+                                 // each cell its own 8, as before; kept for bench_mesh's comparison)
     bounding_box box = bounding_box::unbounded(); // where to mesh; unbounded: the field's own box
     // Called now and then with the fraction of the grid's volume done, in [0, 1].
     std::function<void(double)> progress;
@@ -81,6 +106,9 @@ struct mesh_options {
         if (projection_steps < 0 || projection_steps > 64)
             throw invalid_parameter("mesh_options.projection_steps", "must be in [0, 64]", std::to_string(projection_steps));
         if (memory_budget == 0) throw invalid_parameter("mesh_options.memory_budget", "must be > 0 bytes", "0");
+        if (attributes & ~mesh_attribute::all)
+            throw invalid_parameter("mesh_options.attributes", "must combine mesh_attribute::uv (1) and kernel_color (2)",
+                                    std::to_string(attributes));
     }
 };
 
@@ -102,6 +130,10 @@ public:
     mesh_extractor(const F& f, const mesh_options& o) : f_(f), o_(o)
     {
         o.validate();
+        if (o.attributes != 0 && !locates)
+            throw invalid_parameter("mesh_options.attributes",
+                                    "needs a field that locates its kernels (a sequence: uv and kernel colours come from its kernels)",
+                                    std::to_string(o.attributes));
         // The default (every side infinite) asks for the field's box; any other is the user's,
         // checked by name (a NaN or half-infinite box is not quietly replaced).
         const bounding_box none = bounding_box::unbounded();
@@ -138,12 +170,43 @@ public:
             }
         }
         project();
+        if constexpr (locates) add_attributes();
         stats_.peak_bytes = bytes();
         if (stats) *stats = stats_;
         return std::move(mesh_);
     }
 
 private:
+    static constexpr bool locates = requires(const F& f, const vec3d& p) {
+        { f.locate(p).kernel_point } -> std::convertible_to<vec3d>;
+        f.kernels()[f.locate(p).kernel];
+    };
+
+    void add_attributes()
+    {
+        if constexpr (locates) {
+            const bool uv = (o_.attributes & mesh_attribute::uv) != 0, color = (o_.attributes & mesh_attribute::kernel_color) != 0;
+            if (uv) mesh_.uvs.resize(mesh_.positions.size());
+            if (color) mesh_.colors.resize(mesh_.positions.size());
+            for (std::size_t v = 0; v < mesh_.positions.size() && (uv || color); ++v) {
+                const auto where = f_.locate(vec3d(mesh_.positions[v]));
+                ++stats_.evaluations;
+                if (color) mesh_.colors[v] = kernel_color(where.kernel);
+                if (uv)
+                    mesh_.uvs[v] = std::visit(
+                        [&](const auto& kernel) -> std::array<float, 2> {
+                            if constexpr (requires { kernel.uv(where.kernel_point); }) {
+                                const auto t = kernel.uv(where.kernel_point);
+                                return {float(t.u), float(t.v)};
+                            } else {
+                                return {0.0f, 0.0f};
+                            }
+                        },
+                        f_.kernels()[where.kernel]);
+            }
+        }
+    }
+
     static std::string to_text(const bounding_box& b) { return detail::to_text(b.lo) + " .. " + detail::to_text(b.hi); }
     static void check_box(const bounding_box& b, const char* name)
     {
@@ -186,6 +249,29 @@ private:
         }
         if (size == 1) {
             cell(i, j, k);
+        } else if (size == 2 && o_.share_corners) {
+            ++stats_.blocks_visited;
+            const vec3d c = corner_point(i + 1, j + 1, k + 1);
+            const double reach = h_ * std::sqrt(3.0);
+            if (std::abs(eval(c)) > reach * (1.0 + 1e-5)) {
+                done_ += 8;
+            } else {
+                std::array<double, 27> corner; // (x, y, z) in {0, 1, 2}^3 at x + 3 y + 9 z
+                for (int z = 0; z < 3; ++z)
+                    for (int y = 0; y < 3; ++y)
+                        for (int x = 0; x < 3; ++x) corner[std::size_t(x + 3 * y + 9 * z)] = eval(corner_point(i + x, j + y, k + z));
+                for (int child = 0; child < 8; ++child) { // visit()'s order of the eight children
+                    const int cx = child & 1, cy = child >> 1 & 1, cz = child >> 2 & 1;
+                    if (i + cx >= n_[0] || j + cy >= n_[1] || k + cz >= n_[2]) {
+                        done_ += 1;
+                        continue;
+                    }
+                    std::array<double, 8> d;
+                    for (int b = 0; b < 8; ++b)
+                        d[std::size_t(b)] = corner[std::size_t((cx + (b & 1)) + 3 * (cy + (b >> 1 & 1)) + 9 * (cz + (b >> 2 & 1)))];
+                    mesh_cell(i + cx, j + cy, k + cz, d);
+                }
+            }
         } else {
             ++stats_.blocks_visited;
             const double half = 0.5 * double(size) * h_;
@@ -210,15 +296,20 @@ private:
 
     void cell(std::int64_t i, std::int64_t j, std::int64_t k)
     {
-        if (o_.sparse) done_ += 1;
-        ++stats_.cells_meshed;
         // Corner c (bits x = 1, y = 2, z = 4).
         std::array<double, 8> d;
+        for (int c = 0; c < 8; ++c) d[std::size_t(c)] = eval(corner_point(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1)));
+        mesh_cell(i, j, k, d);
+    }
+
+    // The triangles of cell (i, j, k) from its corners' distances d (corner c: bits x = 1, y = 2, z = 4).
+    void mesh_cell(std::int64_t i, std::int64_t j, std::int64_t k, const std::array<double, 8>& d)
+    {
+        if (o_.sparse) done_ += 1;
+        ++stats_.cells_meshed;
         int inside = 0;
-        for (int c = 0; c < 8; ++c) {
-            d[c] = eval(corner_point(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1)));
-            if (d[c] < 0) inside |= 1 << c;
-        }
+        for (int c = 0; c < 8; ++c)
+            if (d[std::size_t(c)] < 0) inside |= 1 << c;
         if (inside == 0 || inside == 0xff) return;
         static constexpr int axes[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
         for (const auto& perm : axes) {

@@ -5,7 +5,9 @@
 // of krs that need it: krs::krs stays dependency-free (tests/test_dependency_free.cpp).
 //
 // The model: one buffer holding positions (float VEC3, with the min and max glTF requires for
-// POSITION), normals (float VEC3) and indices (uint32 SCALAR), each in its own buffer view; one
+// POSITION), normals (float VEC3), where the mesh has them uvs (TEXCOORD_0, float VEC2) and colours
+// (COLOR_0, float VEC3, linear RGB as glTF defines it) and indices (uint32 SCALAR), each in its own
+// buffer view; one
 // mesh with one triangle primitive (counter-clockwise front faces, as glTF's default); one node;
 // one scene. No material: viewers draw glTF's default (white, metallic 1, rough 1). An instanced
 // scene (krs/mesh/instances.hpp) is written with EXT_mesh_gpu_instancing (see
@@ -106,6 +108,18 @@ inline int add_gltf_mesh(tinygltf::Model& model, const triangle_mesh& m, const s
         primitive.attributes["NORMAL"] =
             add_accessor(model, add_buffer_view(model, normals.data(), normals.size(), TINYGLTF_TARGET_ARRAY_BUFFER),
                          TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, m.normals.size());
+    }
+    if (!m.uvs.empty()) {
+        const auto uvs = little_endian_bytes(m.uvs.data(), m.uvs.size());
+        primitive.attributes["TEXCOORD_0"] =
+            add_accessor(model, add_buffer_view(model, uvs.data(), uvs.size(), TINYGLTF_TARGET_ARRAY_BUFFER),
+                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, m.uvs.size());
+    }
+    if (!m.colors.empty()) {
+        const auto colors = little_endian_bytes(m.colors.data(), m.colors.size());
+        primitive.attributes["COLOR_0"] =
+            add_accessor(model, add_buffer_view(model, colors.data(), colors.size(), TINYGLTF_TARGET_ARRAY_BUFFER),
+                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, m.colors.size());
     }
     const auto indices = little_endian_bytes(m.triangles.data(), m.triangles.size());
     primitive.indices = add_accessor(model, add_buffer_view(model, indices.data(), indices.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),

@@ -23,13 +23,26 @@
 // All parts are meshed with one cell size: the whole sequence's box's longest side divided by
 // `mesh.resolution`, so a kernel is as fine as it would be in a mesh of the whole. The number of
 // instances is checked against `max_instances` before anything is meshed.
+//
+// Unbounded parts. A part whose box is infinite (a plane kernel: a tree's ground, the facets of a
+// rock or a terrain, or the levels below that hold one) is meshed within the scene's box B:
+// `mesh.box` when given, else the sequence's own box (a bounded<> wrapper's: the box of its
+// sphere). Its instances differ in where they carry the part, so the part is meshed over the box
+// of B taken back through every one of its instance isometries (the box of the 8 corners of B
+// under each inverse): every instance then covers all of B, and beyond it only surface that the
+// same instance also has (the mesh is of the part's own zero set; outside B it is clipped at the
+// grid's edge, at most two cells past that box, and is left open there). A part at the top level
+// has the one identity instance and is meshed over B itself.
 
+#include "krs/compose/zones.hpp" // bounded
 #include "krs/expansion.hpp"
 #include "krs/mesh/extract.hpp"
 #include "krs/mesh/mesh.hpp"
 
 #include <array>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -91,6 +104,23 @@ inline void add_instance(instanced_part& part, const isometry& w)
     }
 }
 
+// The box in a part's own space whose image under each of `transforms` holds `box`: the box of
+// box's 8 corners taken back through every inverse (an isometry maps a box's hull to the hull of
+// its image, so the preimage of the box lies in the hull of the preimages of its corners).
+inline bounding_box preimage_box(const bounding_box& box, const std::vector<isometry>& transforms)
+{
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+    const vec3d a(box.lo), b(box.hi);
+    for (const isometry& w : transforms)
+        for (int corner = 0; corner < 8; ++corner) {
+            const vec3d p = w.apply_inverse(vec3d{corner & 1 ? b.x : a.x, corner & 2 ? b.y : a.y, corner & 4 ? b.z : a.z});
+            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        }
+    return box_around(lo, hi);
+}
+
 } // namespace detail
 
 template <mirror_kind Mirror, kernel... Kinds>
@@ -144,10 +174,7 @@ instanced_scene instance_meshes(const basic_sequence<Mirror, Kinds...>& s, const
                 [&](const auto& kern) {
                     mesh_options mo = o.mesh;
                     mo.box = kern.bound_box();
-                    if (!mo.box.is_bounded())
-                        throw invalid_parameter("instance_meshes kernel " + std::to_string(i),
-                                                "must be bounded to be meshed alone (an unbounded kernel, such as a plane, can "
-                                                "only be meshed below the instanced levels: lower instance_options.instance_levels)");
+                    if (!mo.box.is_bounded()) mo.box = detail::preimage_box(whole, transforms); // a plane: within B
                     mo.resolution = resolution_for(mo.box);
                     part.mesh = extract_mesh(kern, mo);
                 },
@@ -168,9 +195,7 @@ instanced_scene instance_meshes(const basic_sequence<Mirror, Kinds...>& s, const
         part.name = "levels below " + std::to_string(split);
         mesh_options mo = o.mesh;
         mo.box = sub.bound_box();
-        if (!mo.box.is_bounded())
-            throw invalid_parameter("instance_meshes levels below " + std::to_string(split),
-                                    "must be bounded to be meshed (they hold an unbounded kernel, such as a plane)");
+        if (!mo.box.is_bounded()) mo.box = detail::preimage_box(whole, transforms); // they hold a plane: within B
         mo.resolution = resolution_for(mo.box);
         part.mesh = extract_mesh(sub, mo);
         for (const isometry& w : transforms) detail::add_instance(part, w);
@@ -179,6 +204,16 @@ instanced_scene instance_meshes(const basic_sequence<Mirror, Kinds...>& s, const
     for (auto& p : out.parts)
         if (!p.reflected.empty()) p.mirrored = detail::mirrored_through_x(p.mesh);
     return out;
+}
+
+// A bounded<> sequence (krs/compose/zones.hpp): its geometry is the sequence's within the wrapper's
+// sphere, so without a mesh.box the box of that sphere is the scene's box B (see above).
+template <mirror_kind Mirror, kernel... Kinds>
+instanced_scene instance_meshes(const bounded<basic_sequence<Mirror, Kinds...>>& b, const instance_options& o = {})
+{
+    instance_options inner = o;
+    if (!inner.mesh.box.is_bounded()) inner.mesh.box = intersect(box_around(b.bound()), b.base().bound_box());
+    return instance_meshes(b.base(), inner);
 }
 
 } // namespace krs

@@ -4,11 +4,17 @@
 // a closed surface is visibly closed: every edge is shared by exactly two triangles, once in each
 // direction (the triangles are counter-clockwise seen from outside, the side where the field is
 // positive), which `edge_use` counts for tests and users alike.
+//
+// Optional per-vertex attributes (mesh_options::attributes, krs/mesh/extract.hpp), each empty or
+// one per position: `uvs`, the (u, v) of the vertex's kernel at its kernel-space point (a
+// sequence's `locate`; (0, 0) for a kernel kind without a uv), and `colors`, linear RGB in [0, 1]
+// from the kernel's index (kernel_color), so that a viewer tells the kernels apart.
 
 #include "krs/core/vec3.hpp"
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -21,15 +27,29 @@ struct triangle_mesh {
     std::vector<vec3f> positions;
     std::vector<vec3f> normals; // unit, outward (the field's gradient), one per position
     std::vector<std::array<std::uint32_t, 3>> triangles; // counter-clockwise seen from outside
+    std::vector<std::array<float, 2>> uvs; // per vertex (u, v), or empty
+    std::vector<vec3f> colors;              // per vertex linear RGB in [0, 1], or empty
 
     std::size_t vertex_count() const { return positions.size(); }
     std::size_t triangle_count() const { return triangles.size(); }
     // What the mesh occupies (its arrays' contents; not the allocator's slack).
     std::size_t bytes() const
     {
-        return positions.size() * sizeof(vec3f) + normals.size() * sizeof(vec3f) + triangles.size() * sizeof(triangles[0]);
+        return positions.size() * sizeof(vec3f) + normals.size() * sizeof(vec3f) + triangles.size() * sizeof(triangles[0]) +
+               uvs.size() * sizeof(uvs[0]) + colors.size() * sizeof(vec3f);
     }
 };
+
+// A colour per kernel index: hues a golden-ratio turn apart (index * 0.618... mod 1), so that
+// neighbouring indices, often neighbouring kernels, differ most; saturation 0.6, value 0.9 (HSV).
+inline vec3f kernel_color(std::uint32_t kernel)
+{
+    const double hue = 6.0 * (double(kernel) * 0.6180339887498949 - std::floor(double(kernel) * 0.6180339887498949));
+    const int sector = std::min(int(hue), 5);
+    const double f = hue - sector, v = 0.9, p = v * (1 - 0.6), q = v * (1 - 0.6 * f), t = v * (1 - 0.6 * (1 - f));
+    const double rgb[6][3] = {{v, t, p}, {q, v, p}, {p, v, t}, {p, q, v}, {t, p, v}, {v, p, q}};
+    return {float(rgb[sector][0]), float(rgb[sector][1]), float(rgb[sector][2])};
+}
 
 // How the edges of a mesh are shared: a closed manifold surface with consistent orientation has
 // every undirected edge used by exactly two triangles, in opposite directions.

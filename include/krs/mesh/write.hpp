@@ -11,9 +11,12 @@
 //
 // PLY's numbers are written byte by byte in little-endian order, never as a struct's memory, so a
 // file is the same on every machine:
-//     vertex: x y z nx ny nz   float32 each (nx ny nz left out for a mesh without normals)
+//     vertex: x y z nx ny nz s t red green blue
+//             float32 each but the colour, uint8 each (round(255 c)), as most PLY readers expect;
+//             nx ny nz, s t and the colour are left out for a mesh without normals, uvs or colours
 //     face:   uint8 3, then three uint32 vertex indices
-// OBJ's numbers are printed with 9 significant digits, which round-trip a float exactly.
+// OBJ's numbers are printed with 9 significant digits, which round-trip a float exactly: uvs as
+// "vt u v", colours as the common extension "v x y z r g b" (read by assimp, MeshLab, Blender).
 
 #include "krs/core/validate.hpp"
 #include "krs/io/write_then_rename.hpp"
@@ -48,6 +51,18 @@ inline void require_mesh(std::string_view caller, const triangle_mesh& m)
     for (const vec3f& n : m.normals)
         if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
             throw invalid_parameter(name, "must have finite normals", detail::to_text(n));
+    if (!m.uvs.empty() && m.uvs.size() != m.positions.size())
+        throw invalid_parameter(name, "must have one uv per vertex or none",
+                                std::to_string(m.uvs.size()) + " uvs for " + std::to_string(m.positions.size()) + " vertices");
+    if (!m.colors.empty() && m.colors.size() != m.positions.size())
+        throw invalid_parameter(name, "must have one colour per vertex or none",
+                                std::to_string(m.colors.size()) + " colours for " + std::to_string(m.positions.size()) + " vertices");
+    for (const auto& t : m.uvs)
+        if (!std::isfinite(t[0]) || !std::isfinite(t[1]))
+            throw invalid_parameter(name, "must have finite uvs", detail::to_text(t[0]) + ", " + detail::to_text(t[1]));
+    for (const vec3f& c : m.colors)
+        if (!(c.x >= 0 && c.x <= 1 && c.y >= 0 && c.y <= 1 && c.z >= 0 && c.z <= 1))
+            throw invalid_parameter(name, "must have colours in [0, 1]", detail::to_text(c));
     for (const auto& t : m.triangles)
         for (std::uint32_t v : t)
             if (v >= m.positions.size())
@@ -60,6 +75,8 @@ inline void put_u32(std::string& out, std::uint32_t v)
     for (int b = 0; b < 4; ++b) out.push_back(char(v >> (8 * b) & 0xff));
 }
 inline void put_f32(std::string& out, float v) { put_u32(out, std::bit_cast<std::uint32_t>(v)); }
+// A colour channel in [0, 1] as PLY's uint8.
+inline char color_byte(float c) { return char(std::uint8_t(std::lround(double(c) * 255.0))); }
 
 inline void write_all(const std::filesystem::path& file, const std::string& bytes)
 {
@@ -81,15 +98,23 @@ inline std::string ply_bytes(const triangle_mesh& m)
     out += "element vertex " + std::to_string(m.positions.size()) + "\n";
     out += "property float x\nproperty float y\nproperty float z\n";
     if (normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
+    const bool uvs = !m.uvs.empty(), colors = !m.colors.empty();
+    if (uvs) out += "property float s\nproperty float t\n";
+    if (colors) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     out += "element face " + std::to_string(m.triangles.size()) + "\n";
     out += "property list uchar uint vertex_indices\nend_header\n";
-    out.reserve(out.size() + m.positions.size() * (normals ? 24 : 12) + m.triangles.size() * 13);
+    out.reserve(out.size() + m.positions.size() * ((normals ? 24 : 12) + (uvs ? 8 : 0) + (colors ? 3 : 0)) + m.triangles.size() * 13);
     for (std::size_t v = 0; v < m.positions.size(); ++v) {
         const vec3f& p = m.positions[v];
         detail::put_f32(out, p.x), detail::put_f32(out, p.y), detail::put_f32(out, p.z);
         if (normals) {
             const vec3f& n = m.normals[v];
             detail::put_f32(out, n.x), detail::put_f32(out, n.y), detail::put_f32(out, n.z);
+        }
+        if (uvs) detail::put_f32(out, m.uvs[v][0]), detail::put_f32(out, m.uvs[v][1]);
+        if (colors) {
+            const vec3f& c = m.colors[v];
+            out.push_back(detail::color_byte(c.x)), out.push_back(detail::color_byte(c.y)), out.push_back(detail::color_byte(c.z));
         }
     }
     for (const auto& t : m.triangles) {
@@ -99,15 +124,25 @@ inline std::string ply_bytes(const triangle_mesh& m)
     return out;
 }
 
-// The mesh as Wavefront OBJ: "v", "vn" (when it has normals) and "f a//a b//b c//c" (1-based).
+// The mesh as Wavefront OBJ: "v" (with "r g b" when it has colours), "vt" (uvs), "vn" (normals)
+// and faces "f a/a/a ..." (1-based; the uv or normal index left out when there is none).
 inline std::string obj_text(const triangle_mesh& m)
 {
     detail::require_mesh("obj_text", m);
-    const bool normals = !m.normals.empty();
+    const bool normals = !m.normals.empty(), uvs = !m.uvs.empty(), colors = !m.colors.empty();
     std::string out = "# written by krs (krs/mesh/write.hpp)\n";
-    char line[128];
-    for (const vec3f& p : m.positions) {
-        std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", double(p.x), double(p.y), double(p.z));
+    char line[256];
+    for (std::size_t v = 0; v < m.positions.size(); ++v) {
+        const vec3f& p = m.positions[v];
+        if (colors)
+            std::snprintf(line, sizeof line, "v %.9g %.9g %.9g %.9g %.9g %.9g\n", double(p.x), double(p.y), double(p.z),
+                          double(m.colors[v].x), double(m.colors[v].y), double(m.colors[v].z));
+        else
+            std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", double(p.x), double(p.y), double(p.z));
+        out += line;
+    }
+    for (const auto& t : m.uvs) {
+        std::snprintf(line, sizeof line, "vt %.9g %.9g\n", double(t[0]), double(t[1]));
         out += line;
     }
     for (const vec3f& n : m.normals) {
@@ -115,10 +150,16 @@ inline std::string obj_text(const triangle_mesh& m)
         out += line;
     }
     for (const auto& t : m.triangles) {
-        const unsigned long a = t[0] + 1ul, b = t[1] + 1ul, c = t[2] + 1ul;
-        if (normals) std::snprintf(line, sizeof line, "f %lu//%lu %lu//%lu %lu//%lu\n", a, a, b, b, c, c);
-        else std::snprintf(line, sizeof line, "f %lu %lu %lu\n", a, b, c);
-        out += line;
+        out += "f";
+        for (std::uint32_t i : t) {
+            const unsigned long a = i + 1ul;
+            if (uvs && normals) std::snprintf(line, sizeof line, " %lu/%lu/%lu", a, a, a);
+            else if (uvs) std::snprintf(line, sizeof line, " %lu/%lu", a, a);
+            else if (normals) std::snprintf(line, sizeof line, " %lu//%lu", a, a);
+            else std::snprintf(line, sizeof line, " %lu", a);
+            out += line;
+        }
+        out += "\n";
     }
     return out;
 }
