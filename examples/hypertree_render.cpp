@@ -276,7 +276,9 @@ int main(int argc, char** argv)
             voxels = classify(entries, classes, tree.ifs.branch_depth);
             volume = tree.ifs.volume;
             // VOXELPERTURB: the post-process noise, shifting the built tree's voxels (perturbation.hpp).
-            if (tree.voxel_perturb) voxels = perturb_voxels(index_list_store::build(volume, voxels), *tree.voxel_perturb);
+            // Through a partitioned_store, which keeps the part bytes the shading's flows, fitted
+            // spheres and part boxes are made of (an index_list_store would make every voxel part 0).
+            if (tree.voxel_perturb) voxels = perturb_voxels(partitioned_store::build(volume, voxels), *tree.voxel_perturb);
             if (tree.render_perturb) extras.displacement = *tree.render_perturb;
             colors = tree.colors();
             if (o.shading.normals_by == normal_method::line_flow) {

@@ -139,6 +139,33 @@ TEST_CASE_TEMPLATE_DEFINE("hypertree perturb_voxels moves every voxel by at most
 }
 TEST_CASE_TEMPLATE_APPLY(perturb_voxels_kinds, store_kinds);
 
+TEST_CASE("hypertree perturb_voxels over a partitioned_store keeps every voxel's first-level part")
+{
+    // The shading's flows, fitted spheres and part boxes are per part: the shift must carry each
+    // voxel's part with it (over a store that keeps parts), and every part must survive.
+    const auto tree = small_tree();
+    const partitioned_store store = build_tree<partitioned_store>(tree, 3);
+    const hypervolume& v = store.volume();
+    const std::vector<stored_voxel> before = stored_voxels(store);
+    std::set<int> parts_before;
+    for (const stored_voxel& b : before) parts_before.insert(b.part);
+    REQUIRE(parts_before.size() == 5); // the trunk and four transformations
+    const vec3d side = v.voxel_size();
+    const std::vector<stored_voxel> after = perturb_voxels(store, perturbation{{1.5 * side.x, 1.5 * side.y, 1.5 * side.z}, 3});
+    std::set<int> parts_after;
+    for (const stored_voxel& a : after) parts_after.insert(a.part);
+    CHECK(parts_after == parts_before);
+    // Each voxel after has a same-part voxel before within amplitude + half a voxel (brute force).
+    std::size_t orphans = 0;
+    for (const stored_voxel& a : after)
+        orphans += std::none_of(before.begin(), before.end(), [&](const stored_voxel& b) {
+            const vec3d d = v.voxel_center(a.index) - v.voxel_center(b.index);
+            return b.part == a.part && std::abs(d.x) <= 2.0 * side.x + 1e-9 && std::abs(d.y) <= 2.0 * side.y + 1e-9 &&
+                   std::abs(d.z) <= 2.0 * side.z + 1e-9;
+        });
+    CHECK(orphans == 0);
+}
+
 TEST_CASE("hypertree noise after generation and during it give the same distortion, within a voxel")
 {
     // The paper: "All of these approaches produce the same effect". Generation moves each point p
@@ -378,3 +405,4 @@ TEST_CASE("hypertree io definition files refuse bad trim regions and noise at th
     refused("PERTURB -0.1 0 0\n", "t.tree:1:", "expected a number >= 0");
     refused("VOXELPERTURB 0 0 0\nVOXELPERTURB 0 0 0\n", "t.tree:2:", "given twice");
 }
+

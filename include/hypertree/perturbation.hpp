@@ -56,7 +56,10 @@ struct perturbation {
 };
 
 // The post-process (stage 2): the store's voxels shifted by the field, as a sorted list any store
-// kind builds from. Amplitude 0 gives the store's own list.
+// kind builds from. Amplitude 0 gives the store's own list. Each voxel keeps the part byte the
+// store gives it (for_each_stored): its first-level part over a partitioned_store, and 0 over
+// every other kind, which keeps no parts. A tree whose shading or bounds need the parts (flows,
+// fitted part spheres, part boxes) is perturbed over a partitioned_store.
 template <voxel_store S>
 std::vector<stored_voxel> perturb_voxels(const S& store, const perturbation& perturb)
 {

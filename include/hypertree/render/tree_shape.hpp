@@ -202,6 +202,13 @@ struct tree_shape {
     {
         const auto& g = drawn.definition().generator;
         if (g.is_point()) throw krs::invalid_parameter("tree_shape.set_line_flow_of", "needs an IFS with a line generator", "a point generator");
+        // The line axes are per first-level part: voxels that all read part 0 (a list rebuilt
+        // through a store that keeps no parts, e.g. index_list_store) would silently leave every
+        // axis the covariance one, a single "trunk" flow. Refused instead.
+        const bool any_branch = std::any_of(flows.begin(), flows.end(), [](const part_flow& f) { return f.part > 0; });
+        if (!flows.empty() && drawn.transform_count() > 0 && !any_branch)
+            throw krs::invalid_parameter("tree_shape.set_line_flow_of", "voxels carrying their first-level parts (a partitioned_store's list)",
+                                         "every voxel in part 0");
         for (part_flow& f : flows) {
             if (f.part < 1 || std::size_t(f.part - 1) >= drawn.transform_count()) continue;
             const auto& chain = drawn.chain_of(std::size_t(f.part - 1), 1);
