@@ -344,6 +344,28 @@ TEST_CASE("hypertree render-time noise is validated by name, and the GLSL marche
     CHECK_NOTHROW((void)hypertree_glsl(store, shape, depth_colors{}, with({{0, 0, 0}, 1})));
 }
 
+TEST_CASE("hypertree render-time noise: an amplitude whose widened box a float sample count cannot cross is refused")
+{
+    // The marcher walks the tree's box widened by the amplitude on every side, counting samples
+    // in floats (exact to 2^24; march_options::validate allows 2^23 across the box). At 64 cells
+    // across 2 units (step 1/32), amplitude 1e6 widens the diagonal to 2e6 sqrt(3), 1.1e8 samples:
+    // the count would stall and the march never end, so it is refused by name.
+    const auto tree = small_tree();
+    const index_list_store store = build_tree<index_list_store>(tree, 3);
+    const tree_shape shape = tree_shape::of(store);
+    march_options o;
+    o.displacement = {{1e6f, 1e6f, 1e6f}, 1};
+    refused_naming("march_options.displacement.amplitude", [&] { volume_marcher(store, shape, depth_colors{}, o); });
+    // An amplitude that leaves the count exact (1e5 on x only: 2e5 / (1/32) = 6.4e6 < 2^23
+    // samples across) is taken, and a ray across the whole widened box returns.
+    o.displacement = {{1e5f, 0, 0}, 1};
+    const volume_marcher m(store, shape, depth_colors{}, o);
+    const float far = 2e5f;
+    const auto r = m.march(krs::ray<float>{krs::vec3f{-far, 0.5f, 0.01f}, krs::vec3f{1, 0, 0}});
+    CHECK(r.transmittance >= 0.0f);
+    CHECK(r.transmittance <= 1.0f);
+}
+
 // ---- the definition file: TRIM, VOXELPERTURB, RENDERPERTURB --------------------------------------
 
 TEST_CASE("hypertree io definition files set trim regions and the three noise stages")
