@@ -10,6 +10,10 @@
 
 #include <doctest/doctest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <random>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -428,3 +432,64 @@ TEST_CASE("hypertree io definition files refuse bad trim regions and noise at th
     refused("VOXELPERTURB 0 0 0\nVOXELPERTURB 0 0 0\n", "t.tree:2:", "given twice");
 }
 
+// ---- a forest's trees: VOXELPERTURB applied per tree, RENDERPERTURB and an empty TRIM refused -------
+
+TEST_CASE("hypertree forest trees take VOXELPERTURB, refuse RENDERPERTURB and report an empty TRIM at its line")
+{
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("krs_test_hypertree_noise_" + std::to_string(std::random_device{}()));
+    std::filesystem::create_directories(dir);
+    const std::string body = "ITERATIONS 6000\nHYPERVOLUME 2 2 2\nDISPLACEMENT 1 0 1\nTREEDEPTH 4\nBRANCHDEPTH 1\n"
+                             "TRANSFORM 1 0\n  ROTATE 0 0 1 30\n  TRANSLATE 0 0.5 0\n  SCALE 0.5\n"
+                             "TRANSFORM 1 0\n  ROTATE 0 0 1 -30\n  TRANSLATE 0 0.6 0\n  SCALE 0.5\n";
+    {
+        std::ofstream(dir / "plain.tree") << "RESOLUTION 32\n" << body;
+        std::ofstream(dir / "noisy.tree") << "RESOLUTION 32\nVOXELPERTURB 0.15 0 0.15 2\n" << body;
+        std::ofstream(dir / "rendered.tree") << "RESOLUTION 32\nNAME r\nRENDERPERTURB 0.1 0.1 0.1\n" << body;
+        // Holds the center (0.015625, 1.015625, 0.015625) of a voxel of its own 64^3 grid, and no
+        // center of the forest's 8^3 grid (centers at odd multiples of 0.125).
+        std::ofstream(dir / "trimmed.tree") << "RESOLUTION 64\nTRIM SPHERE 0.015625 1.015625 0.015625 0.02\n" << body;
+        std::ofstream(dir / "noisy.forest") << "RESOLUTION 32\nSTORAGETYPE dense\nTREE noisy.tree 3 0 0\n";
+        std::ofstream(dir / "plain.forest") << "RESOLUTION 32\nSTORAGETYPE dense\nTREE plain.tree 3 0 0\n";
+        std::ofstream(dir / "rendered.forest") << "RESOLUTION 32\nSTORAGETYPE dense\nTREE plain.tree\nTREE rendered.tree 3 0 0\n";
+        std::ofstream(dir / "trimmed.forest") << "RESOLUTION 8\nSTORAGETYPE dense\nTREE trimmed.tree\n";
+    }
+    // VOXELPERTURB moves the tree's voxels (not dropped), as perturb_voxels does to the tree's own
+    // voxels on the grid moved into its coordinates (the field read where the tree alone reads it).
+    const loaded_forest noisy = load_forest(dir / "noisy.forest");
+    const loaded_forest plain = load_forest(dir / "plain.forest");
+    REQUIRE(noisy.trees.front().voxel_perturb.has_value());
+    const generated_forest with = build_forest(noisy, 5), without = build_forest(plain, 5);
+    REQUIRE(without.voxels.size() > 100);
+    const hypervolume moved(without.volume.origin() - vec3d{3, 0, 0}, without.volume.extent(), without.volume.grid());
+    const std::vector<stored_voxel> want = perturb_voxels(partitioned_store::build(moved, without.voxels), *noisy.trees.front().voxel_perturb);
+    REQUIRE(want.size() == with.voxels.size());
+    bool same = true;
+    for (std::size_t k = 0; k < want.size(); ++k)
+        same = same && want[k].index == with.voxels[k].index && want[k].value.density == with.voxels[k].value.density && want[k].part == with.voxels[k].part;
+    CHECK(same);
+    std::set<voxel_index> was;
+    for (const stored_voxel& v : without.voxels) was.insert(v.index);
+    std::size_t elsewhere = 0;
+    for (const stored_voxel& v : with.voxels) elsewhere += was.count(v.index) == 0;
+    CHECK(elsewhere > with.voxels.size() / 4);
+
+    // RENDERPERTURB: refused at its line in the tree file.
+    const auto message = [](auto&& f) -> std::string {
+        try {
+            f();
+        } catch (const definition_error& e) {
+            return e.what();
+        }
+        return "accepted";
+    };
+    const std::string rendered = message([&] { (void)load_forest(dir / "rendered.forest"); });
+    CHECK_MESSAGE(rendered.starts_with((dir / "rendered.tree").string() + ":3:1: RENDERPERTURB"), rendered);
+    // TRIM: loads (its region holds a voxel of the tree's own grid), then the forest's grid holds
+    // none of it: reported at the tree file's TRIM line, naming the region.
+    const loaded_forest trimmed = load_forest(dir / "trimmed.forest");
+    const std::string empty = message([&] { (void)build_forest(trimmed, 1); });
+    CHECK_MESSAGE(empty.starts_with((dir / "trimmed.tree").string() + ":2:1: "), empty);
+    CHECK_MESSAGE(empty.find("ifs.trim[0]") != std::string::npos, empty);
+    std::filesystem::remove_all(dir);
+}

@@ -60,6 +60,11 @@ struct parsed_tree {
     // TRIM regions are ifs.trim.)
     std::optional<perturbation> voxel_perturb;
     std::optional<sample_displacement> render_perturb;
+    // Where the file said so, for refusals found after parsing (a forest's build checks TRIM
+    // against its own grid, and refuses RENDERPERTURB: forest.hpp, forest_file.hpp).
+    std::string file;
+    std::optional<source_position> voxel_perturb_at, render_perturb_at;
+    std::vector<source_position> trim_at; // one per ifs.trim region, in its order
 
     // The color the file gives voxels of `depth`, if a DEPTHCOLOR covers it.
     std::optional<rgb> color_of_depth(int depth) const
@@ -620,7 +625,15 @@ private:
         } catch (const krs::invalid_parameter& e) {
             fail(position_of(e.parameter()), "invalid tree: " + without_library_prefix(e));
         }
-        return {std::move(tree), std::move(depth_colors_), density_class_count_, voxel_perturb_, render_perturb_};
+        return {std::move(tree),
+                std::move(depth_colors_),
+                density_class_count_,
+                voxel_perturb_,
+                render_perturb_,
+                std::string(file_),
+                seen(definition_keyword::voxel_perturb),
+                seen(definition_keyword::render_perturb),
+                trim_at_};
     }
 
     std::string_view text_, file_;
