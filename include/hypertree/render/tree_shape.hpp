@@ -14,8 +14,11 @@
 //   displacements), replaced by r (1 + dmax / r)^2 = r + 2 dmax + dmax^2 / r, r being the radius
 //   as the shear receives it. (A shear moves every point by f dmax along one direction, f in
 //   [0, 1], so two points' offsets differ by at most dmax: r + dmax would do; the paper's rule is
-//   wider.) Then grown by the perturbation amplitude (as the paper says) and by one cell diagonal
-//   (not in the paper: the sphere bounds generator points, the marcher needs their whole cells).
+//   wider.) With generation noise (ifs::perturb, amplitude a) the crown is the box of perturbed
+//   voxels while the chain maps the unperturbed orbit, which lies within |a| of them: the sphere
+//   pushed through the chain is the crown grown by |a|. The image is then grown by |a| again (its
+//   recorded points move by at most that, as the paper says) and by one cell diagonal (not in
+//   the paper: the sphere bounds generator points, the marcher needs their whole cells).
 //   The trunk is bounded by the condensation's box (part 0's cell box), as the paper does. This
 //   holds every voxel only if the part's subtree lies in the primary sphere, which level-dependent
 //   parameters (3.4) and dummy transformations do not promise: bench_hypertree_render --only
@@ -162,11 +165,14 @@ struct tree_shape {
     void set_paper_spheres_of(const Drawn& drawn)
     {
         const auto& definition = drawn.definition();
-        const double margin = krs::length(definition.volume.voxel_size()) + krs::length(definition.perturb.amplitude);
+        // |a| in, for the unperturbed orbit around the perturbed crown; |a| and a cell diagonal out
+        // (the rule at the head of this file).
+        const double noise = krs::length(definition.perturb.amplitude);
+        const double margin = krs::length(definition.volume.voxel_size()) + noise;
         paper_spheres.clear();
         for (std::size_t j = 0; j < drawn.transform_count(); ++j) {
             if (drawn.dummies_from()[j] <= 1) continue;
-            const auto [c, r] = paper_sphere_through(drawn.chain_of(j, 1), vec3d(crown.center), double(crown.radius));
+            const auto [c, r] = paper_sphere_through(drawn.chain_of(j, 1), vec3d(crown.center), double(crown.radius) + noise);
             paper_spheres.push_back(krs::bound_around(c, r + margin));
         }
         trunk_box.clear();
