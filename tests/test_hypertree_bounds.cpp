@@ -238,6 +238,34 @@ TEST_CASE("hypertree bounds: the paper's spheres of a similarity-only IFS are th
     }
 }
 
+TEST_CASE("hypertree bounds: the float sphere test accepts a point the double sphere holds")
+{
+    // radius^2 rounded to float may fall below the double r^2, and the float sum of squares may
+    // round up: both would reject a point just inside. Points at 1 - 2^-24 of the radius (within
+    // float rounding of the surface), in many directions, on spheres of awkward radii.
+    std::mt19937 random(11);
+    std::normal_distribution<double> normal;
+    std::size_t rejected = 0, tried = 0;
+    for (int n = 0; n < 200; ++n) {
+        tree_shape shape;
+        const krs::vec3d c{0.3 + 0.01 * n, 0.7, -0.2};
+        shape.spheres.push_back(krs::bound_around(c, 0.1 + 0.0037 * n));
+        const bound_test test = bound_test::of(shape, bound_method::spheres);
+        const krs::bounding_sphere s = shape.spheres.front();
+        for (int i = 0; i < 200; ++i) {
+            krs::vec3d d{normal(random), normal(random), normal(random)};
+            d = d / krs::length(d);
+            const krs::vec3f p(krs::vec3d(s.center) + d * (double(s.radius) * (1 - std::ldexp(1.0, -23))));
+            // Only points the double sphere holds count (the float point is a rounding away).
+            if (krs::length(krs::vec3d(p) - krs::vec3d(s.center)) > double(s.radius)) continue;
+            ++tried;
+            rejected += !test.holds(p);
+        }
+    }
+    REQUIRE(tried > 20000);
+    CHECK(rejected == 0);
+}
+
 TEST_CASE("hypertree bounds: bad choices are refused, naming march_options.bounds_by")
 {
     const scene s(small_tree(presets::tree_d(32), 5000), 3);

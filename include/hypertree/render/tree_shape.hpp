@@ -333,8 +333,9 @@ private:
     }
 };
 
-// A bound_method made ready for the march: float spheres (center, radius^2) and float boxes
-// rounded outward, so the float test never rejects a point the double bound holds. holds(p) is
+// A bound_method made ready for the march: float spheres (center, radius^2: radius^2 rounded up
+// with room for the float test's own rounding) and float boxes rounded outward, so the float test
+// never rejects a point the double bound holds. holds(p) is
 // one template for a point (T = float) and a packet (one point per lane), the same operations
 // in the same order, so scalar and packet marchers skip the same samples.
 struct bound_test {
@@ -348,10 +349,17 @@ struct bound_test {
     {
         bound_test t;
         t.by = by;
-        const auto add_sphere = [&](const krs::bounding_sphere& s) { t.spheres.push_back({s.center.x, s.center.y, s.center.z, s.radius * s.radius}); };
+        const auto down = [](double v) { float f = float(v); return double(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f; };
+        const auto up = [](double v) { float f = float(v); return double(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f; };
+        // The center is already float (krs::bound_around grew the radius by its rounding). holds()
+        // computes dx^2 + dy^2 + dz^2 in float: three differences, three squares and two sums, a
+        // relative error below 6 u = 3.6e-7 (u = 2^-24) for the point's own float position. So r^2
+        // is taken in double, grown by 1e-6 relative (half a micron per metre of radius) and
+        // rounded up: a point the double sphere holds is never rejected.
+        const auto add_sphere = [&](const krs::bounding_sphere& s) {
+            t.spheres.push_back({s.center.x, s.center.y, s.center.z, up(double(s.radius) * double(s.radius) * (1 + 1e-6))});
+        };
         const auto add_box = [&](const world_box& b) {
-            const auto down = [](double v) { float f = float(v); return double(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f; };
-            const auto up = [](double v) { float f = float(v); return double(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f; };
             t.boxes.push_back({down(b.lo.x), down(b.lo.y), down(b.lo.z), up(b.hi.x), up(b.hi.y), up(b.hi.z)});
         };
         switch (by) {
