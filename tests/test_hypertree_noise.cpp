@@ -430,6 +430,10 @@ TEST_CASE("hypertree io definition files refuse bad trim regions and noise at th
     refused("RENDERPERTURB 0.1 0.1 0.1 -1\n", "t.tree:1:", "expected a number >= 0");
     refused("PERTURB -0.1 0 0\n", "t.tree:1:", "expected a number >= 0");
     refused("VOXELPERTURB 0 0 0\nVOXELPERTURB 0 0 0\n", "t.tree:2:", "given twice");
+    // Positive, but 0 in the marcher's float: refused rather than the noise silently off.
+    refused("RENDERPERTURB 0 1e-50 0\n", "t.tree:1:", "RENDERPERTURB amplitude y");
+    refused("RENDERPERTURB 1e-46 0 0\n", "t.tree:1:", "which is 0 in float");
+    CHECK(parse_definition("RENDERPERTURB 1e-40 0 0\n" + tail, "t.tree").render_perturb->amplitude.x > 0); // a denormal: kept
 }
 
 // ---- a forest's trees: VOXELPERTURB applied per tree, RENDERPERTURB and an empty TRIM refused -------

@@ -308,8 +308,18 @@ private:
         case definition_keyword::render_perturb: {
             once(s, k);
             const vec3d a = vector3(s, number_rule::non_negative);
+            // The marcher's amplitude is float: a positive amplitude that rounds to 0 (1e-50)
+            // would switch the noise off silently. (PERTURB and VOXELPERTURB stay double.)
+            const auto in_float = [&](double v, const char* axis) {
+                const float f = float(v);
+                if (v > 0 && !(f > 0))
+                    fail(s.where(), std::string("expected a RENDERPERTURB amplitude ") + axis +
+                                        " of 0 or one a float holds (>= 1.4e-45; the marcher reads it in float), got " +
+                                        krs::detail::to_text(v) + ", which is 0 in float");
+                return f;
+            };
             sample_displacement d;
-            d.amplitude = {float(a.x), float(a.y), float(a.z)};
+            d.amplitude = {in_float(a.x, "x"), in_float(a.y, "y"), in_float(a.z, "z")};
             if (!s.at_end()) d.frequency = float(s.number(number_rule::non_negative));
             s.finish();
             checked(s.where(), "RENDERPERTURB", [&] {
