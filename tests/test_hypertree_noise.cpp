@@ -10,6 +10,8 @@
 
 #include <doctest/doctest.h>
 
+#include "support/small_tree.hpp"
+
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -26,25 +28,8 @@ using namespace hypertree;
 
 namespace {
 
-constexpr double degrees = std::numbers::pi / 180.0;
-using branch_pipeline = pipeline<scale, rotate, rotate, translate>;
-
-// A small tree: a stem along y and three tilted branches (as test_hypertree_ifs.cpp's).
-ifs<branch_pipeline> small_tree()
-{
-    ifs<branch_pipeline> t;
-    for (int k = 0; k < 3; ++k)
-        t.transforms.push_back({branch_pipeline(scale(parameter::per_level(0.55, 0.5, 0.45)), rotate({0, 0, 1}, 35 * degrees),
-                                                rotate({0, 1, 0}, (120 * k + 20) * degrees), translate(0, 0.45 + 0.2 * k, 0)),
-                                1.0});
-    t.transforms.push_back({branch_pipeline(scale(0.6), rotate({0, 0, 1}, 5 * degrees), rotate({0, 1, 0}, 0), translate(0, 0.75, 0)), 1.0});
-    t.condensations = {condensation{cone{1, 0.0, 0.6, 0.05, 0.02}, {}}};
-    t.tree_depth = 6;
-    t.branch_depth = 1;
-    t.iterations = 40000;
-    t.volume = hypervolume({-1, -0.05, -1}, {2, 2, 2}, resolution::cube(64));
-    return t;
-}
+// The shared small tree (tests/support/small_tree.hpp), at fewer iterations.
+hypertree::ifs<krs_test::branch_pipeline> small_tree() { return krs_test::small_tree(6, 40000); }
 
 // A block of voxels of varied densities (a hash of the index), in a 24^3 grid of unit cells.
 index_list_store blob()

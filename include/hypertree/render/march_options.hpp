@@ -8,6 +8,7 @@
 // accepted or refused, with the same message, whichever of them is asked, and neither needs the
 // other to find out.
 
+#include "hypertree/perturbation.hpp"
 #include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/store/store.hpp"
@@ -38,13 +39,12 @@ struct sample_displacement {
     krs::vec3f amplitude{0.0f, 0.0f, 0.0f};
     float frequency = 8.0f;
     bool enabled() const { return amplitude.x != 0.0f || amplitude.y != 0.0f || amplitude.z != 0.0f; }
+    // p + shift(p), the field of perturbation.hpp (noise_shift) in the sample's lane type.
     template <class T>
     krs::vec3<T> displaced(const krs::vec3<T>& p) const
     {
-        const T f(frequency);
-        const krs::vec3<T> q{p.x * f, p.y * f, p.z * f};
-        return {p.x + T(amplitude.x) * krs::value_noise(q), p.y + T(amplitude.y) * krs::value_noise(krs::vec3<T>{q.x + T(31.7f), q.y - T(17.3f), q.z + T(5.9f)}),
-                p.z + T(amplitude.z) * krs::value_noise(krs::vec3<T>{q.x - T(11.1f), q.y + T(23.9f), q.z - T(41.3f)})};
+        const krs::vec3<T> s = noise_shift(p, krs::vec3<T>{T(amplitude.x), T(amplitude.y), T(amplitude.z)}, T(frequency));
+        return {p.x + s.x, p.y + s.y, p.z + s.z};
     }
 };
 
