@@ -198,6 +198,14 @@ TEST_CASE("hypertree noise after generation and during it give the same distorti
     const double plain_in_during = within_one(unperturbed, during);
     MESSAGE("within one cell: post in during " << post_in_during << ", during in post " << during_in_post << ", unperturbed in during "
                                                << plain_in_during);
+    // Why 0.97 and 0.93 (measured: 1 and 1): per axis |p - c| <= 0.5 voxel and the two shifts
+    // differ by <= 0.35 voxel (above), so a voxel of one stage lies within 0.85 voxel, one cell,
+    // of the other's on each axis wherever both keep it. They need not both keep it: a voxel whose
+    // shifted centre leaves the volume is dropped by the post-process while some of its points
+    // stay in (the trunk's foot is 1.6 voxels above the floor, the shift up to 4), and where two
+    // land in one cell the post-process keeps one voxel while generation's several hits there
+    // may fill a neighbour too (hence the looser bound that way). Both are the boundary and
+    // collision cells, a few percent of the tree; the unperturbed tree misses far more (below).
     CHECK(post_in_during > 0.97);
     CHECK(during_in_post > 0.93);
     CHECK(plain_in_during < post_in_during - 0.1);
