@@ -8,7 +8,7 @@
 //                      [--output FILE.png] [--save-volume FILE] [--save-vdb FILE.vdb] [--save-nvdb FILE.nvdb]
 //                      [--lod N] [--clear-above Y] [--ambient A] [--diffuse D] [--specular S]
 //                      [--shininess N] [--light-elevation DEG] [--light-azimuth DEG]
-//                      [--normals structure_flow|part_boxes|line_flow] [--shadows on|off]
+//                      [--normals structure_flow|part_boxes|line_flow] [--shadows on|off] [--noise on|off]
 //
 // The settings of the paper's figures 8-12 (examples/hypertrees/figure*.tree and .forest, whose
 // `# render` lines scripts/render_figures.sh runs):
@@ -20,6 +20,8 @@
 // - --ambient, --diffuse, --specular, --shininess, one light from --light-elevation and
 //   --light-azimuth, --normals (march_options::normals_by) and --shadows: the shading of section
 //   8.3 (figure 10); --supersampling is the antialiasing of figure 11.
+// - --noise off drops the tree's noise (PERTURB, VOXELPERTURB, RENDERPERTURB; every tree's in a
+//   forest): figure 8's unperturbed companion, against which the check sees the noise's effect.
 // The camera is framed on the tree as generated, before --lod or --clear-above, so a reduced or
 // cleared tree is seen from exactly where the whole one is (its images compare pixel by pixel).
 //
@@ -74,6 +76,7 @@ struct settings {
     std::uint64_t seed = 1;
     int lod = 0;                          // 0: the generated resolution
     std::optional<double> clear_above;    // a height in tree units
+    bool noise = true;                    // --noise off: the tree files' noise dropped
     march_options shading;                // ambient, diffuse, specular, shininess, light, normals, shadows
 };
 
@@ -213,10 +216,12 @@ int main(int argc, char** argv)
     // The default light, directional_light{} (march_options.hpp): (0.4, 0.8, 0.45) made unit.
     elevation_option->default_str("53");
     azimuth_option->default_str("48.4");
-    std::string normals = "structure_flow", shadows = "on";
+    std::string normals = "structure_flow", shadows = "on", noise = "on";
     args.choice("--normals", normals, {"structure_flow", "part_boxes", "line_flow"}, "the shading normal (section 8.3)");
     args.choice("--shadows", shadows, {"on", "off"}, "self-shadowing");
+    args.choice("--noise", noise, {"on", "off"}, "the tree files' noise (PERTURB, VOXELPERTURB, RENDERPERTURB)");
     args.parse(argc, argv);
+    o.noise = noise == "on";
     if (clear_option->count() > 0) o.clear_above = clear_above;
     o.shading.normals_by = normals == "part_boxes" ? normal_method::part_boxes : normals == "line_flow" ? normal_method::line_flow : normal_method::structure_flow;
     o.shading.shadows = shadows == "on";
@@ -256,6 +261,8 @@ int main(int argc, char** argv)
         const auto t0 = clock_type::now();
         if (!o.forest_file.empty()) {
             loaded_forest forest = load_forest(o.forest_file);
+            if (!o.noise)
+                for (parsed_tree& t : forest.trees) t.ifs.perturb = {}, t.voxel_perturb.reset();
             if (o.resolution) forest.listing.grid = resolution::cube(*o.resolution);
             if (!store_given) o.store = forest.listing.storage;
             generated_forest built = build_forest(forest, o.seed, options);
@@ -270,13 +277,16 @@ int main(int argc, char** argv)
                 tree.ifs = o.preset == "A" ? presets::tree_a(r) : o.preset == "B" ? presets::tree_b(r) : o.preset == "C" ? presets::tree_c(r) : presets::tree_d(r);
             }
             if (o.resolution) tree.ifs.volume = hypervolume(tree.ifs.volume.origin(), tree.ifs.volume.extent(), resolution::cube(*o.resolution));
+            if (!o.noise) tree.ifs.perturb = {}, tree.voxel_perturb.reset(), tree.render_perturb.reset();
             const generated_hits hits = generate(tree.ifs, o.seed, options.generation);
             const std::vector<voxel_entry> entries = compact(hits.hits, options.generation.parallel_for, hits.volume.voxel_count());
             const density_classes classes(entries, tree.density_class_count.value_or(options.density_class_count));
             voxels = classify(entries, classes, tree.ifs.branch_depth);
             volume = tree.ifs.volume;
             // VOXELPERTURB: the post-process noise, shifting the built tree's voxels (perturbation.hpp).
-            if (tree.voxel_perturb) voxels = perturb_voxels(index_list_store::build(volume, voxels), *tree.voxel_perturb);
+            // Through a partitioned_store, which keeps the part bytes the shading's flows, fitted
+            // spheres and part boxes are made of (an index_list_store would make every voxel part 0).
+            if (tree.voxel_perturb) voxels = perturb_voxels(partitioned_store::build(volume, voxels), *tree.voxel_perturb);
             if (tree.render_perturb) extras.displacement = *tree.render_perturb;
             colors = tree.colors();
             if (o.shading.normals_by == normal_method::line_flow) {

@@ -169,9 +169,9 @@ double number(const char* text, const char* what)
 int main(int argc, char** argv)
 {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (!(argc == 5 && (mode == "coverage" || mode == "smoother" || mode == "close" || mode == "brighter" || mode == "cleared")) &&
+    if (!(argc == 5 && (mode == "coverage" || mode == "smoother" || mode == "close" || mode == "brighter" || mode == "cleared" || mode == "moved")) &&
         !(argc == 6 && mode == "closer")) {
-        std::fprintf(stderr, "usage: check_figure_image coverage|smoother|close|brighter|cleared FILE FILE|NUMBER NUMBER\n"
+        std::fprintf(stderr, "usage: check_figure_image coverage|smoother|close|brighter|cleared|moved FILE FILE|NUMBER NUMBER\n"
                              "       check_figure_image closer A REFERENCE B RATIO\n");
         return 2;
     }
@@ -206,6 +206,26 @@ int main(int argc, char** argv)
         std::printf("edge statistic: %s %.5f, %s %.5f, ratio %.3f (allowed <= %g)\n", argv[2], sa, argv[3], sb, sb > 0 ? sa / sb : 0.0, bound);
         if (!(sb > 0 && sa <= bound * sb)) {
             std::fprintf(stderr, "%s is not smoother than %s by the ratio %g\n", argv[2], argv[3], bound);
+            return 1;
+        }
+        return 0;
+    }
+    if (mode == "moved") {
+        // The covered pixels of one image and not the other, over those covered in either: 0 for
+        // the same silhouette, near 1 for disjoint ones. Noise that moves thin branches by a
+        // pixel or more changes a share of their pixels of the order of shift / width.
+        long either = 0, one = 0;
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width; ++x) {
+                const bool ca = covered(a.at(x, y)), cb = covered(b.at(x, y));
+                either += ca || cb;
+                one += ca != cb;
+            }
+        const double share = either ? double(one) / double(either) : 0;
+        std::printf("%s against %s: %.2f%% of the covered pixels covered in one only (allowed >= %.2f%%)\n", argv[2], argv[3], 100 * share,
+                    100 * bound);
+        if (!(share >= bound)) {
+            std::fprintf(stderr, "%s does not differ from %s by the share %g\n", argv[2], argv[3], bound);
             return 1;
         }
         return 0;

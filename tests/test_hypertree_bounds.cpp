@@ -207,6 +207,65 @@ TEST_CASE("hypertree bounds: the paper's rule (1 + dmax / r)^2 holds a sphere's 
     CHECK(farthest > r1); // the shear does move points apart
 }
 
+TEST_CASE("hypertree bounds: the paper's spheres of a similarity-only IFS are the closed form, margins included")
+{
+    // Where the rule is tight: every first-level chain a similarity (scale s, rotation,
+    // translation), so the crown (c, R) maps onto exactly the ball (T(c), s R). With generation
+    // noise of amplitude a, the unperturbed orbit lies within |a| of the perturbed voxels the crown
+    // is fitted to, and the recorded points move |a| again: radius s (R + |a|) + |a| + the cell
+    // diagonal. Dropping either |a| (or the cell diagonal) moves the radius by >= s |a| = 0.01.
+    ifs<> t;
+    const double scales[] = {0.5, 0.4, 0.3};
+    for (int k = 0; k < 3; ++k)
+        t.transforms.push_back({runtime_pipeline({scale(scales[k]), rotate({0, 0, 1}, 0.6), rotate({0, 1, 0}, 2.1 * k), translate(0, 0.4 + 0.15 * k, 0)}),
+                                1.0});
+    t.tree_depth = 5;
+    t.branch_depth = 1;
+    t.iterations = 20000;
+    t.volume = hypervolume({-1, -0.05, -1}, {2, 2, 2}, resolution::cube(48));
+    t.perturb.amplitude = {0.02, 0.03, 0.02};
+    t.perturb.frequency = 5;
+    const drawn_ifs<runtime_pipeline> drawn(t, 3);
+    tree_shape shape = tree_shape::of(build_tree<partitioned_store>(t, 3));
+    shape.set_paper_spheres_of(drawn);
+    REQUIRE(shape.paper_spheres.size() == 3);
+    const double a = krs::length(t.perturb.amplitude), diagonal = krs::length(t.volume.voxel_size()), R = shape.crown.radius;
+    for (int k = 0; k < 3; ++k) {
+        INFO("transformation " << k);
+        const double want = scales[k] * (R + a) + a + diagonal;
+        CHECK(double(shape.paper_spheres[std::size_t(k)].radius) == doctest::Approx(want).epsilon(1e-6));
+        CHECK(krs::length(krs::vec3d(shape.paper_spheres[std::size_t(k)].center) - drawn.chain_of(std::size_t(k), 1)(krs::vec3d(shape.crown.center))) < 1e-6);
+    }
+}
+
+TEST_CASE("hypertree bounds: the float sphere test accepts a point the double sphere holds")
+{
+    // radius^2 rounded to float may fall below the double r^2, and the float sum of squares may
+    // round up: both would reject a point just inside. Points at 1 - 2^-24 of the radius (within
+    // float rounding of the surface), in many directions, on spheres of awkward radii.
+    std::mt19937 random(11);
+    std::normal_distribution<double> normal;
+    std::size_t rejected = 0, tried = 0;
+    for (int n = 0; n < 200; ++n) {
+        tree_shape shape;
+        const krs::vec3d c{0.3 + 0.01 * n, 0.7, -0.2};
+        shape.spheres.push_back(krs::bound_around(c, 0.1 + 0.0037 * n));
+        const bound_test test = bound_test::of(shape, bound_method::spheres);
+        const krs::bounding_sphere s = shape.spheres.front();
+        for (int i = 0; i < 200; ++i) {
+            krs::vec3d d{normal(random), normal(random), normal(random)};
+            d = d / krs::length(d);
+            const krs::vec3f p(krs::vec3d(s.center) + d * (double(s.radius) * (1 - std::ldexp(1.0, -23))));
+            // Only points the double sphere holds count (the float point is a rounding away).
+            if (krs::length(krs::vec3d(p) - krs::vec3d(s.center)) > double(s.radius)) continue;
+            ++tried;
+            rejected += !test.holds(p);
+        }
+    }
+    REQUIRE(tried > 20000);
+    CHECK(rejected == 0);
+}
+
 TEST_CASE("hypertree bounds: bad choices are refused, naming march_options.bounds_by")
 {
     const scene s(small_tree(presets::tree_d(32), 5000), 3);

@@ -8,6 +8,8 @@
 
 #include <doctest/doctest.h>
 
+#include "support/small_tree.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -26,25 +28,9 @@ namespace {
 
 constexpr double degrees = std::numbers::pi / 180.0;
 
-using branch_pipeline = pipeline<scale, rotate, rotate, translate>;
+using krs_test::branch_pipeline;
 
-// A small tree: a stem along y and three branches around it, each a scaled, tilted, turned copy.
-ifs<branch_pipeline> small_tree(int depth = 6)
-{
-    ifs<branch_pipeline> t;
-    t.name = "small";
-    for (int k = 0; k < 3; ++k)
-        t.transforms.push_back({branch_pipeline(scale(parameter::per_level(0.55, 0.5, 0.45)), rotate({0, 0, 1}, 35 * degrees),
-                                                rotate({0, 1, 0}, (120 * k + 20) * degrees), translate(0, 0.45 + 0.2 * k, 0)),
-                                1.0});
-    t.transforms.push_back({branch_pipeline(scale(0.6), rotate({0, 0, 1}, 5 * degrees), rotate({0, 1, 0}, 0), translate(0, 0.75, 0)), 1.0});
-    t.condensations = {condensation{cone{1, 0.0, 0.6, 0.05, 0.02}, {}}};
-    t.tree_depth = depth;
-    t.branch_depth = 1;
-    t.iterations = 60000;
-    t.volume = hypervolume({-1, -0.05, -1}, {2, 2, 2}, resolution::cube(64));
-    return t;
-}
+using krs_test::small_tree;
 
 // Applies a chain by its elements one at a time (no canonical merging): the reference for chain_at.
 template <class... E>

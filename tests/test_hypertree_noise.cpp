@@ -10,6 +10,12 @@
 
 #include <doctest/doctest.h>
 
+#include "support/small_tree.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -22,25 +28,8 @@ using namespace hypertree;
 
 namespace {
 
-constexpr double degrees = std::numbers::pi / 180.0;
-using branch_pipeline = pipeline<scale, rotate, rotate, translate>;
-
-// A small tree: a stem along y and three tilted branches (as test_hypertree_ifs.cpp's).
-ifs<branch_pipeline> small_tree()
-{
-    ifs<branch_pipeline> t;
-    for (int k = 0; k < 3; ++k)
-        t.transforms.push_back({branch_pipeline(scale(parameter::per_level(0.55, 0.5, 0.45)), rotate({0, 0, 1}, 35 * degrees),
-                                                rotate({0, 1, 0}, (120 * k + 20) * degrees), translate(0, 0.45 + 0.2 * k, 0)),
-                                1.0});
-    t.transforms.push_back({branch_pipeline(scale(0.6), rotate({0, 0, 1}, 5 * degrees), rotate({0, 1, 0}, 0), translate(0, 0.75, 0)), 1.0});
-    t.condensations = {condensation{cone{1, 0.0, 0.6, 0.05, 0.02}, {}}};
-    t.tree_depth = 6;
-    t.branch_depth = 1;
-    t.iterations = 40000;
-    t.volume = hypervolume({-1, -0.05, -1}, {2, 2, 2}, resolution::cube(64));
-    return t;
-}
+// The shared small tree (tests/support/small_tree.hpp), at fewer iterations.
+hypertree::ifs<krs_test::branch_pipeline> small_tree() { return krs_test::small_tree(6, 40000); }
 
 // A block of voxels of varied densities (a hash of the index), in a 24^3 grid of unit cells.
 index_list_store blob()
@@ -139,6 +128,33 @@ TEST_CASE_TEMPLATE_DEFINE("hypertree perturb_voxels moves every voxel by at most
 }
 TEST_CASE_TEMPLATE_APPLY(perturb_voxels_kinds, store_kinds);
 
+TEST_CASE("hypertree perturb_voxels over a partitioned_store keeps every voxel's first-level part")
+{
+    // The shading's flows, fitted spheres and part boxes are per part: the shift must carry each
+    // voxel's part with it (over a store that keeps parts), and every part must survive.
+    const auto tree = small_tree();
+    const partitioned_store store = build_tree<partitioned_store>(tree, 3);
+    const hypervolume& v = store.volume();
+    const std::vector<stored_voxel> before = stored_voxels(store);
+    std::set<int> parts_before;
+    for (const stored_voxel& b : before) parts_before.insert(b.part);
+    REQUIRE(parts_before.size() == 5); // the trunk and four transformations
+    const vec3d side = v.voxel_size();
+    const std::vector<stored_voxel> after = perturb_voxels(store, perturbation{{1.5 * side.x, 1.5 * side.y, 1.5 * side.z}, 3});
+    std::set<int> parts_after;
+    for (const stored_voxel& a : after) parts_after.insert(a.part);
+    CHECK(parts_after == parts_before);
+    // Each voxel after has a same-part voxel before within amplitude + half a voxel (brute force).
+    std::size_t orphans = 0;
+    for (const stored_voxel& a : after)
+        orphans += std::none_of(before.begin(), before.end(), [&](const stored_voxel& b) {
+            const vec3d d = v.voxel_center(a.index) - v.voxel_center(b.index);
+            return b.part == a.part && std::abs(d.x) <= 2.0 * side.x + 1e-9 && std::abs(d.y) <= 2.0 * side.y + 1e-9 &&
+                   std::abs(d.z) <= 2.0 * side.z + 1e-9;
+        });
+    CHECK(orphans == 0);
+}
+
 TEST_CASE("hypertree noise after generation and during it give the same distortion, within a voxel")
 {
     // The paper: "All of these approaches produce the same effect". Generation moves each point p
@@ -182,6 +198,14 @@ TEST_CASE("hypertree noise after generation and during it give the same distorti
     const double plain_in_during = within_one(unperturbed, during);
     MESSAGE("within one cell: post in during " << post_in_during << ", during in post " << during_in_post << ", unperturbed in during "
                                                << plain_in_during);
+    // Why 0.97 and 0.93 (measured: 1 and 1): per axis |p - c| <= 0.5 voxel and the two shifts
+    // differ by <= 0.35 voxel (above), so a voxel of one stage lies within 0.85 voxel, one cell,
+    // of the other's on each axis wherever both keep it. They need not both keep it: a voxel whose
+    // shifted centre leaves the volume is dropped by the post-process while some of its points
+    // stay in (the trunk's foot is 1.6 voxels above the floor, the shift up to 4), and where two
+    // land in one cell the post-process keeps one voxel while generation's several hits there
+    // may fill a neighbour too (hence the looser bound that way). Both are the boundary and
+    // collision cells, a few percent of the tree; the unperturbed tree misses far more (below).
     CHECK(post_in_during > 0.97);
     CHECK(during_in_post > 0.93);
     CHECK(plain_in_during < post_in_during - 0.1);
@@ -317,6 +341,28 @@ TEST_CASE("hypertree render-time noise is validated by name, and the GLSL marche
     CHECK_NOTHROW((void)hypertree_glsl(store, shape, depth_colors{}, with({{0, 0, 0}, 1})));
 }
 
+TEST_CASE("hypertree render-time noise: an amplitude whose widened box a float sample count cannot cross is refused")
+{
+    // The marcher walks the tree's box widened by the amplitude on every side, counting samples
+    // in floats (exact to 2^24; march_options::validate allows 2^23 across the box). At 64 cells
+    // across 2 units (step 1/32), amplitude 1e6 widens the diagonal to 2e6 sqrt(3), 1.1e8 samples:
+    // the count would stall and the march never end, so it is refused by name.
+    const auto tree = small_tree();
+    const index_list_store store = build_tree<index_list_store>(tree, 3);
+    const tree_shape shape = tree_shape::of(store);
+    march_options o;
+    o.displacement = {{1e6f, 1e6f, 1e6f}, 1};
+    refused_naming("march_options.displacement.amplitude", [&] { volume_marcher(store, shape, depth_colors{}, o); });
+    // An amplitude that leaves the count exact (1e5 on x only: 2e5 / (1/32) = 6.4e6 < 2^23
+    // samples across) is taken, and a ray across the whole widened box returns.
+    o.displacement = {{1e5f, 0, 0}, 1};
+    const volume_marcher m(store, shape, depth_colors{}, o);
+    const float far = 2e5f;
+    const auto r = m.march(krs::ray<float>{krs::vec3f{-far, 0.5f, 0.01f}, krs::vec3f{1, 0, 0}});
+    CHECK(r.transmittance >= 0.0f);
+    CHECK(r.transmittance <= 1.0f);
+}
+
 // ---- the definition file: TRIM, VOXELPERTURB, RENDERPERTURB --------------------------------------
 
 TEST_CASE("hypertree io definition files set trim regions and the three noise stages")
@@ -377,4 +423,70 @@ TEST_CASE("hypertree io definition files refuse bad trim regions and noise at th
     refused("RENDERPERTURB 0.1 0.1 0.1 -1\n", "t.tree:1:", "expected a number >= 0");
     refused("PERTURB -0.1 0 0\n", "t.tree:1:", "expected a number >= 0");
     refused("VOXELPERTURB 0 0 0\nVOXELPERTURB 0 0 0\n", "t.tree:2:", "given twice");
+    // Positive, but 0 in the marcher's float: refused rather than the noise silently off.
+    refused("RENDERPERTURB 0 1e-50 0\n", "t.tree:1:", "RENDERPERTURB amplitude y");
+    refused("RENDERPERTURB 1e-46 0 0\n", "t.tree:1:", "which is 0 in float");
+    CHECK(parse_definition("RENDERPERTURB 1e-40 0 0\n" + tail, "t.tree").render_perturb->amplitude.x > 0); // a denormal: kept
+}
+
+// ---- a forest's trees: VOXELPERTURB applied per tree, RENDERPERTURB and an empty TRIM refused -------
+
+TEST_CASE("hypertree forest trees take VOXELPERTURB, refuse RENDERPERTURB and report an empty TRIM at its line")
+{
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("krs_test_hypertree_noise_" + std::to_string(std::random_device{}()));
+    std::filesystem::create_directories(dir);
+    const std::string body = "ITERATIONS 6000\nHYPERVOLUME 2 2 2\nDISPLACEMENT 1 0 1\nTREEDEPTH 4\nBRANCHDEPTH 1\n"
+                             "TRANSFORM 1 0\n  ROTATE 0 0 1 30\n  TRANSLATE 0 0.5 0\n  SCALE 0.5\n"
+                             "TRANSFORM 1 0\n  ROTATE 0 0 1 -30\n  TRANSLATE 0 0.6 0\n  SCALE 0.5\n";
+    {
+        std::ofstream(dir / "plain.tree") << "RESOLUTION 32\n" << body;
+        std::ofstream(dir / "noisy.tree") << "RESOLUTION 32\nVOXELPERTURB 0.15 0 0.15 2\n" << body;
+        std::ofstream(dir / "rendered.tree") << "RESOLUTION 32\nNAME r\nRENDERPERTURB 0.1 0.1 0.1\n" << body;
+        // Holds the center (0.015625, 1.015625, 0.015625) of a voxel of its own 64^3 grid, and no
+        // center of the forest's 8^3 grid (centers at odd multiples of 0.125).
+        std::ofstream(dir / "trimmed.tree") << "RESOLUTION 64\nTRIM SPHERE 0.015625 1.015625 0.015625 0.02\n" << body;
+        std::ofstream(dir / "noisy.forest") << "RESOLUTION 32\nSTORAGETYPE dense\nTREE noisy.tree 3 0 0\n";
+        std::ofstream(dir / "plain.forest") << "RESOLUTION 32\nSTORAGETYPE dense\nTREE plain.tree 3 0 0\n";
+        std::ofstream(dir / "rendered.forest") << "RESOLUTION 32\nSTORAGETYPE dense\nTREE plain.tree\nTREE rendered.tree 3 0 0\n";
+        std::ofstream(dir / "trimmed.forest") << "RESOLUTION 8\nSTORAGETYPE dense\nTREE trimmed.tree\n";
+    }
+    // VOXELPERTURB moves the tree's voxels (not dropped), as perturb_voxels does to the tree's own
+    // voxels on the grid moved into its coordinates (the field read where the tree alone reads it).
+    const loaded_forest noisy = load_forest(dir / "noisy.forest");
+    const loaded_forest plain = load_forest(dir / "plain.forest");
+    REQUIRE(noisy.trees.front().voxel_perturb.has_value());
+    const generated_forest with = build_forest(noisy, 5), without = build_forest(plain, 5);
+    REQUIRE(without.voxels.size() > 100);
+    const hypervolume moved(without.volume.origin() - vec3d{3, 0, 0}, without.volume.extent(), without.volume.grid());
+    const std::vector<stored_voxel> want = perturb_voxels(partitioned_store::build(moved, without.voxels), *noisy.trees.front().voxel_perturb);
+    REQUIRE(want.size() == with.voxels.size());
+    bool same = true;
+    for (std::size_t k = 0; k < want.size(); ++k)
+        same = same && want[k].index == with.voxels[k].index && want[k].value.density == with.voxels[k].value.density && want[k].part == with.voxels[k].part;
+    CHECK(same);
+    std::set<voxel_index> was;
+    for (const stored_voxel& v : without.voxels) was.insert(v.index);
+    std::size_t elsewhere = 0;
+    for (const stored_voxel& v : with.voxels) elsewhere += was.count(v.index) == 0;
+    CHECK(elsewhere > with.voxels.size() / 4);
+
+    // RENDERPERTURB: refused at its line in the tree file.
+    const auto message = [](auto&& f) -> std::string {
+        try {
+            f();
+        } catch (const definition_error& e) {
+            return e.what();
+        }
+        return "accepted";
+    };
+    const std::string rendered = message([&] { (void)load_forest(dir / "rendered.forest"); });
+    CHECK_MESSAGE(rendered.starts_with((dir / "rendered.tree").string() + ":3:1: RENDERPERTURB"), rendered);
+    // TRIM: loads (its region holds a voxel of the tree's own grid), then the forest's grid holds
+    // none of it: reported at the tree file's TRIM line, naming the region.
+    const loaded_forest trimmed = load_forest(dir / "trimmed.forest");
+    const std::string empty = message([&] { (void)build_forest(trimmed, 1); });
+    CHECK_MESSAGE(empty.starts_with((dir / "trimmed.tree").string() + ":2:1: "), empty);
+    CHECK_MESSAGE(empty.find("ifs.trim[0]") != std::string::npos, empty);
+    std::filesystem::remove_all(dir);
 }

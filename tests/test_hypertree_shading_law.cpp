@@ -417,6 +417,20 @@ TEST_CASE("shading law: the line flow of an IFS runs along each first-level tran
     // A point generator carries no direction.
     t.generator = generator_shape::point();
     CHECK_THROWS_AS(shape.set_line_flow_of(drawn_ifs<runtime_pipeline>(t, 7)), krs::invalid_parameter);
+    // Voxels that lost their parts (all part 0, as a list rebuilt through an index_list_store)
+    // carry no per-part line axis: refused by name rather than left as one covariance flow.
+    std::vector<cell> merged = rod_cells(4, 4, 4, 28, 0);
+    for (const cell& c : rod_cells(14, 4, 4, 28, 0)) merged.push_back(c);
+    tree_shape one_part = cells_shape(merged);
+    REQUIRE(one_part.flows.size() == 1);
+    t.generator = generator_shape::line({0, -0.025, 0}, {0, 0.025, 0});
+    try {
+        one_part.set_line_flow_of(drawn_ifs<runtime_pipeline>(t, 7));
+        FAIL("accepted voxels without parts");
+    } catch (const krs::invalid_parameter& e) {
+        CHECK(std::string(e.what()).find("tree_shape.set_line_flow_of") != std::string::npos);
+        CHECK(std::string(e.what()).find("part 0") != std::string::npos);
+    }
 }
 
 TEST_CASE("shading law: bad normal options are refused by name")

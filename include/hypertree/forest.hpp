@@ -8,13 +8,21 @@
 // and every tree's voxels share one index space. Trees are united by the paper's max rule
 // (ops.hpp, over partitioned stores: the kind that keeps parts), and a voxel's part becomes its
 // tree's number, so the renderer fits one bounding sphere per tree.
+//
+// Each tree's noise (section 3.5): PERTURB acts during its generation; VOXELPERTURB shifts its
+// voxels before the union, the field evaluated in the tree's own coordinates (the moved grid), so
+// the tree is perturbed as it would be alone. RENDERPERTURB is refused by load_forest (one march
+// renders every tree). A TRIM region is checked against the forest's grid here, which may differ
+// from the tree's own: a region holding no forest voxel is reported at the tree file's TRIM line.
 
 #include "hypertree/build.hpp"
 #include "hypertree/io/forest_file.hpp"
 #include "hypertree/ops.hpp"
+#include "hypertree/perturbation.hpp"
 #include "hypertree/store/partitioned_store.hpp"
 
 #include <algorithm>
+#include <string>
 #include <vector>
 
 namespace hypertree {
@@ -33,10 +41,27 @@ inline generated_forest build_forest(const loaded_forest& forest, std::uint64_t 
     std::pmr::memory_resource* const scratch = options.generation.scratch ? options.generation.scratch : &own;
     for (std::size_t i = 0; i < forest.trees.size(); ++i) {
         ifs<> tree = forest.trees[i].ifs;
+        const parsed_tree& parsed = forest.trees[i];
         tree.volume = hypervolume(out.volume.origin() - forest.listing.trees[i].offset, out.volume.extent(), out.volume.grid());
-        std::pmr::vector<stored_voxel> voxels = detail::stored_voxels_of(
-            tree, seed + i, forest.trees[i].density_class_count.value_or(options.density_class_count), options.generation, scratch);
+        std::pmr::vector<stored_voxel> voxels(scratch);
+        try {
+            voxels = detail::stored_voxels_of(tree, seed + i, parsed.density_class_count.value_or(options.density_class_count),
+                                              options.generation, scratch);
+        } catch (const krs::invalid_parameter& e) {
+            const std::string& name = e.parameter();
+            if (!name.starts_with("ifs.trim[")) throw;
+            const std::size_t j = std::size_t(std::stoul(name.substr(9)));
+            if (j >= parsed.trim_at.size()) throw;
+            throw definition_error(parsed.file, parsed.trim_at[j], "TRIM in the forest's grid: " + std::string(e.what()));
+        }
         for (stored_voxel& v : voxels) v.part = std::uint8_t(std::min<std::size_t>(i, 255));
+        if (parsed.voxel_perturb) {
+            // Over a partitioned_store, which keeps the tree's part; on the moved grid, whose voxel
+            // centers are the tree's own coordinates and whose indices are the forest's.
+            const std::vector<stored_voxel> moved = perturb_voxels(partitioned_store::build(tree.volume, voxels, options.generation.budget),
+                                                                   *parsed.voxel_perturb);
+            voxels.assign(moved.begin(), moved.end());
+        }
         if (out.voxels.empty()) {
             out.voxels.assign(voxels.begin(), voxels.end());
             continue;

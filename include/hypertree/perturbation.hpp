@@ -21,6 +21,7 @@
 // Voxels whose shifted center leaves the hypervolume are dropped.
 
 #include "hypertree/store/store.hpp"
+#include "krs/core/lanes.hpp"
 #include "krs/core/noise.hpp"
 #include "krs/core/validate.hpp"
 
@@ -30,6 +31,19 @@
 #include <vector>
 
 namespace hypertree {
+
+// The field, written once for every stage: shift(p) for a point of any lane type T (double for
+// generation and voxels, float or a packet for the marcher's samples). The offsets decorrelate
+// the three components (three looks into one noise); written as the scalar type's literals, the
+// double and float callers get the same offsets they always had.
+template <class T>
+krs::vec3<T> noise_shift(const krs::vec3<T>& p, const krs::vec3<T>& amplitude, const T& frequency)
+{
+    using S = krs::scalar_t<T>;
+    const krs::vec3<T> q{p.x * frequency, p.y * frequency, p.z * frequency};
+    return {amplitude.x * krs::value_noise(q), amplitude.y * krs::value_noise(krs::vec3<T>{q.x + T(S(31.7)), q.y - T(S(17.3)), q.z + T(S(5.9))}),
+            amplitude.z * krs::value_noise(krs::vec3<T>{q.x - T(S(11.1)), q.y + T(S(23.9)), q.z - T(S(41.3))})};
+}
 
 struct perturbation {
     vec3d amplitude{};
@@ -46,17 +60,19 @@ struct perturbation {
         krs::require_non_negative(n + ".amplitude.z", amplitude.z);
         krs::require_non_negative(n + ".frequency", frequency);
     }
-    // p + shift(p). The offsets decorrelate the three components (three looks into one noise).
+    // p + shift(p) (noise_shift above).
     vec3d displaced(const vec3d& p) const
     {
-        const vec3d q = p * frequency;
-        return {p.x + amplitude.x * krs::value_noise(q), p.y + amplitude.y * krs::value_noise(vec3d{q.x + 31.7, q.y - 17.3, q.z + 5.9}),
-                p.z + amplitude.z * krs::value_noise(vec3d{q.x - 11.1, q.y + 23.9, q.z - 41.3})};
+        const vec3d s = noise_shift(p, amplitude, frequency);
+        return {p.x + s.x, p.y + s.y, p.z + s.z};
     }
 };
 
 // The post-process (stage 2): the store's voxels shifted by the field, as a sorted list any store
-// kind builds from. Amplitude 0 gives the store's own list.
+// kind builds from. Amplitude 0 gives the store's own list. Each voxel keeps the part byte the
+// store gives it (for_each_stored): its first-level part over a partitioned_store, and 0 over
+// every other kind, which keeps no parts. A tree whose shading or bounds need the parts (flows,
+// fitted part spheres, part boxes) is perturbed over a partitioned_store.
 template <voxel_store S>
 std::vector<stored_voxel> perturb_voxels(const S& store, const perturbation& perturb)
 {

@@ -60,6 +60,11 @@ struct parsed_tree {
     // TRIM regions are ifs.trim.)
     std::optional<perturbation> voxel_perturb;
     std::optional<sample_displacement> render_perturb;
+    // Where the file said so, for refusals found after parsing (a forest's build checks TRIM
+    // against its own grid, and refuses RENDERPERTURB: forest.hpp, forest_file.hpp).
+    std::string file;
+    std::optional<source_position> voxel_perturb_at, render_perturb_at;
+    std::vector<source_position> trim_at; // one per ifs.trim region, in its order
 
     // The color the file gives voxels of `depth`, if a DEPTHCOLOR covers it.
     std::optional<rgb> color_of_depth(int depth) const
@@ -303,8 +308,18 @@ private:
         case definition_keyword::render_perturb: {
             once(s, k);
             const vec3d a = vector3(s, number_rule::non_negative);
+            // The marcher's amplitude is float: a positive amplitude that rounds to 0 (1e-50)
+            // would switch the noise off silently. (PERTURB and VOXELPERTURB stay double.)
+            const auto in_float = [&](double v, const char* axis) {
+                const float f = float(v);
+                if (v > 0 && !(f > 0))
+                    fail(s.where(), std::string("expected a RENDERPERTURB amplitude ") + axis +
+                                        " of 0 or one a float holds (>= 1.4e-45; the marcher reads it in float), got " +
+                                        krs::detail::to_text(v) + ", which is 0 in float");
+                return f;
+            };
             sample_displacement d;
-            d.amplitude = {float(a.x), float(a.y), float(a.z)};
+            d.amplitude = {in_float(a.x, "x"), in_float(a.y, "y"), in_float(a.z, "z")};
             if (!s.at_end()) d.frequency = float(s.number(number_rule::non_negative));
             s.finish();
             checked(s.where(), "RENDERPERTURB", [&] {
@@ -620,7 +635,15 @@ private:
         } catch (const krs::invalid_parameter& e) {
             fail(position_of(e.parameter()), "invalid tree: " + without_library_prefix(e));
         }
-        return {std::move(tree), std::move(depth_colors_), density_class_count_, voxel_perturb_, render_perturb_};
+        return {std::move(tree),
+                std::move(depth_colors_),
+                density_class_count_,
+                voxel_perturb_,
+                render_perturb_,
+                std::string(file_),
+                seen(definition_keyword::voxel_perturb),
+                seen(definition_keyword::render_perturb),
+                trim_at_};
     }
 
     std::string_view text_, file_;

@@ -140,6 +140,12 @@ inline loaded_forest load_forest(const std::filesystem::path& path)
         if (!tree_text)
             throw definition_error(forest.listing.file_name, tree.at, "cannot read the tree file '" + tree.file.string() + "'");
         forest.trees.push_back(parse_definition(*tree_text, tree.file.string()));
+        // Render-time noise is one field for the whole march, which renders every tree at once: a
+        // tree cannot carry its own. Refused at its line rather than dropped.
+        if (const auto& at = forest.trees.back().render_perturb_at)
+            throw definition_error(tree.file.string(), *at,
+                                   "RENDERPERTURB is not allowed in a forest's tree (the march is shared by every tree; the noise "
+                                   "would be dropped); VOXELPERTURB and PERTURB are applied per tree");
         // The tree's box where the forest puts it must still be a volume float can place (an
         // offset of 1e9 under a box of side 1e-9 loaded, then failed in volume() unnamed).
         const hypervolume& v = forest.trees.back().ifs.volume;

@@ -241,13 +241,15 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
     }
     const bool spheres = options.bounds_by == bound_method::spheres && !shape.spheres.empty();
     if (spheres) {
-        // center and radius^2 (the float product the marcher compares with)
-        const std::size_t count = shape.spheres.size();
+        // center and radius^2: the CPU marcher's own values (bound_test, radius^2 rounded up with
+        // room for the float test's rounding), so both skip the same samples
+        const bound_test test = bound_test::of(shape, bound_method::spheres);
+        const std::size_t count = test.spheres.size();
         s += "const vec4 " + n + "_spheres[" + integer(count) + "] = vec4[" + integer(count) + "](";
         for (std::size_t i = 0; i < count; ++i) {
-            const krs::bounding_sphere& b = shape.spheres[i];
-            s += (i ? ",\n    vec4(" : "vec4(") + float_literal(b.center.x) + ", " + float_literal(b.center.y) + ", " +
-                 float_literal(b.center.z) + ", " + float_literal(b.radius * b.radius) + ")";
+            const std::array<float, 4>& b = test.spheres[i];
+            s += (i ? ",\n    vec4(" : "vec4(") + float_literal(b[0]) + ", " + float_literal(b[1]) + ", " + float_literal(b[2]) + ", " +
+                 float_literal(b[3]) + ")";
         }
         s += ");\n";
     }

@@ -8,6 +8,7 @@
 // accepted or refused, with the same message, whichever of them is asked, and neither needs the
 // other to find out.
 
+#include "hypertree/perturbation.hpp"
 #include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/store/store.hpp"
@@ -38,13 +39,12 @@ struct sample_displacement {
     krs::vec3f amplitude{0.0f, 0.0f, 0.0f};
     float frequency = 8.0f;
     bool enabled() const { return amplitude.x != 0.0f || amplitude.y != 0.0f || amplitude.z != 0.0f; }
+    // p + shift(p), the field of perturbation.hpp (noise_shift) in the sample's lane type.
     template <class T>
     krs::vec3<T> displaced(const krs::vec3<T>& p) const
     {
-        const T f(frequency);
-        const krs::vec3<T> q{p.x * f, p.y * f, p.z * f};
-        return {p.x + T(amplitude.x) * krs::value_noise(q), p.y + T(amplitude.y) * krs::value_noise(krs::vec3<T>{q.x + T(31.7f), q.y - T(17.3f), q.z + T(5.9f)}),
-                p.z + T(amplitude.z) * krs::value_noise(krs::vec3<T>{q.x - T(11.1f), q.y + T(23.9f), q.z - T(41.3f)})};
+        const krs::vec3<T> s = noise_shift(p, krs::vec3<T>{T(amplitude.x), T(amplitude.y), T(amplitude.z)}, T(frequency));
+        return {p.x + s.x, p.y + s.y, p.z + s.z};
     }
 };
 
@@ -131,18 +131,28 @@ struct march_options {
 
     // ... and for a tree: rays count their samples in floats, exact to 2^24, and a skip adds up to
     // 10^6 at once, so a ray may take at most 2^23 samples across the box, or its count would stop
-    // growing. (The same float step and box corners the marcher uses.)
+    // growing (and the march never end). The box is the one the marcher walks: with render-time
+    // noise, the tree's box widened by the amplitude on every side (marcher enter_box). (The same
+    // float step and box corners the marcher uses.)
     void validate(const hypervolume& volume, const world_box& box) const
     {
         validate();
+        constexpr double limit = double(1 << 23);
         const float step = step_factor * float(volume.smallest_voxel_side());
         const krs::vec3f lo(box.lo), hi(box.hi);
         const double samples = krs::length(krs::vec3d(hi - lo)) / double(step);
-        if (!(samples < double(1 << 23)))
+        if (!(samples < limit))
             throw krs::invalid_parameter("march_options.step_factor",
                                          "must leave at most 2^23 samples across the tree's box (its diagonal / (step_factor x the smallest "
                                          "voxel side) is " + std::to_string(samples) + ")",
                                          std::to_string(step_factor));
+        const krs::vec3f pad = displacement.amplitude;
+        const double widened = krs::length(krs::vec3d((hi + pad) - (lo - pad))) / double(step);
+        if (!(widened < limit))
+            throw krs::invalid_parameter("march_options.displacement.amplitude",
+                                         "must leave at most 2^23 samples across the tree's box widened by it on every side (that box's "
+                                         "diagonal / (step_factor x the smallest voxel side) is " + std::to_string(widened) + ")",
+                                         std::to_string(pad.x) + " " + std::to_string(pad.y) + " " + std::to_string(pad.z));
     }
 
     // The lights' directions made unit. Finite and non-zero: an infinite component normalized to

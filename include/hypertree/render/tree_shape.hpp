@@ -14,8 +14,11 @@
 //   displacements), replaced by r (1 + dmax / r)^2 = r + 2 dmax + dmax^2 / r, r being the radius
 //   as the shear receives it. (A shear moves every point by f dmax along one direction, f in
 //   [0, 1], so two points' offsets differ by at most dmax: r + dmax would do; the paper's rule is
-//   wider.) Then grown by the perturbation amplitude (as the paper says) and by one cell diagonal
-//   (not in the paper: the sphere bounds generator points, the marcher needs their whole cells).
+//   wider.) With generation noise (ifs::perturb, amplitude a) the crown is the box of perturbed
+//   voxels while the chain maps the unperturbed orbit, which lies within |a| of them: the sphere
+//   pushed through the chain is the crown grown by |a|. The image is then grown by |a| again (its
+//   recorded points move by at most that, as the paper says) and by one cell diagonal (not in
+//   the paper: the sphere bounds generator points, the marcher needs their whole cells).
 //   The trunk is bounded by the condensation's box (part 0's cell box), as the paper does. This
 //   holds every voxel only if the part's subtree lies in the primary sphere, which level-dependent
 //   parameters (3.4) and dummy transformations do not promise: bench_hypertree_render --only
@@ -162,11 +165,14 @@ struct tree_shape {
     void set_paper_spheres_of(const Drawn& drawn)
     {
         const auto& definition = drawn.definition();
-        const double margin = krs::length(definition.volume.voxel_size()) + krs::length(definition.perturb.amplitude);
+        // |a| in, for the unperturbed orbit around the perturbed crown; |a| and a cell diagonal out
+        // (the rule at the head of this file).
+        const double noise = krs::length(definition.perturb.amplitude);
+        const double margin = krs::length(definition.volume.voxel_size()) + noise;
         paper_spheres.clear();
         for (std::size_t j = 0; j < drawn.transform_count(); ++j) {
             if (drawn.dummies_from()[j] <= 1) continue;
-            const auto [c, r] = paper_sphere_through(drawn.chain_of(j, 1), vec3d(crown.center), double(crown.radius));
+            const auto [c, r] = paper_sphere_through(drawn.chain_of(j, 1), vec3d(crown.center), double(crown.radius) + noise);
             paper_spheres.push_back(krs::bound_around(c, r + margin));
         }
         trunk_box.clear();
@@ -202,6 +208,13 @@ struct tree_shape {
     {
         const auto& g = drawn.definition().generator;
         if (g.is_point()) throw krs::invalid_parameter("tree_shape.set_line_flow_of", "needs an IFS with a line generator", "a point generator");
+        // The line axes are per first-level part: voxels that all read part 0 (a list rebuilt
+        // through a store that keeps no parts, e.g. index_list_store) would silently leave every
+        // axis the covariance one, a single "trunk" flow. Refused instead.
+        const bool any_branch = std::any_of(flows.begin(), flows.end(), [](const part_flow& f) { return f.part > 0; });
+        if (!flows.empty() && drawn.transform_count() > 0 && !any_branch)
+            throw krs::invalid_parameter("tree_shape.set_line_flow_of", "voxels carrying their first-level parts (a partitioned_store's list)",
+                                         "every voxel in part 0");
         for (part_flow& f : flows) {
             if (f.part < 1 || std::size_t(f.part - 1) >= drawn.transform_count()) continue;
             const auto& chain = drawn.chain_of(std::size_t(f.part - 1), 1);
@@ -320,8 +333,9 @@ private:
     }
 };
 
-// A bound_method made ready for the march: float spheres (center, radius^2) and float boxes
-// rounded outward, so the float test never rejects a point the double bound holds. holds(p) is
+// A bound_method made ready for the march: float spheres (center, radius^2: radius^2 rounded up
+// with room for the float test's own rounding) and float boxes rounded outward, so the float test
+// never rejects a point the double bound holds. holds(p) is
 // one template for a point (T = float) and a packet (one point per lane), the same operations
 // in the same order, so scalar and packet marchers skip the same samples.
 struct bound_test {
@@ -335,10 +349,17 @@ struct bound_test {
     {
         bound_test t;
         t.by = by;
-        const auto add_sphere = [&](const krs::bounding_sphere& s) { t.spheres.push_back({s.center.x, s.center.y, s.center.z, s.radius * s.radius}); };
+        const auto down = [](double v) { float f = float(v); return double(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f; };
+        const auto up = [](double v) { float f = float(v); return double(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f; };
+        // The center is already float (krs::bound_around grew the radius by its rounding). holds()
+        // computes dx^2 + dy^2 + dz^2 in float: three differences, three squares and two sums, a
+        // relative error below 6 u = 3.6e-7 (u = 2^-24) for the point's own float position. So r^2
+        // is taken in double, grown by 1e-6 relative (half a micron per metre of radius) and
+        // rounded up: a point the double sphere holds is never rejected.
+        const auto add_sphere = [&](const krs::bounding_sphere& s) {
+            t.spheres.push_back({s.center.x, s.center.y, s.center.z, up(double(s.radius) * double(s.radius) * (1 + 1e-6))});
+        };
         const auto add_box = [&](const world_box& b) {
-            const auto down = [](double v) { float f = float(v); return double(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f; };
-            const auto up = [](double v) { float f = float(v); return double(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f; };
             t.boxes.push_back({down(b.lo.x), down(b.lo.y), down(b.lo.z), up(b.hi.x), up(b.hi.y), up(b.hi.z)});
         };
         switch (by) {
