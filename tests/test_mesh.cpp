@@ -253,6 +253,62 @@ TEST_CASE("mesh: the triangle count grows about 4x per doubling of the resolutio
     }
 }
 
+TEST_CASE("mesh: a budget below the estimate is refused before the full-resolution pass starts")
+{
+    const krs::torus t({0.0f, 0.1f, 0.0f}, {0.3f, 0.2f, 1.0f}, 1.0f, 0.3f);
+    krs::mesh_options o;
+    o.resolution = 128;
+    o.estimate_first = false;
+    krs::mesh_stats stats;
+    const krs::triangle_mesh m = krs::extract_mesh(t, o, &stats); // the true size, from the full pass
+    // A third of the true size: far below any estimate within the slack of the truth.
+    o.memory_budget = stats.peak_bytes / 3;
+    int reports = 0;
+    o.progress = [&](double) { ++reports; };
+    // Without the estimate, the growth check refuses too, but only after meshing part of the grid
+    // (the progress callback saw it): what the estimate is there to avoid.
+    CHECK_THROWS_AS((void)krs::extract_mesh(t, o), krs::invalid_parameter);
+    CHECK(reports > 0);
+    reports = 0;
+    o.estimate_first = true;
+    try {
+        (void)krs::extract_mesh(t, o);
+        FAIL("not refused");
+    } catch (const krs::invalid_parameter& e) {
+        CHECK(e.parameter() == "mesh_options.memory_budget");
+        CHECK(std::string(e.what()).find("estimated") != std::string::npos);
+        CHECK(std::string(e.what()).find(std::to_string(o.memory_budget)) != std::string::npos);
+        MESSAGE(std::string(e.what()));
+    }
+    CHECK(reports == 0); // the full-resolution pass never started
+}
+
+TEST_CASE("mesh: a budget just above the true mesh size is not refused by the estimate")
+{
+    const auto fits = [](const auto& f, int resolution) {
+        krs::mesh_options o;
+        o.resolution = resolution;
+        o.estimate_first = false;
+        krs::mesh_stats stats;
+        const krs::triangle_mesh m = krs::extract_mesh(f, o, &stats);
+        // peak_bytes is at least what the growth check counted; 90% of it is refused by the
+        // growth check, so the budget below is within about 10% of the true size.
+        o.memory_budget = stats.peak_bytes * 9 / 10;
+        CHECK_THROWS_AS((void)krs::extract_mesh(f, o), krs::invalid_parameter);
+        o.memory_budget = stats.peak_bytes;
+        o.estimate_first = true;
+        krs::mesh_stats again;
+        CHECK_NOTHROW((void)krs::extract_mesh(f, o, &again));
+        CHECK(again.peak_bytes == stats.peak_bytes);
+    };
+    fits(krs::sphere({0.1f, -0.2f, 0.3f}, 0.8f), 64);
+    fits(krs::sphere({0.1f, -0.2f, 0.3f}, 0.8f), 128);
+    fits(krs::torus({0.0f, 0.1f, 0.0f}, {0.3f, 0.2f, 1.0f}, 1.0f, 0.3f), 64);
+    fits(krs::torus({0.0f, 0.1f, 0.0f}, {0.3f, 0.2f, 1.0f}, 1.0f, 0.3f), 128);
+    const small_sequence seq = make_small_sequence();
+    fits(seq, 64);
+}
+
 TEST_CASE("mesh: bad options and fields are refused by name")
 {
     const krs::sphere s({0, 0, 0}, 1.0f);

@@ -56,6 +56,22 @@
 // checked after every cell, so an over-fine resolution is refused with an invalid_parameter naming
 // mesh_options.memory_budget and what was reached, before it can take more than one cell's worth
 // (at most 12 triangles) beyond it. A field returning NaN or infinity is refused by name too.
+//
+// Up front. That check refuses only after the work up to the budget is done. With
+// `estimate_first` (the default), a coarse pass first meshes the same box at resolution / f, f the
+// largest of 4 and 2 that keeps it >= 8 cells (none below 16: such a mesh is small anyway), without
+// placing vertices, and counts its bytes as the growth check does. A surface's triangles (and
+// vertices, and so bytes) grow with its area over h^2, about f^2 from the coarse grid to the full
+// one (3.9-4.2x per doubling on torus and rock), so the full mesh is estimated at
+// coarse bytes x (resolution / coarse resolution)^2 and refused, before any full-resolution cell,
+// with the estimate and the budget when that exceeds the budget by more than `estimate_slack`
+// (1/4). The slack absorbs the few percent by which a smooth surface's growth falls short of f^2,
+// so a mesh that fits is never refused by the estimate; detail finer than the coarse cells (a
+// fractal: 10.6x per doubling on the Menger sponge) only makes the estimate lower, never higher.
+// The estimate is thus a lower bound that catches the gross cases cheaply (the coarse pass costs
+// about 1/f^2 of the full one's meshing, and no projection), and the growth check stays the
+// guarantee. The coarse pass has its own budget of budget x (1 + slack) / f^2: going over it
+// already means the estimate is over, so the coarse pass never takes more than that.
 
 #include "krs/core/bounds.hpp"
 #include "krs/core/validate.hpp"
@@ -94,6 +110,7 @@ struct mesh_options {
     bool sparse = true;          // skip blocks by their centre's distance; false visits every cell
     bool share_corners = true;   // sparse: a block of 2^3 cells evaluates its 27 corners once (false:
                                  // each cell its own 8, as before; kept for bench_mesh's comparison)
+    bool estimate_first = true;  // refuse up front from a coarse pass's estimate (see Up front above)
     bounding_box box = bounding_box::unbounded(); // where to mesh; unbounded: the field's own box
     // Called now and then with the fraction of the grid's volume done, in [0, 1].
     std::function<void(double)> progress;
@@ -123,6 +140,9 @@ struct mesh_stats {
 };
 
 namespace detail {
+
+// The estimate may exceed the budget by this fraction before it refuses (see Up front above).
+inline constexpr double estimate_slack = 0.25;
 
 template <field F>
 class mesh_extractor {
@@ -155,7 +175,28 @@ public:
         for (int a = 0; a < 3; ++a) stats_.cells_per_axis[a] = std::size_t(n_[a]);
     }
 
+    // The coarse pass: the grid meshed without placing vertices; the bytes the growth check counts
+    // at the end, or throws over_budget past `counting_budget`.
+    struct over_budget {};
+    std::size_t count(std::size_t budget)
+    {
+        counting_budget_ = budget;
+        grid();
+        return bytes();
+    }
+
     triangle_mesh run(mesh_stats* stats)
+    {
+        grid();
+        project();
+        if constexpr (locates) add_attributes();
+        stats_.peak_bytes = bytes();
+        if (stats) *stats = stats_;
+        return std::move(mesh_);
+    }
+
+private:
+    void grid()
     {
         if (o_.sparse) {
             std::int64_t size = 1;
@@ -169,14 +210,8 @@ public:
                 report(double(k + 1) / double(n_[2]));
             }
         }
-        project();
-        if constexpr (locates) add_attributes();
-        stats_.peak_bytes = bytes();
-        if (stats) *stats = stats_;
-        return std::move(mesh_);
     }
 
-private:
     static constexpr bool locates = requires(const F& f, const vec3d& p) {
         { f.locate(p).kernel_point } -> std::convertible_to<vec3d>;
         f.kernels()[f.locate(p).kernel];
@@ -390,6 +425,10 @@ private:
     void check_budget()
     {
         const std::size_t used = bytes();
+        if (counting_budget_ != 0) {
+            if (used > counting_budget_) throw over_budget{};
+            return;
+        }
         if (used > o_.memory_budget)
             throw invalid_parameter("mesh_options.memory_budget",
                                     "exceeded after " + std::to_string(mesh_.triangles.size()) + " triangles and " +
@@ -465,6 +504,7 @@ private:
     std::int64_t n_[3] = {0, 0, 0};
     std::int64_t root_ = 1;
     double done_ = 0, reported_ = 0;
+    std::size_t counting_budget_ = 0; // > 0: the coarse pass (count), with this budget
     triangle_mesh mesh_;
     std::vector<pending> edges_;
     std::unordered_map<std::uint64_t, std::uint32_t> vertex_of_edge_;
@@ -475,11 +515,41 @@ private:
 
 // The zero set of `f` as a closed, oriented triangle mesh (see above). Throws invalid_parameter
 // for bad options, a field without a box when none is given, a non-finite distance, or a mesh
-// that would exceed options.memory_budget.
+// that would exceed options.memory_budget (estimated up front, then checked as it grows).
 template <field F>
 triangle_mesh extract_mesh(const F& f, const mesh_options& options = {}, mesh_stats* stats = nullptr)
 {
-    detail::mesh_extractor<F> x(f, options);
+    detail::mesh_extractor<F> x(f, options); // validates the options before any pass
+    int factor = 4;
+    while (factor > 1 && options.resolution / factor < 8) factor /= 2;
+    if (options.estimate_first && factor > 1) {
+        mesh_options coarse = options;
+        coarse.resolution = options.resolution / factor;
+        coarse.attributes = 0;
+        coarse.progress = nullptr;
+        const double scale = double(options.resolution) / double(coarse.resolution);
+        const double refuse_above = double(options.memory_budget) * (1.0 + detail::estimate_slack);
+        const std::size_t coarse_budget = std::size_t(std::min(refuse_above / (scale * scale), 1e18)) + 1;
+        double estimate = 0;
+        std::string counted;
+        try {
+            detail::mesh_extractor<F> c(f, coarse);
+            const std::size_t b = c.count(coarse_budget);
+            estimate = double(b) * scale * scale;
+            counted = std::to_string(b) + " bytes";
+        } catch (const typename detail::mesh_extractor<F>::over_budget&) {
+            estimate = double(coarse_budget) * scale * scale;
+            counted = "over " + std::to_string(coarse_budget) + " bytes";
+        }
+        if (estimate > refuse_above)
+            throw invalid_parameter("mesh_options.memory_budget",
+                                    "is below the mesh's estimated " + std::string(counted[0] == 'o' ? "at least " : "") + std::to_string(std::size_t(estimate)) + " bytes at resolution " +
+                                        std::to_string(options.resolution) + " (a pass at resolution " +
+                                        std::to_string(coarse.resolution) + " counted " + counted + ", times " +
+                                        std::to_string(int(scale * scale + 0.5)) +
+                                        "); raise the budget or lower mesh_options.resolution",
+                                    std::to_string(options.memory_budget));
+    }
     return x.run(stats);
 }
 
