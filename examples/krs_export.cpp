@@ -11,8 +11,9 @@
 // ground plane) the box its tests sample, with N cells along the box's longest side (default
 // 128). Progress goes to stderr; the summary (triangles, vertices, worst vertex distance to the
 // zero set in cells, time) to stdout. .glb and .gltf need a build with tinygltf (krs::mesh_gltf).
-// A mesh over the memory budget (default 1024 MB) is refused before the file is written, and a
-// failed write leaves no file behind. --uv and --kernel-colors add per-vertex uv (the kernel's
+// A mesh over the memory budget (default 1024 MB) is refused before the file is written (one a
+// coarse pass estimates over it, before the full-resolution meshing starts), and a failed write
+// leaves no file behind. --uv and --kernel-colors add per-vertex uv (the kernel's
 // own, at the vertex's kernel-space point) and a colour per kernel, for sequence scenes
 // (krs/mesh/extract.hpp's mesh_options::attributes). A refusal found while meshing names the
 // option typed (--memory-budget, --resolution, ...), not the library's field.
