@@ -147,6 +147,14 @@ namespace detail {
 // The estimate may exceed the budget by this fraction before it refuses (see Up front above).
 inline constexpr double estimate_slack = 0.25;
 
+// The coarse pass's divisor f: 4, or 2 where resolution / 4 < 8 cells; 1 (no coarse pass) below 16.
+inline int estimate_factor(int resolution)
+{
+    int factor = 4;
+    while (factor > 1 && resolution / factor < 8) factor /= 2;
+    return factor;
+}
+
 template <field F>
 class mesh_extractor {
 public:
@@ -523,8 +531,7 @@ template <field F>
 triangle_mesh extract_mesh(const F& f, const mesh_options& options = {}, mesh_stats* stats = nullptr)
 {
     detail::mesh_extractor<F> x(f, options); // validates the options before any pass
-    int factor = 4;
-    while (factor > 1 && options.resolution / factor < 8) factor /= 2;
+    const int factor = detail::estimate_factor(options.resolution);
     if (options.estimate_first && factor > 1) {
         mesh_options coarse = options;
         coarse.resolution = options.resolution / factor;
