@@ -184,12 +184,12 @@ krs_case(krs_export        0 "krs_export: rock: ;triangles;-> "                 
 krs_case(krs_export        2 "--projection-steps;'65';[0, 64]"                     --scene rock --projection-steps 65 --mesh <out>/x.ply)
 krs_case(krs_export        2 "--uv;--mesh"                                          --scene rock --uv)
 # Refusals found while meshing (status 1) name the option typed, not the library's field.
-krs_case(krs_export        1 "--memory-budget: exceeded;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --mesh <out>/x.ply)
+krs_case(krs_export        1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --mesh <out>/x.ply)
 krs_case(krs_export        1 "--uv / --kernel-colors: needs a field that locates"   --scene kifs_menger --resolution 8 --uv --mesh <out>/x.ply)
 krs_case(krs_export        0 "krs_export: tree: ;triangles"                         --scene tree --resolution 16 --uv --kernel-colors --mesh <out>/tree.obj)
 if(KRS_WITH_GLTF)
     krs_case(krs_export    2 "--max-instances;'0'"                                  --scene tree --max-instances 0 --instances <out>/x.glb)
-    krs_case(krs_export    1 "--memory-budget: exceeded;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --instances <out>/x.glb)
+    krs_case(krs_export    1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --instances <out>/x.glb)
     krs_case(krs_export    1 "--max-instances: exceeded;at --instance-levels 4;lower --instance-levels;(got 3)" --scene tree --max-instances 3 --instances <out>/x.glb)
     krs_case(krs_export    1 "--instance-levels: must be at most"                   --scene rock --instance-levels 64 --instances <out>/x.glb)
     # Scenes with planes (the tree's ground, the rock's and terrain's facets) export as instances:
