@@ -237,6 +237,13 @@ public:
         return made_for(memo) && memo.slots() > 0 && memo.slots() * memo.stride() < (std::size_t(1) << 31);
     }
 
+    // Whether march_packets marches flat shading in step (colors by level, no shading memo read):
+    // not with a ray cache (scalar), a render-time displacement, or the per-lane reference asked.
+    bool marches_flat_in_step(bool ray_cache, bool shade_each_sample) const
+    {
+        return shading_.flat() && !ray_cache && !shade_each_sample && !options_.displacement.enabled();
+    }
+
     // Marches the rays of the lanes.
     template <class T>
     march_result<T> march(const krs::ray<T>& ray, march_context context = {}) const
@@ -253,9 +260,8 @@ public:
     {
         // (Displaced samples read voxels off the ray's own path: only the per-lane march displaces.)
         const bool cached = std::floating_point<T> && context.rays;
-        const bool displaced = options_.displacement.enabled();
-        if (shading_.flat() && !cached && !displaced && !context.shade_each_sample) return march_in_step<T, K, true>(rays, nullptr);
-        const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || cached || displaced;
+        if (marches_flat_in_step(cached, context.shade_each_sample)) return march_in_step<T, K, true>(rays, nullptr);
+        const bool per_sample = !options_.shade_per_voxel || options_.specular > 0 || cached || options_.displacement.enabled();
         if (!per_sample && context.shading && context.shading->complete() && fits(*context.shading))
             return march_in_step<T, K, false>(rays, context.shading);
         std::array<march_result<T>, K> out;

@@ -127,8 +127,7 @@ image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, c
     const march_options& options = marcher.options();
     std::optional<shade_memo> memo;
     // (Flat shading marching in step reads no memo: its colors come by level.)
-    const bool in_step_flat = marcher.shading().flat() && !settings.shade_each_sample && !(std::floating_point<T> && settings.ray_cache) &&
-                              !options.displacement.enabled(); // (as march_packets chooses)
+    const bool in_step_flat = marcher.marches_flat_in_step(std::floating_point<T> && settings.ray_cache, settings.shade_each_sample);
     if (options.shade_per_voxel && !in_step_flat) memo.emplace(marcher.new_shade_memo());
     std::atomic<std::uint64_t> shading_lookups{0};
     if (memo && settings.shade_ahead) {
