@@ -8,8 +8,8 @@
 // Creation is one build_tree call, generate + validate (compact), both on T threads (default all
 // cores), + density classes + building the store, best of R calls (default 5; 2 at resolution
 // 1000), with a scratch_memory kept across the calls as an application creating trees would keep
-// it (hypertree/scratch.hpp): its temporaries then reuse mapped pages. Four ways side by side, in
-// the same run, so their ratios do not depend on the machine's load of the moment:
+// it (hypertree/create/scratch.hpp): its temporaries then reuse mapped pages. Four ways side by
+// side, in the same run, so their ratios do not depend on the machine's load of the moment:
 //   recycled    each call builds in the store the last call returned (the stores' build with a
 //               recycled store), as an application making tree after tree at one size would;
 //               the headline figure;
@@ -35,7 +35,7 @@
 // A last table gives build_tree's own steps (generate, bucket, merge, classify, then the store's
 // build) on one thread in CPU time, which the machine's load barely moves: their sum over two is
 // the least two threads could take, the floor the targets are measured against. Where the grid
-// has at most 2^21 voxels, build_tree validates through a per-voxel table (compact.hpp's
+// has at most 2^21 voxels, build_tree validates through a per-voxel table (create/compact.hpp's
 // voxel_table) instead of bucket + merge: "tbl add" and "tbl read" are its two steps, timed in
 // the same rounds as bucket and merge, "same" whether its entries equal the merge's, "gain"
 // (bucket + merge) / (add + read); the sum then counts the table.
@@ -50,9 +50,9 @@
 // (issue 7).
 
 #include "hypertree/build.hpp"
+#include "hypertree/create/scratch.hpp"
 #include "hypertree/huge_pages.hpp"
 #include "hypertree/presets.hpp"
-#include "hypertree/scratch.hpp"
 #include "hypertree/store/store_kinds.hpp"
 #include "support/creation_before.hpp"
 #include "support/text.hpp"

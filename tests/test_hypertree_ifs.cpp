@@ -283,9 +283,9 @@ TEST_CASE("hypertree generation is the same on one thread and many")
 TEST_CASE("hypertree lanes run in step make the same hits as lanes run one by one")
 {
     // In a build with AVX-512 the point generator's eight lanes of cycles run in SIMD registers
-    // (generator_lanes.hpp); vector_lanes = false runs them through the scalar loop. The tree must not
-    // depend on which: the same hits (in another order) and the same counts. Without AVX-512
-    // both runs take the scalar loop.
+    // (create/generator_lanes.hpp); vector_lanes = false runs them through the scalar loop. The
+    // tree must not depend on which: the same hits (in another order) and the same counts. Without
+    // AVX-512 both runs take the scalar loop.
     const auto sorted_hits = [](const generated_hits& g) {
         std::vector<std::tuple<voxel_index, int, int>> v;
         for (const hit& h : g.hits) v.emplace_back(h.voxel, h.level, h.part);
@@ -945,11 +945,12 @@ TEST_CASE("hypertree trimming during generation: no hit and no voxel inside a re
 
 TEST_CASE("hypertree trimming during generation differs from clearing afterwards in densities, not in voxels")
 {
-    // Density classes are placed on the population of hit voxels (density.hpp). Clearing a region
-    // afterwards keeps the classes the region's voxels helped place; locking them during generation
-    // places the classes on what is left. So: the same voxels and levels either way, densities that
-    // differ, and the trimmed tree's densities are those of classifying the untrimmed hits outside
-    // the region (the reference, built from generate(), compact() and classify()).
+    // Density classes are placed on the population of hit voxels (create/density.hpp). Clearing a
+    // region afterwards keeps the classes the region's voxels helped place; locking them during
+    // generation places the classes on what is left. So: the same voxels and levels either way,
+    // densities that differ, and the trimmed tree's densities are those of classifying the
+    // untrimmed hits outside the region (the reference, built from generate(), compact() and
+    // classify()).
     auto plain = small_tree();
     plain.iterations = 60000;
     plain.branch_depth = 0; // every voxel's density from its class (branch voxels are always full)

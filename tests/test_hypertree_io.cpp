@@ -3,7 +3,7 @@
 // independent reference, written with C++ arithmetic rather than parsed. Every error class gets a
 // small bad text and a check of the location and the expectation in its message.
 
-#include "hypertree/generate.hpp"
+#include "hypertree/create/generate.hpp"
 #include "hypertree/io/definition_file.hpp"
 #include "hypertree/forest.hpp"
 #include "hypertree/io/forest_file.hpp"

@@ -3,11 +3,11 @@
 // compaction, counting by hand for classes, a plain array of every voxel of the grid for stores
 // and operations.
 
-#include "hypertree/compact.hpp"
-#include "hypertree/density.hpp"
+#include "hypertree/create/compact.hpp"
+#include "hypertree/create/density.hpp"
 #include "hypertree/huge_pages.hpp"
 #include "hypertree/ops.hpp"
-#include "hypertree/scratch.hpp"
+#include "hypertree/create/scratch.hpp"
 #include "hypertree/store/store_kinds.hpp"
 
 #include "support/random.hpp"

@@ -1,8 +1,8 @@
 #pragma once
 // Today's creation path as it was before issue 27's rework (commit d69f522), kept callable so
 // bench_hypertree_create can time it side by side with the library's, alternating, in one run.
-// A frozen copy of build.hpp's stored_voxels_of, of compact.hpp's bucket_chunk, direct_merge and
-// merge_bucketed and of density.hpp's classify as they were; nothing here is used by the
+// A frozen copy of build.hpp's stored_voxels_of, of create/compact.hpp's bucket_chunk, direct_merge
+// and merge_bucketed and of create/density.hpp's classify as they were; nothing here is used by the
 // library. The generator (generate_chunks one chunk at a time, as before), density_classes and
 // the stores' build are the library's own, which the rework leaves as they were.
 
@@ -104,7 +104,7 @@ void merge_bucketed(std::span<const bucketed_chunk> chunks, const direct_buckets
                                        entries);
 }
 
-// classify as it was (density.hpp), one list split into tasks.
+// classify as it was (create/density.hpp), one list split into tasks.
 template <class Voxels = std::vector<stored_voxel>>
 Voxels classify(std::span<const voxel_entry> entries, const density_classes& classes, int branch_depth, Voxels voxels = {},
                 const parallel_for_hook& parallel_for = {})

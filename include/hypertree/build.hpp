@@ -4,7 +4,7 @@
 //
 //     auto tree = hypertree::build_tree<hypertree::bit_array_store>(presets::tree_a(300), seed);
 //
-// An application that builds many trees keeps one scratch_memory (scratch.hpp) in
+// An application that builds many trees keeps one scratch_memory (create/scratch.hpp) in
 // options.generation.scratch: each build then reuses the pages of the last one's temporaries;
 // passing its last store as `recycled` builds the new one in that store's memory too (the stores'
 // build with a recycled store), so a tree of the same size maps no new page at all.
@@ -12,10 +12,10 @@
 // Each step stays public for callers that want to keep the hit list (to build several stores, or
 // to unite trees before classifying).
 
-#include "hypertree/compact.hpp"
-#include "hypertree/density.hpp"
-#include "hypertree/generate.hpp"
-#include "hypertree/scratch.hpp"
+#include "hypertree/create/compact.hpp"
+#include "hypertree/create/density.hpp"
+#include "hypertree/create/generate.hpp"
+#include "hypertree/create/scratch.hpp"
 #include "hypertree/store/store.hpp"
 
 #include <optional>
@@ -33,11 +33,11 @@ namespace detail {
 // Generation, validation and density classes: the stored voxels of one tree, in a list drawn
 // from `scratch` (every temporary of the way too). Each list goes back to the scratch as soon as
 // the next is made, so the next step can reuse its pages. Where the grid allows, the chunks are
-// generated in groups of consecutive chunks (generate.hpp's generation_group_count), each group's
-// hits validated on its task while they are in cache and its buffer reused by the next group:
-// added to a per-voxel table on grids up to 2^21 voxels (compact.hpp's voxel_table), else
-// bucketed (compact.hpp's direct_buckets) and merged; on larger grids validation reads the
-// chunks as pieces.
+// generated in groups of consecutive chunks (create/generate.hpp's generation_group_count), each
+// group's hits validated on its task while they are in cache and its buffer reused by the next
+// group: added to a per-voxel table on grids up to 2^21 voxels (create/compact.hpp's voxel_table),
+// else bucketed (create/compact.hpp's direct_buckets) and merged; on larger grids validation reads
+// the chunks as pieces.
 template <transform_pipeline P>
 std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::uint64_t seed, int density_class_count,
                                                 const generation_options& options, std::pmr::memory_resource* scratch)
@@ -58,8 +58,8 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
                                std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
     };
     if (voxel_count > 0 && voxel_count <= voxel_table::max_voxels) {
-        // Small grids: one table slot per voxel (compact.hpp's voxel_table), each group's hits
-        // added on its task while hot. A voxel past 2^17 hits (never in the presets) sends the
+        // Small grids: one table slot per voxel (create/compact.hpp's voxel_table), each group's
+        // hits added on its task while hot. A voxel past 2^17 hits (never in the presets) sends the
         // build to the bucketed path below, which counts in 32 bits.
         voxel_table_pool pool(voxel_count, scratch);
         generate_chunks(definition, seed, drawing, observer, [&](std::size_t, chunk_output& hits) {

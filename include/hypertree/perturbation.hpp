@@ -2,8 +2,8 @@
 // Noise perturbation (paper section 3.5): "The too ideal structure of hypertrees can be distorted
 // with a three-dimensional vector-valued noise or turbulence", injected at one of three stages,
 // all with the same field here:
-//   1. during generation, on generator positions (ifs::perturb, generate.hpp): the paper's "best
-//      solution", exact in position;
+//   1. during generation, on generator positions (ifs::perturb, create/generate.hpp): the paper's
+//      "best solution", exact in position;
 //   2. as a post-process, "a shift operation to the completed hypertree" (perturb_voxels below):
 //      every stored voxel moves, with its density, level and part, to the voxel holding its
 //      shifted center;

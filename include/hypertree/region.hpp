@@ -7,16 +7,16 @@
 // constraint of IFS or performed as postprocessing"):
 //   - afterwards: ops.hpp's clear() and set() empty or fill a region of a finished store;
 //   - during generation: ifs::trim lists regions whose voxels are locked while the IFS runs
-//     (generate.hpp): a hit on a locked voxel is never recorded. Generators still transform and
-//     move on (the IFS is unchanged), so branches that pass through a region continue beyond it:
-//     the paper's "dangling parts", which it leaves open.
+//     (create/generate.hpp): a hit on a locked voxel is never recorded. Generators still transform
+//     and move on (the IFS is unchanged), so branches that pass through a region continue beyond
+//     it: the paper's "dangling parts", which it leaves open.
 //
 // The two give the same occupied voxels (a voxel outside every region collects the same hits
-// either way, and a voxel inside none), but not the same densities: density classes (density.hpp)
-// are placed on the population of hit voxels, so the voxels a region would have held change the
-// class boundaries of every other voxel when they are cleared afterwards, and not when they were
-// never recorded. Trimming during generation classifies only what is left (tested in
-// test_hypertree_ifs.cpp on a tree whose region holds many voxels).
+// either way, and a voxel inside none), but not the same densities: density classes
+// (create/density.hpp) are placed on the population of hit voxels, so the voxels a region would
+// have held change the class boundaries of every other voxel when they are cleared afterwards, and
+// not when they were never recorded. Trimming during generation classifies only what is left
+// (tested in test_hypertree_ifs.cpp on a tree whose region holds many voxels).
 
 #include "hypertree/store/store.hpp"
 #include "krs/core/validate.hpp"

@@ -101,7 +101,7 @@ public:
     }
     // The voxel holding p, or nothing when p lies outside the box (or is not finite). Cells are
     // half-open [lo, hi) except that the box's maximum face belongs to the last cell. The cell
-    // coordinate is (p - origin) * cells_per_unit truncated: the voxel walk of generate.hpp
+    // coordinate is (p - origin) * cells_per_unit truncated: the voxel walk of create/generate.hpp
     // computes cells the same way, so both agree on boundaries.
     std::optional<voxel_index> voxel_at(const vec3d& p) const
     {

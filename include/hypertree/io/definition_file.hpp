@@ -156,8 +156,8 @@ inline std::string without_library_prefix(const krs::invalid_parameter& e)
     return std::string(s);
 }
 
-// The class counts DENSITYCLASSES accepts: density_classes' limits (density.hpp), repeated so that
-// reading a file does not pull in the store code.
+// The class counts DENSITYCLASSES accepts: density_classes' limits (create/density.hpp), repeated
+// so that reading a file does not pull in the store code.
 inline constexpr int density_class_minimum = 2;   // density_classes::min_class_count
 inline constexpr int density_class_maximum = 255; // density_classes::max_class_count
 

@@ -70,7 +70,7 @@ public:
     const T& operator[](std::size_t i) const { return data_[i]; }
 
     // Whether reuse(size) would keep this block: it holds `size` elements and is at most twice
-    // as large (a small array should not pin a large block, as scratch.hpp's rule).
+    // as large (a small array should not pin a large block, as create/scratch.hpp's rule).
     bool reusable_for(std::size_t size) const { return size <= capacity_ && capacity_ / 2 <= size && size > 0; }
     // Precondition: every element of the block is zero again (the caller cleared what it wrote).
     // Makes this a zeroed array of `size` elements, in its own block when reusable_for(size), or

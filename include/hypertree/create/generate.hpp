@@ -21,8 +21,8 @@
 // chunks on yours.
 
 #include "hypertree/ifs.hpp"
-#include "hypertree/generator_lanes.hpp"
-#include "hypertree/scratch.hpp"
+#include "hypertree/create/generator_lanes.hpp"
+#include "hypertree/create/scratch.hpp"
 #include "hypertree/voxel.hpp"
 #include "krs/core/noise.hpp"
 

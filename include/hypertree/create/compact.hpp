@@ -22,7 +22,7 @@
 // On grids of at most 2^21 voxels build_tree skips the buckets: voxel_table (below) keeps one slot
 // per voxel, so each hit is one read-modify-write and the entries are read out in voxel order.
 
-#include "hypertree/scratch.hpp"
+#include "hypertree/create/scratch.hpp"
 #include "hypertree/voxel.hpp"
 
 #include <algorithm>
