@@ -53,6 +53,7 @@
 // rounds), lookups and probes per primary ray, the stored voxels the bound leaves outside (brute
 // force) and the pixels not bit-equal to AABB only's (0 whenever nothing is left outside).
 
+#include "hypertree/execution.hpp"
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
 #include "support/text.hpp"

@@ -4,6 +4,7 @@
 // from the FNV-1a definition, not taken from the library.
 
 #include "hypertree/build.hpp"
+#include "hypertree/execution.hpp"
 #include "hypertree/io/binary.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/store/store_kinds.hpp"

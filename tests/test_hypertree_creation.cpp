@@ -6,6 +6,7 @@
 // over a histogram (test_hypertree_store.cpp) with the code under test.
 
 #include "hypertree/build.hpp"
+#include "hypertree/execution.hpp"
 #include "hypertree/presets.hpp"
 
 #include <doctest/doctest.h>

@@ -10,6 +10,7 @@
 // center, as render does) and the shader reads them from a storage buffer, so both marchers start
 // from the same floats and the comparison is of the march alone.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/render/glsl.hpp"

@@ -2,6 +2,7 @@
 // independent reference: closed forms for the maps, a from-scratch recomposition of every
 // generator's pipeline for the row reuse of figure 2, brute-force sampling for the voxel walk.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
 #include "support/random.hpp"

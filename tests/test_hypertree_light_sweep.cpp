@@ -2,6 +2,7 @@
 // where nothing is approximated (no cut, or lights along an axis, where a cut voxel's ray is the
 // cutting ray's tail), and within a measured bound of them in images of trees A-D.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/hypertree.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/render/render.hpp"

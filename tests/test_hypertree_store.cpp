@@ -5,6 +5,7 @@
 
 #include "hypertree/create/compact.hpp"
 #include "hypertree/create/density.hpp"
+#include "hypertree/execution.hpp"
 #include "hypertree/huge_pages.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/create/scratch.hpp"

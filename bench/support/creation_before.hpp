@@ -7,6 +7,7 @@
 // the stores' build are the library's own, which the rework leaves as they were.
 
 #include "hypertree/build.hpp"
+#include "hypertree/execution.hpp"
 
 #include <bit>
 #include <cstdint>

@@ -12,6 +12,7 @@
 #include "hypertree/create/density.hpp"
 #include "hypertree/create/generate.hpp"
 #include "hypertree/create/scratch.hpp"
+#include "hypertree/execution.hpp"
 #include "hypertree/forest.hpp"
 #include "hypertree/ifs.hpp"
 #include "hypertree/io/binary.hpp"

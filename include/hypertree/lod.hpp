@@ -42,6 +42,7 @@
 // `resolution_for_projected_voxel` picks the reduction target from the projected voxel size
 // (the paper names the criterion and leaves the study open; see its description below).
 
+#include "hypertree/execution.hpp"
 #include "hypertree/store/store.hpp"
 
 #include "krs/trace/camera.hpp"

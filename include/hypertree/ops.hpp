@@ -22,6 +22,7 @@
 // variants build the operands' kind directly. Parts survive where the operands keep them
 // (partitioned_store), as the part of the voxel whose level is kept.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/region.hpp"
 #include "hypertree/store/store.hpp"
 

@@ -20,6 +20,7 @@
 // cell the denser is kept (then the shallower level, then the smaller part, as unite_max).
 // Voxels whose shifted center leaves the hypervolume are dropped.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/store/store.hpp"
 #include "krs/core/lanes.hpp"
 #include "krs/core/noise.hpp"

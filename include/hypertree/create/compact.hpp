@@ -23,6 +23,7 @@
 // per voxel, so each hit is one read-modify-write and the entries are read out in voxel order.
 
 #include "hypertree/create/scratch.hpp"
+#include "hypertree/execution.hpp"
 #include "hypertree/voxel.hpp"
 
 #include <algorithm>

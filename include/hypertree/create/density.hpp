@@ -20,6 +20,7 @@
 // the branching structure (level <= branch_depth) get full density whatever their hit count, so
 // trunk and branches stay solid under sparse foliage.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/voxel.hpp"
 
 #include <algorithm>

@@ -20,6 +20,7 @@
 // library starts no thread itself (docs/design.md#rule-6): pass `generation_options::parallel_for` to run
 // chunks on yours.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/ifs.hpp"
 #include "hypertree/create/generator_lanes.hpp"
 #include "hypertree/create/scratch.hpp"

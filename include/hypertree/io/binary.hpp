@@ -29,6 +29,7 @@
 // A stream may hold more after the tree (load reads exactly the tree's bytes); a file loaded by
 // path must end with the checksum.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/store/store.hpp"
 #include "krs/io/write_then_rename.hpp"
 

@@ -33,6 +33,7 @@
 // and a value below 0.5 / 255 rounds to an empty voxel. Files are written to a new
 // "<path>.partial-<process>-<n>" and renamed, so a failed write never leaves a partial file under the name.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/io/binary.hpp" // load_error, loaded_voxels
 #include "hypertree/io/grid_files.hpp"
 #include "hypertree/store/store.hpp"

@@ -74,6 +74,7 @@
 // tests). For Vulkan (SPIR-V) set hypertree_glsl_options::binding: the sampler then carries
 // layout(binding = N), which GLSL below 4.20 does not accept.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/render/brick_walk.hpp"
 #include "hypertree/render/march_options.hpp"
 #include "hypertree/render/tree_shape.hpp"

@@ -53,6 +53,7 @@
 // voxel of sample k of the previous ray; a ray reads it until its first mismatch and then
 // overwrites the rest. (The paper found it gave little; bench_hypertree_render measures it.)
 
+#include "hypertree/execution.hpp"
 #include "hypertree/render/brick_walk.hpp"
 #include "hypertree/render/light_sweep.hpp"
 #include "hypertree/render/march_options.hpp"

@@ -12,6 +12,7 @@
 // Bands of rows_per_band rows are the unit of work: `parallel_for(bands, body)` may run them on
 // any threads (the library starts none); an empty function renders serially.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/render/marcher.hpp"
 #include "krs/trace/camera.hpp"
 

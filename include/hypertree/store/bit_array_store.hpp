@@ -18,6 +18,7 @@
 // bit array when the new bits fit it (at most twice as many words): the old list says exactly
 // which words hold a set bit, and only those are cleared.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/store/store.hpp"
 #include "hypertree/store/zeroed_array.hpp"
 

@@ -12,6 +12,7 @@
 // back to zero only the runs of 32 voxels (64 bytes, a cache line) it wrote, which one bit each
 // records (1/256 byte per voxel), instead of mapping 54 MB afresh or clearing all of it.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/store/store.hpp"
 #include "hypertree/store/zeroed_array.hpp"
 

@@ -21,6 +21,7 @@
 // Built again in a recycled store (build's last parameter), it keeps its lists' capacity: a tree
 // of the same size or smaller maps no new page.
 
+#include "hypertree/execution.hpp"
 #include "hypertree/store/store.hpp"
 
 #include "krs/core/bounds.hpp"

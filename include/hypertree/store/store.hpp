@@ -29,6 +29,7 @@
 // std::move(old))` builds in the memory of a store `old` the caller is done with: a tree of the
 // same size then maps no new page (huge_pages.hpp says why pages cost).
 
+#include "hypertree/execution.hpp"
 #include "hypertree/voxel.hpp"
 #include "krs/core/bounds.hpp"
 
