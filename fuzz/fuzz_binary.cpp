@@ -20,6 +20,7 @@
 // function over fuzz/corpus/binary/ and fuzz/crashers/binary/ in ctest.
 
 #include "fuzz_input.hpp"
+#include "hypertree/execution.hpp"
 #include "hypertree/io/binary.hpp"
 #include "hypertree/store/store_kinds.hpp"
 
