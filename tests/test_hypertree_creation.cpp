@@ -3,7 +3,7 @@
 // list with a std::map: per voxel the hit count and the shallowest (level, part), then the
 // density classes of those entries and the branch rule, voxel by voxel. The reference shares
 // only the generator (tested on its own in test_hypertree_ifs.cpp) and the placing of classes
-// over a histogram (test_hypertree_store.cpp) with the code under test.
+// over a histogram (test_hypertree_density.cpp) with the code under test.
 
 #include "hypertree/build.hpp"
 #include "hypertree/execution.hpp"
