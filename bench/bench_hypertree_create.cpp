@@ -34,7 +34,10 @@
 //
 // A last table gives build_tree's own steps (generate, bucket, merge, classify, then the store's
 // build) on one thread in CPU time, which the machine's load barely moves: their sum over two is
-// the least two threads could take, the floor the targets are measured against. Where the grid
+// the least two threads could take, the floor the targets are measured against; "Amdahl T" keeps
+// the store's build (build_tree's one serial step) whole and shares the rest over the T threads,
+// and "ceiling" is the paper's index-list time over it: the most this work can reach on T threads,
+// beside the ratio measured ("measured", the recycled index list above). Where the grid
 // has at most 2^21 voxels, build_tree validates through a per-voxel table (create/compact.hpp's
 // voxel_table) instead of bucket + merge: "tbl add" and "tbl read" are its two steps, timed in
 // the same rounds as bucket and merge, "same" whether its entries equal the merge's, "gain"
@@ -452,8 +455,11 @@ int main(int argc, char** argv)
                     ratios[2].c_str(), ratios[3].c_str(), ratios[4].c_str());
     }
     std::printf("\nbuild_tree's steps on one thread, CPU time (best of %d): the work two threads share at best\n\n", repeat);
-    std::printf("%-4s %5s %9s %8s | %8s %8s %8s %9s | %9s %8s | %10s %10s | %8s %8s %5s %6s\n", "tree", "res", "hits", "voxels", "generate", "bucket",
-                "merge", "classify", "list build", "dense", "sum (list)", "sum / 2", "tbl add", "tbl read", "same", "gain");
+    std::printf("%-4s %5s %9s %8s | %8s %8s %8s %9s | %9s %8s | %10s %10s %9s %8s %8s | %8s %8s %5s %6s\n", "tree", "res", "hits", "voxels", "generate",
+                "bucket", "merge", "classify", "list build", "dense", "sum (list)", "sum / 2", "Amdahl T", "ceiling", "measured", "tbl add",
+                "tbl read", "same", "gain");
+    double least_ceiling = 1e300;
+    std::string least_ceiling_row;
     for (const step_floor& f : floors) {
         // build_tree's own path: the table where the grid takes one, else bucket + merge.
         const double validate = f.table_add < 1e300 ? f.table_add + f.table_read : f.bucket + f.merge;
@@ -462,10 +468,30 @@ int main(int argc, char** argv)
         if (f.table_add < 1e300)
             table = bench::format("%6.2fms %6.2fms %5s %5.2fx", f.table_add * 1e3, f.table_read * 1e3, f.table_same ? "yes" : "NO",
                                   (f.bucket + f.merge) / (f.table_add + f.table_read));
-        std::printf("%-4s %5d %9zu %8zu | %6.2fms %6.2fms %6.2fms %7.2fms | %7.2fms %6.2fms | %8.2fms %8.2fms | %s\n", f.tree.c_str(),
-                    f.resolution, f.hits, f.voxels, f.generate * 1e3, f.bucket * 1e3, f.merge * 1e3, f.classify * 1e3,
-                    f.index_list * 1e3, f.dense * 1e3, sum * 1e3, sum * 0.5e3, table.c_str());
+        // Amdahl's bound on T threads: every step but the store's build (build_tree's one serial
+        // step) shared perfectly, the build alone; "ceiling" is the paper's index-list time over
+        // that bound, the most any scheduling of these steps could reach on this machine, and
+        // "measured" the index list's recycled creation in the tables above (worst run).
+        const double amdahl = (sum - f.index_list) / double(threads) + f.index_list;
+        const int tree_row = f.tree.empty() ? -1 : f.tree[0] - 'A';
+        std::string ceiling = "       -", measured = "       -";
+        if (tree_row >= 0 && tree_row < 4 && (f.resolution == 100 || f.resolution == 300)) {
+            const double paper_s = f.resolution == 100 ? paper[tree_row][0].seconds_100 : paper[tree_row][0].seconds_300;
+            ceiling = bench::format("%7.0fx", paper_s / amdahl);
+            if (paper_s / amdahl < least_ceiling)
+                least_ceiling = paper_s / amdahl, least_ceiling_row = f.tree + " " + std::to_string(f.resolution);
+            const auto list_row = std::find_if(rows.begin(), rows.end(), [&](const row& r) {
+                return r.tree == f.tree && r.resolution == f.resolution && r.store == "index_list" && r.bytes;
+            });
+            if (list_row != rows.end()) measured = bench::format("%7.0fx", paper_s / list_row->recycled.seconds);
+        }
+        std::printf("%-4s %5d %9zu %8zu | %6.2fms %6.2fms %6.2fms %7.2fms | %7.2fms %6.2fms | %8.2fms %8.2fms %7.2fms %8s %8s | %s\n",
+                    f.tree.c_str(), f.resolution, f.hits, f.voxels, f.generate * 1e3, f.bucket * 1e3, f.merge * 1e3, f.classify * 1e3,
+                    f.index_list * 1e3, f.dense * 1e3, sum * 1e3, sum * 0.5e3, amdahl * 1e3, ceiling.c_str(), measured.c_str(), table.c_str());
     }
+    if (least_ceiling < 1e300)
+        std::printf("\nAmdahl's ceiling on %u thread(s) (index list, the store build serial): lowest %.0fx (%s)\n", threads, least_ceiling,
+                    least_ceiling_row.c_str());
     std::printf("\nload average before: %s; after: %s (%u cores)\n\n", load_before.c_str(), load_after.c_str(),
                 std::max(1u, std::thread::hardware_concurrency()));
 
