@@ -38,7 +38,7 @@
 // the store's build (build_tree's one serial step) whole and shares the rest over the T threads,
 // and "ceiling" is the paper's index-list time over it: the most this work can reach on T threads,
 // beside the ratio measured ("measured", the recycled index list above). Where the grid
-// has at most 2^21 voxels, build_tree validates through a per-voxel table (create/compact.hpp's
+// has at most 2^21 voxels, build_tree validates through a per-voxel table (create/voxel_table.hpp's
 // voxel_table) instead of bucket + merge: "tbl add" and "tbl read" are its two steps, timed in
 // the same rounds as bucket and merge, "same" whether its entries equal the merge's, "gain"
 // (bucket + merge) / (add + read); the sum then counts the table.
@@ -54,6 +54,7 @@
 
 #include "hypertree/build.hpp"
 #include "hypertree/create/scratch.hpp"
+#include "hypertree/create/voxel_table.hpp"
 #include "hypertree/huge_pages.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/store/store_kinds.hpp"

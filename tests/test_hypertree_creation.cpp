@@ -6,6 +6,7 @@
 // over a histogram (test_hypertree_density.cpp) with the code under test.
 
 #include "hypertree/build.hpp"
+#include "hypertree/create/voxel_table.hpp"
 #include "hypertree/execution.hpp"
 #include "hypertree/presets.hpp"
 

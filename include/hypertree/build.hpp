@@ -16,6 +16,7 @@
 #include "hypertree/create/density.hpp"
 #include "hypertree/create/generate.hpp"
 #include "hypertree/create/scratch.hpp"
+#include "hypertree/create/voxel_table.hpp"
 #include "hypertree/store/store.hpp"
 
 #include <optional>
@@ -35,7 +36,7 @@ namespace detail {
 // the next is made, so the next step can reuse its pages. Where the grid allows, the chunks are
 // generated in groups of consecutive chunks (create/generate.hpp's generation_group_count), each
 // group's hits validated on its task while they are in cache and its buffer reused by the next
-// group: added to a per-voxel table on grids up to 2^21 voxels (create/compact.hpp's voxel_table),
+// group: added to a per-voxel table on grids up to 2^21 voxels (create/voxel_table.hpp),
 // else bucketed (create/compact.hpp's direct_buckets) and merged; on larger grids validation reads
 // the chunks as pieces.
 template <transform_pipeline P>
@@ -58,7 +59,7 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
                                std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
     };
     if (voxel_count > 0 && voxel_count <= voxel_table::max_voxels) {
-        // Small grids: one table slot per voxel (create/compact.hpp's voxel_table), each group's
+        // Small grids: one table slot per voxel (create/voxel_table.hpp), each group's
         // hits added on its task while hot. A voxel past 2^17 hits (never in the presets) sends the
         // build to the bucketed path below, which counts in 32 bits.
         voxel_table_pool pool(voxel_count, scratch);
