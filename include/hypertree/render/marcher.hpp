@@ -279,19 +279,19 @@ public:
                 const std::size_t live = std::min(w, count > k * w ? count - k * w : 0);
                 running[k] = krs::mask_from_bits<T>(live == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << live) - 1);
             }
+            // The lanes' voxel slots (idle lanes keep an earlier voxel's: a valid slot, not used).
+            std::array<krs::index_lanes<T>, packets> at;
+            for (std::size_t k = 0; k < packets; ++k) {
+                std::array<std::int32_t, w> lanes_k;
+                for (std::size_t lane = 0; lane < w; ++lane) lanes_k[lane] = std::int32_t(slots[k * w + lane]);
+                if constexpr (std::floating_point<T>) at[k] = lanes_k[0];
+                else at[k] = krs::index_lanes<T>::load_unaligned(lanes_k.data());
+            }
             std::array<std::array<float, n>, march_options::max_lights> shadows{};
             for (std::size_t i = 0; i < lights; ++i) {
-                if (!options_.shadows) {
-                    shadows[i].fill(1.0f);
-                    continue;
-                }
-                if (!swept_.empty()) { // swept when the marcher was made: read, not marched
-                    for (std::size_t k = 0; k < count; ++k) shadows[i][k] = swept_.toward(i)[slots[k]];
-                    continue;
-                }
                 std::array<T, packets> looked;
                 looked.fill(T(0.0f));
-                const std::array<T, packets> t = shadow_transmittances<T, packets>(p, shading_.light_directions()[i], looked, running);
+                const std::array<T, packets> t = shadows_toward<T, packets>(i, p, &at, looked, running);
                 for (std::size_t k = 0; k < packets; ++k) {
                     const auto transmittance = krs::lanes_of(t[k]), per_lane = krs::lanes_of(looked[k]);
                     std::copy(transmittance.begin(), transmittance.end(), shadows[i].begin() + std::ptrdiff_t(k * w));
@@ -602,24 +602,35 @@ private:
 
     // The lit color at shading point q; writes each light's shadow transmittance to `shadows`.
     // `slot` is the voxel's when q is its center (shade_per_voxel), else -1: with the sweep, a
-    // center reads its swept shadow, another point marches to its cut (shadow_transmittances).
+    // center reads its swept shadow, another point marches to its cut (shadows_toward).
     rgb light_at(const krs::vec3f& q, int level, float* shadows, float& lookups, std::int64_t slot) const
     {
-        const std::vector<krs::vec3f>& lights = shading_.light_directions();
-        for (std::size_t i = 0; i < lights.size(); ++i) {
-            if (!options_.shadows) {
-                shadows[i] = 1.0f;
-            } else if (swept_.empty()) {
-                shadows[i] = shadow_transmittance(q, lights[i], lookups);
-            } else if (slot >= 0) {
-                shadows[i] = swept_.toward(i)[slot];
-            } else {
-                std::array<float, 1> looked{lookups};
-                shadows[i] = shadow_transmittances<float, 1>({q}, lights[i], looked, {true}, swept_.toward(i))[0];
-                lookups = looked[0];
-            }
+        const std::array<std::int32_t, 1> at{std::int32_t(slot)};
+        for (std::size_t i = 0; i < shading_.light_directions().size(); ++i) {
+            std::array<float, 1> looked{lookups};
+            shadows[i] = shadows_toward<float, 1>(i, {q}, slot >= 0 ? &at : nullptr, looked, {true})[0];
+            lookups = looked[0];
         }
         return lit(q, level, shadows);
+    }
+
+    // Light i's shadow transmittance at the lanes' points, by the one rule of both shading paths
+    // (light_at: one point; shade_bricks: packets of voxel centers): 1 without shadows; under the
+    // sweep, at voxel centers (`slots`: their voxels' slots) the table's entry as it is, and at
+    // other points (no slots) the point's ray to its cut, completed by the table; under rays, the
+    // full shadow ray. `lookups` counts each lane's voxel reads.
+    template <class T, std::size_t K>
+    std::array<T, K> shadows_toward(std::size_t i, const std::array<krs::vec3<T>, K>& p, const std::array<krs::index_lanes<T>, K>* slots,
+                                    std::array<T, K>& lookups, const std::array<krs::mask_t<T>, K>& running) const
+    {
+        const krs::vec3f& l = shading_.light_directions()[i];
+        std::array<T, K> out;
+        if (!options_.shadows) out.fill(T(1.0f));
+        else if (swept_.empty()) out = shadow_transmittances<T, K>(p, l, lookups, running);
+        else if (slots) // swept when the marcher was made: read, not marched
+            for (std::size_t k = 0; k < K; ++k) out[k] = krs::gather(swept_.toward(i), (*slots)[k]);
+        else out = shadow_transmittances<T, K>(p, l, lookups, running, swept_.toward(i));
+        return out;
     }
 
     // The lit color at q given each light's shadow transmittance, with the structure-flow normal
