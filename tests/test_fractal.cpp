@@ -15,6 +15,7 @@
 
 #include "support/parity.hpp"
 #include "support/random.hpp"
+#include "support/rejects.hpp"
 
 #include <doctest/doctest.h>
 
@@ -590,15 +591,7 @@ TEST_CASE("fractal packet lanes equal the scalar result")
 
 TEST_CASE("fractal parameters are validated")
 {
-    auto rejects = [](const std::function<void()>& build, const std::string& parameter) {
-        try {
-            build();
-        } catch (const krs::invalid_parameter& e) {
-            CHECK(e.parameter() == parameter);
-            return;
-        }
-        FAIL("no krs::invalid_parameter for ", parameter);
-    };
+    using krs_test::rejects;
     const float nan = std::nanf("");
     rejects([] { krs::make_sierpinski_tetrahedron(5, 1.0f); }, "sierpinski_tetrahedron.scale");
     rejects([] { krs::make_sierpinski_tetrahedron(5, 0.5f); }, "sierpinski_tetrahedron.scale");

@@ -10,6 +10,7 @@
 
 #include <doctest/doctest.h>
 
+#include "support/rejects.hpp"
 #include "support/small_tree.hpp"
 
 #include <filesystem>
@@ -47,16 +48,7 @@ index_list_store blob()
     return index_list_store::build(v, voxels);
 }
 
-template <class F>
-void refused_naming(const char* name, F&& f)
-{
-    try {
-        f();
-        FAIL("accepted a bad ", name);
-    } catch (const krs::invalid_parameter& e) {
-        CHECK_MESSAGE(std::string(e.what()).find(name) != std::string::npos, e.what());
-    }
-}
+using krs_test::rejects_naming;
 
 } // namespace
 
@@ -215,11 +207,11 @@ TEST_CASE("hypertree perturb_voxels validates its amplitude and frequency by nam
 {
     const auto store = blob();
     const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
-    refused_naming("perturb_voxels.perturb.amplitude.x", [&] { perturb_voxels(store, perturbation{{-1, 0, 0}, 1}); });
-    refused_naming("perturb_voxels.perturb.amplitude.y", [&] { perturb_voxels(store, perturbation{{0, nan, 0}, 1}); });
-    refused_naming("perturb_voxels.perturb.amplitude.z", [&] { perturb_voxels(store, perturbation{{0, 0, inf}, 1}); });
-    refused_naming("perturb_voxels.perturb.frequency", [&] { perturb_voxels(store, perturbation{{1, 1, 1}, -2}); });
-    refused_naming("perturb_voxels.perturb.frequency", [&] { perturb_voxels(store, perturbation{{1, 1, 1}, nan}); });
+    rejects_naming([&] { perturb_voxels(store, perturbation{{-1, 0, 0}, 1}); }, "perturb_voxels.perturb.amplitude.x");
+    rejects_naming([&] { perturb_voxels(store, perturbation{{0, nan, 0}, 1}); }, "perturb_voxels.perturb.amplitude.y");
+    rejects_naming([&] { perturb_voxels(store, perturbation{{0, 0, inf}, 1}); }, "perturb_voxels.perturb.amplitude.z");
+    rejects_naming([&] { perturb_voxels(store, perturbation{{1, 1, 1}, -2}); }, "perturb_voxels.perturb.frequency");
+    rejects_naming([&] { perturb_voxels(store, perturbation{{1, 1, 1}, nan}); }, "perturb_voxels.perturb.frequency");
 }
 
 // ---- render time: displaced samples -------------------------------------------------------------
@@ -332,12 +324,12 @@ TEST_CASE("hypertree render-time noise is validated by name, and the GLSL marche
         o.displacement = d;
         return o;
     };
-    refused_naming("march_options.displacement.amplitude.x", [&] { volume_marcher(store, shape, depth_colors{}, with({{-1, 0, 0}, 1})); });
-    refused_naming("march_options.displacement.amplitude.y", [&] { volume_marcher(store, shape, depth_colors{}, with({{0, nan, 0}, 1})); });
-    refused_naming("march_options.displacement.amplitude.z", [&] { volume_marcher(store, shape, depth_colors{}, with({{0, 0, inf}, 1})); });
-    refused_naming("march_options.displacement.frequency", [&] { volume_marcher(store, shape, depth_colors{}, with({{1, 1, 1}, -1})); });
-    refused_naming("march_options.displacement.frequency", [&] { volume_marcher(store, shape, depth_colors{}, with({{1, 1, 1}, nan})); });
-    refused_naming("march_options.displacement", [&] { (void)hypertree_glsl(store, shape, depth_colors{}, with({{0.5f, 0, 0}, 1})); });
+    rejects_naming([&] { volume_marcher(store, shape, depth_colors{}, with({{-1, 0, 0}, 1})); }, "march_options.displacement.amplitude.x");
+    rejects_naming([&] { volume_marcher(store, shape, depth_colors{}, with({{0, nan, 0}, 1})); }, "march_options.displacement.amplitude.y");
+    rejects_naming([&] { volume_marcher(store, shape, depth_colors{}, with({{0, 0, inf}, 1})); }, "march_options.displacement.amplitude.z");
+    rejects_naming([&] { volume_marcher(store, shape, depth_colors{}, with({{1, 1, 1}, -1})); }, "march_options.displacement.frequency");
+    rejects_naming([&] { volume_marcher(store, shape, depth_colors{}, with({{1, 1, 1}, nan})); }, "march_options.displacement.frequency");
+    rejects_naming([&] { (void)hypertree_glsl(store, shape, depth_colors{}, with({{0.5f, 0, 0}, 1})); }, "march_options.displacement");
     CHECK_NOTHROW((void)hypertree_glsl(store, shape, depth_colors{}, with({{0, 0, 0}, 1})));
 }
 
@@ -352,7 +344,7 @@ TEST_CASE("hypertree render-time noise: an amplitude whose widened box a float s
     const tree_shape shape = tree_shape::of(store);
     march_options o;
     o.displacement = {{1e6f, 1e6f, 1e6f}, 1};
-    refused_naming("march_options.displacement.amplitude", [&] { volume_marcher(store, shape, depth_colors{}, o); });
+    rejects_naming([&] { volume_marcher(store, shape, depth_colors{}, o); }, "march_options.displacement.amplitude");
     // An amplitude that leaves the count exact (1e5 on x only: 2e5 / (1/32) = 6.4e6 < 2^23
     // samples across) is taken, and a ray across the whole widened box returns.
     o.displacement = {{1e5f, 0, 0}, 1};

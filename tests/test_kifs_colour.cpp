@@ -7,6 +7,7 @@
 #include "krs/fractal/kifs_presets.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "support/random.hpp"
+#include "support/rejects.hpp"
 #include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
@@ -244,15 +245,7 @@ TEST_CASE("kifs_colour packet lanes equal the scalar result")
 
 TEST_CASE("kifs_colour parameters are validated")
 {
-    auto rejects = [](const std::function<void()>& build, const std::string& parameter) {
-        try {
-            build();
-        } catch (const krs::invalid_parameter& e) {
-            CHECK(e.parameter() == parameter);
-            return;
-        }
-        FAIL("no krs::invalid_parameter for ", parameter);
-    };
+    using krs_test::rejects;
     const float nan = std::nanf(""), inf = std::numeric_limits<float>::infinity();
     rejects([] { krs::orbit_trap::plane({0, 0, 0}, 1.0f); }, "orbit_trap.normal");
     rejects([&] { krs::orbit_trap::plane({0, 0, 1}, nan); }, "orbit_trap.offset");

@@ -13,6 +13,7 @@
 #include "krs/trace/tile_rays.hpp"
 #include "support/grid.hpp"
 #include "support/random.hpp"
+#include "support/rejects.hpp"
 #include "support/scenes.hpp"
 
 #include <doctest/doctest.h>
@@ -787,19 +788,11 @@ TEST_CASE("box clip: parallel rays, unbounded boxes and huge footprints")
         CHECK(krs::lane_at(pt1, i) == s1);
     }
     // A non-finite origin and invalid options are refused by name.
-    const auto refuses = [](auto make, const std::string& parameter) {
-        try {
-            make();
-        } catch (const krs::invalid_parameter& e) {
-            CHECK(e.parameter() == parameter);
-            return;
-        }
-        FAIL("no invalid_parameter for " << parameter);
-    };
-    refuses([&] { krs::box_clip(box, {std::nanf(""), 0, 0}, o); }, "box_clip.origin");
+    using krs_test::rejects;
+    rejects([&] { krs::box_clip(box, {std::nanf(""), 0, 0}, o); }, "box_clip.origin");
     krs::trace_options negative = o;
     negative.threshold_floor = -1.0f;
-    refuses([&] { krs::box_clip(box, {0, 0, -5}, negative); }, "trace_options.threshold_floor");
+    rejects([&] { krs::box_clip(box, {0, 0, -5}, negative); }, "trace_options.threshold_floor");
     // Nothing to clip to, or a threshold that grows as fast as the ray: no clipping.
     CHECK(!krs::box_clip(krs::bounding_box::unbounded(), {0, 0, 0}, o).clips());
     o.pixel_footprint = 0.6f;

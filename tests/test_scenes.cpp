@@ -10,6 +10,7 @@
 #include "krs/model/terrain.hpp"
 #include "krs/trace/sphere_trace.hpp"
 #include "support/random.hpp"
+#include "support/rejects.hpp"
 
 #include <doctest/doctest.h>
 
@@ -25,17 +26,7 @@ using krs::vec3f;
 
 using krs_test::uniform;
 
-// Runs `build` and requires an invalid_parameter naming `name`.
-void require_rejects(const std::function<void()>& build, const std::string& name)
-{
-    try {
-        build();
-    } catch (const krs::invalid_parameter& e) {
-        CHECK(e.parameter() == name);
-        return;
-    }
-    FAIL("no krs::invalid_parameter for " << name);
-}
+using krs_test::rejects;
 
 // Two fields agree bit for bit on random points (same build) or not (different seeds).
 template <class A, class B>
@@ -112,16 +103,16 @@ TEST_CASE("forest: trees are reflected copies and never clipped by the forest mi
     other.seed = 2;
     CHECK_FALSE(same_field(forest.sequence, krs::model::build_forest(other).sequence, r));
     // Validation.
-    require_rejects([&] { auto p = f; p.doublings = 21; krs::model::build_forest(p); }, "forest.doublings");
-    require_rejects([&] { auto p = f; p.spacing = -0.1f; krs::model::build_forest(p); }, "forest.spacing");
-    require_rejects([&] { auto p = f; p.angle_jitter_degrees = 91; krs::model::build_forest(p); },
+    rejects([&] { auto p = f; p.doublings = 21; krs::model::build_forest(p); }, "forest.doublings");
+    rejects([&] { auto p = f; p.spacing = -0.1f; krs::model::build_forest(p); }, "forest.spacing");
+    rejects([&] { auto p = f; p.angle_jitter_degrees = 91; krs::model::build_forest(p); },
                     "forest.angle_jitter_degrees");
-    require_rejects([&] { auto p = f; p.tree.spread_degrees = 0; krs::model::build_forest(p); },
+    rejects([&] { auto p = f; p.tree.spread_degrees = 0; krs::model::build_forest(p); },
                     "tree_style.spread_degrees");
-    require_rejects([&] { auto p = f; p.tree.levels = 50; p.doublings = 20; krs::model::build_forest(p); },
+    rejects([&] { auto p = f; p.tree.levels = 50; p.doublings = 20; krs::model::build_forest(p); },
                     "forest.doublings");
     // Beyond the magnitude policy the error named the ground plane's offset, not this parameter.
-    require_rejects([&] { auto p = f; p.ground_height = 1e10f; krs::model::build_forest(p); }, "forest.ground_height");
+    rejects([&] { auto p = f; p.ground_height = 1e10f; krs::model::build_forest(p); }, "forest.ground_height");
 }
 
 TEST_CASE("grass: counts and validation and determinism")
@@ -145,10 +136,10 @@ TEST_CASE("grass: counts and validation and determinism")
     auto q = p;
     q.seed = 5;
     CHECK_FALSE(same_field(grass.sequence, krs::model::build_grass(q).sequence, 2.0));
-    require_rejects([&] { auto b = p; b.blades_per_clump = 0; krs::model::build_grass(b); }, "grass.blades_per_clump");
-    require_rejects([&] { auto b = p; b.blade_width = 0.2f; krs::model::build_grass(b); }, "grass.blade_width");
-    require_rejects([&] { auto b = p; b.lean = 2; krs::model::build_grass(b); }, "grass.lean");
-    require_rejects([&] { auto b = p; b.doublings = -1; krs::model::build_grass(b); }, "grass.doublings");
+    rejects([&] { auto b = p; b.blades_per_clump = 0; krs::model::build_grass(b); }, "grass.blades_per_clump");
+    rejects([&] { auto b = p; b.blade_width = 0.2f; krs::model::build_grass(b); }, "grass.blade_width");
+    rejects([&] { auto b = p; b.lean = 2; krs::model::build_grass(b); }, "grass.lean");
+    rejects([&] { auto b = p; b.doublings = -1; krs::model::build_grass(b); }, "grass.doublings");
 }
 
 TEST_CASE("terrain: a height field with one crossing per vertical line")
@@ -181,18 +172,18 @@ TEST_CASE("terrain: a height field with one crossing per vertical line")
     auto other = t;
     other.seed = 9;
     CHECK_FALSE(same_field(terrain, krs::model::build_terrain(other), 8.0));
-    require_rejects([&] { auto b = t; b.levels = 0; krs::model::build_terrain(b); }, "terrain.levels");
-    require_rejects([&] { auto b = t; b.size = 0; krs::model::build_terrain(b); }, "terrain.size");
-    require_rejects([&] { auto b = t; b.detail_ratio = 1.5f; krs::model::build_terrain(b); }, "terrain.detail_ratio");
+    rejects([&] { auto b = t; b.levels = 0; krs::model::build_terrain(b); }, "terrain.levels");
+    rejects([&] { auto b = t; b.size = 0; krs::model::build_terrain(b); }, "terrain.size");
+    rejects([&] { auto b = t; b.detail_ratio = 1.5f; krs::model::build_terrain(b); }, "terrain.detail_ratio");
     // The documented bounds written as floats are inside (0.99f is 0.99000001); the next float out is not.
     for (float ratio : {0.5f, 0.99f}) {
         auto b = t;
         b.detail_ratio = ratio;
         CHECK_NOTHROW(krs::model::build_terrain(b));
     }
-    require_rejects([&] { auto b = t; b.detail_ratio = std::nextafter(0.99f, 1.0f); krs::model::build_terrain(b); },
+    rejects([&] { auto b = t; b.detail_ratio = std::nextafter(0.99f, 1.0f); krs::model::build_terrain(b); },
                     "terrain.detail_ratio");
-    require_rejects([&] { auto b = t; b.slope = -1; krs::model::build_terrain(b); }, "terrain.slope");
+    rejects([&] { auto b = t; b.slope = -1; krs::model::build_terrain(b); }, "terrain.slope");
 }
 
 TEST_CASE("rock: solid at its center and inside its declared bound")
@@ -218,10 +209,10 @@ TEST_CASE("rock: solid at its center and inside its declared bound")
     auto q = p;
     q.seed = 2;
     CHECK_FALSE(same_field(krs::model::build_rock(p).sequence, krs::model::build_rock(q).sequence, 2.0));
-    require_rejects([&] { auto b = p; b.radius = 0; krs::model::build_rock(b); }, "rock.radius");
-    require_rejects([&] { auto b = p; b.facets = 0; krs::model::build_rock(b); }, "rock.facets");
-    require_rejects([&] { auto b = p; b.folds = 59; krs::model::build_rock(b); }, "rock.folds");
-    require_rejects([&] { auto b = p; b.fold_offset = 0.7f; krs::model::build_rock(b); }, "rock.fold_offset");
+    rejects([&] { auto b = p; b.radius = 0; krs::model::build_rock(b); }, "rock.radius");
+    rejects([&] { auto b = p; b.facets = 0; krs::model::build_rock(b); }, "rock.facets");
+    rejects([&] { auto b = p; b.folds = 59; krs::model::build_rock(b); }, "rock.folds");
+    rejects([&] { auto b = p; b.fold_offset = 0.7f; krs::model::build_rock(b); }, "rock.fold_offset");
 }
 
 TEST_CASE("coral: instance count and validation")
@@ -236,9 +227,9 @@ TEST_CASE("coral: instance count and validation")
     auto q = p;
     q.seed = 3;
     CHECK_FALSE(same_field(coral, krs::model::build_coral(q), 3.0));
-    require_rejects([&] { auto b = p; b.levels = 0; krs::model::build_coral(b); }, "coral.levels");
-    require_rejects([&] { auto b = p; b.taper = 0.2f; krs::model::build_coral(b); }, "coral.taper");
-    require_rejects([&] { auto b = p; b.knot = 0.5f; krs::model::build_coral(b); }, "coral.knot");
+    rejects([&] { auto b = p; b.levels = 0; krs::model::build_coral(b); }, "coral.levels");
+    rejects([&] { auto b = p; b.taper = 0.2f; krs::model::build_coral(b); }, "coral.taper");
+    rejects([&] { auto b = p; b.knot = 0.5f; krs::model::build_coral(b); }, "coral.knot");
 }
 
 TEST_CASE("sponge: the KRS equals the Menger construction")
@@ -281,8 +272,8 @@ TEST_CASE("sponge: the KRS equals the Menger construction")
     }
     CHECK(inside > 200);
     CHECK(outside > 1000);
-    require_rejects([&] { auto b = p; b.levels = 10; krs::model::build_sponge(b); }, "sponge.levels");
-    require_rejects([&] { auto b = p; b.size = -1; krs::model::build_sponge(b); }, "sponge.size");
+    rejects([&] { auto b = p; b.levels = 10; krs::model::build_sponge(b); }, "sponge.levels");
+    rejects([&] { auto b = p; b.size = -1; krs::model::build_sponge(b); }, "sponge.size");
 }
 
 TEST_CASE("forest on terrain: every trunk base lies on the ground surface")

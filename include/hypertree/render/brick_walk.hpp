@@ -39,6 +39,7 @@
 #include "krs/core/lanes.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/glsl/literal.hpp"
+#include "krs/trace/ray.hpp"
 
 #include <algorithm>
 #include <array>
@@ -178,6 +179,19 @@ public:
         return {place, looks, advance, {c[0], c[1], c[2]}};
     }
 
+    // The same with a secondary bound's test on top (bound_test of tree_shape.hpp, or any type
+    // with everything() and holds(p)): a sample outside the bound looks at nothing, and advances
+    // as the walk says. Every march of the marcher and the light sweep probes through this.
+    template <class T, class Bound>
+    [[gnu::always_inline]] probe_result<T> probe(const voxel_bricks::view& bricks, const krs::vec3<T>& p, const T (&slope)[3],
+                                                 const krs::mask_t<T>& running, const T& margin, const exit_faces& faces,
+                                                 const Bound& bound) const
+    {
+        probe_result<T> found = probe(bricks, p, slope, running, margin, faces);
+        if (!bound.everything()) found.looks = found.looks & bound.holds(p);
+        return found;
+    }
+
     // How many steps short of an empty brick's exit a skip must stop, for a ray from `from` at t:
     // skip_margin(margin_at_origin(from), t).
     template <class T>
@@ -258,5 +272,36 @@ private:
     float rounding_per_step_ = 0, grid_reach_ = 0; // skip_margin's: 2^-21 / step, and max |origin| + the grid's diagonal
     skips skipping_ = skips::every_level;
 };
+
+// Where a walk starts and ends: the slab test of the rays' lanes against the box [lo, hi], with
+// t0 >= 0 (a ray from inside starts at its origin). Rays that miss get t0 >= t1. Primary rays
+// and shadow rays both clip by it (the marcher widens the box for render-time noise).
+template <class T>
+void enter_box(const krs::ray<T>& ray, const krs::vec3f& lo_corner, const krs::vec3f& hi_corner, T& t0, T& t1)
+{
+    using krs::abs, krs::max, krs::min, krs::select;
+    t0 = T(0.0f);
+    t1 = T(3.0e38f);
+    const T lo[3] = {T(lo_corner.x), T(lo_corner.y), T(lo_corner.z)}, hi[3] = {T(hi_corner.x), T(hi_corner.y), T(hi_corner.z)};
+    const T o[3] = {ray.origin.x, ray.origin.y, ray.origin.z}, d[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
+    for (int a = 0; a < 3; ++a) {
+        // A zero direction component becomes tiny, so the division gives a huge finite slope
+        // instead of inf * 0 = NaN when the origin lies on a slab plane.
+        const T safe = select(abs(d[a]) < T(1e-30f), T(1e-30f), d[a]);
+        const T inv = T(1.0f) / safe;
+        const T ta = (lo[a] - o[a]) * inv, tb = (hi[a] - o[a]) * inv;
+        t0 = max(t0, min(ta, tb));
+        t1 = min(t1, max(ta, tb));
+    }
+    // Rays march in steps of ds along t, so a direction must be unit (krs::make_ray makes it
+    // so): a zero one had a span of 1e30 that a float sample count never crossed (march hung),
+    // and a short one would take more samples than the 2^23 the marcher allows. Such a ray, or
+    // one from a non-finite origin, misses the box.
+    const T length_squared = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    const auto usable = (abs(length_squared - T(1.0f)) <= T(1e-3f)) && krs::is_finite(o[0]) && krs::is_finite(o[1]) &&
+                        krs::is_finite(o[2]);
+    t0 = select(usable, t0, T(0.0f)); // (a NaN slab bound could leave t0 at -1e31, not NaN)
+    t1 = select(usable, t1, T(-1.0f));
+}
 
 } // namespace hypertree

@@ -23,16 +23,16 @@
 //
 // Shading (8.3, voxel_shading.hpp): ambient light attenuated toward the interior, wrapped Lambert
 // diffuse and Blinn-Phong specular with the procedural normals of the structure flow, each light's
-// term attenuated by the opacity a shadow ray accumulates toward it (same step, same early exit).
-// By default (march_options::shadow_by = sweep) those shadows come from the light sweep
-// (light_sweep.hpp), computed once when the marcher is made (on the threads of the hook the
-// constructor is given): each voxel's shadow ray is cut at its first non-empty voxel toward the
-// light and completed by that voxel's swept shadow. With `rays`
-// every shaded voxel marches its full shadow ray in every render (the reference; the GLSL marcher
-// always does). By default a sample is shaded at its voxel's center (shade_per_voxel), so a
-// voxel's shading is computed once per render and kept in a table (shade_memo.hpp): either all
-// voxels before the rays (shade_bricks: the swept shadows read, or shadow rays marched 16 at a
-// time), or each when a ray first meets it.
+// term attenuated by the opacity a shadow ray accumulates toward it (shadow_ray.hpp: same step,
+// same early exit). By default (march_options::shadow_by = sweep) those shadows come from the
+// light sweep (light_sweep.hpp, which marches its rays and makes its table), computed once when
+// the marcher is made (on the threads of the hook the constructor is given): each voxel's shadow
+// ray is cut at its first non-empty voxel toward the light and completed by that voxel's swept
+// shadow. With `rays` every shaded voxel marches its full shadow ray in every render (the
+// reference; the GLSL marcher always does). By default a sample is shaded at its voxel's center
+// (shade_per_voxel), so a voxel's shading is computed once per render and kept in a table
+// (shade_memo.hpp): either all voxels before the rays (shade_bricks: the swept shadows read, or
+// shadow rays marched 16 at a time), or each when a ray first meets it.
 //
 // Two marches, one accumulation: the loop over samples, the masks and the compositing are written
 // once over T. Rays through voxels all shaded ahead only read: their lanes march in step,
@@ -58,6 +58,7 @@
 #include "hypertree/render/light_sweep.hpp"
 #include "hypertree/render/march_options.hpp"
 #include "hypertree/render/shade_memo.hpp"
+#include "hypertree/render/shadow_ray.hpp"
 #include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/render/voxel_bricks.hpp"
@@ -124,7 +125,8 @@ public:
         for (int x = 0; x < bricks_.grid()[0]; ++x) centers_[0].push_back(center_of(volume_.index(x, 0, 0)).x);
         for (int y = 0; y < bricks_.grid()[1]; ++y) centers_[1].push_back(center_of(volume_.index(0, y, 0)).y);
         for (int z = 0; z < bricks_.grid()[2]; ++z) centers_[2].push_back(center_of(volume_.index(0, 0, z)).z);
-        if (options_.shadows && options_.shadow_by == march_options::shadow_method::sweep && !shading_.light_directions().empty()) sweep_lights(parallel_for);
+        if (options_.shadows && options_.shadow_by == march_options::shadow_method::sweep && !shading_.light_directions().empty())
+            swept_ = make_sweep(parallel_for);
     }
 
     const march_options& options() const { return options_; }
@@ -139,89 +141,19 @@ public:
     // The swept transmittances (light_sweep.hpp), made with the marcher under shadow_method::sweep;
     // empty under rays.
     const light_sweep& sweep() const { return swept_; }
-    // The sweep's table as the constructor makes it, in two passes, the first on the caller's
-    // threads (`parallel_for`; empty: this thread).
-    //
-    // A voxel's swept transmittance is P(v) T(w): P(v) the product of (1 - alpha) over its ray's
-    // samples up to and including its cut w (light_sweep.hpp), T(w) the cut voxel's own. Only the
-    // last factor depends on another voxel's result, and only through one multiply. So the first
-    // pass marches every voxel's ray to its cut, with no order at all: the voxels of runs of
-    // sweep_bricks bricks per task, in memory order, so a packet's 16 rays start side by side and
-    // read the same bricks (the level order of the first sweep spread a packet over a diagonal
-    // plane of the tree); it writes P(v) to the table and w (or none) to a list. The second pass,
-    // on this thread, completes T(v) = P(v) T(w) along each chain of cuts: from each voxel it
-    // follows the cuts to the first voxel already complete (a voxel with no cut is complete), then
-    // completes the chain backwards. Cuts go to strictly larger keys (light_sweep.hpp), so a chain
-    // ends; each voxel is completed once. Every voxel's value is the same product in the same order
-    // as in the sweep by levels (make_sweep_in_light_order): the tables are equal to the bit, on
-    // any number of threads (tested).
+    // The sweep's table as the constructor makes it (light_sweep.hpp, sweep_in_two_passes): every
+    // voxel's ray to its cut on the caller's threads (`parallel_for`; empty: this thread), then the
+    // chains of cuts. The same table, bit for bit, whatever the threads.
     light_sweep make_sweep(const parallel_for_hook& parallel_for = {}) const
     {
-        const std::vector<krs::vec3f>& lights = shading_.light_directions();
-        light_sweep table(bricks_.voxel_count(), lights.size());
-        constexpr std::uint32_t none = ~std::uint32_t(0);
-        std::vector<std::uint32_t> cut(bricks_.voxel_count() * lights.size(), none);
-        const std::size_t runs = (bricks_.brick_count() + sweep_bricks - 1) / sweep_bricks;
-        run_tasks(parallel_for, runs * lights.size(), [&](std::size_t task) {
-            const std::size_t light = task / runs, first = task % runs * sweep_bricks;
-            const std::size_t last = std::min(bricks_.brick_count(), first + sweep_bricks);
-            std::vector<std::uint32_t> places;
-            for (std::size_t b = first; b < last; ++b)
-                for (std::uint64_t m = bricks_.mask(b); m != 0; m &= m - 1)
-                    places.push_back(std::uint32_t(b * voxel_bricks::brick_voxels + std::size_t(std::countr_zero(m))));
-            if (places.empty()) return;
-            sweep_wave wave;
-            sweep_rays(lights[light], places, table.toward(light), cut.data() + light * bricks_.voxel_count(), wave);
-        });
-        // The chains are followed from the voxels in slot order (bricks by their first voxel in
-        // the store's index order, z slowest) when the light is below (l_z <= 0: cuts go to lower
-        // z, whose slots come first), else backwards: then a voxel's cut is mostly complete when it
-        // comes, and its chain is one link, a branch the core predicts (in slot order toward a
-        // light above, chains ran across the tree, and the pass took 15% of the sweep at tree A,
-        // resolution 100). The order changes nothing else: each value is P(v) T(w) either way.
-        std::vector<std::uint32_t> chain;
-        for (std::size_t light = 0; light < lights.size(); ++light) {
-            float* out = table.toward(light);
-            std::uint32_t* next = cut.data() + light * bricks_.voxel_count();
-            const bool backwards = lights[light].z > 0;
-            const std::size_t count = bricks_.voxel_count();
-            for (std::size_t i = 0; i < count; ++i) {
-                const std::size_t v = backwards ? count - 1 - i : i;
-                if (next[v] == none) continue;
-                if (next[next[v]] == none) { // a chain of one link (the common case), without the list
-                    out[v] = out[v] * out[next[v]];
-                    next[v] = none;
-                    continue;
-                }
-                chain.clear();
-                for (std::uint32_t u = std::uint32_t(v); next[u] != none; u = next[u]) chain.push_back(u);
-                for (std::size_t i = chain.size(); i-- > 0;) {
-                    const std::uint32_t u = chain[i];
-                    out[u] = out[u] * out[next[u]]; // (as sweep_rays multiplies at the cut)
-                    next[u] = none;
-                }
-            }
-        }
-        return table;
+        return sweep_in_two_passes(sweep_source{bricks_, shadow_reads_of(), shading_.light_directions(), centers_}, parallel_for);
     }
-    // The sweep's table as it was first made (the reference): per light, the levels of
-    // sweep_order in turn, nearest the light first, each level's rays completed at their cuts from
-    // the levels before. One thread.
+    // The sweep's table as it was first made, level by level in light order on one thread
+    // (light_sweep.hpp, sweep_in_light_order): the reference make_sweep is tested against.
     light_sweep make_sweep_in_light_order() const
     {
-        const std::vector<krs::vec3f>& lights = shading_.light_directions();
-        light_sweep table(bricks_.voxel_count(), lights.size());
-        sweep_wave wave;
-        for (std::size_t i = 0; i < lights.size(); ++i) {
-            const sweep_order order = sweep_order::toward(bricks_, lights[i]);
-            for (std::size_t level = 0; level < order.levels(); ++level)
-                sweep_rays(lights[i], std::span(order.places).subspan(order.level[level], order.level[level + 1] - order.level[level]),
-                           table.toward(i), nullptr, wave);
-        }
-        return table;
+        return sweep_in_light_order(sweep_source{bricks_, shadow_reads_of(), shading_.light_directions(), centers_});
     }
-    // Bricks per task of make_sweep's first pass (tree A at resolution 300: about 750 voxels).
-    static constexpr std::size_t sweep_bricks = 64;
     // An empty shading memo sized for this marcher (its voxel count and lights), for one render:
     // all its threads may share it.
     shade_memo new_shade_memo() const { return shade_memo(bricks_.voxel_count(), 3 + shading_.light_directions().size()); }
@@ -270,18 +202,12 @@ public:
         return out;
     }
 
-    // Transmittance from p toward the light along direction l (unit), within the tree's box:
-    // samples at base + j ds from j = 1, one step out. At step factor 1 on cubic voxels that
-    // sample has left the shading voxel whatever the light's direction (the voxel's far face is
-    // at most sqrt(3)/2 of a side from its centre), so a voxel does not shadow itself. Below step
-    // factor 0.87, or on elongated voxels, the first samples can fall in the voxel itself, which
-    // then dims its own light: shading depends on the step factor there (a lone voxel of density
-    // 200: shadow 1.0 at step 1, 0.46 at 0.5). The GLSL marcher keeps the same convention. The
-    // march has the primary rays' empty-space skipping and early exit. One template for one point (T =
-    // float) and for a packet of points, one per lane, toward the same light: the shading pass
-    // marches the shadow rays of voxels a packet at a time (shade_bricks), each lane computing
-    // exactly what the scalar march computes for its point. `lookups` counts each lane's voxel
-    // reads.
+    // Transmittance from p toward the light along direction l (unit): p's shadow ray
+    // (shadow_ray.hpp: within the tree's box, from one step out, with the primary rays' empty-space
+    // skipping and early exit). One template for one point (T = float) and for a packet of
+    // points, one per lane, toward the same light: the shading pass marches the shadow rays of
+    // voxels a packet at a time (shade_bricks), each lane computing exactly what the scalar march
+    // computes for its point. `lookups` counts each lane's voxel reads.
     template <class T>
     T shadow_transmittance(const krs::vec3<T>& p, const krs::vec3f& l, T& lookups, krs::mask_t<T> running = krs::mask_t<T>(true)) const
     {
@@ -296,53 +222,32 @@ public:
     //
     // With `swept` (light l's column of the sweep, light_sweep.hpp) the ray is cut at its first
     // sample, from step `sweep_near_steps` on, in a non-empty voxel other than p's own, and
-    // completed by that voxel's opacity and swept transmittance. Without, it is the full shadow ray.
+    // completed by that voxel's swept transmittance: the step the sweep's own rays take
+    // (shadow_ray::step), so a voxel's center marched here gives its table entry. Without, it is
+    // the full shadow ray.
     template <class T, std::size_t K>
     std::array<T, K> shadow_transmittances(const std::array<krs::vec3<T>, K>& p, const krs::vec3f& l, std::array<T, K>& lookups,
                                            std::array<krs::mask_t<T>, K> running, const float* swept = nullptr) const
     {
-        using krs::select, krs::max, krs::any;
-        // Locals, so what every sample reads stays in registers (see voxel_bricks::view).
-        const brick_walk walk = walk_;
-        const voxel_bricks::view view = bricks_.view_of();
-        const krs::vec3<T> direction{T(l.x), T(l.y), T(l.z)};
-        T slope[3];
-        walk_.slopes_of(direction, slope);
-        const brick_walk::exit_faces faces = brick_walk::faces_of(slope);
-        const float* alpha_at = alpha_at_.data();
-        const std::int32_t* slot_at = bricks_.slots();
-        const T step(walk_.step()), least(options_.min_transmittance), zero(0.0f), one(1.0f), near(float(options_.sweep_near_steps));
-        std::array<T, K> base, t1, transmittance, j, margin0;
-        std::array<krs::index_lanes<T>, K> own; // p's own place (negative outside the bricks)
+        const shadow_ray<T> ray(shadow_reads_of(), l);
+        std::array<typename shadow_ray<T>::lanes, K> s;
         for (std::size_t k = 0; k < K; ++k) {
-            T t0;
-            margin0[k] = walk_.margin_at_origin(p[k]);
-            enter_box(krs::ray<T>{p[k], direction}, t0, t1[k]);
-            base[k] = max(t0, zero);
-            transmittance[k] = one, j[k] = one;
-            if (swept) own[k] = probe(walk, view, p[k], slope, running[k], walk.skip_margin(margin0[k], zero), faces).place;
+            s[k].p = p[k], s[k].running = running[k];
+            ray.start(s[k]);
+            if (swept) s[k].own = ray.origin_place(s[k]);
         }
         for (bool marching = true; marching;) {
             marching = false;
             for (std::size_t k = 0; k < K; ++k) {
-                const T t = base[k] + j[k] * step;
-                running[k] = running[k] & (t < t1[k]) & (transmittance[k] >= least);
-                if (!any(running[k])) continue;
+                krs::mask_t<T> cut;
+                krs::index_lanes<T> place;
+                if (!ray.step(s[k], &lookups[k], swept != nullptr, cut, place)) continue;
                 marching = true;
-                const brick_walk::probe_result<T> found = probe(walk, view, p[k] + direction * t, slope, running[k], walk.skip_margin(margin0[k], t), faces);
-                const krs::index_lanes<T> place = krs::index_max(found.place, krs::index_lanes<T>(0));
-                const T alpha = krs::gather(alpha_at, place);
-                transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
-                lookups[k] = lookups[k] + select(found.looks, one, zero);
-                if (swept) {
-                    // (Places compared in the float domain as their difference, exact: zero only when equal.)
-                    const auto cut = found.looks & (alpha > zero) & (j[k] >= near) & (krs::index_to_float(found.place - own[k]) != zero);
-                    transmittance[k] = select(cut, transmittance[k] * krs::gather(swept, krs::gather(slot_at, place)), transmittance[k]);
-                    running[k] = running[k] & !cut;
-                }
-                j[k] = j[k] + found.advance;
+                if (swept) ray.complete(s[k], cut, place, swept);
             }
         }
+        std::array<T, K> transmittance;
+        for (std::size_t k = 0; k < K; ++k) transmittance[k] = s[k].transmittance;
         return transmittance;
     }
 
@@ -375,19 +280,19 @@ public:
                 const std::size_t live = std::min(w, count > k * w ? count - k * w : 0);
                 running[k] = krs::mask_from_bits<T>(live == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << live) - 1);
             }
+            // The lanes' voxel slots (idle lanes keep an earlier voxel's: a valid slot, not used).
+            std::array<krs::index_lanes<T>, packets> at;
+            for (std::size_t k = 0; k < packets; ++k) {
+                std::array<std::int32_t, w> lanes_k;
+                for (std::size_t lane = 0; lane < w; ++lane) lanes_k[lane] = std::int32_t(slots[k * w + lane]);
+                if constexpr (std::floating_point<T>) at[k] = lanes_k[0];
+                else at[k] = krs::index_lanes<T>::load_unaligned(lanes_k.data());
+            }
             std::array<std::array<float, n>, march_options::max_lights> shadows{};
             for (std::size_t i = 0; i < lights; ++i) {
-                if (!options_.shadows) {
-                    shadows[i].fill(1.0f);
-                    continue;
-                }
-                if (!swept_.empty()) { // swept when the marcher was made: read, not marched
-                    for (std::size_t k = 0; k < count; ++k) shadows[i][k] = swept_.toward(i)[slots[k]];
-                    continue;
-                }
                 std::array<T, packets> looked;
                 looked.fill(T(0.0f));
-                const std::array<T, packets> t = shadow_transmittances<T, packets>(p, shading_.light_directions()[i], looked, running);
+                const std::array<T, packets> t = shadows_toward<T, packets>(i, p, &at, looked, running);
                 for (std::size_t k = 0; k < packets; ++k) {
                     const auto transmittance = krs::lanes_of(t[k]), per_lane = krs::lanes_of(looked[k]);
                     std::copy(transmittance.begin(), transmittance.end(), shadows[i].begin() + std::ptrdiff_t(k * w));
@@ -439,15 +344,21 @@ private:
         return volume;
     }
 
+    // What the shadow rays' samples read (shadow_ray.hpp), made where they are marched (its
+    // pointers are into this marcher, which may have moved since it was made).
+    shadow_reads shadow_reads_of() const
+    {
+        return {walk_, bricks_.view_of(), &bounds_, alpha_at_.data(), bricks_.slots(), box_lo_, box_hi_, options_.min_transmittance,
+                float(options_.sweep_near_steps)};
+    }
+
     // The brick walk's probe, and with a secondary bound (bounds_by) its test on top.
     template <class T>
     [[gnu::always_inline]] brick_walk::probe_result<T> probe(const brick_walk& walk, const voxel_bricks::view& view, const krs::vec3<T>& p,
                                                              const T (&slope)[3], const krs::mask_t<T>& running, const T& margin,
                                                              const brick_walk::exit_faces& faces) const
     {
-        brick_walk::probe_result<T> found = walk.probe(view, p, slope, running, margin, faces);
-        if (!bounds_.everything()) found.looks = found.looks & bounds_.holds(p);
-        return found;
+        return walk.probe(view, p, slope, running, margin, faces, bounds_);
     }
 
     // The march of rays whose lanes march in step, gathering what each sample needs: through
@@ -626,37 +537,14 @@ private:
             return T::load_unaligned(a.data());
     }
 
-    // Slab test against the tree's box; t0 >= 0. Rays that miss get t0 >= t1.
+    // The slab test against the tree's box (brick_walk.hpp, enter_box); t0 >= 0. Rays that miss
+    // get t0 >= t1. Primary rays with render-time noise: widened by its amplitude, so samples
+    // whose displaced positions fall in the box are taken (march_options.hpp).
     template <class T>
     void enter_box(const krs::ray<T>& ray, T& t0, T& t1, bool displaced = false) const
     {
-        using krs::abs, krs::max, krs::min, krs::select;
-        t0 = T(0.0f);
-        t1 = T(3.0e38f);
-        // Primary rays with render-time noise: widened by its amplitude, so samples whose displaced
-        // positions fall in the box are taken (march_options.hpp).
         const krs::vec3f pad = displaced ? options_.displacement.amplitude : krs::vec3f{0.0f, 0.0f, 0.0f};
-        const T lo[3] = {T(box_lo_.x - pad.x), T(box_lo_.y - pad.y), T(box_lo_.z - pad.z)},
-                hi[3] = {T(box_hi_.x + pad.x), T(box_hi_.y + pad.y), T(box_hi_.z + pad.z)};
-        const T o[3] = {ray.origin.x, ray.origin.y, ray.origin.z}, d[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
-        for (int a = 0; a < 3; ++a) {
-            // A zero direction component becomes tiny, so the division gives a huge finite slope
-            // instead of inf * 0 = NaN when the origin lies on a slab plane.
-            const T safe = select(abs(d[a]) < T(1e-30f), T(1e-30f), d[a]);
-            const T inv = T(1.0f) / safe;
-            const T ta = (lo[a] - o[a]) * inv, tb = (hi[a] - o[a]) * inv;
-            t0 = max(t0, min(ta, tb));
-            t1 = min(t1, max(ta, tb));
-        }
-        // Rays march in steps of ds along t, so a direction must be unit (krs::make_ray makes it
-        // so): a zero one had a span of 1e30 that a float sample count never crossed (march hung),
-        // and a short one would take more samples than the 2^23 the constructor allows. Such a
-        // ray, or one from a non-finite origin, misses the box.
-        const T length_squared = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        const auto usable = (abs(length_squared - T(1.0f)) <= T(1e-3f)) && krs::is_finite(o[0]) && krs::is_finite(o[1]) &&
-                            krs::is_finite(o[2]);
-        t0 = select(usable, t0, T(0.0f)); // (a NaN slab bound could leave t0 at -1e31, not NaN)
-        t1 = select(usable, t1, T(-1.0f));
+        hypertree::enter_box(ray, box_lo_ - pad, box_hi_ + pad, t0, t1);
     }
 
     voxel fetch_cached(voxel_index index, std::size_t place, std::size_t k, ray_cache& cache, bool& valid, float& lookups) const
@@ -715,170 +603,35 @@ private:
 
     // The lit color at shading point q; writes each light's shadow transmittance to `shadows`.
     // `slot` is the voxel's when q is its center (shade_per_voxel), else -1: with the sweep, a
-    // center reads its swept shadow, another point marches to its cut (shadow_transmittances).
+    // center reads its swept shadow, another point marches to its cut (shadows_toward).
     rgb light_at(const krs::vec3f& q, int level, float* shadows, float& lookups, std::int64_t slot) const
     {
-        const std::vector<krs::vec3f>& lights = shading_.light_directions();
-        for (std::size_t i = 0; i < lights.size(); ++i) {
-            if (!options_.shadows) {
-                shadows[i] = 1.0f;
-            } else if (swept_.empty()) {
-                shadows[i] = shadow_transmittance(q, lights[i], lookups);
-            } else if (slot >= 0) {
-                shadows[i] = swept_.toward(i)[slot];
-            } else {
-                std::array<float, 1> looked{lookups};
-                shadows[i] = shadow_transmittances<float, 1>({q}, lights[i], looked, {true}, swept_.toward(i))[0];
-                lookups = looked[0];
-            }
+        const std::array<std::int32_t, 1> at{std::int32_t(slot)};
+        for (std::size_t i = 0; i < shading_.light_directions().size(); ++i) {
+            std::array<float, 1> looked{lookups};
+            shadows[i] = shadows_toward<float, 1>(i, {q}, slot >= 0 ? &at : nullptr, looked, {true})[0];
+            lookups = looked[0];
         }
         return lit(q, level, shadows);
     }
 
-    // Fills the sweep's table (light_sweep.hpp) in two passes (make_sweep).
-    void sweep_lights(const parallel_for_hook& parallel_for) { swept_ = make_sweep(parallel_for); }
-
-    // The state of one level's shadow rays, an entry per voxel (struct of arrays).
-    struct sweep_wave {
-        std::vector<float> x, y, z, base, t1, margin0, j, transmittance, live;
-        std::vector<float> cut; // the cut voxel's slot as bits (krs::index_bits), ~0: none (yet)
-        std::vector<std::int32_t> own;
-        std::vector<std::uint32_t> slot; // ~0: padding
-        void resize(std::size_t n)
-        {
-            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live, &cut}) v->resize(n);
-            own.resize(n), slot.resize(n);
-        }
-        void move(std::size_t to, std::size_t from)
-        {
-            for (auto* v : {&x, &y, &z, &base, &t1, &margin0, &j, &transmittance, &live, &cut}) (*v)[to] = (*v)[from];
-            own[to] = own[from], slot[to] = slot[from];
-        }
-    };
-
-    // The cut shadow rays of the voxels at `places` (shadow_transmittances with `swept`, the same
-    // operations per ray), marched as a wavefront: packets of live rays take a few steps each,
-    // then the finished rays leave the wave (their transmittance is written) and the rest close
-    // ranks, so packets stay full. Packets of fixed voxels waited on their longest ray (one that
-    // meets no voxel marches out of the box): 15% of the lanes worked (tree A at 300).
-    // Without `cut`, a ray is completed at its cut by the cut voxel's entry of `out` (the sweep
-    // by levels: the places are one level, and no ray of a level reads a voxel of its own level,
-    // so writing during the level is safe); with `cut`, a ray stops at its cut without it, and
-    // the cut voxel's slot is written to cut[slot] (make_sweep's first pass: nothing is read).
-    template <class T = krs::packet_f>
-    void sweep_rays(const krs::vec3f& l, std::span<const std::uint32_t> places, float* out, std::uint32_t* cut_slots, sweep_wave& wave) const
+    // Light i's shadow transmittance at the lanes' points, by the one rule of both shading paths
+    // (light_at: one point; shade_bricks: packets of voxel centers): 1 without shadows; under the
+    // sweep, at voxel centers (`slots`: their voxels' slots) the table's entry as it is, and at
+    // other points (no slots) the point's ray to its cut, completed by the table; under rays, the
+    // full shadow ray. `lookups` counts each lane's voxel reads.
+    template <class T, std::size_t K>
+    std::array<T, K> shadows_toward(std::size_t i, const std::array<krs::vec3<T>, K>& p, const std::array<krs::index_lanes<T>, K>* slots,
+                                    std::array<T, K>& lookups, const std::array<krs::mask_t<T>, K>& running) const
     {
-        using I = krs::index_lanes<T>;
-        using krs::select, krs::max, krs::any;
-        constexpr std::size_t w = lanes<T>;
-        // Steps between two closings of ranks: most rays meet their cut within a few steps, so
-        // after 8 most lanes of a packet idled (sweep alone, one thread, trees A-D at resolution
-        // 100: 4 steps 0.85-0.95 of 8's time, 3 and 2 alike, 16 1.15-1.25; at 300 4 as 8).
-        constexpr int steps_per_pass = 4;
-        const auto load_f = [](const float* a) {
-            if constexpr (std::floating_point<T>) return *a;
-            else return T::load_unaligned(a);
-        };
-        const auto load_i = [](const std::int32_t* a) {
-            if constexpr (std::floating_point<T>) return *a;
-            else return I::load_unaligned(a);
-        };
-        const auto store_f = [](float* a, const T& v) {
-            if constexpr (std::floating_point<T>) *a = v;
-            else v.store_unaligned(a);
-        };
-        const brick_walk walk = walk_;
-        const voxel_bricks::view view = bricks_.view_of();
-        const krs::vec3<T> direction{T(l.x), T(l.y), T(l.z)};
-        T slope[3];
-        walk_.slopes_of(direction, slope);
-        const brick_walk::exit_faces faces = brick_walk::faces_of(slope);
-        const float* alpha_at = alpha_at_.data();
-        const std::int32_t* slot_at = bricks_.slots();
-        const T step(walk_.step()), least(options_.min_transmittance), zero(0.0f), one(1.0f), near(float(options_.sweep_near_steps));
-        const std::size_t n = places.size();
-        std::size_t active = (n + w - 1) / w * w;
-        wave.resize(active);
-        // A voxel's center by axis from centers_ (center_of's values, read rather than computed
-        // through a division per voxel); its own place is the place itself (the probe of its
-        // center, a gather, found it before).
-        for (std::size_t e = 0; e < active; ++e) {
-            const std::uint32_t place = places[std::min(e, n - 1)];
-            const std::array<int, 3> c = voxel_bricks::cell_at(bricks_.origin(place / voxel_bricks::brick_voxels), place % voxel_bricks::brick_voxels);
-            wave.x[e] = centers_[0][std::size_t(c[0])], wave.y[e] = centers_[1][std::size_t(c[1])], wave.z[e] = centers_[2][std::size_t(c[2])];
-            wave.own[e] = std::int32_t(place);
-            wave.slot[e] = e < n ? bricks_.slot(place) : ~std::uint32_t(0);
-            wave.cut[e] = std::bit_cast<float>(~std::uint32_t(0)); // none (a quiet NaN's bits: moves keep them)
-            wave.live[e] = e < n ? 1.0f : 0.0f;
-        }
-        for (std::size_t a = 0; a < active; a += w) {
-            const krs::vec3<T> p{load_f(&wave.x[a]), load_f(&wave.y[a]), load_f(&wave.z[a])};
-            T t0, t1;
-            enter_box(krs::ray<T>{p, direction}, t0, t1);
-            const T margin0 = walk_.margin_at_origin(p);
-            store_f(&wave.base[a], max(t0, zero)), store_f(&wave.t1[a], t1), store_f(&wave.margin0[a], margin0);
-            store_f(&wave.j[a], one), store_f(&wave.transmittance[a], one);
-        }
-        while (active > 0) {
-            // K packets in turn within one loop, as shadow_transmittances: each step's gathers wait
-            // on the last step's, so one packet alone waits on memory at every step.
-            constexpr std::size_t K = 4;
-            for (std::size_t first = 0; first < active; first += K * w) {
-                const std::size_t packets = std::min(K, (active - first) / w);
-                std::array<krs::vec3<T>, K> p;
-                std::array<T, K> base, t1, margin0, j, transmittance, cut_bits;
-                std::array<I, K> own;
-                std::array<krs::mask_t<T>, K> running;
-                for (std::size_t k = 0; k < packets; ++k) {
-                    const std::size_t a = first + k * w;
-                    p[k] = {load_f(&wave.x[a]), load_f(&wave.y[a]), load_f(&wave.z[a])};
-                    base[k] = load_f(&wave.base[a]), t1[k] = load_f(&wave.t1[a]), margin0[k] = load_f(&wave.margin0[a]);
-                    own[k] = load_i(&wave.own[a]);
-                    j[k] = load_f(&wave.j[a]), transmittance[k] = load_f(&wave.transmittance[a]), cut_bits[k] = load_f(&wave.cut[a]);
-                    running[k] = load_f(&wave.live[a]) > zero;
-                }
-                for (int s = 0; s < steps_per_pass; ++s) {
-                    bool marching = false;
-                    for (std::size_t k = 0; k < packets; ++k) {
-                        const T t = base[k] + j[k] * step;
-                        running[k] = running[k] & (t < t1[k]) & (transmittance[k] >= least);
-                        if (!any(running[k])) continue;
-                        marching = true;
-                        const brick_walk::probe_result<T> found =
-                            probe(walk, view, p[k] + direction * t, slope, running[k], walk.skip_margin(margin0[k], t), faces);
-                        const I place = krs::index_max(found.place, I(0));
-                        const T alpha = krs::gather(alpha_at, place);
-                        transmittance[k] = select(found.looks, transmittance[k] * (one - alpha), transmittance[k]);
-                        const auto cut = found.looks & (alpha > zero) & (j[k] >= near) & (krs::index_to_float(found.place - own[k]) != zero);
-                        if (cut_slots) {
-                            // The cut voxel's slot, its bits in a float lane (krs::index_bits).
-                            if (any(cut)) cut_bits[k] = select(cut, krs::index_bits(krs::gather(slot_at, place)), cut_bits[k]);
-                        } else {
-                            transmittance[k] = select(cut, transmittance[k] * krs::gather(out, krs::gather(slot_at, place)), transmittance[k]);
-                        }
-                        running[k] = running[k] & !cut;
-                        j[k] = j[k] + found.advance;
-                    }
-                    if (!marching) break;
-                }
-                // (A ray still running after its last step is checked against its end at the next pass.)
-                for (std::size_t k = 0; k < packets; ++k) {
-                    const std::size_t a = first + k * w;
-                    store_f(&wave.j[a], j[k]), store_f(&wave.transmittance[a], transmittance[k]), store_f(&wave.cut[a], cut_bits[k]);
-                    store_f(&wave.live[a], select(running[k], one, zero));
-                }
-            }
-            std::size_t kept = 0;
-            for (std::size_t e = 0; e < active; ++e) {
-                if (wave.live[e] > 0.0f) wave.move(kept++, e);
-                else if (wave.slot[e] != ~std::uint32_t(0)) {
-                    out[wave.slot[e]] = wave.transmittance[e];
-                    if (cut_slots) cut_slots[wave.slot[e]] = std::bit_cast<std::uint32_t>(wave.cut[e]);
-                }
-            }
-            active = (kept + w - 1) / w * w;
-            for (std::size_t e = kept; e < active; ++e) wave.move(e, 0), wave.live[e] = 0.0f, wave.slot[e] = ~std::uint32_t(0);
-        }
+        const krs::vec3f& l = shading_.light_directions()[i];
+        std::array<T, K> out;
+        if (!options_.shadows) out.fill(T(1.0f));
+        else if (swept_.empty()) out = shadow_transmittances<T, K>(p, l, lookups, running);
+        else if (slots) // swept when the marcher was made: read, not marched
+            for (std::size_t k = 0; k < K; ++k) out[k] = krs::gather(swept_.toward(i), (*slots)[k]);
+        else out = shadow_transmittances<T, K>(p, l, lookups, running, swept_.toward(i));
+        return out;
     }
 
     // The lit color at q given each light's shadow transmittance, with the structure-flow normal
