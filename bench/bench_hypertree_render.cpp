@@ -38,8 +38,8 @@
 // Frame CPU (`--only frame-cpu`, not in the default run): one frame with its setup on one thread,
 // as that thread's CPU time: the marcher made without threads, then one packet render() without
 // threads (the default lighting: light sweep, per-voxel shading, shading ahead), trees A-D at 100
-// (s = 1) and 300 (s = 2), dense store, setup and frame in alternating rounds, best of 15 at 100,
-// 3 at 300; with a hash of the frame's pixels and lookups (FNV-1a of the float bits), so that two
+// (s = 1) and 300 (s = 2), dense store, setup and frame in alternating rounds, best of 31 at 100,
+// 5 at 300; with a hash of the frame's pixels and lookups (FNV-1a of the float bits), so that two
 // builds (the same benchmark over two versions of the library) can be compared bit for bit.
 //
 // Walk (`--only walk`): the brick walk with empty cubes of every level (brick_walk::skips, the
@@ -675,7 +675,7 @@ int main(int argc, char** argv)
     if (only == "frame-cpu") {
         // One frame with its setup, each on this thread alone, as its CPU time
         // (CLOCK_THREAD_CPUTIME_ID: a loaded machine's waits for a core are left out).
-        std::printf("one frame with its setup on one thread, thread CPU time (best of 15 at 100, 3 at 300; setup and frame "
+        std::printf("one frame with its setup on one thread, thread CPU time (best of 31 at 100, 5 at 300; setup and frame "
                     "alternating), dense store, 300x300, load average %s\n\n",
                     bench::load_average().c_str());
         std::printf("%-4s %4s %2s | %9s %9s %9s | %8s %6s | %16s\n", "tree", "res", "s", "setup", "frame", "sum", "paper", "x", "image hash");
@@ -694,7 +694,7 @@ int main(int argc, char** argv)
                 const volume_marcher marcher(store, scene.shape, scene.colors, {});
                 double setup = 1e300, frame = 1e300;
                 image img;
-                for (int round = 0; round < (res == 100 ? 15 : 3); ++round) {
+                for (int round = 0; round < (res == 100 ? 31 : 5); ++round) {
                     setup = std::min(setup, cpu_of([&] { (void)volume_marcher(store, scene.shape, scene.colors, {}); }));
                     frame = std::min(frame, cpu_of([&] { img = render<krs::packet_f>(marcher, scene.camera, rs); }));
                 }
