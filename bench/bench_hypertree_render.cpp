@@ -1,7 +1,7 @@
 // bench_hypertree_render: the rendering columns of the hypertree paper's Table 1, and speed
 // against error for the raymarcher's settings (docs/design.md#rule-5).
 //
-//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds|setup-cpu]
+//     bench_hypertree_render [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds|setup-cpu|frame-cpu]
 //     (the CSV goes next to the executable, as <executable>.csv, unless --csv names one)
 //
 // Table: trees A-D (hypertree/presets.hpp) in a 300 x 300 image, at resolution 100 without
@@ -34,6 +34,13 @@
 // Setup CPU (`--only setup-cpu`, not in the default run): each marcher's setup on one thread as
 // its CPU time, trees A-D at 100 and 300, dense, index list and bit array, with a hash of the
 // sweep's table (two builds with equal hashes made equal tables).
+//
+// Frame CPU (`--only frame-cpu`, not in the default run): one frame with its setup on one thread,
+// as that thread's CPU time: the marcher made without threads, then one packet render() without
+// threads (the default lighting: light sweep, per-voxel shading, shading ahead), trees A-D at 100
+// (s = 1) and 300 (s = 2), dense store, setup and frame in alternating rounds, best of 31 at 100,
+// 5 at 300; with a hash of the frame's pixels and lookups (FNV-1a of the float bits), so that two
+// builds (the same benchmark over two versions of the library) can be compared bit for bit.
 //
 // Walk (`--only walk`): the brick walk with empty cubes of every level (brick_walk::skips, the
 // default) against the walk of empty bricks and 16^3 blocks only (the one before), trees A-D at
@@ -236,7 +243,7 @@ int main(int argc, char** argv)
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (i + 1 >= argc) {
-            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds|setup-cpu]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--csv FILE] [--threads T] [--size N] [--only table|error|setup|walk|bounds|setup-cpu|frame-cpu]\n", argv[0]);
             return 2;
         }
         const std::string v = argv[++i];
@@ -665,6 +672,52 @@ int main(int argc, char** argv)
                 row("bit_array", bit_array_store::build(scene.tree.volume, scene.voxels));
             }
         }
+    }
+    if (only == "frame-cpu") {
+        // One frame with its setup, each on this thread alone, as its CPU time
+        // (CLOCK_THREAD_CPUTIME_ID: a loaded machine's waits for a core are left out).
+        std::printf("one frame with its setup on one thread, thread CPU time (best of 31 at 100, 5 at 300; setup and frame "
+                    "alternating), dense store, 300x300, load average %s\n\n",
+                    bench::load_average().c_str());
+        std::printf("%-4s %4s %2s | %9s %9s %9s | %8s %6s | %16s\n", "tree", "res", "s", "setup", "frame", "sum", "paper", "x", "image hash");
+        const auto cpu_of = [](const auto& f) {
+            const double t0 = bench::thread_cpu_seconds();
+            f();
+            return bench::thread_cpu_seconds() - t0;
+        };
+        for (auto [res, s] : {std::pair{100, 1}, std::pair{300, 2}}) {
+            for (std::size_t t = 0; t < 4; ++t) {
+                const auto maker = std::array{presets::tree_a, presets::tree_b, presets::tree_c, presets::tree_d}[t];
+                const paper_tree scene = paper_tree::of(maker(res));
+                const dense_store store = dense_store::build(scene.tree.volume, scene.voxels);
+                render_settings rs;
+                rs.supersampling = s;
+                const volume_marcher marcher(store, scene.shape, scene.colors, {});
+                double setup = 1e300, frame = 1e300;
+                image img;
+                for (int round = 0; round < (res == 100 ? 31 : 5); ++round) {
+                    setup = std::min(setup, cpu_of([&] { (void)volume_marcher(store, scene.shape, scene.colors, {}); }));
+                    frame = std::min(frame, cpu_of([&] { img = render<krs::packet_f>(marcher, scene.camera, rs); }));
+                }
+                std::uint64_t hash = 1469598103934665603ull;
+                for (const float v : img.rgb) {
+                    std::uint32_t bits;
+                    std::memcpy(&bits, &v, sizeof bits);
+                    hash = (hash ^ bits) * 1099511628211ull;
+                }
+                hash = (hash ^ img.lookups) * 1099511628211ull;
+                const double paper = paper_seconds[t][2][res == 100 ? 0 : 1];
+                std::printf("%-4s %4d %2d | %7.3fms %7.3fms %7.3fms | %6.1f s %5.0fx | %016llx\n", scene.tree.name.c_str(), res, s,
+                            setup * 1e3, frame * 1e3, (setup + frame) * 1e3, paper, paper / (setup + frame),
+                            static_cast<unsigned long long>(hash));
+                std::fflush(stdout);
+                const std::string prefix = "frame_cpu," + scene.tree.name + ',' + std::to_string(res) + ',' + std::to_string(s) + ",dense,packet,";
+                csv << prefix << "setup," << setup << ",,," << paper << '\n';
+                csv << prefix << "frame," << frame << ',' << img.lookups << ",," << paper << '\n';
+            }
+        }
+        std::printf("\n(setup: the marcher made on this thread; frame: packet render() on this thread; x: the paper's time (3D array) over "
+                    "the sum, one core against the paper's one)\n");
     }
     std::printf("\nload average after: %s\nwrote %s\n", bench::load_average().c_str(), csv_path.c_str());
     return 0;

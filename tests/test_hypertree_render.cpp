@@ -755,3 +755,50 @@ TEST_CASE("hypertree render: flat shading marched in step, colors gathered by le
             }
     }
 }
+
+TEST_CASE("hypertree render: packets without supersampling take tiles of pixels and give the scalar rows' pixels at any image size")
+{
+    // render() hands packets tiles of pixels when s = 1 (4 x 4 at 16 lanes) where the scalar
+    // marcher takes rows: the same rays, so the same pixels and lookups, on image sizes that cut
+    // tiles, groups of tiles and bands (a width not a multiple of 16, heights not of 4 or 8, one
+    // pixel), serial and on threads, lit (shading ahead and as met), with shadow rays, and flat.
+    const small_scene scene(small_tree());
+    const auto shape = tree_shape::of(scene.list);
+    march_options rays, flat;
+    rays.shadow_by = march_options::shadow_method::rays;
+    flat.shadows = false;
+    flat.lights.clear();
+    flat.ambient_falloff = 0.0f;
+    const parallel_for_hook three_threads = [](std::size_t count, const std::function<void(std::size_t)>& body) {
+        std::vector<std::thread> workers;
+        for (std::size_t w = 0; w < 3; ++w)
+            workers.emplace_back([&, w] {
+                for (std::size_t i = w; i < count; i += 3) body(i);
+            });
+        for (auto& t : workers) t.join();
+    };
+    for (const march_options& o : {march_options{}, rays, flat}) {
+        const volume_marcher m(scene.list, shape, depth_colors::tree(3, 6), o);
+        for (const auto& [width, height] : {std::pair{61, 37}, std::pair{17, 5}, std::pair{16, 4}, std::pair{1, 1}, std::pair{33, 19}}) {
+            INFO(width << "x" << height);
+            const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, width, height);
+            for (const bool ahead : {true, false}) {
+                render_settings serial;
+                serial.shade_ahead = ahead;
+                render_settings threaded = serial;
+                threaded.parallel_for = three_threads;
+                const image rows = render<float>(m, camera, serial);
+                const image tiles = render<krs::packet_f>(m, camera, serial);
+                CHECK(max_difference(rows, tiles) == 0.0);
+                CHECK(rows.lookups == tiles.lookups);
+                CHECK(max_difference(rows, render<krs::packet_f>(m, camera, threaded)) == 0.0);
+            }
+        }
+        // Not the background alone: the view at 61 x 37 shows the tree.
+        const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 61, 37);
+        const image img = render<krs::packet_f>(m, camera);
+        std::size_t covered = 0;
+        for (std::size_t i = 0; i < img.rgb.size(); i += 3) covered += std::abs(img.rgb[i + 2] - render_settings{}.background.b) > 0.2f;
+        CHECK(covered > 50);
+    }
+}

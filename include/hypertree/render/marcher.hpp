@@ -326,7 +326,8 @@ public:
             for (std::uint64_t mask = bricks_.mask(b); mask != 0; mask &= mask - 1) {
                 const std::size_t offset = std::size_t(std::countr_zero(mask)), place = b * voxel_bricks::brick_voxels + offset;
                 const std::array<int, 3> c = voxel_bricks::cell_at(bricks_.origin(b), offset);
-                const krs::vec3f q = center_of(volume_.index(c[0], c[1], c[2]));
+                // (center_of's values, from the per-axis tables: no division per voxel.)
+                const krs::vec3f q{centers_[0][std::size_t(c[0])], centers_[1][std::size_t(c[1])], centers_[2][std::size_t(c[2])]};
                 x[count] = q.x, y[count] = q.y, z[count] = q.z;
                 slots[count] = bricks_.slot(place);
                 levels[count] = bricks_.at_place(place).level;

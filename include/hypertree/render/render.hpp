@@ -11,6 +11,11 @@
 //
 // Bands of rows_per_band rows are the unit of work: `parallel_for(bands, body)` may run them on
 // any threads (the library starts none); an empty function renders serially.
+//
+// Packets of rays without supersampling take tiles of pixels (4 x 4 at 16 lanes) rather than runs
+// of a row: the rays of a tile stay together through the tree, so a packet ends its march nearer
+// the time its first lane does. One lane's march depends on its own ray alone, so the pixels are
+// the rows' bit for bit (tested against the scalar marcher's rows).
 
 #include "hypertree/execution.hpp"
 #include "hypertree/render/marcher.hpp"
@@ -141,35 +146,47 @@ image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, c
         run_tasks(settings.parallel_for, tasks, shade_task);
         memo->seal(); // the threads that shaded are done: rays read the table directly
     }
-    const auto render_row = [&](std::size_t row) {
+    // A band's buffers, reused row after row (made per row, their allocations were 5 per row).
+    struct row_buffers {
+        std::vector<float> px, py, cr, cg, cb;
+    };
+    const auto render_row = [&](std::size_t row, row_buffers& buffers) {
         const int y = int(row);
         ray_cache cache;
-        // Every sample ray of the row, in order; packets take them `lanes` at a time.
+        // Every sample ray of the row, in order; packets take them `lanes` at a time. Without
+        // supersampling sample i is pixel i's centre, made where its packet is (below); with it
+        // the jittered positions are listed first.
         const std::size_t count = std::size_t(w) * std::size_t(s * s);
-        std::vector<float> px(count), py(count);
-        for (int x = 0; x < w; ++x)
-            for (int j = 0; j < s * s; ++j) {
-                const std::size_t i = std::size_t(x) * std::size_t(s * s) + std::size_t(j);
-                const int sx = j % s, sy = j / s;
-                if (s == 1) {
-                    px[i] = float(x) + 0.5f, py[i] = float(y) + 0.5f;
-                    continue;
+        std::vector<float>&px = buffers.px, &py = buffers.py, &cr = buffers.cr, &cg = buffers.cg, &cb = buffers.cb;
+        if (s > 1) {
+            px.resize(count), py.resize(count);
+            for (int x = 0; x < w; ++x)
+                for (int j = 0; j < s * s; ++j) {
+                    const std::size_t i = std::size_t(x) * std::size_t(s * s) + std::size_t(j);
+                    const int sx = j % s, sy = j / s;
+                    px[i] = float(x) + (float(sx) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 0)) / float(s);
+                    py[i] = float(y) + (float(sy) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 1)) / float(s);
                 }
-                px[i] = float(x) + (float(sx) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 0)) / float(s);
-                py[i] = float(y) + (float(sy) + detail::jitter(std::uint32_t(x), std::uint32_t(y), std::uint32_t(j), 1)) / float(s);
-            }
-        std::vector<float> cr(count), cg(count), cb(count);
+        }
+        cr.resize(count), cg.resize(count), cb.resize(count);
         // Packets go to the marcher `group` at a time (marching several at once hides the latency
         // of each one's lookups: volume_marcher::march_in_step; four gave 5-13% less CPU than two
         // on tree A at resolution 100, one thread); the last ones repeat the last ray.
         constexpr std::size_t group = 4, rays_per_group = group * lanes;
+        const float row_centre = float(y) + 0.5f;
         for (std::size_t first = 0; first < count; first += rays_per_group) {
             std::array<krs::ray<T>, group> rays;
             for (std::size_t g = 0; g < group; ++g) {
                 std::array<float, lanes> lx{}, ly{};
-                for (std::size_t l = 0; l < lanes; ++l) {
-                    const std::size_t i = std::min(first + g * lanes + l, count - 1);
-                    lx[l] = px[i], ly[l] = py[i];
+                if (s == 1) {
+                    // (The pixel centres, as float(x) + 0.5f, computed in place of being listed.)
+                    for (std::size_t l = 0; l < lanes; ++l)
+                        lx[l] = float(std::int32_t(std::min(first + g * lanes + l, count - 1))) + 0.5f, ly[l] = row_centre;
+                } else {
+                    for (std::size_t l = 0; l < lanes; ++l) {
+                        const std::size_t i = std::min(first + g * lanes + l, count - 1);
+                        lx[l] = px[i], ly[l] = py[i];
+                    }
                 }
                 T tx, ty;
                 if constexpr (std::floating_point<T>)
@@ -195,6 +212,7 @@ image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, c
                 }
             }
         }
+        const float inv = 1.0f / float(s * s);
         for (int x = 0; x < w; ++x) {
             float r = 0, g = 0, b = 0;
             for (int j = 0; j < s * s; ++j) {
@@ -202,15 +220,69 @@ image render(const volume_marcher& marcher, const krs::pinhole_camera& camera, c
                 r += cr[i], g += cg[i], b += cb[i];
             }
             float* o = &out.rgb[(std::size_t(y) * std::size_t(w) + std::size_t(x)) * 3];
-            const float inv = 1.0f / float(s * s);
             o[0] = r * inv, o[1] = g * inv, o[2] = b * inv;
         }
     };
+    // Without supersampling, packets take tiles of tile_cols x tile_rows pixels instead of runs of
+    // a row: the rays of a tile stay closer together through the tree, so a packet's lanes end
+    // nearer the same sample (a packet marches until its last lane is done) and its gathers touch
+    // fewer bricks. Each lane still marches its own pixel's ray alone (its result does not depend
+    // on the other lanes: march_packets), so the pixels are those of the rows, bit for bit (tested).
+    constexpr std::size_t tile_rows = lanes >= 16 ? 4 : lanes >= 4 ? 2 : 1, tile_cols = lanes / tile_rows;
+    static_assert(rows_per_band % tile_rows == 0, "a band is whole tiles high");
+    const auto render_tiles = [&](std::size_t row0) {
+        constexpr std::size_t group = 4;
+        const std::size_t width = std::size_t(w), height = std::size_t(h);
+        const float inv = 1.0f / float(s * s); // (1: the arithmetic of render_row's average, kept)
+        for (std::size_t x0 = 0; x0 < width; x0 += group * tile_cols) {
+            std::array<krs::ray<T>, group> rays;
+            for (std::size_t g = 0; g < group; ++g) {
+                std::array<float, lanes> lx{}, ly{};
+                for (std::size_t l = 0; l < lanes; ++l) {
+                    // Lanes past the image repeat its last column or row (their results are dropped).
+                    const std::size_t x = std::min(x0 + g * tile_cols + l % tile_cols, width - 1), y = std::min(row0 + l / tile_cols, height - 1);
+                    lx[l] = float(std::int32_t(x)) + 0.5f, ly[l] = float(std::int32_t(y)) + 0.5f;
+                }
+                if constexpr (std::floating_point<T>)
+                    rays[g] = camera.primary_ray(lx[0], ly[0]); // (not taken: the scalar marcher keeps the rows)
+                else
+                    rays[g] = camera.primary_ray(T::load_unaligned(lx.data()), T::load_unaligned(ly.data()));
+            }
+            const std::array<march_result<T>, group> marched =
+                marcher.template march_packets<T, group>(rays, march_context{nullptr, memo ? &*memo : nullptr, settings.shade_each_sample});
+            for (std::size_t g = 0; g < group; ++g) {
+                const march_result<T>& m = marched[g];
+                const auto tr = krs::lanes_of(m.transmittance), mr = krs::lanes_of(m.r), mg = krs::lanes_of(m.g),
+                           mb = krs::lanes_of(m.b), ml = krs::lanes_of(m.lookups);
+                for (std::size_t l = 0; l < lanes; ++l) {
+                    const std::size_t x = x0 + g * tile_cols + l % tile_cols, y = row0 + l / tile_cols;
+                    if (x >= width || y >= height) continue;
+                    // render_row's operations for s = 1: the sample's color over the background,
+                    // then the average of one sample.
+                    const float cr = mr[l] + tr[l] * settings.background.r, cg = mg[l] + tr[l] * settings.background.g,
+                                cb = mb[l] + tr[l] * settings.background.b;
+                    float r = 0, gr = 0, b = 0;
+                    r += cr, gr += cg, b += cb;
+                    float* o = &out.rgb[(y * width + x) * 3];
+                    o[0] = r * inv, o[1] = gr * inv, o[2] = b * inv;
+                    row_lookups[y] += std::uint64_t(ml[l]);
+                }
+            }
+        }
+    };
+    // (The scalar marcher, a ray cache or supersampling keep the rows.)
+    const bool tiled = !std::floating_point<T> && s == 1 && !settings.ray_cache;
     // Tasks are bands of rows, not rows: neighbouring rows meet the same voxels, whose bricks and
     // shading then stay in one core's cache.
     const std::size_t bands = (std::size_t(h) + rows_per_band - 1) / rows_per_band;
     run_tasks(settings.parallel_for, bands, [&](std::size_t band) {
-        for (std::size_t row = band * rows_per_band; row < std::min(std::size_t(h), (band + 1) * rows_per_band); ++row) render_row(row);
+        const std::size_t end = std::min(std::size_t(h), (band + 1) * rows_per_band);
+        if (tiled) {
+            for (std::size_t row = band * rows_per_band; row < end; row += tile_rows) render_tiles(row);
+            return;
+        }
+        row_buffers buffers;
+        for (std::size_t row = band * rows_per_band; row < end; ++row) render_row(row, buffers);
     });
     out.lookups = shading_lookups;
     for (auto n : row_lookups) out.lookups += n;
