@@ -378,7 +378,7 @@ void generate_chunk_unlocked(const drawn_ifs<P>& tree, std::uint64_t seed, std::
     }
 }
 
-// ... and with locked voxels (ifs::trim, region.hpp): the chunk's new hits on locked voxels are
+// ... and with locked voxels (ifs::trim, hypertree/region.hpp): the chunk's new hits on locked voxels are
 // dropped as soon as the chunk is made, while they are hot in cache and before any other step
 // sees them, so a locked voxel never enters the hit list. Filtering the chunk rather than testing
 // in the record step keeps both generator loops (scalar and lanes in step) unchanged and their

@@ -280,7 +280,8 @@ public:
                 const std::size_t live = std::min(w, count > k * w ? count - k * w : 0);
                 running[k] = krs::mask_from_bits<T>(live == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << live) - 1);
             }
-            // The lanes' voxel slots (idle lanes keep an earlier voxel's: a valid slot, not used).
+            // The lanes' voxel slots (idle lanes keep an earlier voxel's, or slot 0 in the first batch:
+            // a valid slot, not used).
             std::array<krs::index_lanes<T>, packets> at;
             for (std::size_t k = 0; k < packets; ++k) {
                 std::array<std::int32_t, w> lanes_k;

@@ -35,7 +35,7 @@
 
 namespace hypertree {
 
-// What a shadow ray's samples read, all owned by the marcher (volume_marcher::shadow_reads): its
+// What a shadow ray's samples read, all owned by the marcher (volume_marcher::shadow_reads_of): its
 // walk and the bricks' view (copies, so that what every sample reads stays in registers: see
 // voxel_bricks::view), its secondary bound, per place of the bricks the voxel's opacity for one
 // step and its slot, the tree's box, and the options the march stops by.
