@@ -727,6 +727,56 @@ TEST_CASE("hypertree build_tree's voxels equal the separate steps' on grids abov
     }
 }
 
+TEST_CASE("hypertree lanes: line walks of consecutive rows in flight keep the order of rows walked one by one")
+{
+    // With lanes in step, a row's voxel walks step along with the next row's (whose hits wait in
+    // a side buffer until the first row's walks end; create/generator_lanes.hpp). The hit list
+    // must be the one of walking each row to its end before the next begins, in the same order:
+    // the lanes-vs-scalar test above compares sorted hits and cannot see an order. Lines short
+    // and long (walks of a row ending long after the next row's), lanes of unequal length, a
+    // volume the lines leave (clipped and escaping walks).
+    if (!detail::lanes_built) {
+        MESSAGE("no AVX-512 lanes in this build: nothing to compare");
+        return;
+    }
+    auto long_lines = presets::tree_c(40);
+    long_lines.generator = generator_shape::line({0, -0.5, 0}, {0, 0.5, 0});
+    auto leaving = presets::tree_c(50);
+    leaving.volume = hypervolume({-0.3, 0.1, -0.3}, {0.6, 0.6, 0.6}, resolution{50, 50, 50});
+    for (const auto& def : {presets::tree_c(80), presets::tree_c(300), long_lines, leaving}) {
+        INFO(def.name << " at " << def.volume.grid().x);
+        const drawn_ifs tree(def, 7);
+        const auto tables = detail::lane_tables::of(tree);
+        REQUIRE(tables);
+        const std::uint64_t cycles[detail::cycle_lanes] = {60, 60, 60, 59, 59, 59, 59, 59};
+        const std::size_t segment_voxels = max_voxels_on_segment(def.volume, 2.0 * krs::length((def.generator.end - def.generator.start) * 0.5));
+        const auto run = [&](auto overlap) {
+            std::uint64_t state[detail::cycle_lanes];
+            for (std::uint64_t j = 0; j < detail::cycle_lanes; ++j) state[j] = random_stream::derive(7, j + 1).state();
+            std::vector<hit> buffer(detail::chunk_room(def, 475));
+            const auto room = [&](hit* end, std::size_t more) {
+                REQUIRE(std::size_t(end - buffer.data()) + more <= buffer.size());
+                return end;
+            };
+            std::vector<std::uint64_t> per_depth(std::size_t(def.tree_depth));
+            detail::lane_counts counts{0, 0, 0, per_depth.data()};
+            hit* const end = detail::generate_in_lanes<true, decltype(overlap)::value>(tree, *tables, state, cycles, buffer.data(), counts,
+                                                                                       segment_voxels, room);
+            std::vector<std::tuple<voxel_index, int, int>> hits;
+            for (const hit* h = buffer.data(); h != end; ++h) hits.emplace_back(h->voxel, h->level, h->part);
+            return std::pair(hits, counts.escaped);
+        };
+        const auto [overlapped, escaped] = run(std::true_type{});
+        const auto [one_by_one, escaped_one_by_one] = run(std::false_type{});
+        CHECK(overlapped.size() > 1000);
+        REQUIRE(overlapped.size() == one_by_one.size());
+        std::size_t differ = 0;
+        for (std::size_t i = 0; i < overlapped.size(); ++i) differ += overlapped[i] != one_by_one[i];
+        CHECK(differ == 0);
+        CHECK(escaped == escaped_one_by_one);
+    }
+}
+
 TEST_CASE("hypertree generator chunks never outgrow the room they start with")
 {
     // Each chunk makes room for the most hits it can record before it starts, so it never copies

@@ -15,6 +15,10 @@
 // Where the scalar loop branches (a lane's cycle ends by the last-level rule, a rejection
 // sampler retries, a line walk has voxels left), a mask keeps the lanes that go on.
 //
+// The voxel walks of lines run one row behind: a row's walks step together with the next row's,
+// whose hits wait in a small side buffer until the first row's are written (record_line below),
+// so the hit list is that of walking each row to its end first.
+//
 // Every step is the scalar loop's arithmetic in the same order (multiplies and adds, with no
 // fused multiply-add written here), so where the compiler does not contract the two paths give
 // the same hits, only interleaved differently (tested with contraction off).
@@ -156,8 +160,10 @@ struct lane_tables {
 // store writes a whole register of hits and advances by those that count: before each row,
 // room(end, k) must return where `end` now is (the buffer may move) with room for k hits past it;
 // the lanes ask for cycle_lanes per row of points and cycle_lanes (segment_voxels + 1) per row of
-// lines, segment_voxels being the most one line visits (generate.hpp).
-template <bool Line, transform_pipeline P, class Room>
+// lines, segment_voxels being the most one line visits (generate.hpp). OverlapWalks = false walks
+// each row of lines to its end before the next row begins (the reference the overlap is tested
+// against: the same hits in the same order).
+template <bool Line, bool OverlapWalks = true, transform_pipeline P, class Room>
 hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std::uint64_t (&state)[cycle_lanes],
                        const std::uint64_t (&cycles)[cycle_lanes], hit* end, lane_counts& counts, std::size_t segment_voxels, Room&& room)
 {
@@ -270,9 +276,9 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
         store(voxel_of(fx, fy, fz), mask & in, tag_of(level, part));
         count(mask, mask & ~in, level);
     };
-    // Records the lanes of `mask` whose segment [a, b] visits voxels: for_each_voxel_on_segment
-    // in lanes, step for step (its clipping, cells and walk; see generate.hpp), each lane walking
-    // until its own budget is spent. Lanes with an end outside count as escaped.
+    // The voxels of the lanes' segments: for_each_voxel_on_segment in lanes, step for step (its
+    // clipping, cells and walk; see generate.hpp), each lane walking until its own budget is spent.
+    // Lanes with an end outside count as escaped.
     const vec3d low_corner = volume.origin(), high_corner = volume.maximum(), voxel_side = volume.voxel_size();
     const double low_[3] = {low_corner.x, low_corner.y, low_corner.z}, high_[3] = {high_corner.x, high_corner.y, high_corner.z};
     const double side_[3] = {voxel_side.x, voxel_side.y, voxel_side.z}, per_[3] = {per.x, per.y, per.z};
@@ -281,10 +287,26 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
     const __m512d infinity = _mm512_set1_pd(INFINITY);
     const __m512i zero_i = _mm512_setzero_si512(), one_i = _mm512_set1_epi64(1);
     const auto finite = [](__m512d v) { return __mmask8(_mm512_fpclass_pd_mask(v, 0x99) ^ 0xff); }; // not NaN nor +-inf
-    const auto record_line = [&](const points& a, const points& b, __mmask8 mask, int level, __m512i part) {
+    // A row's voxel walks in flight: the walk's state between steps (zero before a walk begins, so
+    // that stepping a row with no lane walking reads defined values and stores nothing).
+    struct walk {
+        __mmask8 walking = 0;
+        __m512i tag{}, index{}, budget{}, remaining[3]{}, stride[3]{};
+        __m512d crossing[3]{}, delta[3]{};
+    };
+    const auto store_at = [&](hit*& at, __m512i index, __mmask8 kept, __m512i tag) {
+        const __m512i packed = _mm512_or_si512(_mm512_and_si512(index, _mm512_set1_epi64(0xffffffffll)), tag);
+        _mm512_storeu_si512(at, _mm512_maskz_compress_epi64(kept, packed));
+        at += std::popcount(unsigned(kept));
+    };
+    // Begins the walks of the lanes of `mask` whose segment [a, b] visits voxels (clipping and
+    // first cells), storing at `at` the voxel of those whose segment is a point.
+    const auto begin_walk = [&](const points& a, const points& b, __mmask8 mask, int level, __m512i part, hit*& at) {
+        walk w;
         count(mask, mask & ~(inside(a) & inside(b)), level);
-        if (!mask) return;
+        if (!mask) return w;
         const __m512i tag = tag_of(level, part);
+        w.tag = tag;
         __mmask8 walking = mask & finite(a.x) & finite(a.y) & finite(a.z) & finite(b.x) & finite(b.y) & finite(b.z);
         const __m512d start[3] = {a.x, a.y, a.z};
         const __m512d dir[3] = {_mm512_sub_pd(b.x, a.x), _mm512_sub_pd(b.y, a.y), _mm512_sub_pd(b.z, a.z)};
@@ -296,10 +318,10 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
         if (still) { // a point: its voxel, if inside
             __m512d fx, fy, fz;
             const __mmask8 in = cells(a, fx, fy, fz);
-            store(voxel_of(fx, fy, fz), still & in, tag);
+            store_at(at, voxel_of(fx, fy, fz), still & in, tag);
             walking &= ~still;
         }
-        if (!walking) return;
+        if (!walking) return w;
         __m512d t0 = zero, t1 = one;
         for (int i = 0; i < 3; ++i) {
             const __m512d lo = _mm512_set1_pd(low_[i]), hi = _mm512_set1_pd(high_[i]);
@@ -311,9 +333,8 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
             t1 = _mm512_mask_min_pd(t1, moves[i], far, t1);  // std::min(t1, far)
         }
         walking &= _mm512_cmp_pd_mask(t0, t1, _CMP_LE_OQ);
-        if (!walking) return;
-        __m512i index = zero_i, remaining[3], budget = zero_i, stride[3];
-        __m512d crossing[3], delta[3];
+        if (!walking) return w;
+        w.index = zero_i, w.budget = zero_i;
         for (int i = 0; i < 3; ++i) {
             const __m512d lo = _mm512_set1_pd(low_[i]), per_unit = _mm512_set1_pd(per_[i]), side = _mm512_set1_pd(side_[i]);
             const __m512d top = _mm512_set1_pd(double(cells_[i] - 1));
@@ -327,29 +348,59 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
             const __m512i step = _mm512_mask_mov_epi64(_mm512_maskz_mov_epi64(up, one_i), down, _mm512_set1_epi64(-1));
             const __m512d boundary = _mm512_add_pd(lo, _mm512_mul_pd(_mm512_cvtepi64_pd(_mm512_mask_add_epi64(cell, up, cell, one_i)), side));
             const __m512d next = _mm512_div_pd(_mm512_sub_pd(boundary, start[i]), dir[i]);
-            delta[i] = _mm512_div_pd(side, _mm512_abs_pd(dir[i]));
-            remaining[i] = _mm512_abs_epi64(_mm512_sub_epi64(last, cell));
-            budget = _mm512_add_epi64(budget, remaining[i]);
-            crossing[i] = _mm512_mask_mov_pd(infinity, _mm512_cmp_epi64_mask(remaining[i], zero_i, _MM_CMPINT_GT), next);
-            stride[i] = _mm512_mullo_epi64(step, _mm512_set1_epi64(strides_[i]));
-            index = _mm512_add_epi64(index, _mm512_mullo_epi64(cell, _mm512_set1_epi64(strides_[i])));
+            w.delta[i] = _mm512_div_pd(side, _mm512_abs_pd(dir[i]));
+            w.remaining[i] = _mm512_abs_epi64(_mm512_sub_epi64(last, cell));
+            w.budget = _mm512_add_epi64(w.budget, w.remaining[i]);
+            w.crossing[i] = _mm512_mask_mov_pd(infinity, _mm512_cmp_epi64_mask(w.remaining[i], zero_i, _MM_CMPINT_GT), next);
+            w.stride[i] = _mm512_mullo_epi64(step, _mm512_set1_epi64(strides_[i]));
+            w.index = _mm512_add_epi64(w.index, _mm512_mullo_epi64(cell, _mm512_set1_epi64(strides_[i])));
         }
-        for (;;) {
-            store(index, walking, tag);
-            walking &= _mm512_cmp_epi64_mask(budget, zero_i, _MM_CMPINT_GT);
-            if (!walking) return;
-            budget = _mm512_sub_epi64(budget, one_i);
-            const __mmask8 x = _mm512_cmp_pd_mask(crossing[0], crossing[1], _CMP_LE_OQ) & _mm512_cmp_pd_mask(crossing[0], crossing[2], _CMP_LE_OQ);
-            const __mmask8 y = __mmask8(~x) & _mm512_cmp_pd_mask(crossing[1], crossing[2], _CMP_LE_OQ);
-            const __mmask8 moved[3] = {x, y, __mmask8(~x & ~y)};
-            for (int i = 0; i < 3; ++i) {
-                index = _mm512_mask_add_epi64(index, moved[i], index, stride[i]);
-                remaining[i] = _mm512_mask_sub_epi64(remaining[i], moved[i], remaining[i], one_i);
-                const __m512d ahead = _mm512_mask_mov_pd(infinity, _mm512_cmp_epi64_mask(remaining[i], zero_i, _MM_CMPINT_GT),
-                                                         _mm512_add_pd(crossing[i], delta[i]));
-                crossing[i] = _mm512_mask_mov_pd(crossing[i], moved[i], ahead);
-            }
+        w.walking = walking;
+        return w;
+    };
+    // One step of the walks: the voxels of the lanes walking, stored at `at`, then each lane's
+    // next voxel (lanes that stopped move too, unseen: they store nothing again).
+    const auto step_walk = [&](walk& w, hit*& at) {
+        store_at(at, w.index, w.walking, w.tag);
+        w.walking &= _mm512_cmp_epi64_mask(w.budget, zero_i, _MM_CMPINT_GT);
+        w.budget = _mm512_sub_epi64(w.budget, one_i);
+        const __mmask8 x = _mm512_cmp_pd_mask(w.crossing[0], w.crossing[1], _CMP_LE_OQ) & _mm512_cmp_pd_mask(w.crossing[0], w.crossing[2], _CMP_LE_OQ);
+        const __mmask8 y = __mmask8(~x) & _mm512_cmp_pd_mask(w.crossing[1], w.crossing[2], _CMP_LE_OQ);
+        const __mmask8 moved[3] = {x, y, __mmask8(~x & ~y)};
+        for (int i = 0; i < 3; ++i) {
+            w.index = _mm512_mask_add_epi64(w.index, moved[i], w.index, w.stride[i]);
+            w.remaining[i] = _mm512_mask_sub_epi64(w.remaining[i], moved[i], w.remaining[i], one_i);
+            const __m512d ahead = _mm512_mask_mov_pd(infinity, _mm512_cmp_epi64_mask(w.remaining[i], zero_i, _MM_CMPINT_GT),
+                                                     _mm512_add_pd(w.crossing[i], w.delta[i]));
+            w.crossing[i] = _mm512_mask_mov_pd(w.crossing[i], moved[i], ahead);
         }
+    };
+    // Records a row of segments with the previous row's walks still in flight: this row's walks
+    // begin into `side` and step along with the previous row's, which write at `end`; when those
+    // end, this row's hits so far follow them and its walks go on at `end`, overlapping the next
+    // row's geometry and walks. The hits are those of walking each row to its end before the
+    // next, in the same order. Why: one walk is a chain of dependent steps (compare the three
+    // crossings, move, add delta; the end pointer advanced by a popcount) that leaves the core
+    // idle between steps, and tree C's generation is ~80% walk; two independent walks per step
+    // fill it (tree C at 300: 3.3 -> 2.4-2.5 ms on one thread, docs/benchmarks.md). Room: the
+    // previous row's walks write within the room asked for when their row took over `end` (at
+    // most row_room from there); this row asks again once they are done, as a row walked alone
+    // would; `side` holds one row and a register's slack.
+    const std::size_t side_room = Line ? cycle_lanes * (segment_voxels + 1) + cycle_lanes : 0;
+    std::unique_ptr<hit[]> side(Line ? new hit[side_room] : nullptr);
+    walk pending;
+    const std::size_t row_room = cycle_lanes * (Line ? segment_voxels + 1 : 1);
+    const auto record_line = [&](const points& a, const points& b, __mmask8 mask, int level, __m512i part) {
+        hit* at = side.get();
+        walk next = begin_walk(a, b, mask, level, part, at);
+        while (pending.walking) step_walk(pending, end), step_walk(next, at);
+        end = room(end, row_room);
+        const std::size_t written = std::size_t(at - side.get());
+        std::copy_n(side.get(), written, end);
+        end += written;
+        pending = next;
+        if constexpr (!OverlapWalks)
+            while (pending.walking) step_walk(pending, end);
     };
 
     const __m512i last_column = _mm512_set1_epi64(std::int64_t(n) - 1);
@@ -413,7 +464,6 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
         a = {_mm512_sub_pd(mid.x, h.x), _mm512_sub_pd(mid.y, h.y), _mm512_sub_pd(mid.z, h.z)};
         b = {_mm512_add_pd(mid.x, h.x), _mm512_add_pd(mid.y, h.y), _mm512_add_pd(mid.z, h.z)};
     };
-    const std::size_t row_room = cycle_lanes * (Line ? segment_voxels + 1 : 1);
     for (std::uint64_t i = 0; i < cycles[0]; ++i) {
         // The lanes that still have cycle i (cycles[] does not increase with the lane).
         __mmask8 alive = 0;
@@ -463,6 +513,7 @@ hit* generate_in_lanes(const drawn_ifs<P>& tree, const lane_tables& lookups, std
             before = previous, previous = w;
         }
     }
+    while (pending.walking) step_walk(pending, end);
     _mm512_storeu_si512(state, random);
     return end;
 }
@@ -485,7 +536,7 @@ struct lane_tables {
     }
 };
 
-template <bool Line, transform_pipeline P, class Room>
+template <bool Line, bool OverlapWalks = true, transform_pipeline P, class Room>
 hit* generate_in_lanes(const drawn_ifs<P>&, const lane_tables&, std::uint64_t (&)[cycle_lanes], const std::uint64_t (&)[cycle_lanes], hit* end,
                        lane_counts&, std::size_t, Room&&)
 {
