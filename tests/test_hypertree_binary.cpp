@@ -30,6 +30,9 @@ using hypertree::stored_voxel;
 using hypertree::voxel;
 using hypertree::voxel_index;
 
+// Exactly `wanted` distinct random voxels (the byte-by-byte tests need a known count, where
+// krs_test::random_voxels draws each voxel with a probability), random density, level 0..11 and
+// part 0..8.
 std::vector<stored_voxel> random_voxels(const hypervolume& volume, std::size_t wanted, std::uint64_t seed)
 {
     std::mt19937_64 g(seed);

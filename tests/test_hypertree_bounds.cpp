@@ -8,6 +8,8 @@
 #include "hypertree/render/glsl.hpp"
 #include "hypertree/render/render.hpp"
 
+#include "support/random.hpp"
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -193,13 +195,10 @@ TEST_CASE("hypertree bounds: the paper's rule (1 + dmax / r)^2 holds a sphere's 
     CHECK(krs::length(center - chain(c)) < 1e-12);
     // Dense sampling: points of the ball (surface and inside) map into the derived sphere; the
     // farthest comes within r1 + dmax of the mapped center, which the rule's r1 + 2 dmax + dmax^2/r1 exceeds.
-    std::mt19937 random(7);
-    std::normal_distribution<double> normal;
-    std::uniform_real_distribution<double> uniform(0, 1);
+    std::mt19937_64 random(7);
     double farthest = 0;
     for (int i = 0; i < 200000; ++i) {
-        krs::vec3d d{normal(random), normal(random), normal(random)};
-        d = d / krs::length(d) * (i % 2 ? r : r * std::cbrt(uniform(random)));
+        const krs::vec3d d = i % 2 ? krs_test::random_direction(random) * r : krs_test::in_ball(random, r);
         farthest = std::max(farthest, krs::length(chain(c + d) - center));
     }
     CHECK(farthest <= radius);
@@ -243,8 +242,7 @@ TEST_CASE("hypertree bounds: the float sphere test accepts a point the double sp
     // radius^2 rounded to float may fall below the double r^2, and the float sum of squares may
     // round up: both would reject a point just inside. Points at 1 - 2^-24 of the radius (within
     // float rounding of the surface), in many directions, on spheres of awkward radii.
-    std::mt19937 random(11);
-    std::normal_distribution<double> normal;
+    std::mt19937_64 random(11);
     std::size_t rejected = 0, tried = 0;
     for (int n = 0; n < 200; ++n) {
         tree_shape shape;
@@ -253,8 +251,7 @@ TEST_CASE("hypertree bounds: the float sphere test accepts a point the double sp
         const bound_test test = bound_test::of(shape, bound_method::spheres);
         const krs::bounding_sphere s = shape.spheres.front();
         for (int i = 0; i < 200; ++i) {
-            krs::vec3d d{normal(random), normal(random), normal(random)};
-            d = d / krs::length(d);
+            const krs::vec3d d = krs_test::random_direction(random);
             const krs::vec3f p(krs::vec3d(s.center) + d * (double(s.radius) * (1 - std::ldexp(1.0, -23))));
             // Only points the double sphere holds count (the float point is a rounding away).
             if (krs::length(krs::vec3d(p) - krs::vec3d(s.center)) > double(s.radius)) continue;

@@ -6,6 +6,7 @@
 #include "hypertree/create/scratch.hpp"
 #include "hypertree/execution.hpp"
 
+#include "support/threads.hpp"
 #include "support/voxel_reference.hpp"
 
 #include <doctest/doctest.h>
@@ -29,19 +30,6 @@ using hypertree::voxel_index;
 using krs_test::compact_with_map;
 using krs_test::integer;
 using krs_test::random_hits;
-
-// A parallel_for hook on two threads started for the call, task i on thread i % 2.
-hypertree::parallel_for_hook two_threads()
-{
-    return [](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::vector<std::thread> threads;
-        for (unsigned t = 0; t < 2; ++t)
-            threads.emplace_back([&, t] {
-                for (std::size_t i = t; i < count; i += 2) body(i);
-            });
-        for (std::thread& t : threads) t.join();
-    };
-}
 
 void check_same_entries(const std::vector<voxel_entry>& got, const std::vector<voxel_entry>& expected)
 {
@@ -149,7 +137,7 @@ TEST_CASE("compact over pieces (the generator's chunks) gives the entries of the
     // build_tree validates the chunks as the generator left them: any split, with empty pieces
     // and pieces shorter than a task's share, on threads or not, into a std::pmr::vector drawn
     // from scratch memory, must give the map's entries.
-    const hypertree::parallel_for_hook pool = two_threads();
+    const hypertree::parallel_for_hook pool = krs_test::strided_threads(2);
     std::mt19937_64 g(31);
     hypertree::scratch_memory scratch;
     for (const voxel_index highest : {voxel_index(3000), voxel_index(300 * 300 * 300 - 1), voxel_index(1) << 30}) {
@@ -181,7 +169,7 @@ TEST_CASE("compact chunk by chunk (build_tree's way) gives the entries of the wh
     // Each chunk bucketed on its own, then every bucket merged across the chunks: random chunks,
     // empty ones among them, on threads or not, must give the map's entries; hits past the grid
     // or at level 64 are refused with the parameter named.
-    const hypertree::parallel_for_hook pool = two_threads();
+    const hypertree::parallel_for_hook pool = krs_test::strided_threads(2);
     std::mt19937_64 g(33);
     hypertree::scratch_memory scratch;
     for (const std::uint64_t voxels : {std::uint64_t(1), std::uint64_t(3000), std::uint64_t(300) * 300 * 300, std::uint64_t(1) << 25}) {

@@ -1,6 +1,7 @@
 // build_tree's creation path (generation in groups of chunks; per-voxel tables up to 2^21 voxels,
-// else four-way bucketing, the merge's groups classified where they lie) against a brute-force reference built from generate()'s hit
-// list with a std::map: per voxel the hit count and the shallowest (level, part), then the
+// else four-way bucketing, the merge's groups classified where they lie) against a brute-force
+// reference built from generate()'s hit list with a std::map (compact_with_map,
+// support/voxel_reference.hpp): per voxel the hit count and the shallowest (level, part), then the
 // density classes of those entries and the branch rule, voxel by voxel. The reference shares
 // only the generator (tested on its own in test_hypertree_ifs.cpp) and the placing of classes
 // over a histogram (test_hypertree_density.cpp) with the code under test.
@@ -10,12 +11,13 @@
 #include "hypertree/execution.hpp"
 #include "hypertree/presets.hpp"
 
+#include "support/threads.hpp"
+#include "support/voxel_reference.hpp"
+
 #include <doctest/doctest.h>
 
-#include <functional>
-#include <map>
+#include <algorithm>
 #include <stdexcept>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -23,22 +25,9 @@ using namespace hypertree;
 
 namespace {
 
-struct reference_entry {
-    std::uint32_t hits = 0;
-    std::uint16_t best = 0xffff; // level << 8 | part, the smallest
-};
-
 std::vector<stored_voxel> brute_force_voxels(const ifs<>& tree, std::uint64_t seed, int class_count)
 {
-    const generated_hits generated = generate(tree, seed);
-    std::map<voxel_index, reference_entry> by_voxel;
-    for (const hit& h : generated.hits) {
-        reference_entry& e = by_voxel[h.voxel];
-        ++e.hits;
-        e.best = std::min<std::uint16_t>(e.best, std::uint16_t(h.level << 8 | h.part));
-    }
-    std::vector<voxel_entry> entries;
-    for (const auto& [v, e] : by_voxel) entries.push_back({v, e.hits, std::uint8_t(e.best >> 8), std::uint8_t(e.best & 0xff)});
+    const std::vector<voxel_entry> entries = krs_test::compact_with_map(generate(tree, seed).hits);
     const density_classes classes(entries, class_count);
     std::vector<stored_voxel> voxels;
     for (const voxel_entry& e : entries) {
@@ -46,17 +35,6 @@ std::vector<stored_voxel> brute_force_voxels(const ifs<>& tree, std::uint64_t se
         voxels.push_back({e.voxel, voxel{density, e.level}, e.part});
     }
     return voxels;
-}
-
-parallel_for_hook two_threads()
-{
-    return [](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::thread other([&] {
-            for (std::size_t i = 1; i < count; i += 2) body(i);
-        });
-        for (std::size_t i = 0; i < count; i += 2) body(i);
-        other.join();
-    };
 }
 
 } // namespace
@@ -74,7 +52,7 @@ TEST_CASE("hypertree creation: build_tree's voxels equal a brute-force map over 
                 INFO("tree " << tree.name << " at " << resolution << (threaded ? ", two threads" : ", one thread"));
                 scratch_memory scratch;
                 generation_options options;
-                if (threaded) options.parallel_for = two_threads();
+                if (threaded) options.parallel_for = krs_test::strided_threads(2);
                 const std::pmr::vector<stored_voxel> voxels = detail::stored_voxels_of(tree, 5, 32, options, &scratch);
                 REQUIRE(voxels.size() == expected.size());
                 std::size_t differ = 0;
@@ -162,12 +140,7 @@ TEST_CASE("hypertree creation: the per-voxel table (two tables at once) equals a
         hits.push_back({v, std::uint8_t(next() % 64), std::uint8_t(next() % 256)});
     }
     hits.push_back({voxel_index(voxel_count - 1), 63, 255});
-    std::map<voxel_index, reference_entry> by_voxel;
-    for (const hit& h : hits) {
-        reference_entry& e = by_voxel[h.voxel];
-        ++e.hits;
-        e.best = std::min<std::uint16_t>(e.best, std::uint16_t(h.level << 8 | h.part));
-    }
+    const std::vector<voxel_entry> expected = krs_test::compact_with_map(hits);
     scratch_memory scratch;
     detail::voxel_table_pool pool(voxel_count, &scratch);
     const std::size_t half = hits.size() / 2;
@@ -180,14 +153,14 @@ TEST_CASE("hypertree creation: the per-voxel table (two tables at once) equals a
         });
     });
     REQUIRE(!pool.overflowed());
-    const auto pieces = pool.read_out<std::vector<voxel_entry>>(3, two_threads());
+    const auto pieces = pool.read_out<std::vector<voxel_entry>>(3, krs_test::strided_threads(2));
     std::vector<voxel_entry> entries;
     for (const auto& p : pieces) entries.insert(entries.end(), p.begin(), p.end());
-    REQUIRE(entries.size() == by_voxel.size());
-    std::size_t differ = 0, i = 0;
-    for (const auto& [v, e] : by_voxel) {
-        const voxel_entry& got = entries[i++];
-        differ += got.voxel != v || got.hits != e.hits || got.level != (e.best >> 8) || got.part != (e.best & 0xff);
+    REQUIRE(entries.size() == expected.size());
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+        const voxel_entry &got = entries[i], &e = expected[i];
+        differ += got.voxel != e.voxel || got.hits != e.hits || got.level != e.level || got.part != e.part;
     }
     CHECK(differ == 0);
     // Read out, the tables are empty again: a second round gives the same entries.

@@ -17,6 +17,7 @@
 
 #include "support/brick_walk_rays.hpp"
 #include "support/gl_context.hpp"
+#include "support/small_tree.hpp"
 
 #include <doctest/doctest.h>
 
@@ -63,7 +64,7 @@ struct uploaded {
     }
 };
 
-// A small tree (preset D at resolution 40, 30000 iterations): the shape from a partitioned store
+// The rendering tests' small tree (support/small_tree.hpp): the shape from a partitioned store
 // (one sphere and one flow per first-level part), the voxels copied into a dense store for the
 // CPU marcher and pack_bricks (any store gives the same voxels).
 struct small_tree {
@@ -75,12 +76,7 @@ struct small_tree {
     {
         shape = tree_shape::of(parts);
     }
-    static ifs<> definition()
-    {
-        auto t = presets::tree_d(40);
-        t.iterations = 30000;
-        return t;
-    }
+    static ifs<> definition() { return krs_test::small_tree_d(); }
 };
 
 const small_tree& tree()

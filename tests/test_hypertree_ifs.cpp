@@ -7,6 +7,7 @@
 #include "hypertree/presets.hpp"
 #include "support/random.hpp"
 #include "support/rejects.hpp"
+#include "support/threads.hpp"
 
 #include <doctest/doctest.h>
 
@@ -19,7 +20,6 @@
 #include <map>
 #include <numbers>
 #include <set>
-#include <thread>
 #include <tuple>
 #include <type_traits>
 
@@ -266,14 +266,7 @@ TEST_CASE("hypertree generation is the same on one thread and many")
     generation_options serial;
     serial.chunk_cycles = 1000;
     generation_options threaded = serial;
-    threaded.parallel_for = [](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::vector<std::thread> workers;
-        for (unsigned w = 0; w < 3; ++w)
-            workers.emplace_back([&, w] {
-                for (std::size_t i = w; i < count; i += 3) body(i);
-            });
-        for (auto& t : workers) t.join();
-    };
+    threaded.parallel_for = krs_test::strided_threads(3);
     const auto a = generate(tree, 17, serial), b = generate(tree, 17, threaded);
     REQUIRE(a.hits.size() == b.hits.size());
     CHECK(std::equal(a.hits.begin(), a.hits.end(), b.hits.begin(),
@@ -663,14 +656,7 @@ TEST_CASE("hypertree build_tree with scratch memory: the tree of the separate st
     // build_tree validates the generator's chunks in place and draws every temporary from the
     // scratch; the reference runs the public steps one by one (generate's concatenated hits,
     // compact, classify) without it. Point (D) and line (C) generators, on one thread and three.
-    const parallel_for_hook pool = [](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::vector<std::thread> workers;
-        for (unsigned w = 0; w < 3; ++w)
-            workers.emplace_back([&, w] {
-                for (std::size_t i = w; i < count; i += 3) body(i);
-            });
-        for (auto& t : workers) t.join();
-    };
+    const parallel_for_hook pool = krs_test::strided_threads(3);
     for (auto t : {presets::tree_d(40), presets::tree_c(40)}) {
         INFO(t.name);
         t.iterations = 30000;

@@ -7,6 +7,8 @@
 #include "hypertree/presets.hpp"
 #include "hypertree/render/render.hpp"
 
+#include "support/small_tree.hpp"
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -16,6 +18,7 @@
 #include <vector>
 
 using namespace hypertree;
+using krs_test::small_tree_d;
 
 namespace {
 
@@ -70,20 +73,13 @@ index_list_store random_cubes()
     return index_list_store::build(v, voxels);
 }
 
-ifs<> small_tree()
-{
-    auto t = presets::tree_d(40);
-    t.iterations = 30000;
-    return t;
-}
-
 } // namespace
 
 TEST_CASE("hypertree light sweep: without cuts it is every voxel's shadow ray, whatever the light")
 {
     // sweep_near_steps beyond any ray's length: no ray is cut, so the wavefront of each level
     // must reproduce shadow_transmittance for every voxel (same operations, same order).
-    const auto store = build_tree<index_list_store>(small_tree(), 2);
+    const auto store = build_tree<index_list_store>(small_tree_d(), 2);
     const tree_shape shape = tree_shape::of(store);
     march_options o;
     o.sweep_near_steps = 1 << 20;
@@ -167,7 +163,7 @@ TEST_CASE("hypertree light sweep: images of trees A-D within RMSE 0.01 of the sh
 
 TEST_CASE("hypertree light sweep: without shadows or lights, the pixels of shadow rays")
 {
-    const auto store = build_tree<index_list_store>(small_tree(), 2);
+    const auto store = build_tree<index_list_store>(small_tree_d(), 2);
     const tree_shape shape = tree_shape::of(store);
     const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 48, 40);
     march_options no_shadows, no_lights;

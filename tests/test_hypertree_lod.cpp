@@ -8,6 +8,8 @@
 #include "hypertree/presets.hpp"
 #include "hypertree/store/store_kinds.hpp"
 
+#include "support/voxel_reference.hpp"
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -28,17 +30,11 @@ using hypertree::voxel;
 using hypertree::voxel_index;
 using krs::vec3d;
 
-// A random sparse volume: each voxel non-empty with probability `fill`, random density, level
-// 0..5 and part 0..3. Sorted by construction.
+// A random sparse volume from its own seed (support/voxel_reference.hpp): levels 0..5, parts 0..3.
 std::vector<stored_voxel> random_voxels(const hypervolume& volume, double fill, std::uint64_t seed)
 {
     std::mt19937_64 g(seed);
-    std::vector<stored_voxel> voxels;
-    for (std::uint64_t i = 0; i < volume.voxel_count(); ++i)
-        if (double(g() >> 11) * 0x1.0p-53 < fill)
-            voxels.push_back(
-                {voxel_index(i), voxel{std::uint8_t(1 + g() % 255), std::uint8_t(g() % 6)}, std::uint8_t(g() % 4)});
-    return voxels;
+    return krs_test::random_voxels(g, volume, fill, 4, 6);
 }
 
 // Every voxel of the grid, empty ones included (density 0).

@@ -12,6 +12,8 @@
 #include "hypertree/presets.hpp"
 #include "hypertree/store/store_kinds.hpp"
 
+#include "support/random.hpp"
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -76,12 +78,12 @@ template <class WorldToIndex>
 std::size_t misplaced_points(const hypervolume& volume, WorldToIndex&& to_index, std::uint64_t seed)
 {
     std::mt19937_64 g(seed);
-    std::uniform_real_distribution<double> u(0, 1);
+    const auto u = [&g] { return krs_test::uniform(g, 0, 1); };
     std::size_t wrong = 0;
     int tested = 0;
     while (tested < 2000) {
-        const vec3d p{volume.origin().x + u(g) * volume.extent().x, volume.origin().y + u(g) * volume.extent().y,
-                      volume.origin().z + u(g) * volume.extent().z};
+        const vec3d p{volume.origin().x + u() * volume.extent().x, volume.origin().y + u() * volume.extent().y,
+                      volume.origin().z + u() * volume.extent().z};
         const vec3d f = volume.cell_coordinates(p);
         const double from_face = std::min({f.x - std::floor(f.x), std::ceil(f.x) - f.x, f.y - std::floor(f.y), std::ceil(f.y) - f.y,
                                            f.z - std::floor(f.z), std::ceil(f.z) - f.z});

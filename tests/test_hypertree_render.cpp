@@ -6,6 +6,8 @@
 #include "hypertree/render/render.hpp"
 
 #include "support/brick_walk_rays.hpp"
+#include "support/small_tree.hpp"
+#include "support/threads.hpp"
 
 #include <doctest/doctest.h>
 
@@ -16,6 +18,7 @@
 #include <thread>
 
 using namespace hypertree;
+using krs_test::small_tree_d;
 
 namespace {
 
@@ -48,13 +51,6 @@ struct small_scene {
     partitioned_store parts;
     explicit small_scene(const ifs<>& t) : list(build_tree<index_list_store>(t, 2)), parts(build_tree<partitioned_store>(t, 2)) {}
 };
-
-ifs<> small_tree()
-{
-    auto t = presets::tree_d(40);
-    t.iterations = 30000;
-    return t;
-}
 
 } // namespace
 
@@ -286,7 +282,7 @@ TEST_CASE("hypertree render refuses bad options, naming them")
 
 TEST_CASE("hypertree render packets give the scalar pixels")
 {
-    const small_scene scene(small_tree());
+    const small_scene scene(small_tree_d());
     const auto shape = tree_shape::of(scene.parts);
     const volume_marcher m(scene.parts, shape, depth_colors::tree(3, 6));
     const krs::pinhole_camera camera({0.3f, 0.7f, -2.4f}, {0, 0.6f, 0}, {0, 1, 0}, 40, 48, 40);
@@ -298,14 +294,7 @@ TEST_CASE("hypertree render packets give the scalar pixels")
     // Threads share a shading memo behind their own: which thread renders a band of rows changes
     // no pixel, and a voxel's shadow rays are marched about once whatever the thread count.
     render_settings threaded = s;
-    threaded.parallel_for = [](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::vector<std::thread> workers;
-        for (std::size_t w = 0; w < 3; ++w)
-            workers.emplace_back([&, w] {
-                for (std::size_t i = w; i < count; i += 3) body(i);
-            });
-        for (auto& t : workers) t.join();
-    };
+    threaded.parallel_for = krs_test::strided_threads(3);
     const image threaded_image = render<krs::packet_f>(m, camera, threaded);
     CHECK(max_difference(threaded_image, scalar) == 0.0);
     // (Measured: 0.2% more lookups than serial shared, 6.5% more with a memo per thread alone;
@@ -320,7 +309,7 @@ TEST_CASE("hypertree render packets give the scalar pixels")
 
 TEST_CASE("hypertree render bounding spheres and the ray cache change no pixel")
 {
-    const small_scene scene(small_tree());
+    const small_scene scene(small_tree_d());
     const auto shape = tree_shape::of(scene.parts);
     REQUIRE(shape.spheres.size() > 3);
     march_options with, without;
@@ -342,7 +331,7 @@ TEST_CASE("hypertree render: a marcher outlives the store it was made from")
     // Issue 26: the marcher keeps its own volume and bricks, no pointer into the store. Its store
     // is destroyed and another store built in the same place before the march: a read through a
     // dangling pointer would see the other store (or, in the suite's ASan build, freed memory).
-    const auto definition = small_tree();
+    const auto definition = small_tree_d();
     const index_list_store alive = build_tree<index_list_store>(definition, 2);
     const auto shape = tree_shape::of(alive);
     const depth_colors colors = depth_colors::tree(3, 6);
@@ -361,7 +350,7 @@ TEST_CASE("hypertree render: a marcher outlives the store it was made from")
 
 TEST_CASE("hypertree render supersampling factor follows the projected voxel size")
 {
-    const auto t = small_tree();
+    const auto t = small_tree_d();
     const small_scene scene(t);
     const auto shape = tree_shape::of(scene.parts);
     const krs::vec3f target = shape.crown.center;
@@ -552,7 +541,7 @@ TEST_CASE("hypertree voxel bricks hold exactly the store's voxels")
 
 TEST_CASE("hypertree shadow rays: a packet of points gives each lane the scalar transmittance")
 {
-    const small_scene scene(small_tree());
+    const small_scene scene(small_tree_d());
     const auto shape = tree_shape::of(scene.list);
     for (bool spheres : {false, true}) {
         march_options o;
@@ -601,7 +590,7 @@ TEST_CASE("hypertree shadow rays: a packet of points gives each lane the scalar 
 
 TEST_CASE("hypertree render: voxels shaded ahead, in packets, give the pixels of voxels shaded as rays meet them")
 {
-    const small_scene scene(small_tree());
+    const small_scene scene(small_tree_d());
     const auto shape = tree_shape::of(scene.list);
     march_options two_lights;
     two_lights.lights.push_back({{-0.7f, 0.3f, -0.2f}, {0.3f, 0.4f, 0.9f}});
@@ -762,22 +751,14 @@ TEST_CASE("hypertree render: packets without supersampling take tiles of pixels 
     // marcher takes rows: the same rays, so the same pixels and lookups, on image sizes that cut
     // tiles, groups of tiles and bands (a width not a multiple of 16, heights not of 4 or 8, one
     // pixel), serial and on threads, lit (shading ahead and as met), with shadow rays, and flat.
-    const small_scene scene(small_tree());
+    const small_scene scene(small_tree_d());
     const auto shape = tree_shape::of(scene.list);
     march_options rays, flat;
     rays.shadow_by = march_options::shadow_method::rays;
     flat.shadows = false;
     flat.lights.clear();
     flat.ambient_falloff = 0.0f;
-    const parallel_for_hook three_threads = [](std::size_t count, const std::function<void(std::size_t)>& body) {
-        std::vector<std::thread> workers;
-        for (std::size_t w = 0; w < 3; ++w)
-            workers.emplace_back([&, w] {
-                for (std::size_t i = w; i < count; i += 3) body(i);
-            });
-        for (auto& t : workers) t.join();
-    };
-    for (const march_options& o : {march_options{}, rays, flat}) {
+        for (const march_options& o : {march_options{}, rays, flat}) {
         const volume_marcher m(scene.list, shape, depth_colors::tree(3, 6), o);
         for (const auto& [width, height] : {std::pair{61, 37}, std::pair{17, 5}, std::pair{16, 4}, std::pair{1, 1}, std::pair{33, 19}}) {
             INFO(width << "x" << height);
@@ -786,7 +767,7 @@ TEST_CASE("hypertree render: packets without supersampling take tiles of pixels 
                 render_settings serial;
                 serial.shade_ahead = ahead;
                 render_settings threaded = serial;
-                threaded.parallel_for = three_threads;
+                threaded.parallel_for = krs_test::strided_threads(3);
                 const image rows = render<float>(m, camera, serial);
                 const image tiles = render<krs::packet_f>(m, camera, serial);
                 CHECK(max_difference(rows, tiles) == 0.0);

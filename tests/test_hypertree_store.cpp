@@ -77,17 +77,16 @@ TEST_CASE("the coordinate walker places every index as the volume does, in any o
         std::vector<voxel_index> order;
         // Increasing with every kind of gap (same row, next rows, far rows), from index 0 and from
         // the last row, then random order (backwards steps divide).
-        std::uniform_int_distribution<voxel_index> gap_kind(0, 3);
         for (voxel_index i = 0; i < count;) {
             order.push_back(i);
             const voxel_index row = voxel_index(grid.x);
-            const voxel_index k = gap_kind(g);
+            const voxel_index k = integer(g, 0, 3);
             const voxel_index gap = k == 0 ? 1 : k == 1 ? row : k == 2 ? 3 * row + 1 : 70 * row + 5;
             if (count - i <= gap) break;
             i += gap;
         }
         order.push_back(count - 1);
-        for (int k = 0; k < 2000; ++k) order.push_back(std::uniform_int_distribution<voxel_index>(0, count - 1)(g));
+        for (int k = 0; k < 2000; ++k) order.push_back(integer(g, 0, count - 1));
         hypertree::detail::coordinate_walker walker(volume);
         std::size_t wrong = 0;
         for (const voxel_index i : order) wrong += walker(i) != volume.coordinates(i);

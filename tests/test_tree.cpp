@@ -3,6 +3,8 @@
 #include "krs/expansion.hpp"
 #include "krs/model/tree.hpp"
 
+#include "support/random.hpp"
+
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -79,7 +81,7 @@ TEST_CASE("tree: the field bounds its geometry (subset of instances, 1-Lipschitz
     const krs::model::tree_sequence s = krs::model::build_tree(params);
     const auto e = krs::expand(s);
     std::mt19937_64 g(4);
-    auto u = [&](double lo, double hi) { return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53; };
+    auto u = [&](double lo, double hi) { return krs_test::uniform(g, lo, hi); };
     for (int k = 0; k < 3000; ++k) {
         const vec3d x{u(-4, 4), u(0, 8), u(-4, 4)};
         REQUIRE(s.distance(x) >= e.distance(x) - 1e-5); // float-stored normals: see test_sequence

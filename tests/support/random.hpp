@@ -4,6 +4,7 @@
 
 #include "krs/core/vec3.hpp"
 
+#include <cstdint>
 #include <random>
 
 namespace krs_test {
@@ -12,6 +13,13 @@ namespace krs_test {
 inline double uniform(std::mt19937_64& g, double lo, double hi)
 {
     return lo + (hi - lo) * double(g() >> 11) * 0x1.0p-53;
+}
+
+// Uniform integer in [lo, hi], from the engine's bits only (the remainder's bias toward small
+// values, at most (hi - lo + 1) / 2^64, is far below anything a test sees).
+inline std::uint32_t integer(std::mt19937_64& g, std::uint64_t lo, std::uint64_t hi)
+{
+    return std::uint32_t(lo + g() % (hi - lo + 1));
 }
 
 // Uniform in the ball of the given radius (rejection from the cube).

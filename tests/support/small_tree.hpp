@@ -1,10 +1,9 @@
 #pragma once
-// A small hypertree shared by the IFS and noise tests: a stem along y (a cone condensation) and
-// four transformations, three tilted branches around it (level-dependent sizes 0.55, 0.5, 0.45)
-// and one near-vertical continuation. Small enough (64^3, tens of thousands of iterations) to
-// generate in milliseconds, and with first-level parts 0..4 for the tests that count them.
+// The small hypertrees the tests share, each defined once so that two tests meaning the same tree
+// build the same voxels.
 
 #include "hypertree/ifs.hpp"
+#include "hypertree/presets.hpp"
 
 #include <cstdint>
 #include <numbers>
@@ -13,6 +12,10 @@ namespace krs_test {
 
 using branch_pipeline = hypertree::pipeline<hypertree::scale, hypertree::rotate, hypertree::rotate, hypertree::translate>;
 
+// small_tree: the IFS and noise tests' tree, a stem along y (a cone condensation) and four
+// transformations, three tilted branches around it (level-dependent sizes 0.55, 0.5, 0.45) and one
+// near-vertical continuation. Small enough (64^3, tens of thousands of iterations) to generate in
+// milliseconds, and with first-level parts 0..4 for the tests that count them.
 inline hypertree::ifs<branch_pipeline> small_tree(int depth = 6, std::uint64_t iterations = 60000)
 {
     using namespace hypertree;
@@ -29,6 +32,17 @@ inline hypertree::ifs<branch_pipeline> small_tree(int depth = 6, std::uint64_t i
     t.branch_depth = 1;
     t.iterations = iterations;
     t.volume = hypervolume({-1, -0.05, -1}, {2, 2, 2}, resolution::cube(64));
+    return t;
+}
+
+// small_tree_d: the rendering tests' tree, preset D (presets.hpp) at resolution 40 with 30000
+// iterations: a whole tree of the paper's kind, small enough to build and render many times in one
+// test case. test_hypertree_render.cpp, test_hypertree_light_sweep.cpp and
+// test_hypertree_glsl_gpu.cpp march it.
+inline hypertree::ifs<> small_tree_d()
+{
+    auto t = hypertree::presets::tree_d(40);
+    t.iterations = 30000;
     return t;
 }
 

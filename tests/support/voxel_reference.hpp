@@ -1,7 +1,8 @@
 #pragma once
 // The brute-force references the hypertree creation, store and operation tests share
-// (test_hypertree_compact.cpp, test_hypertree_density.cpp, test_hypertree_store.cpp,
-// test_hypertree_ops.cpp): a std::map for validation, a plain array of every voxel of the grid for
+// (test_hypertree_compact.cpp, test_hypertree_creation.cpp, test_hypertree_density.cpp,
+// test_hypertree_lod.cpp, test_hypertree_ops.cpp, test_hypertree_scratch.cpp,
+// test_hypertree_store.cpp): a std::map for validation, a plain array of every voxel of the grid for
 // stores and operations, and the random hit and voxel lists they are given. Written with nothing
 // of the code under test beyond its data types, so a store or an operation is compared with a
 // reference that cannot share its mistakes.
@@ -22,12 +23,6 @@
 #include <vector>
 
 namespace krs_test {
-
-// Uniform integer in [lo, hi], from the engine's bits only (platform-independent).
-inline std::uint32_t integer(std::mt19937_64& g, std::uint64_t lo, std::uint64_t hi)
-{
-    return std::uint32_t(lo + g() % (hi - lo + 1));
-}
 
 // ---- compaction reference ---------------------------------------------------------------------
 
@@ -78,14 +73,15 @@ std::vector<hypertree::voxel> grid_of_store(const S& store)
     return grid;
 }
 
-// Each voxel of the grid non-empty with probability `fill`, with a random density, level, part.
+// Each voxel of the grid non-empty with probability `fill`, with a random density 1..255, level
+// 0..levels - 1 and part 0..parts - 1; sorted by construction.
 inline std::vector<hypertree::stored_voxel> random_voxels(std::mt19937_64& g, const hypertree::hypervolume& volume,
-                                                          double fill, int parts = 4)
+                                                          double fill, int parts = 4, int levels = 8)
 {
     std::vector<hypertree::stored_voxel> voxels;
     for (hypertree::voxel_index i = 0; i < volume.voxel_count(); ++i)
         if (uniform(g, 0, 1) < fill)
-            voxels.push_back({i, hypertree::voxel{std::uint8_t(integer(g, 1, 255)), std::uint8_t(integer(g, 0, 7))},
+            voxels.push_back({i, hypertree::voxel{std::uint8_t(integer(g, 1, 255)), std::uint8_t(integer(g, 0, levels - 1))},
                               std::uint8_t(integer(g, 0, parts - 1))});
     return voxels;
 }

@@ -34,9 +34,9 @@
 // tests/test_hypertree_light_sweep.cpp against shadow rays at trees A-D). The GLSL marcher keeps
 // shadow rays (glsl.hpp).
 
+#include "hypertree/execution.hpp"
 #include "hypertree/render/shadow_ray.hpp"
 #include "hypertree/render/voxel_bricks.hpp"
-#include "hypertree/voxel.hpp"
 #include "krs/core/lanes.hpp"
 #include "krs/core/vec3.hpp"
 

@@ -22,6 +22,7 @@
 #include "krs/trace/camera.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
