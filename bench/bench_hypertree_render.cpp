@@ -142,9 +142,9 @@ struct paper_tree {
     }
 };
 
-// The primary rays of a view through a marcher's voxels all shaded ahead (as render() marches
-// them, four packets at a time, in 4 x 4 tiles at s = 1): pixel centres, one thread. Returns the rays that enter the box,
-// and sums their probes and lookups.
+// The primary rays of a view through a marcher's voxels all shaded ahead (as render() marches them,
+// four packets at a time, in 4 x 4 tiles at s = 1): pixel centres, one thread. Returns the rays
+// that enter the box, and sums their probes and lookups.
 struct primary_counts {
     double rays = 0, probes = 0, lookups = 0;
 };

@@ -379,11 +379,11 @@ void generate_chunk_unlocked(const drawn_ifs<P>& tree, std::uint64_t seed, std::
     }
 }
 
-// ... and with locked voxels (ifs::trim, hypertree/region.hpp): the chunk's new hits on locked voxels are
-// dropped as soon as the chunk is made, while they are hot in cache and before any other step
-// sees them, so a locked voxel never enters the hit list. Filtering the chunk rather than testing
-// in the record step keeps both generator loops (scalar and lanes in step) unchanged and their
-// hits identical: the lock is a function of the voxel alone, whichever loop found it.
+// ... and with locked voxels (ifs::trim, hypertree/region.hpp): the chunk's new hits on locked
+// voxels are dropped as soon as the chunk is made, while they are hot in cache and before any other
+// step sees them, so a locked voxel never enters the hit list. Filtering the chunk rather than
+// testing in the record step keeps both generator loops (scalar and lanes in step) unchanged and
+// their hits identical: the lock is a function of the voxel alone, whichever loop found it.
 template <transform_pipeline P, class Observer>
 void generate_chunk(const drawn_ifs<P>& tree, std::uint64_t seed, std::uint64_t chunk, std::uint64_t cycles,
                     const lane_tables* lanes_in_step, const voxel_lock* lock, chunk_output& out, generation_stats& stats, Observer& observer)

@@ -12,13 +12,12 @@
 // draw from it too.
 //
 // A request takes the smallest kept block that fits it, unless that block is more than twice as
-// large (a small request should not pin a large block), else a new block from the system.
-// Blocks go back to the system only when the scratch_memory is destroyed or released. Blocks of
-// half a huge page or more are mapped on huge pages where the system offers them
-// (hypertree/huge_pages.hpp), so even a first build, or one without a kept scratch, pays one fault per
-// 2 MiB instead of one per 4 KiB. Requests
-// are few (two per generator chunk and a few more: 50 to 200 per build) and come from the
-// caller's worker threads: a mutex guards the lists.
+// large (a small request should not pin a large block), else a new block from the system. Blocks go
+// back to the system only when the scratch_memory is destroyed or released. Blocks of half a huge
+// page or more are mapped on huge pages where the system offers them (hypertree/huge_pages.hpp), so
+// even a first build, or one without a kept scratch, pays one fault per 2 MiB instead of one per
+// 4 KiB. Requests are few (two per generator chunk and a few more: 50 to 200 per build) and come
+// from the caller's worker threads: a mutex guards the lists.
 
 #include "hypertree/huge_pages.hpp"
 

@@ -14,8 +14,8 @@
 //
 // Packets of rays without supersampling or a ray cache take tiles of pixels (4 x 4 at 16 lanes)
 // rather than runs of a row: the rays of a tile stay together through the tree, so a packet ends
-// its march nearer the time its first lane does. One lane's march depends on its own ray alone, so the pixels are
-// the rows' bit for bit (tested against the scalar marcher's rows).
+// its march nearer the time its first lane does. One lane's march depends on its own ray alone, so
+// the pixels are the rows' bit for bit (tested against the scalar marcher's rows).
 
 #include "hypertree/execution.hpp"
 #include "hypertree/render/marcher.hpp"
