@@ -21,7 +21,7 @@ mode="${1:---all}"
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
 tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools spirv-tools python3
        libopenvdb-dev libnanovdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
-       libtinygltf-dev assimp-utils blender)
+       libtinygltf-dev assimp-utils blender python3-numpy) # Blender's glTF importer needs numpy
 examples=(libopenimageio-dev openimageio-tools libcli11-dev libtinygltf-dev)
 benchmarks=(libbenchmark-dev)
 peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev) # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
