@@ -189,6 +189,11 @@ krs_case(krs_export        2 "--gpu-instancing: only with --instances"          
 krs_case(krs_export        1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --mesh <out>/x.ply)
 krs_case(krs_export        1 "--uv / --kernel-colors: needs a field that locates"   --scene kifs_menger --resolution 8 --uv --mesh <out>/x.ply)
 krs_case(krs_export        0 "krs_export: tree: ;triangles"                         --scene tree --resolution 16 --uv --kernel-colors --mesh <out>/tree.obj)
+# The similar shells mesh at the default resolution (issue 41: their inside was 0, never negative;
+# a few seconds), and a grid too coarse for the geometry says the field was never negative there.
+krs_case(krs_export        0 "krs_export: lotus: ;triangles"                        --scene lotus --mesh <out>/lotus.ply)
+krs_case(krs_export        0 "krs_export: cube_singularity: ;triangles"             --scene cube_singularity --mesh <out>/cubes.ply)
+krs_case(krs_export        1 "no triangle at resolution 40;never negative where sampled" --scene kifs_sierpinski --resolution 40 --mesh <out>/x.ply)
 if(KRS_WITH_GLTF)
     krs_case(krs_export    2 "--max-instances;'0'"                                  --scene tree --max-instances 0 --instances <out>/x.glb)
     krs_case(krs_export    1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --instances <out>/x.glb)

@@ -219,7 +219,16 @@ int main(int argc, char** argv)
             bar.finish();
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             if (m.triangles.empty()) {
-                std::fprintf(stderr, "krs_export: the scene's surface gave no triangle at resolution %d: raise --resolution\n", resolution);
+                // Whether a finer grid can help: only where the field went below a cell's reach.
+                const double lowest = stats.lowest_distance / stats.cell_size;
+                std::fprintf(stderr, "krs_export: the scene's surface gave no triangle at resolution %d: %s (lowest %.3g cells)\n",
+                             resolution,
+                             lowest < 0 ? "the field is negative in the box but changes sign on no grid edge"
+                             : lowest > 0.5 * std::sqrt(3.0)
+                                 ? "the field is positive everywhere in the box: no resolution can mesh it"
+                                 : "the field was never negative where sampled: raise --resolution if the geometry is thinner "
+                                   "than a cell (a field that is 0 inside cannot be meshed)",
+                             lowest);
                 return;
             }
             double worst = 0;
