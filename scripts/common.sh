@@ -7,9 +7,12 @@ repo_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${KRS_BUILD_DIR:-$repo_root/build}"
 build_jobs="$(nproc 2>/dev/null || echo 2)"
 
-# On CI keep ccache's files inside the build tree (no writes to $HOME; one directory to cache).
+# On CI, ccache's files go to /var/tmp/krs-ccache, outside the clean clone (so a later run on the
+# same machine reuses what an earlier one compiled; ccache keys on the preprocessed source and the
+# flags, so a hit is the object a compile would make) and outside $HOME. Elsewhere ccache's default.
 if [ "${CI:-}" = "true" ]; then
-    export CCACHE_DIR="${CCACHE_DIR:-$build_dir/.ccache}"
+    export CCACHE_DIR="${CCACHE_DIR:-/var/tmp/krs-ccache}"
+    export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-8G}"
 fi
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$repo_root}"
 

@@ -15,8 +15,9 @@ cmake --build "$build_dir" --parallel "$build_jobs"
 cd "$build_dir"
 ctest --output-on-failure --parallel "$build_jobs" --timeout 900
 
-# The same suite under AddressSanitizer and UndefinedBehaviorSanitizer, in its own build tree
-# (examples, benchmarks and the packaging checks add nothing there).
+# The suite under AddressSanitizer and UndefinedBehaviorSanitizer, in its own build tree: the
+# portable variant at -O1 (tests/CMakeLists.txt says why; examples, benchmarks and the packaging
+# checks add nothing there).
 sanitize_dir="${build_dir}-sanitize"
 cmake -S "$repo_root" -B "$sanitize_dir" -DCMAKE_BUILD_TYPE=Release -DKRS_BUILD_TESTS=ON \
     -DKRS_BUILD_EXAMPLES=OFF -DKRS_BUILD_BENCHMARKS=OFF -DKRS_SANITIZERS=address,undefined
