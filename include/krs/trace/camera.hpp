@@ -66,6 +66,14 @@ struct camera_orbit {
     float rate() const { return seconds == 0.0f ? 0.0f : float(2.0 * std::numbers::pi / double(seconds)); }
 };
 
+// The world side of a pixel of footprint `footprint` (pinhole_camera::pixel_footprint, the side
+// at distance 1) facing the eye at distance d: d * footprint. The one rule for a pixel's size at
+// a distance (a voxel's level of detail, hypertree/lod.hpp; supersampling, hypertree/render).
+inline double pixel_size_at(double distance, double footprint)
+{
+    return distance * footprint;
+}
+
 namespace detail {
 // Full turn and largest tilt of the pointer (radians): the program's literals, as floats.
 inline constexpr float drag_turn = float(2.0 * std::numbers::pi);
@@ -140,7 +148,7 @@ public:
     float pixel_footprint() const { return tan_half_fov_ * 2.0f / float(height_); }
     // The world side of a center pixel at distance d from the eye (d * footprint): what a voxel
     // or a sphere must reach to cover a pixel there.
-    double pixel_size_at(double distance) const { return distance * double(pixel_footprint()); }
+    double pixel_size_at(double distance) const { return krs::pixel_size_at(distance, double(pixel_footprint())); }
 
     // The ray through image position (px, py), in pixels from the top-left corner; pixel centers
     // are at half-integers. Works for scalar and packet coordinates alike.
