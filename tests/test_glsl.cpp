@@ -7,6 +7,7 @@
 #include "krs/fractal/shell_presets.hpp"
 #include "krs/fractal/similar_shell.hpp"
 #include "krs/glsl/example_scenes.hpp"
+#include "krs/trace/packet_trace.hpp"
 
 #include <doctest/doctest.h>
 
@@ -80,6 +81,79 @@ TEST_CASE("glsl float literals read back as the same float")
         CHECK(s.find_first_of(".e") != std::string::npos);
         CHECK(std::strtof(s.c_str(), nullptr) == v);
     }
+}
+
+TEST_CASE("render_reference is the library's tracer: its scene pixels are sphere_trace's hits, at rest and turned")
+{
+    // Independent of the reference's own loop: every pixel's camera ray traced by the packet
+    // stream (trace_queue's refilling lanes, unclipped, from t = 0) with the program's primary
+    // options. A pixel shows the scene in the reference (differs from the sky alone) exactly where
+    // the stream finds a hit: same camera, same rays, same threshold.
+    constexpr int width = 64, height = 48;
+    const auto check = [&](const auto& s, const krs::pinhole_camera& camera, const char* what) {
+        INFO(s.name << " " << what);
+        const krs::pinhole_camera c = camera.with_size(width, height);
+        const krs::trace_options primary = s.program.primary(c);
+        std::vector<char> found(std::size_t(width) * std::size_t(height), 0);
+        std::uint32_t next_id = 0;
+        krs::trace_stream(
+            s.field,
+            [&](krs::ray_job& job) {
+                if (next_id == std::uint32_t(width * height)) return false;
+                const int i = int(next_id % std::uint32_t(width)), j = int(next_id / std::uint32_t(width));
+                job.r = c.primary_ray(float(i) + 0.5f, float(height) - (float(j) + 0.5f)); // row j from the bottom
+                job.t_start = 0.0f;
+                job.t_max = primary.max_distance;
+                job.id = next_id++;
+                return true;
+            },
+            [&](std::uint32_t id, const krs::hit<float>& h) { found[id] = h.found ? 1 : 0; }, primary);
+        const std::vector<float> frame = ex::reference_frame(s, c, width, height);
+        krs::glsl::shadertoy_options empty = s.program;
+        empty.max_distance = 1e-6f;
+        const std::vector<float> sky = ex::reference_frame(s, c, empty, width, height, false);
+        std::size_t differ = 0, hits = 0;
+        for (std::size_t p = 0; p < found.size(); ++p) {
+            const std::size_t i = 4 * p;
+            const bool scene = frame[i] != sky[i] || frame[i + 1] != sky[i + 1] || frame[i + 2] != sky[i + 2];
+            differ += scene != (found[p] != 0);
+            hits += found[p] != 0;
+        }
+        CHECK(hits > found.size() / 20);
+        CHECK(differ == 0);
+    };
+    const auto tree = ex::tree();
+    check(tree, tree.camera, "at rest");
+    check(tree, tree.camera.with_size(width, height).turned(11.0f, 40.0f, 30.0f), "turned");
+    const auto koch = ex::kifs_koch();
+    check(koch, koch.camera, "at rest");
+    const auto sponge = ex::sponge(); // bounded: the reference clips, the stream does not
+    check(sponge, sponge.camera.with_size(width, height).turned(7.0f, 0.0f, 0.0f), "turned");
+}
+
+TEST_CASE("framebuffer_byte rounds as an 8-bit framebuffer: to nearest, ties to even")
+{
+    // A float v whose 255 v is exactly k + 1/2 in float: the tie a GPU stores as the even
+    // neighbour (ANGLE's D3D11 and Vulkan back ends stored 122 for 122.5; std::lround gave 123).
+    const auto tie = [](int k) {
+        const float target = float(k) + 0.5f;
+        float v = target / 255.0f;
+        for (int n = 0; n < 64 && 255.0f * v != target; ++n)
+            v = std::nextafter(v, 255.0f * v < target ? 1.0f : 0.0f);
+        REQUIRE(255.0f * v == target);
+        return v;
+    };
+    CHECK(krs::glsl::framebuffer_byte(tie(122)) == 122);
+    CHECK(krs::glsl::framebuffer_byte(tie(123)) == 124);
+    CHECK(krs::glsl::framebuffer_byte(tie(0)) == 0);
+    CHECK(krs::glsl::framebuffer_byte(tie(254)) == 254);
+    // Away from ties, the nearest byte; outside [0, 1], clamped.
+    for (int k = 0; k <= 255; ++k) {
+        CHECK(krs::glsl::framebuffer_byte(float(k) / 255.0f) == k);
+        CHECK(krs::glsl::framebuffer_byte((float(k) + 0.49f) / 255.0f) == std::min(k, 255));
+    }
+    CHECK(krs::glsl::framebuffer_byte(-0.3f) == 0);
+    CHECK(krs::glsl::framebuffer_byte(1.7f) == 255);
 }
 
 TEST_CASE("shadertoy clips primary rays to a bounded scene's box without changing the picture")
