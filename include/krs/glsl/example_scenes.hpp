@@ -210,7 +210,7 @@ inline scene<cube_singularity> cube_singularity_scene()
 {
     scene<cube_singularity> s{"cube_singularity", make_cube_singularity(1.0f),
                               pinhole_camera({-2.2f, 0.35f, -2.2f}, {0, 0, 0}, {0, 1, 0}, 50.0f, frame_width, frame_height),
-                              shadertoy_options::lit(fractals_light, 20.0f),
+            shadertoy_options::lit(fractals_light, 20.0f),
                               {0, 0, 0}, {3.45f, 3.45f, 3.45f}, {0.75f, 0.50f, 0.85f}};
     s.camera = s.camera.with_orbit({.max_elevation = 30.0f}); // the diagonal's cubes (35.3 degrees) hold the eye's radius near 36
     return s;
