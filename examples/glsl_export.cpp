@@ -57,8 +57,10 @@ bool ends_with_png(std::string path)
 }
 
 // RGBA rows bottom-up (as the GPU reads them back) to an RGB PNG, top row first. The values are
-// already encoded for display (the program takes sqrt of the colour), so no gamma is applied;
-// alpha is 1 everywhere and left out.
+// already encoded for display (the program takes sqrt of the colour), so no gamma is applied, and
+// each is stored as an 8-bit framebuffer stores it (krs::glsl::framebuffer_byte: ties to even),
+// handed to write_png as that byte over 255 (which its round(255 v) gives back exactly); alpha is
+// 1 everywhere and left out.
 bool write_reference(const std::string& path, const std::vector<float>& rgba, int width, int height)
 {
     std::vector<float> rgb(std::size_t(width) * std::size_t(height) * 3);
@@ -66,7 +68,9 @@ bool write_reference(const std::string& path, const std::vector<float>& rgba, in
         for (int x = 0; x < width; ++x)
             for (int c = 0; c < 3; ++c)
                 rgb[(std::size_t(height - 1 - y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(c)] =
-                    rgba[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 4 + std::size_t(c)];
+                    float(krs::glsl::framebuffer_byte(
+                        rgba[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 4 + std::size_t(c)])) /
+                    255.0f;
     if (!example::write_png(path, width, height, rgb, 1.0f)) return false;
     std::fprintf(stderr, "glsl_export: wrote the %dx%d reference frame to %s\n", width, height, path.c_str());
     return true;

@@ -68,16 +68,7 @@ const float KRS_TILT_HIGHEST = 1.1715046;
 const float KRS_ORBIT_RATE = 0.10471976; // radians per second of iTime
 const float KRS_DRAG_TURN = 6.2831855;
 const float KRS_DRAG_TILT = 2.0943952;
-const vec3 KRS_TO_LIGHT = vec3(0.496904, 0.7950464, 0.3478328);
 const float KRS_TAN_HALF_FOV = 0.36397022;
-const float KRS_MAX_DISTANCE = 20.0;
-const int KRS_MAX_STEPS = 256;
-const float KRS_THRESHOLD_FLOOR = 1e-05;
-const float KRS_FOOTPRINT_SCALE = 0.5;
-const bool KRS_CLIP = false;
-const vec3 KRS_BOX_LO = vec3(0.0, 0.0, 0.0);
-const vec3 KRS_BOX_HI = vec3(0.0, 0.0, 0.0);
-float krs_scene(vec3 p) { return krs_kifs_sierpinski(p); }
 struct krs_view {
     vec3 eye;
     vec3 forward;
@@ -110,27 +101,78 @@ krs_view krs_camera(float time, vec4 mouse, vec2 resolution) {
     c.right = krs_turn(KRS_RIGHT, KRS_VERTICAL, cy, sy);
     return c;
 }
-// Sphere tracing from t0 to t1; a hit when the distance drops under footprint * t + floor + bias.
-float krs_trace(vec3 origin, vec3 direction, float t0, float t1, float footprint, float bias, out bool found) {
-    float t = t0;
-    found = false;
-    for (int i = 0; i < KRS_MAX_STEPS; ++i) {
-        float d = krs_scene(origin + direction * t);
-        if (d < footprint * t + KRS_THRESHOLD_FLOOR + bias) { found = true; return t; }
-        t += d;
-        if (!(t <= t1)) return t;
-    }
-    return t;
+// pinhole_camera::pixel_footprint for a frame `height` pixels high.
+float krs_pixel_footprint(float height) {
+    return KRS_TAN_HALF_FOV * 2.0 / height;
 }
-// [t0, t1] cut to the scene's box grown by the largest threshold a stop in it can have (a stop
-// within threshold(t) of the box lies at t <= (reach + floor) / (1 - footprint)); false when the
-// ray misses it.
-bool krs_clip(vec3 origin, vec3 direction, float footprint, inout float t0, inout float t1) {
-    if (!KRS_CLIP || !(footprint < 0.5)) return true;
-    float reach = length(max(abs(KRS_BOX_LO - origin), abs(KRS_BOX_HI - origin)));
-    float grow = footprint * ((reach + KRS_THRESHOLD_FLOOR) / (1.0 - footprint)) + KRS_THRESHOLD_FLOOR + 1e-6 * reach;
-    vec3 lo = KRS_BOX_LO - vec3(grow);
-    vec3 hi = KRS_BOX_HI + vec3(grow);
+// pinhole_camera::primary_ray's direction through `pixel` (pixels from the bottom-left corner).
+vec3 krs_primary_direction(krs_view c, vec2 pixel, vec2 resolution) {
+    float scale = krs_pixel_footprint(resolution.y);
+    float sx = (pixel.x - 0.5 * resolution.x) * scale;
+    float sy = (pixel.y - 0.5 * resolution.y) * scale;
+    vec3 d = c.forward + c.right * sx + c.up * sy;
+    return d / sqrt(dot(d, d));
+}
+const vec3 KRS_TO_LIGHT = vec3(0.496904, 0.7950464, 0.3478328);
+const float KRS_MAX_DISTANCE = 20.0;
+const int KRS_MAX_STEPS = 256;
+const float KRS_THRESHOLD_FLOOR = 1e-05;
+const float KRS_FOOTPRINT_SCALE = 0.5;
+const bool KRS_CLIP = false;
+const vec3 KRS_BOX_LO = vec3(0.0, 0.0, 0.0);
+const vec3 KRS_BOX_HI = vec3(0.0, 0.0, 0.0);
+float krs_scene(vec3 p) { return krs_kifs_sierpinski(p); }
+// krs::hit_threshold: the hit threshold at depth t.
+float krs_hit_threshold(float footprint, float t, float thresholdFloor) {
+    return footprint * t + thresholdFloor;
+}
+// krs::march_state of one ray (the plain form: omega = 1).
+struct krs_march {
+    vec3 origin;
+    vec3 direction;
+    float t;
+    float t_max;
+    float threshold_bias;
+    bool marching; // march_state::active (`active` is a GLSL reserved word)
+    bool found;
+    int steps;
+};
+// krs::start_march (the ray is usable: a camera's or a shadow ray).
+krs_march krs_start_march(vec3 origin, vec3 direction, float t_start, float t_max, float threshold_bias) {
+    return krs_march(origin, direction, t_start, t_max, threshold_bias, t_start <= t_max, false, 0);
+}
+// krs::march_advance, given the field's value d at the sample point m.t.
+void krs_march_advance(inout krs_march m, float d, float footprint, float thresholdFloor, int max_steps) {
+    m.steps += 1;
+    if (d < krs_hit_threshold(footprint, m.t, thresholdFloor) + m.threshold_bias) {
+        m.found = true;
+        m.marching = false;
+        return;
+    }
+    m.t += d;
+    m.marching = m.t <= m.t_max && m.steps < max_steps;
+}
+// krs::sphere_trace through krs_scene.
+krs_march krs_trace(vec3 origin, vec3 direction, float t_start, float t_max, float footprint,
+        float thresholdFloor, float threshold_bias, int max_steps) {
+    krs_march m = krs_start_march(origin, direction, t_start, t_max, threshold_bias);
+    while (m.marching)
+        krs_march_advance(m, krs_scene(m.origin + m.direction * m.t), footprint, thresholdFloor, max_steps);
+    return m;
+}
+// krs::box_clip_growth.
+float krs_box_clip_growth(float reach, float footprint, float thresholdFloor) {
+    float lastStop = (reach + thresholdFloor) / (1.0 - footprint);
+    return krs_hit_threshold(footprint, lastStop, thresholdFloor) + 1e-6 * reach;
+}
+// krs::box_clip for rays from `origin`, then apply: [t0, t1] cut to the grown box.
+bool krs_box_clip(vec3 boxLo, vec3 boxHi, vec3 origin, vec3 direction, float footprint, float thresholdFloor,
+        inout float t0, inout float t1) {
+    if (!(footprint < 0.5)) return true;
+    float reach = length(max(abs(boxLo - origin), abs(boxHi - origin)));
+    float grow = krs_box_clip_growth(reach, footprint, thresholdFloor);
+    vec3 lo = boxLo - vec3(grow);
+    vec3 hi = boxHi + vec3(grow);
     float enter = t0;
     float leave = t1;
     for (int k = 0; k < 3; ++k) {
@@ -150,13 +192,15 @@ bool krs_clip(vec3 origin, vec3 direction, float footprint, inout float t0, inou
 }
 // The Lambert term `diffuse` at the hit p (ray depth t), or 0 when the light is blocked: the
 // shadow ray starts where the surface is at least two thresholds away along the light
-// (t cos >= 2 threshold), so there is no self-shadowing acne at grazing light.
+// (t cos >= 2 threshold), so there is no self-shadowing acne at grazing light, and adds the hit's
+// threshold to its own.
 float krs_shadow(vec3 p, float t, float footprint, float diffuse) {
     if (diffuse > 0.0) {
-        float hitThreshold = footprint * t + KRS_THRESHOLD_FLOOR;
-        bool shadowed;
-        krs_trace(p, KRS_TO_LIGHT, hitThreshold * (1.0 + 2.0 / max(diffuse, 0.1)), KRS_MAX_DISTANCE, footprint, hitThreshold, shadowed);
-        if (shadowed) diffuse = 0.0;
+        float hitThreshold = krs_hit_threshold(footprint, t, KRS_THRESHOLD_FLOOR);
+        float start = hitThreshold * (1.0 + 2.0 / max(diffuse, 0.1));
+        if (krs_trace(p, KRS_TO_LIGHT, start, KRS_MAX_DISTANCE, footprint, KRS_THRESHOLD_FLOOR, hitThreshold,
+                      KRS_MAX_STEPS).found)
+            diffuse = 0.0;
     }
     return diffuse;
 }
@@ -177,24 +221,21 @@ vec3 krs_normal(vec3 p, float h) {
 }
 // Lambert with the gradient normal at a step of KRS_NORMAL_STEP hit thresholds, turned to the eye.
 vec3 krs_surface(vec3 p, vec3 direction, float t, float scale, float footprint) {
-    vec3 n = krs_normal(p, KRS_NORMAL_STEP * (footprint * t + KRS_THRESHOLD_FLOOR));
+    vec3 n = krs_normal(p, KRS_NORMAL_STEP * krs_hit_threshold(footprint, t, KRS_THRESHOLD_FLOOR));
     if (dot(n, direction) > 0.0) n = -n;
     float diffuse = krs_shadow(p, t, footprint, max(dot(n, KRS_TO_LIGHT), 0.0));
     return KRS_ALBEDO * (0.25 + 0.75 * diffuse);
 }
 void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     krs_view c = krs_camera(iTime, iMouse, iResolution.xy);
-    float scale = KRS_TAN_HALF_FOV * 2.0 / iResolution.y;
-    float sx = (fragCoord.x - 0.5 * iResolution.x) * scale;
-    float sy = (fragCoord.y - 0.5 * iResolution.y) * scale;
-    vec3 d = c.forward + c.right * sx + c.up * sy;
-    vec3 direction = d / sqrt(dot(d, d));
+    vec3 direction = krs_primary_direction(c, fragCoord, iResolution.xy);
+    float scale = krs_pixel_footprint(iResolution.y);
     float footprint = KRS_FOOTPRINT_SCALE * scale;
-    bool found = false;
     float t0 = 0.0;
     float t1 = KRS_MAX_DISTANCE;
-    float t = KRS_MAX_DISTANCE;
-    if (krs_clip(c.eye, direction, footprint, t0, t1)) t = krs_trace(c.eye, direction, t0, t1, footprint, 0.0, found);
-    vec3 color = found ? krs_surface(c.eye + direction * t, direction, t, scale, footprint) : krs_sky(direction);
+    krs_march m = krs_march(c.eye, direction, 0.0, 0.0, 0.0, false, false, 0);
+    if (!KRS_CLIP || krs_box_clip(KRS_BOX_LO, KRS_BOX_HI, c.eye, direction, footprint, KRS_THRESHOLD_FLOOR, t0, t1))
+        m = krs_trace(c.eye, direction, t0, t1, footprint, KRS_THRESHOLD_FLOOR, 0.0, KRS_MAX_STEPS);
+    vec3 color = m.found ? krs_surface(c.eye + direction * m.t, direction, m.t, scale, footprint) : krs_sky(direction);
     fragColor = vec4(sqrt(clamp(color, 0.0, 1.0)), 1.0);
 }

@@ -1,5 +1,6 @@
 // check_glsl_reference SCENE FILE WIDTH HEIGHT: the PNG `glsl_export --scene SCENE --reference FILE
-// --width WIDTH --height HEIGHT` wrote holds, byte for byte, round(255 v) of the CPU reference frame
+// --width WIDTH --height HEIGHT` wrote holds, byte for byte, the CPU reference frame as an 8-bit
+// framebuffer stores it (krs::glsl::framebuffer_byte: round(255 v), ties to even)
 // (krs::glsl::examples::reference_frame, rendered here again), RGB, top row first: the reference
 // comes bottom-up (as glReadPixels returns it), so its last row is the file's first. Its first and
 // last rows differ (the sky darkens upward), so a file written upside down fails. Exit status 0
@@ -32,8 +33,8 @@ int main(int argc, char** argv)
         return 2;
     }
     const auto byte = [&](int x, int bottom_up_row, int c) {
-        return long(std::lround(255.0f * reference[(std::size_t(bottom_up_row) * std::size_t(width) + std::size_t(x)) * 4 +
-                                                 std::size_t(c)]));
+        return long(krs::glsl::framebuffer_byte(
+            reference[(std::size_t(bottom_up_row) * std::size_t(width) + std::size_t(x)) * 4 + std::size_t(c)]));
     };
     long rows_differ = 0;
     for (int x = 0; x < width; ++x)
@@ -74,7 +75,7 @@ int main(int argc, char** argv)
                      width * height * 3);
         return 1;
     }
-    std::printf("%s: %dx%d, every byte equals round(255 v) of the %s reference, top row first\n", path.c_str(), width,
+    std::printf("%s: %dx%d, every byte equals the %s reference as a framebuffer stores it, top row first\n", path.c_str(), width,
                 height, scene.c_str());
     return 0;
 }

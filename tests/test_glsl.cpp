@@ -7,6 +7,7 @@
 #include "krs/fractal/shell_presets.hpp"
 #include "krs/fractal/similar_shell.hpp"
 #include "krs/glsl/example_scenes.hpp"
+#include "krs/trace/packet_trace.hpp"
 
 #include <doctest/doctest.h>
 
@@ -82,6 +83,79 @@ TEST_CASE("glsl float literals read back as the same float")
     }
 }
 
+TEST_CASE("render_reference is the library's tracer: its scene pixels are sphere_trace's hits, at rest and turned")
+{
+    // Independent of the reference's own loop: every pixel's camera ray traced by the packet
+    // stream (trace_queue's refilling lanes, unclipped, from t = 0) with the program's primary
+    // options. A pixel shows the scene in the reference (differs from the sky alone) exactly where
+    // the stream finds a hit: same camera, same rays, same threshold.
+    constexpr int width = 64, height = 48;
+    const auto check = [&](const auto& s, const krs::pinhole_camera& camera, const char* what) {
+        INFO(s.name << " " << what);
+        const krs::pinhole_camera c = camera.with_size(width, height);
+        const krs::trace_options primary = s.program.primary(c);
+        std::vector<char> found(std::size_t(width) * std::size_t(height), 0);
+        std::uint32_t next_id = 0;
+        krs::trace_stream(
+            s.field,
+            [&](krs::ray_job& job) {
+                if (next_id == std::uint32_t(width * height)) return false;
+                const int i = int(next_id % std::uint32_t(width)), j = int(next_id / std::uint32_t(width));
+                job.r = c.primary_ray(float(i) + 0.5f, float(height) - (float(j) + 0.5f)); // row j from the bottom
+                job.t_start = 0.0f;
+                job.t_max = primary.max_distance;
+                job.id = next_id++;
+                return true;
+            },
+            [&](std::uint32_t id, const krs::hit<float>& h) { found[id] = h.found ? 1 : 0; }, primary);
+        const std::vector<float> frame = ex::reference_frame(s, c, width, height);
+        krs::glsl::shadertoy_options empty = s.program;
+        empty.max_distance = 1e-6f;
+        const std::vector<float> sky = ex::reference_frame(s, c, empty, width, height, false);
+        std::size_t differ = 0, hits = 0;
+        for (std::size_t p = 0; p < found.size(); ++p) {
+            const std::size_t i = 4 * p;
+            const bool scene = frame[i] != sky[i] || frame[i + 1] != sky[i + 1] || frame[i + 2] != sky[i + 2];
+            differ += scene != (found[p] != 0);
+            hits += found[p] != 0;
+        }
+        CHECK(hits > found.size() / 20);
+        CHECK(differ == 0);
+    };
+    const auto tree = ex::tree();
+    check(tree, tree.camera, "at rest");
+    check(tree, tree.camera.with_size(width, height).turned(11.0f, 40.0f, 30.0f), "turned");
+    const auto koch = ex::kifs_koch();
+    check(koch, koch.camera, "at rest");
+    const auto sponge = ex::sponge(); // bounded: the reference clips, the stream does not
+    check(sponge, sponge.camera.with_size(width, height).turned(7.0f, 0.0f, 0.0f), "turned");
+}
+
+TEST_CASE("framebuffer_byte rounds as an 8-bit framebuffer: to nearest, ties to even")
+{
+    // A float v whose 255 v is exactly k + 1/2 in float: the tie a GPU stores as the even
+    // neighbour (ANGLE's D3D11 and Vulkan back ends stored 122 for 122.5; std::lround gave 123).
+    const auto tie = [](int k) {
+        const float target = float(k) + 0.5f;
+        float v = target / 255.0f;
+        for (int n = 0; n < 64 && 255.0f * v != target; ++n)
+            v = std::nextafter(v, 255.0f * v < target ? 1.0f : 0.0f);
+        REQUIRE(255.0f * v == target);
+        return v;
+    };
+    CHECK(krs::glsl::framebuffer_byte(tie(122)) == 122);
+    CHECK(krs::glsl::framebuffer_byte(tie(123)) == 124);
+    CHECK(krs::glsl::framebuffer_byte(tie(0)) == 0);
+    CHECK(krs::glsl::framebuffer_byte(tie(254)) == 254);
+    // Away from ties, the nearest byte; outside [0, 1], clamped.
+    for (int k = 0; k <= 255; ++k) {
+        CHECK(krs::glsl::framebuffer_byte(float(k) / 255.0f) == k);
+        CHECK(krs::glsl::framebuffer_byte((float(k) + 0.49f) / 255.0f) == std::min(k, 255));
+    }
+    CHECK(krs::glsl::framebuffer_byte(-0.3f) == 0);
+    CHECK(krs::glsl::framebuffer_byte(1.7f) == 255);
+}
+
 TEST_CASE("shadertoy clips primary rays to a bounded scene's box without changing the picture")
 {
     // The program clips where the sequence is bounded (the sponge; a tree without ground, mostly
@@ -92,8 +166,8 @@ TEST_CASE("shadertoy clips primary rays to a bounded scene's box without changin
     style.ground_height.reset();
     const ex::scene<krs::model::tree_sequence> bare{
         "bare", krs::model::build_tree(krs::model::grow_tree(style)),
-        krs::glsl::view::look_at({4.6f, 3.6f, -9.2f}, {0.0f, 3.3f, 0.0f}, {0, 1, 0}, 50.0f, {0.45f, 0.8f, -0.4f}, 40.0f),
-        {}, {1, 1, 1}};
+        krs::pinhole_camera({4.6f, 3.6f, -9.2f}, {0.0f, 3.3f, 0.0f}, {0, 1, 0}, 50.0f, 96, 72),
+        krs::glsl::shadertoy_options::lit({0.45f, 0.8f, -0.4f}, 40.0f), {}, {1, 1, 1}};
     int bounded = 0;
     const auto check = [&](const auto& s) {
         INFO(s.name);
@@ -250,10 +324,10 @@ TEST_CASE("glsl scene names: one that makes a name the library or an earlier fie
     // A Shadertoy program declares krs_scene, krs_sky, krs_trace ... beside the scene's krs_NAME.
     for (const char* clash : {"scene", "sky", "trace", "clip", "albedo"}) {
         INFO(std::string(clash));
-        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, s.camera, clash), doctest::Contains("glsl.shadertoy.name"),
+        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, s.camera, s.program, clash), doctest::Contains("glsl.shadertoy.name"),
                              krs::invalid_parameter);
     }
-    CHECK_NOTHROW(krs::glsl::shadertoy(s.field, s.camera, "my_scene"));
+    CHECK_NOTHROW(krs::glsl::shadertoy(s.field, s.camera, s.program, "my_scene"));
 }
 
 TEST_CASE("glsl twice_declared reads a text's global names")
@@ -385,167 +459,168 @@ TEST_CASE("glsl fractals: KIFS and similar shells emit by recursion, pack agrees
     CHECK(adjacent.find("inf") == std::string::npos);
 }
 
-TEST_CASE("shadertoy_view: at rest the baked camera, an orbit about the pivot's vertical, a rigid basis")
+TEST_CASE("pinhole_camera::turned: at rest the camera, an orbit about the pivot's vertical, a rigid basis")
 {
-    const krs::glsl::view v = ex::tree().camera;
+    const krs::pinhole_camera v = ex::tree().camera.with_size(160, 120);
     const auto equal = [](const krs::vec3f& a, const krs::vec3f& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
-    const auto same = [&](const krs::glsl::view& a, const krs::glsl::view& b) {
-        return equal(a.eye, b.eye) && equal(a.forward, b.forward) && equal(a.right, b.right) && equal(a.up, b.up);
+    const auto same = [&](const krs::pinhole_camera& a, const krs::pinhole_camera& b) {
+        return equal(a.eye(), b.eye()) && equal(a.forward(), b.forward()) && equal(a.right(), b.right()) &&
+               equal(a.up(), b.up());
     };
-    // No time, no drag, or the pointer at the frame's centre: the baked camera, bit for bit (the
+    // No time, no drag, or the pointer at the frame's centre: the camera, bit for bit (the
     // program's frame at rest is held against render_reference of this very camera).
-    CHECK(same(krs::glsl::shadertoy_view(v, 0.0f, 0.0f, 0.0f, 160.0f, 120.0f), v));
-    CHECK(same(krs::glsl::shadertoy_view(v, 0.0f, 80.0f, 60.0f, 160.0f, 120.0f), v));
-    const float radius = krs::length(v.eye - v.pivot);
-    for (const float time : {7.0f, 0.5f * v.orbit_seconds, v.orbit_seconds}) {
-        const krs::glsl::view o = krs::glsl::shadertoy_view(v, time, 0.0f, 0.0f, 160.0f, 120.0f);
+    CHECK(same(v.turned(0.0f, 0.0f, 0.0f), v));
+    CHECK(same(v.turned(0.0f, 80.0f, 60.0f), v));
+    const float radius = krs::length(v.eye() - v.pivot());
+    const float seconds = v.orbit().seconds;
+    for (const float time : {7.0f, 0.5f * seconds, seconds}) {
+        const krs::pinhole_camera o = v.turned(time, 0.0f, 0.0f);
         INFO("time " << time);
         // About the vertical through the pivot: height and distance kept, the angle turned is
-        // 2 pi time / orbit_seconds (measured in the horizontal plane, in double).
-        CHECK(o.eye.y == doctest::Approx(v.eye.y).epsilon(1e-5));
-        CHECK(krs::length(o.eye - v.pivot) == doctest::Approx(radius).epsilon(1e-5));
-        const double a0 = std::atan2(double(v.eye.z - v.pivot.z), double(v.eye.x - v.pivot.x));
-        const double a1 = std::atan2(double(o.eye.z - v.pivot.z), double(o.eye.x - v.pivot.x));
+        // 2 pi time / orbit seconds (measured in the horizontal plane, in double).
+        CHECK(o.eye().y == doctest::Approx(v.eye().y).epsilon(1e-5));
+        CHECK(krs::length(o.eye() - v.pivot()) == doctest::Approx(radius).epsilon(1e-5));
+        const double a0 = std::atan2(double(v.eye().z - v.pivot().z), double(v.eye().x - v.pivot().x));
+        const double a1 = std::atan2(double(o.eye().z - v.pivot().z), double(o.eye().x - v.pivot().x));
         const double turned = std::remainder(a0 - a1, 2.0 * std::numbers::pi); // x toward z is negative yaw
-        const double expected = std::remainder(2.0 * std::numbers::pi * double(time) / double(v.orbit_seconds),
-                                               2.0 * std::numbers::pi);
+        const double expected =
+            std::remainder(2.0 * std::numbers::pi * double(time) / double(seconds), 2.0 * std::numbers::pi);
         CHECK(std::abs(std::remainder(turned - expected, 2.0 * std::numbers::pi)) <= 1e-4);
         // Still an orthonormal basis, and still looking at the pivot.
-        CHECK(krs::length(o.forward) == doctest::Approx(1.0f).epsilon(1e-5));
-        CHECK(std::abs(krs::dot(o.forward, o.right)) <= 1e-5f);
-        CHECK(std::abs(krs::dot(o.forward, o.up)) <= 1e-5f);
-        CHECK(std::abs(krs::dot(o.right, o.up)) <= 1e-5f);
-        CHECK(krs::length(krs::cross(o.forward, krs::normalize(v.pivot - o.eye))) <= 1e-5f);
+        CHECK(krs::length(o.forward()) == doctest::Approx(1.0f).epsilon(1e-5));
+        CHECK(std::abs(krs::dot(o.forward(), o.right())) <= 1e-5f);
+        CHECK(std::abs(krs::dot(o.forward(), o.up())) <= 1e-5f);
+        CHECK(std::abs(krs::dot(o.right(), o.up())) <= 1e-5f);
+        CHECK(krs::length(krs::cross(o.forward(), krs::normalize(v.pivot() - o.eye()))) <= 1e-5f);
     }
     // The pointer above the centre tilts about the right axis and raises the eye.
-    const krs::glsl::view tilted = krs::glsl::shadertoy_view(v, 0.0f, 80.0f, 100.0f, 160.0f, 120.0f);
-    CHECK(krs::length(tilted.right - v.right) <= 1e-6f);
-    CHECK(tilted.eye.y - v.eye.y > 0.1f * radius);
-    CHECK(krs::length(tilted.eye - v.pivot) == doctest::Approx(radius).epsilon(1e-5));
-    // orbit_seconds 0 keeps the camera still.
-    krs::glsl::view still = v;
-    still.orbit_seconds = 0.0f;
-    CHECK(same(krs::glsl::shadertoy_view(still, 12.0f, 0.0f, 0.0f, 160.0f, 120.0f), still));
+    const krs::pinhole_camera tilted = v.turned(0.0f, 80.0f, 100.0f);
+    CHECK(krs::length(tilted.right() - v.right()) <= 1e-6f);
+    CHECK(tilted.eye().y - v.eye().y > 0.1f * radius);
+    CHECK(krs::length(tilted.eye() - v.pivot()) == doctest::Approx(radius).epsilon(1e-5));
+    // An orbit of 0 seconds keeps the camera still.
+    const krs::pinhole_camera still = v.with_orbit({.seconds = 0.0f});
+    CHECK(same(still.turned(12.0f, 0.0f, 0.0f), still));
 }
 
-TEST_CASE("shadertoy_view: pointer up raises the eye, the elevation stays in range, the eye outside the scene")
+TEST_CASE("pinhole_camera::turned: pointer up raises the eye, the elevation stays in range, the eye outside the scene")
 {
     // Elevation of the eye seen from the pivot, in degrees above the plane across the vertical,
     // measured from the eye's position (the code clamps an angle read from the forward axis).
-    const auto elevation = [](const krs::glsl::view& v, const krs::glsl::view& o) {
-        const krs::vec3d offset = krs::vec3d(o.eye - v.pivot);
-        return std::asin(krs::dot(offset, krs::normalize(krs::vec3d(v.vertical))) / krs::length(offset)) * 180.0 /
+    const auto elevation = [](const krs::pinhole_camera& v, const krs::pinhole_camera& o) {
+        const krs::vec3d offset = krs::vec3d(o.eye() - v.pivot());
+        return std::asin(krs::dot(offset, krs::normalize(krs::vec3d(v.vertical()))) / krs::length(offset)) * 180.0 /
                std::numbers::pi;
     };
-    constexpr float width = 160, height = 120;
+    constexpr int width = 160, height = 120;
     int scenes = 0;
     ex::for_each_scene([&](const auto& s) {
         INFO(s.name);
-        const krs::glsl::view& v = s.camera;
+        const krs::pinhole_camera v = s.camera.with_size(width, height);
         const double rest = elevation(v, v);
-        const double lowest = std::min(rest, double(v.min_elevation)) - 1e-3;
-        const double highest = std::max(rest, double(v.max_elevation)) + 1e-3;
+        const double lowest = std::min(rest, double(v.orbit().min_elevation)) - 1e-3;
+        const double highest = std::max(rest, double(v.orbit().max_elevation)) + 1e-3;
         // Straight up and down from the centre (no turn about the vertical): up raises, down lowers
         // (or stays, where the baked elevation is already the lowest allowed).
-        const double up = elevation(v, krs::glsl::shadertoy_view(v, 0.0f, 0.5f * width, 0.9f * height, width, height));
-        const double down = elevation(v, krs::glsl::shadertoy_view(v, 0.0f, 0.5f * width, 0.1f * height, width, height));
+        const double up = elevation(v, v.turned(0.0f, 0.5f * width, 0.9f * height));
+        const double down = elevation(v, v.turned(0.0f, 0.5f * width, 0.1f * height));
         CHECK(up > rest + 1.0);
         CHECK(down <= rest + 1e-3);
         // Anywhere the pointer goes, at any time, the elevation is within the range and the eye
         // outside the scene (above the ground, never past the pole).
         for (const float time : {0.0f, 17.0f, 1e5f})
             for (int column = 0; column < 24; ++column) // every 15 degrees of turn
-                for (const float y : {1.0f, 0.25f * height, 0.5f * height, 0.75f * height, height}) {
+                for (const float y : {1.0f, 0.25f * height, 0.5f * height, 0.75f * height, float(height)}) {
                     const float x = 1.0f + float(column) * (width - 1.0f) / 23.0f;
-                    const krs::glsl::view o = krs::glsl::shadertoy_view(v, time, x, y, width, height);
+                    const krs::pinhole_camera o = v.turned(time, x, y);
                     INFO("time " << time << " pointer " << x << ", " << y);
                     const double e = elevation(v, o);
                     CHECK(e >= lowest);
                     CHECK(e <= highest);
-                    CHECK(s.field.distance(o.eye) > 0.0f);
-                    CHECK(krs::dot(o.up, v.vertical) > 0.0f); // not flipped over the pole
+                    CHECK(s.field.distance(o.eye()) > 0.0f);
+                    CHECK(krs::dot(o.up(), v.vertical()) > 0.0f); // not flipped over the pole
                 }
         ++scenes;
     });
     CHECK(scenes == 14);
     // The turn is reduced to one turn: a day of iTime gives the camera of the same phase.
-    const krs::glsl::view v = ex::tree().camera;
-    const krs::glsl::view late = krs::glsl::shadertoy_view(v, 86400.0f + 15.0f, 0.0f, 0.0f, width, height);
-    const krs::glsl::view early = krs::glsl::shadertoy_view(v, 15.0f, 0.0f, 0.0f, width, height);
-    CHECK(krs::length(late.eye - early.eye) <= 1e-3f * krs::length(v.eye - v.pivot));
+    const krs::pinhole_camera v = ex::tree().camera.with_size(width, height);
+    const krs::pinhole_camera late = v.turned(86400.0f + 15.0f, 0.0f, 0.0f);
+    const krs::pinhole_camera early = v.turned(15.0f, 0.0f, 0.0f);
+    CHECK(krs::length(late.eye() - early.eye()) <= 1e-3f * krs::length(v.eye() - v.pivot()));
     // The angle handed to sin and cos is within [-pi, pi] (plus rounding), and the same angle.
-    CHECK(krs::glsl::detail::one_turn(0.0f) == 0.0f);
+    CHECK(krs::detail::one_turn(0.0f) == 0.0f);
     for (const float x : {3.0f, -3.0f, 3.2f, -3.2f, 100.0f, -7000.5f, 86400.0f * 0.10471976f}) {
         INFO(x);
-        const float r = krs::glsl::detail::one_turn(x);
+        const float r = krs::detail::one_turn(x);
         CHECK(std::abs(double(r)) <= std::numbers::pi * (1.0 + 1e-6));
         const double whole_turns = (double(x) - double(r)) / (2.0 * std::numbers::pi);
         CHECK(std::abs(whole_turns - std::round(whole_turns)) <= 1e-3);
     }
 }
 
-TEST_CASE("view::validate refuses what would draw NaN or nothing, by name")
+TEST_CASE("shadertoy_options::validate and the camera's orbit refuse what would draw NaN or nothing, by name")
 {
     const auto s = ex::kifs_koch();
-    const auto refused = [&](const krs::glsl::view& v, const char* name) {
+    const auto refused = [&](const krs::glsl::shadertoy_options& o, const char* name) {
         INFO(name);
-        CHECK_THROWS_WITH_AS(v.validate(), doctest::Contains(name), krs::invalid_parameter);
-        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, v, s.name, s.albedo), doctest::Contains(name),
+        CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains(name), krs::invalid_parameter);
+        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, s.camera, o, s.name, s.albedo), doctest::Contains(name),
                              krs::invalid_parameter);
-        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, v, s.albedo, 4, 4), doctest::Contains(name),
-                             krs::invalid_parameter);
-        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy_view(v, 1.0f, 0.0f, 0.0f, 4.0f, 4.0f), doctest::Contains(name),
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, o, s.albedo, 4, 4), doctest::Contains(name),
                              krs::invalid_parameter);
     };
     const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
-    CHECK_NOTHROW(s.camera.validate());
+    CHECK_NOTHROW(s.program.validate());
     for (const float bad : {0.0f, -0.5f, nan, inf}) {
-        krs::glsl::view v = s.camera;
-        v.normal_step = bad;
-        refused(v, "view.normal_step");
-        v = s.camera;
-        v.band_pixels = bad;
-        refused(v, "view.band_pixels");
-        v = s.camera;
-        v.tan_half_fov = bad;
-        refused(v, "view.tan_half_fov");
-        v = s.camera;
-        v.max_distance = bad;
-        refused(v, "view.max_distance");
-        v = s.camera;
-        v.threshold_floor = bad;
-        refused(v, "view.threshold_floor");
+        krs::glsl::shadertoy_options o = s.program;
+        o.normal_step = bad;
+        refused(o, "shadertoy_options.normal_step");
+        o = s.program;
+        o.band_pixels = bad;
+        refused(o, "shadertoy_options.band_pixels");
+        o = s.program;
+        o.max_distance = bad;
+        refused(o, "shadertoy_options.max_distance");
+        o = s.program;
+        o.threshold_floor = bad;
+        refused(o, "shadertoy_options.threshold_floor");
+        CHECK_THROWS_WITH_AS(krs::glsl::shadertoy_options::lit({0, 1, 0}, bad),
+                             doctest::Contains("shadertoy_options.max_distance"), krs::invalid_parameter);
     }
     for (const float bad : {-1.0f, nan, inf}) {
-        krs::glsl::view v = s.camera;
-        v.orbit_seconds = bad;
-        refused(v, "view.orbit_seconds");
-        v = s.camera;
-        v.footprint_scale = bad;
-        refused(v, "view.footprint_scale");
+        krs::glsl::shadertoy_options o = s.program;
+        o.footprint_scale = bad;
+        refused(o, "shadertoy_options.footprint_scale");
+        CHECK_THROWS_WITH_AS(s.camera.with_orbit({.seconds = bad}), doctest::Contains("camera_orbit.seconds"),
+                             krs::invalid_parameter);
     }
-    krs::glsl::view v = s.camera;
-    v.max_steps = 0;
-    refused(v, "view.max_steps");
-    v = s.camera;
-    v.vertical = {0, 2, 0};
-    refused(v, "view.vertical");
-    v = s.camera;
-    v.forward = {nan, 0, 1};
-    refused(v, "view.forward");
+    krs::glsl::shadertoy_options o = s.program;
+    o.max_steps = 0;
+    refused(o, "shadertoy_options.max_steps");
+    o = s.program;
+    o.to_light = {0, 2, 0};
+    refused(o, "shadertoy_options.to_light");
+    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy_options::lit({0, 0, 0}, 1.0f),
+                         doctest::Contains("shadertoy_options.to_light"), krs::invalid_parameter);
     for (const auto& [lo, hi] : {std::pair{50.0f, 40.0f}, std::pair{-90.0f, 10.0f}, std::pair{5.0f, 90.0f},
                                  std::pair{nan, 10.0f}}) {
-        v = s.camera;
-        v.min_elevation = lo;
-        v.max_elevation = hi;
-        refused(v, "view.m");
+        CHECK_THROWS_WITH_AS(s.camera.with_orbit({.min_elevation = lo, .max_elevation = hi}),
+                             doctest::Contains("camera_orbit.m"), krs::invalid_parameter);
     }
+    for (const float bad : {0.0f, 180.0f, nan})
+        CHECK_THROWS_WITH_AS(krs::pinhole_camera({0, 0, -1}, {0, 0, 0}, {0, 1, 0}, bad, 4, 4),
+                             doctest::Contains("camera.vertical_fov_degrees"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(krs::pinhole_camera({0, 0, -1}, {0, 0, 0}, {0, 0, 1}, 40.0f, 4, 4),
+                         doctest::Contains("camera.up"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(s.camera.with_size(0, 4), doctest::Contains("camera.size"), krs::invalid_parameter);
     // A palette must hold one finite colour per kernel type.
     const auto grass = ex::grass();
-    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(grass.field, grass.camera, "g", {{0.1f, 0.2f, 0.3f}}),
+    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(grass.field, grass.camera, grass.program, "g", {{0.1f, 0.2f, 0.3f}}),
                          doctest::Contains("glsl.palette"), krs::invalid_parameter);
-    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(grass.field, grass.camera, "g", {{0.1f, nan, 0.3f}, {0.1f, 0.2f, 0.3f}}),
-                         doctest::Contains("glsl.palette"), krs::invalid_parameter);
+    CHECK_THROWS_WITH_AS(
+        krs::glsl::shadertoy(grass.field, grass.camera, grass.program, "g", {{0.1f, nan, 0.3f}, {0.1f, 0.2f, 0.3f}}),
+        doctest::Contains("glsl.palette"), krs::invalid_parameter);
 }
 
 TEST_CASE("shadertoy grass: blades green, ground soil (the scene's palette, not bark by kernel type)")
@@ -595,18 +670,14 @@ TEST_CASE("glsl distance_only: no locate, shade or their structs; a gradient-sha
 TEST_CASE("shadertoy refuses bad orbits and frame sizes by name")
 {
     const auto s = ex::kifs_koch();
-    krs::glsl::view v = s.camera;
-    v.orbit_seconds = -1.0f;
-    CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(s.field, v, s.name, s.albedo), doctest::Contains("view.orbit_seconds"),
-                         krs::invalid_parameter);
     for (const int bad : {0, -3, 16385}) {
         INFO(bad);
-        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.albedo, bad, 8),
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.program, s.albedo, bad, 8),
                              doctest::Contains("glsl.render_reference.width"), krs::invalid_parameter);
-        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.albedo, 8, bad),
+        CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.program, s.albedo, 8, bad),
                              doctest::Contains("glsl.render_reference.height"), krs::invalid_parameter);
     }
     // Alpha 1 everywhere, the sky too (premultiplied-alpha pages would show through a 0).
-    const std::vector<float> frame = krs::glsl::render_reference(s.field, s.camera, s.albedo, 16, 12);
+    const std::vector<float> frame = krs::glsl::render_reference(s.field, s.camera, s.program, s.albedo, 16, 12);
     for (std::size_t i = 3; i < frame.size(); i += 4) CHECK(frame[i] == 1.0f);
 }

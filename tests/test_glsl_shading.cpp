@@ -511,8 +511,8 @@ TEST_CASE("GLSL kernel uv in buffer mode follows the data of another sequence of
     style.seed = 3;
     style.bend = 0.3f;
     style.trunk_radius = 0.16f;
-    const ex::scene<krs::model::tree_sequence> bent{"bent", krs::model::build_tree(krs::model::grow_tree(style)), {},
-                                                    tree.sample_center, tree.sample_half};
+    const ex::scene<krs::model::tree_sequence> bent{"bent", krs::model::build_tree(krs::model::grow_tree(style)),
+                                                    tree.camera, tree.program, tree.sample_center, tree.sample_half};
     REQUIRE(bent.field.kernels().size() == tree.field.kernels().size());
     for (std::size_t k = 0; k < tree.field.kernels().size(); ++k) {
         REQUIRE(bent.field.kernels()[k].index() == tree.field.kernels()[k].index());

@@ -287,7 +287,7 @@ double density_integral(const S& store)
 // (section 9: "the most appropriate voxel size based on the projected voxel area"). At distance
 // d, a pixel whose footprint at distance 1 is f (the camera's pixel_footprint(): 2 tan(fov/2) /
 // height; for a pixel of angular size a, f = 2 tan(a / 2), about a) covers a square of side
-// p = d f facing the viewer. A voxel of sides s_x, s_y, s_z is taken to have the projected area
+// p = d f facing the viewer (krs::pixel_size_at, the rule krs/trace/camera.hpp states once). A voxel of sides s_x, s_y, s_z is taken to have the projected area
 // of a square of its geometric-mean side s = (s_x s_y s_z)^(1/3), which is exact for cubic
 // voxels seen face-on. Keeping the grid's aspect ratio, the target resolution is
 //
@@ -303,7 +303,7 @@ inline resolution resolution_for_projected_voxel(const hypervolume& volume, doub
     krs::require_non_negative("resolution_for_projected_voxel.distance", distance);
     krs::require_positive("resolution_for_projected_voxel.pixel_footprint", pixel_footprint);
     const resolution n = volume.grid();
-    const double pixel = distance * pixel_footprint;
+    const double pixel = krs::pixel_size_at(distance, pixel_footprint);
     if (!(pixel > 0)) return n;
     const vec3d& s = volume.voxel_size();
     const double mean_side = std::cbrt(s.x * s.y * s.z);

@@ -59,7 +59,7 @@ struct render_settings {
 inline int supersampling_for(const krs::pinhole_camera& camera, const tree_shape& shape, const hypervolume& volume)
 {
     const double distance = krs::length(krs::vec3d(shape.crown.center) - krs::vec3d(camera.eye()));
-    const double pixel_side = double(camera.pixel_footprint()) * distance; // world size of one pixel there
+    const double pixel_side = camera.pixel_size_at(distance); // world side of a center pixel there
     const double voxel_side = volume.smallest_voxel_side();
     // Clamped in double to render()'s range before the conversion (far away the quotient passed
     // INT_MAX, which is undefined as an int).

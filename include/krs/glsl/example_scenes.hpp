@@ -42,11 +42,16 @@
 
 namespace krs::glsl::examples {
 
+// The size of the scenes' cameras: glsl_export's default frame (a Shadertoy program takes its
+// frame's size from iResolution, and render_reference from its arguments).
+inline constexpr int frame_width = 640, frame_height = 360;
+
 template <class S>
 struct scene {
     std::string name;
     S field;
-    glsl::view camera;
+    pinhole_camera camera;     // the program's at iTime = 0 and no drag (camera.turned: the others)
+    shadertoy_options program; // light, march limits and shading widths of its Shadertoy program
     vec3f sample_center{}; // tests sample points in the box center +- sample_half
     vec3f sample_half{1, 1, 1};
     vec3f albedo{0.7f, 0.68f, 0.64f}; // of a field shaded by its gradient (sequences: by kernel type)
@@ -61,7 +66,8 @@ inline scene<model::tree_sequence> tree()
     style.seed = 3;
     model::tree_sequence s = model::build_tree(model::grow_tree(style));
     const vec3f eye{4.6f, 3.6f, -9.2f};
-    return {"tree", s, view::look_at(eye, {0.0f, 3.3f, 0.0f}, {0, 1, 0}, 50.0f, {0.45f, 0.8f, -0.4f}, 40.0f),
+    return {"tree", s, pinhole_camera(eye, {0.0f, 3.3f, 0.0f}, {0, 1, 0}, 50.0f, frame_width, frame_height),
+            shadertoy_options::lit({0.45f, 0.8f, -0.4f}, 40.0f),
             {0.0f, 3.0f, 0.0f}, {3.5f, 3.5f, 3.5f}};
 }
 
@@ -77,10 +83,10 @@ inline scene<model::tree_sequence> forest()
     const vec3f look = b.center;
     const vec3f eye = look + vec3f{0.35f, 0.45f, -1.0f} * (1.1f * b.radius);
     scene<model::tree_sequence> s{"forest", built.sequence,
-                                  view::look_at(eye, look - vec3f{0, 0.15f * b.radius, 0}, {0, 1, 0}, 45.0f,
-                                                {0.4f, 0.85f, -0.3f}, 6.0f * b.radius),
+                                  pinhole_camera(eye, look - vec3f{0, 0.15f * b.radius, 0}, {0, 1, 0}, 45.0f, frame_width, frame_height),
+            shadertoy_options::lit({0.4f, 0.85f, -0.3f}, 6.0f * b.radius),
                                   b.center, vec3f{b.radius, 0.5f * b.radius, b.radius}};
-    s.camera.min_elevation = 8.0f; // the trees' crowns reach the orbit's circle below 4 degrees
+    s.camera = s.camera.with_orbit({.min_elevation = 8.0f}); // the trees' crowns reach the orbit's circle below 4 degrees
     return s;
 }
 
@@ -90,10 +96,10 @@ inline scene<model::plane_sequence> terrain()
     t.levels = 28;
     model::plane_sequence s = model::build_terrain(t);
     scene<model::plane_sequence> built{"terrain", s,
-                                       view::look_at({-4.0f, 7.0f, -16.0f}, {6.0f, -1.0f, 10.0f}, {0, 1, 0}, 55.0f,
-                                                     {-0.6f, 0.45f, 0.4f}, 120.0f),
+                                       pinhole_camera({-4.0f, 7.0f, -16.0f}, {6.0f, -1.0f, 10.0f}, {0, 1, 0}, 55.0f, frame_width, frame_height),
+            shadertoy_options::lit({-0.6f, 0.45f, 0.4f}, 120.0f),
                                        {5.0f, 0.0f, 10.0f}, {15.0f, 4.0f, 15.0f}};
-    built.camera.min_elevation = 14.0f; // hills cross the orbit's circle up to 11 degrees
+    built.camera = built.camera.with_orbit({.min_elevation = 14.0f}); // hills cross the orbit's circle up to 11 degrees
     return built;
 }
 
@@ -104,7 +110,8 @@ inline scene<model::sponge_sequence> sponge()
     p.center = {0, 1, 0};
     model::sponge built = model::build_sponge(p);
     return {"sponge", built.sequence,
-            view::look_at({2.4f, 2.9f, -3.3f}, {0, 0.9f, 0}, {0, 1, 0}, 42.0f, {0.5f, 0.75f, -0.35f}, 60.0f),
+            pinhole_camera({2.4f, 2.9f, -3.3f}, {0, 0.9f, 0}, {0, 1, 0}, 42.0f, frame_width, frame_height),
+            shadertoy_options::lit({0.5f, 0.75f, -0.35f}, 60.0f),
             {0, 1, 0}, {1.5f, 1.5f, 1.5f}};
 }
 
@@ -120,7 +127,8 @@ inline scene<model::plane_sequence> rock()
     p.folds = 16;
     const model::rock built = model::build_rock(p);
     return {"rock", built.sequence,
-            view::look_at({3.4f, 2.9f, -4.7f}, {0, 0.6f, 0}, {0, 1, 0}, 40.0f, scenes_sun, 20.0f), {0, 0.6f, 0},
+            pinhole_camera({3.4f, 2.9f, -4.7f}, {0, 0.6f, 0}, {0, 1, 0}, 40.0f, frame_width, frame_height),
+            shadertoy_options::lit(scenes_sun, 20.0f), {0, 0.6f, 0},
             {1.5f, 1.5f, 1.5f}};
 }
 
@@ -132,8 +140,8 @@ inline scene<coral_field> coral()
     const model::coral_sequence c = model::build_coral(p);
     const bounding_sphere b = c.bound();
     return {"coral", coral_field(c, noise_warp(0.02f, 4.0f)),
-            view::look_at(b.center + vec3f{0.3f, 0.35f, -1.0f} * (1.15f * b.radius), b.center, {0, 1, 0}, 42.0f,
-                          scenes_sun, 8.0f * b.radius),
+            pinhole_camera(b.center + vec3f{0.3f, 0.35f, -1.0f} * (1.15f * b.radius), b.center, {0, 1, 0}, 42.0f, frame_width, frame_height),
+            shadertoy_options::lit(scenes_sun, 8.0f * b.radius),
             b.center, vec3f{b.radius, b.radius, b.radius}, {0.85f, 0.45f, 0.35f}};
 }
 
@@ -152,9 +160,10 @@ inline scene<model::grass_sequence> grass()
     static_assert(std::is_same_v<model::grass_sequence, sequence<torus_capsule, plane>>);
     scene<model::grass_sequence> s{
         "grass", built.sequence,
-        view::look_at(eye, eye + into * 3.0f - vec3f{0, 0.9f, 0}, {0, 1, 0}, 50.0f, scenes_sun, 40.0f),
+        pinhole_camera(eye, eye + into * 3.0f - vec3f{0, 0.9f, 0}, {0, 1, 0}, 50.0f, frame_width, frame_height),
+            shadertoy_options::lit(scenes_sun, 40.0f),
         eye + into * 3.0f, {2.0f, 0.5f, 2.0f}, {}, {{0.26f, 0.385f, 0.115f}, {0.30f, 0.26f, 0.16f}}};
-    s.camera.min_elevation = 10.0f; // blades reach the orbit's circle below 6 degrees
+    s.camera = s.camera.with_orbit({.min_elevation = 10.0f}); // blades reach the orbit's circle below 6 degrees
     return s;
 }
 
@@ -163,7 +172,8 @@ template <class F>
 scene<F> kifs_scene(const std::string& name, const F& f, const vec3f& eye, const vec3f& target, const vec3f& albedo,
                     const vec3f& sample_half)
 {
-    return {name, f, view::look_at(eye, target, {0, 1, 0}, 40.0f, fractals_light, 20.0f), {0, 0, 0}, sample_half, albedo};
+    return {name, f, pinhole_camera(eye, target, {0, 1, 0}, 40.0f, frame_width, frame_height),
+            shadertoy_options::lit(fractals_light, 20.0f), {0, 0, 0}, sample_half, albedo};
 }
 inline scene<square_fractal> kifs_square()
 {
@@ -199,9 +209,10 @@ inline scene<koch_curve> kifs_koch()
 inline scene<cube_singularity> cube_singularity_scene()
 {
     scene<cube_singularity> s{"cube_singularity", make_cube_singularity(1.0f),
-                              view::look_at({-2.2f, 0.35f, -2.2f}, {0, 0, 0}, {0, 1, 0}, 50.0f, fractals_light, 20.0f),
+                              pinhole_camera({-2.2f, 0.35f, -2.2f}, {0, 0, 0}, {0, 1, 0}, 50.0f, frame_width, frame_height),
+            shadertoy_options::lit(fractals_light, 20.0f),
                               {0, 0, 0}, {3.45f, 3.45f, 3.45f}, {0.75f, 0.50f, 0.85f}};
-    s.camera.max_elevation = 30.0f; // the diagonal's cubes (35.3 degrees) hold the eye's radius near 36
+    s.camera = s.camera.with_orbit({.max_elevation = 30.0f}); // the diagonal's cubes (35.3 degrees) hold the eye's radius near 36
     return s;
 }
 
@@ -215,9 +226,10 @@ inline scene<recursive_lotus> lotus()
     const double elevation = 75.0 * std::numbers::pi / 180.0, radius = 3.3;
     const vec3f eye = vec3f(vec3d{0.0, -std::cos(elevation), std::sin(elevation)} * radius);
     scene<recursive_lotus> s{"lotus", make_recursive_lotus(1.0f, 8),
-                             view::look_at(eye, {0, 0, 0}, {0, 0, 1}, 50.0f, {0.35f, -0.45f, 0.82f}, 20.0f),
+                             pinhole_camera(eye, {0, 0, 0}, {0, 0, 1}, 50.0f, frame_width, frame_height),
+            shadertoy_options::lit({0.35f, -0.45f, 0.82f}, 20.0f),
                              {0, 0, 0}, {2.0f, 2.0f, 2.0f}, {0.90f, 0.55f, 0.65f}};
-    s.camera.min_elevation = 65.0f;
+    s.camera = s.camera.with_orbit({.min_elevation = 65.0f});
     return s;
 }
 
@@ -272,8 +284,8 @@ template <class S>
 std::string file_text(const scene<S>& s, const file_kind& kind, const std::string& prefix = "krs_")
 {
     if (kind.target == target::shadertoy) {
-        if constexpr (kernel_shaded<S>) return shadertoy(s.field, s.camera, s.name, s.palette);
-        else return shadertoy(s.field, s.camera, s.name, s.albedo);
+        if constexpr (kernel_shaded<S>) return shadertoy(s.field, s.camera, s.program, s.name, s.palette);
+        else return shadertoy(s.field, s.camera, s.program, s.name, s.albedo);
     }
     emitter e({.target = kind.target, .mode = kind.mode, .data_name = s.name + "_data", .prefix = prefix});
     e.add(s.field, s.name);
@@ -281,14 +293,23 @@ std::string file_text(const scene<S>& s, const file_kind& kind, const std::strin
 }
 
 // The CPU reference of the scene's Shadertoy program (krs::glsl::render_reference) seen through
-// `camera` (s.camera is the program's at iTime = 0 and no drag; shadertoy_view gives the others):
-// RGBA floats, rows bottom-up. `clip_to_box` false traces primary rays unclipped.
+// `camera` (s.camera is the program's at iTime = 0 and no drag; s.camera.turned gives the others)
+// and with `program` (s.program unless given): RGBA floats, rows bottom-up. `clip_to_box` false
+// traces primary rays unclipped.
 template <class S>
-std::vector<float> reference_frame(const scene<S>& s, const view& camera, int width, int height,
+std::vector<float> reference_frame(const scene<S>& s, const pinhole_camera& camera, int width, int height,
                                    bool clip_to_box = true)
 {
-    if constexpr (kernel_shaded<S>) return render_reference(s.field, camera, width, height, clip_to_box, s.palette);
-    else return render_reference(s.field, camera, s.albedo, width, height, clip_to_box);
+    return reference_frame(s, camera, s.program, width, height, clip_to_box);
+}
+template <class S>
+std::vector<float> reference_frame(const scene<S>& s, const pinhole_camera& camera, const shadertoy_options& program,
+                                   int width, int height, bool clip_to_box = true)
+{
+    if constexpr (kernel_shaded<S>)
+        return render_reference(s.field, camera, program, width, height, clip_to_box, s.palette);
+    else
+        return render_reference(s.field, camera, program, s.albedo, width, height, clip_to_box);
 }
 
 // The sky alone through the scene's camera (the same view with nothing in reach): a pixel shows
@@ -296,9 +317,9 @@ std::vector<float> reference_frame(const scene<S>& s, const view& camera, int wi
 template <class S>
 std::vector<float> sky_frame(const scene<S>& s, int width, int height)
 {
-    view empty = s.camera;
+    shadertoy_options empty = s.program;
     empty.max_distance = 1e-6f;
-    return reference_frame(s, empty, width, height, false);
+    return reference_frame(s, s.camera, empty, width, height, false);
 }
 
 } // namespace krs::glsl::examples

@@ -108,6 +108,9 @@ struct box {
 
     // GLSL: five vec4s (center, oriented ? 1 : 0), (half extents, 0), (axis x, 0), (axis y, 0),
     // (axis z, 0). The orientation test is uniform, as in C++.
+    // The colour a Shadertoy program and its reference shade this kind with where the caller
+    // gives no palette (linear RGB; stone).
+    static constexpr vec3f default_albedo{0.70f, 0.68f, 0.64f};
     static constexpr std::string_view glsl_name = "krs_box";
     static constexpr std::string_view glsl_source = R"(vec3 krs_box_local(vec3 p, vec4 c, vec4 ax, vec4 ay, vec4 az) {
     vec3 d = p - c.xyz;

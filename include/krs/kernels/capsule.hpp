@@ -90,6 +90,9 @@ struct capsule {
 
     // GLSL: three vec4s (a, radius), (b - a, 1 / |b - a|^2), (perpendicular, 0): the stored float
     // values, so the GPU clamps the same t as the CPU.
+    // The colour a Shadertoy program and its reference shade this kind with where the caller
+    // gives no palette (linear RGB; bark: capsules are stems).
+    static constexpr vec3f default_albedo{0.40f, 0.26f, 0.15f};
     static constexpr std::string_view glsl_name = "krs_capsule";
     static constexpr std::string_view glsl_source = R"(vec3 krs_capsule_offset(vec3 p, vec4 a, vec4 ab) {
     vec3 ap = p - a.xyz;

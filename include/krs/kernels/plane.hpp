@@ -47,6 +47,9 @@ struct plane {
     bounding_box bound_box() const { return bounding_box::unbounded(); }
 
     // GLSL: one vec4 (unit normal, offset).
+    // The colour a Shadertoy program and its reference shade this kind with where the caller
+    // gives no palette (linear RGB; soil: planes are grounds).
+    static constexpr vec3f default_albedo{0.42f, 0.40f, 0.33f};
     static constexpr std::string_view glsl_name = "krs_plane";
     static constexpr std::string_view glsl_source = R"(float krs_plane_distance(vec3 p, vec4 n) { return (n.x * p.x - n.w) + n.y * p.y + n.z * p.z; }
 vec3 krs_plane_normal(vec3 p, vec4 n) { return n.xyz; }

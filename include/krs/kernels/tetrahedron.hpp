@@ -49,6 +49,9 @@ struct tetrahedron {
     bounding_box bound_box() const { return box_around(vec3d(-1, -1, -1), vec3d(1, 1, 1)); }
 
     // GLSL: the distance only (no parameters; 0.57735026 is inv_sqrt3_v<float>).
+    // The colour a Shadertoy program and its reference shade this kind with where the caller
+    // gives no palette (linear RGB; stone).
+    static constexpr vec3f default_albedo{0.70f, 0.68f, 0.64f};
     static constexpr std::string_view glsl_name = "krs_tetrahedron";
     static constexpr std::string_view glsl_source = R"(float krs_tetrahedron_distance(vec3 p) {
     float a = max(-p.x - p.y - p.z, p.x + p.y - p.z);

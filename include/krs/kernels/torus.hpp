@@ -108,6 +108,9 @@ public:
     }
 
     // GLSL: the same distance and normal; three vec4s: (center, R), (axis, r), (in-plane e1, 0).
+    // The colour a Shadertoy program and its reference shade this kind with where the caller
+    // gives no palette (linear RGB; stone).
+    static constexpr vec3f default_albedo{0.70f, 0.68f, 0.64f};
     static constexpr std::string_view glsl_name = "krs_torus";
     static constexpr std::string_view glsl_source = R"(float krs_torus_distance(vec3 p, vec4 t0, vec4 t1, vec4 t2) {
     vec3 q = p - t0.xyz;

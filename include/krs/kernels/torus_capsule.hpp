@@ -249,6 +249,9 @@ public:
     // GLSL: the chord-midpoint evaluation above, line for line. Seven vec4s:
     // (chord middle, kappa), (plane normal, cos alpha), (toward control, h sin alpha),
     // (start, radius), (end, major ? 1 : 0), (start tangent, 0), (end tangent, 0).
+    // The colour a Shadertoy program and its reference shade this kind with where the caller
+    // gives no palette (linear RGB; bark: bent capsules are stems).
+    static constexpr vec3f default_albedo{0.40f, 0.26f, 0.15f};
     static constexpr std::string_view glsl_name = "krs_torus_capsule";
     static constexpr std::string_view glsl_source = R"(float krs_torus_capsule_distance(vec3 p, vec4 t0, vec4 t1, vec4 t2, vec4 t3, vec4 t4, vec4 t5, vec4 t6) {
     vec3 u = p - t0.xyz;

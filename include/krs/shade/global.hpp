@@ -108,8 +108,8 @@ struct soft_shadow_options {
 //
 // `threshold` gives each lane its own hit threshold (and lift), e.g. its primary hit's, in place
 // of o.threshold: a packet of shading points at different depths. It must be > 0 in every lane in
-// `lanes`. It rides in the march state's threshold_bias over a zero floor, so the test is
-// d < 0 * t + 0 + threshold = threshold exactly, as the scalar call with o.threshold makes it.
+// `lanes`. It rides in the march state's threshold_bias (threshold_policy::inherited), so the
+// test is d < threshold exactly, as the scalar call with o.threshold makes it.
 template <field F, class T>
 T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_light, const soft_shadow_options& o,
               const mask_t<T>& lanes, const T& threshold)
@@ -118,11 +118,7 @@ T soft_shadow(const F& f, const vec3<T>& p, const vec3<T>& n, const vec3<T>& to_
     o.validate();
     if (any(lanes && !(threshold > T(0) && is_finite(threshold))))
         throw invalid_parameter("soft_shadow.threshold", "must be finite and > 0 in every lane shaded");
-    trace_options march;
-    march.pixel_footprint = 0.0f; // threshold(t) = 0 * t + 0, plus the lane's bias: see above
-    march.threshold_floor = 0.0f; // (not a valid floor for a tracer; here the bias is the threshold)
-    march.max_distance = o.max_distance;
-    march.max_steps = o.max_steps;
+    const trace_options march = inherited_threshold_options(o.max_distance, o.max_steps); // the lane's, see above
     const T k(S(o.hardness));
     // A lane left out ends before its start: start_march rejects it without a step. march_step
     // still evaluates the field in every lane, and a left-out lane's p, n, threshold and direction

@@ -26,6 +26,7 @@
 
 #include "krs/core/validate.hpp"
 #include "krs/sequence.hpp"
+#include "krs/trace/sphere_trace.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -52,7 +53,7 @@ S smoothing_threshold(S t, S pixel_footprint, S pixels = S(4), S floor = S(1e-6)
     require_non_negative("smoothing_threshold.pixel_footprint", pixel_footprint);
     require_non_negative("smoothing_threshold.pixels", pixels);
     require_positive("smoothing_threshold.floor", floor);
-    return pixels * pixel_footprint * t + floor;
+    return hit_threshold(pixels * pixel_footprint, t, floor);
 }
 
 // Algorithm 2 at world point x. `to_light` and `to_eye` are world directions (unit); threshold is

@@ -26,12 +26,9 @@ struct directional_light {
 template <field F, std::floating_point S>
 S hard_shadow(const F& f, const vec3<S>& p, const vec3<S>& n, const vec3<S>& to_light, S threshold, S max_distance)
 {
-    trace_options o;
-    o.pixel_footprint = 0.0f;
-    o.threshold_floor = float(threshold);
-    o.max_distance = float(max_distance);
+    const trace_options o = inherited_threshold_options(float(max_distance));
     const ray<S> r{p + n * (S(2) * threshold), to_light};
-    return sphere_trace(f, r, o).found ? S(0) : S(1);
+    return sphere_trace(f, r, S(0), S(o.max_distance), o, S(float(threshold))).found ? S(0) : S(1);
 }
 
 struct lambert_material {

@@ -26,11 +26,7 @@ mask_t<T> light_visible(const F& f, const vec3<T>& p, const vec3<T>& n, const ve
                         float max_distance, const mask_t<T>& lanes, int max_steps = 512)
 {
     using S = scalar_t<T>;
-    trace_options o;
-    o.pixel_footprint = 0.0f;
-    o.threshold_floor = 1e-30f; // the threshold is the per-lane bias
-    o.max_distance = max_distance;
-    o.max_steps = max_steps;
+    const trace_options o = inherited_threshold_options(max_distance, max_steps); // each lane's threshold
     const ray<T> r{p + n * (T(2) * threshold), vec3<T>(to_light)};
     const T start = select(lanes, T(0), T(std::numeric_limits<S>::infinity())); // others: rejected
     march_state<T> m = start_march(r, start, T(max_distance), o);

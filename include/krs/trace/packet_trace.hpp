@@ -107,13 +107,11 @@ template <bool Relaxed, class P, int Interleave, field F, class More, class Done
 stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done& done, const trace_options& options,
                               int refill_at)
 {
-    using S = scalar_t<P>;
     using ids = index_lanes<P>;
     constexpr std::size_t W = lane_count<P>;
     if (refill_at <= 0) refill_at = detail::default_refill(f, int(W));
     // The options as lane constants, made once: the step reads nothing else from them.
     const march_limits<P> limits(options);
-    const P inf(std::numeric_limits<S>::infinity());
     stream_stats stats;
     // Reports the rays set aside since the queue was last cleared.
     auto report_set_aside = [&] {
@@ -199,23 +197,12 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
             const std::size_t need = std::size_t(std::popcount(want));
             const std::uint64_t take = queue.size() >= need ? want : detail::lowest_bits(want, queue.size());
             queue.take(take, m.r, m.t, m.t_max, id[k]);
-            if constexpr (Relaxed) m.accepted_t = select(mask_from_bits<P>(take), m.t, m.accepted_t);
             filled |= take, want &= ~take;
         }
         live[k] = (live[k] & active) | filled;
         if (filled == 0) return active;
         const mask_t<P> fresh = mask_from_bits<P>(filled);
-        if constexpr (Relaxed) {
-            m.accepted_d = select(fresh, inf, m.accepted_d);
-            m.omega = select(fresh, P(options.omega), m.omega);
-        }
-        m.result.t = select(fresh, inf, m.result.t);
-        if constexpr (std::floating_point<P>)
-            m.result.steps = 0; // the one lane is fresh
-        else
-            m.result.steps = select(fresh, P(0.0f), m.result.steps);
-        // (As words of bits: a mask's `!` is not a single instruction with every xsimd target.)
-        m.result.found = mask_from_bits<P>(mask_bits<P>(m.result.found) & ~filled);
+        restart_lanes<Relaxed>(m, fresh, limits.omega);
         m.active = m.active || fresh;
         return active | filled;
     };
@@ -268,10 +255,9 @@ stream_stats trace_queue_with(const F& f, ray_queue<P>& queue, More& more, Done&
 //
 // Per packet the stream keeps a march_state, the lanes' ids (index lanes) and `live`, the lanes
 // holding a ray not yet reported. A harvest compresses the finished lanes' results into the
-// report buffer (reported to `done` a run at a time) and expands the queue's next rays into those lanes; of the state it then
-// resets only what start_march sets differently for a new ray (the ray, t, t_max, the step count,
-// found, active; and the over-relaxation's kept sphere and factor where omega > 1). No lane is
-// ever invalid here: the queue set those rays aside.
+// report buffer (reported to `done` a run at a time) and expands the queue's next rays into those
+// lanes (their ray, t and t_max); `restart_lanes`, start_march's own reset, then starts them, and
+// they are marked active. No lane is ever invalid here: the queue set those rays aside.
 //
 // The step is march_advance with the options made lane constants once (march_limits) and its
 // form (relaxed or plain) fixed per compiled loop; the packets' states stay in memory between

@@ -9,16 +9,44 @@
 //
 // The result never holds NaN: a ray with a non-finite origin or a zero/non-finite direction is
 // reported as a miss with `invalid` set, and a field value that is NaN ends that lane as a miss.
+//
+// The hit threshold is one rule, `hit_threshold` (footprint * t + floor), and a march says which
+// footprint and floor it wants by its `threshold_policy`: a primary ray's pixel cone, or a
+// shadow ray's threshold inherited from the hit it leaves (the lane's `threshold_bias`, the same
+// at every t). The GLSL twins (`hit_threshold_glsl`, `march_glsl`, `sphere_trace_glsl`) are the
+// C++ operation for operation, for a Shadertoy program (krs/glsl/shadertoy.hpp) and its CPU
+// reference, which is this tracer.
 
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
 #include "krs/trace/ray.hpp"
 
 #include <limits>
+#include <string>
+#include <string_view>
 #include <type_traits>
 #include <utility>
 
 namespace krs {
+
+// The hit threshold at depth t: an unbounding sphere smaller than footprint * t projects to less
+// than a pixel of angular size `footprint` (section 4), and `floor` keeps it above 0 near t = 0.
+// Every threshold of the library and of its GLSL (krs_hit_threshold below) is this function.
+template <class T>
+[[gnu::always_inline]] inline T hit_threshold(const T& footprint, const T& t, const T& floor)
+{
+    return footprint * t + floor;
+}
+
+// How a march's hit threshold is made (trace_options::threshold_by).
+enum class threshold_policy {
+    // hit_threshold(pixel_footprint, t, threshold_floor) (plus the lane's threshold_bias, 0 unless
+    // set): the threshold grows with the pixel's cone, as a primary ray's.
+    pixel_cone,
+    // Exactly each lane's threshold_bias, at every t: a shadow ray judges its occluders at the
+    // threshold of the hit it leaves (pixel_footprint and threshold_floor are not used).
+    inherited,
+};
 
 struct trace_options {
     int max_steps = 512;
@@ -30,6 +58,7 @@ struct trace_options {
     // spheres overlap, fall back to omega = 1 for the rest of the ray when they do not. 1 is plain
     // sphere tracing; useful values are about 1.2 ... 1.8, and it must stay below 2.
     float omega = 1.0f;
+    threshold_policy threshold_by = threshold_policy::pixel_cone;
 
     // Rejects impossible options; returns *this for chaining.
     const trace_options& validate() const
@@ -41,20 +70,39 @@ struct trace_options {
         if (!(max_distance > min_distance))
             throw invalid_parameter("trace_options.max_distance", "must exceed min_distance",
                                     detail::to_text(max_distance));
-        require_non_negative("trace_options.pixel_footprint", pixel_footprint);
-        require_positive("trace_options.threshold_floor", threshold_floor);
+        if (threshold_by == threshold_policy::pixel_cone) {
+            require_non_negative("trace_options.pixel_footprint", pixel_footprint);
+            require_positive("trace_options.threshold_floor", threshold_floor);
+        } else if (threshold_by != threshold_policy::inherited) {
+            throw invalid_parameter("trace_options.threshold_by", "must be pixel_cone or inherited",
+                                    std::to_string(int(threshold_by)));
+        }
         require_finite("trace_options.omega", omega);
         if (!(omega >= 1.0f && omega < 2.0f))
             throw invalid_parameter("trace_options.omega", "must be in [1, 2)", detail::to_text(omega));
         return *this;
     }
-    // The hit threshold at depth t.
+    // The footprint and floor the march puts into hit_threshold: the options' own, or 0 and 0 for
+    // an inherited threshold (0 * t + 0 + bias is the bias exactly, for every finite t).
+    float marched_footprint() const { return threshold_by == threshold_policy::inherited ? 0.0f : pixel_footprint; }
+    float marched_floor() const { return threshold_by == threshold_policy::inherited ? 0.0f : threshold_floor; }
+    // The hit threshold at depth t, before a lane's threshold_bias.
     template <class T>
     T threshold(const T& t) const
     {
-        return T(pixel_footprint) * t + T(threshold_floor);
+        return hit_threshold(T(marched_footprint()), t, T(marched_floor()));
     }
 };
+
+// A shadow ray's options: the threshold inherited from the hit (the lanes' threshold_bias).
+inline trace_options inherited_threshold_options(float max_distance, int max_steps = 512)
+{
+    trace_options o;
+    o.threshold_by = threshold_policy::inherited;
+    o.max_distance = max_distance;
+    o.max_steps = max_steps;
+    return o;
+}
 
 // Counters are ints for a scalar ray and float lanes for a packet (exact up to 2^24 steps).
 template <class T>
@@ -93,7 +141,7 @@ struct march_state {
     T accepted_t{};      // last sample whose unbounding sphere was kept (over-relaxation)
     T accepted_d{};      // its radius; +infinity before the first sample
     T omega{};           // this lane's relaxation factor (drops to 1 after a failed overlap test)
-    T threshold_bias{};  // added to the hit threshold (a shadow ray inherits its primary hit's)
+    T threshold_bias{};  // added to the hit threshold (threshold_policy::inherited: the whole of it)
     mask_t<T> active{};
     hit<T> result{};
 };
@@ -106,24 +154,46 @@ template <class T>
     return !(is_finite(r.origin) && is_finite(r.direction) && length_squared(r.direction) > T(0) && is_finite(t_start));
 }
 
+// What a new ray's lanes start with, besides their ray, t and t_max (which the caller has put in
+// place) and their active mask: no hit yet (t = +infinity, found false, no step), and the
+// over-relaxation's kept sphere at the start with an infinite radius and the options' omega.
+// start_march sets it for every lane; a packet tracer that puts new rays into finished lanes
+// (krs/trace/packet_trace.hpp) sets it for those lanes and marks them active. With Relaxed false
+// (a plain march's loop) the kept sphere and omega are left as they are: the plain step never
+// reads them. The lanes' threshold_bias is kept: a stream's rays share it.
+template <bool Relaxed, class T>
+[[gnu::always_inline]] inline void restart_lanes(march_state<T>& m, const mask_t<T>& fresh, const T& omega)
+{
+    using S = scalar_t<T>;
+    const T inf(std::numeric_limits<S>::infinity());
+    if constexpr (Relaxed) {
+        m.accepted_t = select(fresh, m.t, m.accepted_t);
+        m.accepted_d = select(fresh, inf, m.accepted_d);
+        m.omega = select(fresh, omega, m.omega);
+    }
+    m.result.t = select(fresh, inf, m.result.t);
+    if constexpr (std::floating_point<T>) {
+        if (fresh) m.result.steps = 0, m.result.found = false;
+    } else {
+        m.result.steps = select(fresh, T(0), m.result.steps);
+        // (As words of bits: a mask's `!` is not a single instruction with every xsimd target.)
+        m.result.found = mask_from_bits<T>(mask_bits<T>(m.result.found) & ~mask_bits<T>(fresh));
+    }
+}
+
 // Starts a march along r from t_start (per lane) to t_max.
 template <class T>
 march_state<T> start_march(const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options)
 {
-    using S = scalar_t<T>;
     march_state<T> m;
     m.r = r;
     m.result.invalid = unusable_ray(r, t_start);
     // A lane whose start is already past its end (a ray clipped away, krs/trace/box_clip.hpp)
     // misses without a step.
     m.active = !m.result.invalid && t_start <= t_max;
-    m.result.found = m.active && !m.active; // all false, in the mask's own type
-    m.result.t = T(std::numeric_limits<S>::infinity());
     m.t = t_start;
     m.t_max = t_max;
-    m.accepted_t = t_start;
-    m.accepted_d = T(std::numeric_limits<S>::infinity());
-    m.omega = T(options.omega);
+    restart_lanes<true>(m, m.active || !m.active, T(options.omega)); // every lane
     return m;
 }
 
@@ -136,7 +206,8 @@ struct march_limits {
     count_t<T> max_steps;
     bool relaxed;
     explicit march_limits(const trace_options& o)
-        : footprint(o.pixel_footprint), floor(o.threshold_floor), omega(o.omega), max_steps{}, relaxed(o.omega > 1.0f)
+        : footprint(o.marched_footprint()), floor(o.marched_floor()), omega(o.omega), max_steps{},
+          relaxed(o.omega > 1.0f)
     {
         if constexpr (std::floating_point<T>)
             max_steps = o.max_steps;
@@ -180,7 +251,7 @@ template <bool Relaxed, class T>
         m.result.steps += was_active ? 1 : 0;
     else
         m.result.steps = select(was_active, m.result.steps + T(1), m.result.steps);
-    const T threshold = c.footprint * m.t + c.floor + m.threshold_bias;
+    const T threshold = hit_threshold(c.footprint, m.t, c.floor) + m.threshold_bias;
     mask_t<T> accept = was_active;
     if constexpr (Relaxed) {
         const mask_t<T> relaxed = m.omega > T(1);
@@ -264,14 +335,72 @@ hit<T> sphere_trace(const F& f, const ray<T>& r, const trace_options& options)
     return march_result(m);
 }
 
-// The same with a per-lane start (a tile prepass gives every ray its own) and far limit.
+// The same with a per-lane start (a tile prepass gives every ray its own) and far limit, and a
+// per-lane threshold_bias (a shadow ray's inherited threshold, or one added to the pixel cone's).
 template <field F, class T>
-hit<T> sphere_trace(const F& f, const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options)
+hit<T> sphere_trace(const F& f, const ray<T>& r, const T& t_start, const T& t_max, const trace_options& options,
+                    const T& threshold_bias = T(0))
 {
     options.validate();
     march_state<T> m = start_march(r, t_start, t_max, options);
+    m.threshold_bias = threshold_bias;
     while (any(m.active)) march_step(f, m, options);
     return march_result(m);
+}
+
+// ---- GLSL ----------------------------------------------------------------------------------
+//
+// hit_threshold as GLSL.
+inline constexpr std::string_view hit_threshold_glsl = R"(// krs::hit_threshold: the hit threshold at depth t.
+float krs_hit_threshold(float footprint, float t, float thresholdFloor) {
+    return footprint * t + thresholdFloor;
+}
+)";
+
+// One ray's march_state and march_advance in the plain form (omega = 1), for a threshold of
+// threshold_policy::pixel_cone plus threshold_bias (inherited: footprint and floor 0). A hit ends
+// the march with found; a NaN or infinite distance makes t NaN or infinite, which ends it as a
+// miss as the C++ does (the C++ keeps t; a miss's t is not used). Needs hit_threshold_glsl.
+inline constexpr std::string_view march_glsl = R"(// krs::march_state of one ray (the plain form: omega = 1).
+struct krs_march {
+    vec3 origin;
+    vec3 direction;
+    float t;
+    float t_max;
+    float threshold_bias;
+    bool marching; // march_state::active (`active` is a GLSL reserved word)
+    bool found;
+    int steps;
+};
+// krs::start_march (the ray is usable: a camera's or a shadow ray).
+krs_march krs_start_march(vec3 origin, vec3 direction, float t_start, float t_max, float threshold_bias) {
+    return krs_march(origin, direction, t_start, t_max, threshold_bias, t_start <= t_max, false, 0);
+}
+// krs::march_advance, given the field's value d at the sample point m.t.
+void krs_march_advance(inout krs_march m, float d, float footprint, float thresholdFloor, int max_steps) {
+    m.steps += 1;
+    if (d < krs_hit_threshold(footprint, m.t, thresholdFloor) + m.threshold_bias) {
+        m.found = true;
+        m.marching = false;
+        return;
+    }
+    m.t += d;
+    m.marching = m.t <= m.t_max && m.steps < max_steps;
+}
+)";
+
+// krs::sphere_trace (per-lane start, far limit and bias) of one ray through the GLSL field
+// `float field(vec3 p)`, as the GLSL function `function`. Needs march_glsl.
+inline std::string sphere_trace_glsl(const std::string& function, const std::string& field)
+{
+    return "// krs::sphere_trace through " + field + ".\n"
+           "krs_march " + function + "(vec3 origin, vec3 direction, float t_start, float t_max, float footprint,\n"
+           "        float thresholdFloor, float threshold_bias, int max_steps) {\n"
+           "    krs_march m = krs_start_march(origin, direction, t_start, t_max, threshold_bias);\n"
+           "    while (m.marching)\n"
+           "        krs_march_advance(m, " + field + "(m.origin + m.direction * m.t), footprint, thresholdFloor, max_steps);\n"
+           "    return m;\n"
+           "}\n";
 }
 
 } // namespace krs
