@@ -634,7 +634,7 @@ TEST_CASE("shadertoy grass: blades green, ground soil (the scene's palette, not 
     CHECK(occurrences(text, "if (kind == 0u) return " + krs::glsl::vec3_literal(palette[0]) + ";") == 1);
 }
 
-TEST_CASE("glsl distance_only: no locate, shade or their structs; a gradient-shaded program has none")
+TEST_CASE("glsl distance_only: no locate, shade or their structs, a gradient-shaded program has none")
 {
     // The coral's warp holds a sequence: without distance_only its program carried the sequence's
     // _locate and _shade and the krs_location structs, none of which it calls.

@@ -531,7 +531,7 @@ TEST_CASE("glslangValidator accepts the emitted hypertree volume marcher")
                 spirv_files);
 }
 
-TEST_CASE("hypertree GLSL: every global name starts with the chosen prefix; bad prefixes and names are refused by name")
+TEST_CASE("hypertree GLSL: every global name starts with the chosen prefix, bad prefixes and names are refused by name")
 {
     const small_tree& t = tree();
     const packed_bricks bricks = pack_bricks(t.dense);
@@ -676,7 +676,7 @@ TEST_CASE("hypertree GLSL frame on llvmpipe matches the CPU marcher (specular, t
     CHECK(a.covered > a.pixels / 10);
 }
 
-TEST_CASE("hypertree GLSL frame on llvmpipe matches the CPU marcher (box normals, line flow; specular)")
+TEST_CASE("hypertree GLSL frame on llvmpipe matches the CPU marcher (box normals, line flow, specular)")
 {
     march_options boxes = varied_options();
     boxes.normals_by = normal_method::part_boxes;

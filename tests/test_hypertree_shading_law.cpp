@@ -172,7 +172,7 @@ TEST_CASE("shading law: transmittance through a slab of constant density is (1 -
     }
 }
 
-TEST_CASE("shading law: the structure-flow normal of a rod is radial about its axis; Lambert is max(0, n.l) wrapped")
+TEST_CASE("shading law: the structure-flow normal of a rod is radial about its axis, Lambert is max(0, n.l) wrapped")
 {
     // One first-level part, a rod along y (cells x, z in [10, 12), y in [4, 28)): centroid (11, 16, 11),
     // principal axis y. With one flow the blended normal is the radial direction about that axis.
@@ -261,7 +261,7 @@ TEST_CASE("shading law: Blinn-Phong is specular x max(0, n.h)^shininess x shadow
     }
 }
 
-TEST_CASE("shading law: DEPTHCOLOR spans interpolate linearly in depth; outside every span the nearest end")
+TEST_CASE("shading law: DEPTHCOLOR spans interpolate linearly in depth, outside every span the nearest end")
 {
     const dvec a{0.1, 0.2, 0.3}, b{0.5, 0.1, 0.9}, c{0.0, 1.0, 0.0}, d{0.8, 0.8, 0.2};
     const depth_colors colors({{2, 5, {0.1f, 0.2f, 0.3f}, {0.5f, 0.1f, 0.9f}}, {9, 13, {0.0f, 1.0f, 0.0f}, {0.8f, 0.8f, 0.2f}}});

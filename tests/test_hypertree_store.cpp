@@ -174,7 +174,7 @@ TEST_CASE("stores: the bit array's occupancy bits and the partitioned store's pa
     }
 }
 
-TEST_CASE("zeroed arrays start zero and copy deeply; copied stores answer like their originals")
+TEST_CASE("zeroed arrays start zero and copy deeply, copied stores answer like their originals")
 {
     hypertree::zeroed_array<std::uint64_t> a(1 << 20); // 8 MiB: calloc maps fresh pages
     REQUIRE(a.size() == std::size_t(1) << 20);

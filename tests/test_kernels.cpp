@@ -636,7 +636,7 @@ TEST_CASE_TEMPLATE("capsule: distance against brute force, never overestimates, 
     }
 }
 
-TEST_CASE("capsule: bound holds the surface; packet lanes equal the scalar path")
+TEST_CASE("capsule: bound holds the surface, packet lanes equal the scalar path")
 {
     for (const capsule_case& c : capsule_cases()) {
         check_bound(c);
@@ -674,7 +674,7 @@ TEST_CASE("box: a flat box matches brute force (its inside is empty)")
     }
 }
 
-TEST_CASE("box: bound holds the surface; packet lanes equal the scalar path")
+TEST_CASE("box: bound holds the surface, packet lanes equal the scalar path")
 {
     for (const box_case& c : box_cases()) {
         check_bound(c);
@@ -707,7 +707,7 @@ TEST_CASE_TEMPLATE("torus_capsule: distance against brute force, never overestim
     }
 }
 
-TEST_CASE("torus_capsule: bound holds the surface; packet lanes equal the scalar path")
+TEST_CASE("torus_capsule: bound holds the surface, packet lanes equal the scalar path")
 {
     for (const torus_case& c : torus_cases()) {
         check_bound(c);
@@ -915,7 +915,7 @@ TEST_CASE_TEMPLATE("torus: distance against brute force, never overestimates, no
     check_against_reference<T>(ring_case({0, 0, 0}, {1, 1, 0}, 0.0f, 0.4f, "R = 0: a ball"));
 }
 
-TEST_CASE("torus: bound holds the surface; packet lanes equal the scalar path")
+TEST_CASE("torus: bound holds the surface, packet lanes equal the scalar path")
 {
     for (const ring_case& c : ring_cases()) {
         check_bound(c);
@@ -1006,7 +1006,7 @@ TEST_CASE_TEMPLATE("tetrahedron: zero set is the surface, never overestimates, n
     check_normal<T>(c);
 }
 
-TEST_CASE("tetrahedron: bounds hold the surface; packet lanes equal the scalar path")
+TEST_CASE("tetrahedron: bounds hold the surface, packet lanes equal the scalar path")
 {
     const tetrahedron_case c;
     check_bound(c);

@@ -349,7 +349,7 @@ TEST_CASE("mesh: bad options and fields are refused by name")
                          krs::invalid_parameter);
 }
 
-TEST_CASE("mesh files: PLY and OBJ hold the mesh exactly; bad paths and meshes leave no file")
+TEST_CASE("mesh files: PLY and OBJ hold the mesh exactly, bad paths and meshes leave no file")
 {
     const krs::sphere s({0, 0, 0}, 1.0f);
     krs::mesh_options o;

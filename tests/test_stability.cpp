@@ -337,7 +337,7 @@ TEST_CASE("magnitude policy: the documented limits and the messages agree")
     CHECK(krs::require_magnitude("p", vec3f{0, 0, limit}).z == limit);
 }
 
-TEST_CASE("magnitude policy: kernels and mirrors at the limit are finite everywhere in reach; past it refused")
+TEST_CASE("magnitude policy: kernels and mirrors at the limit are finite everywhere in reach, past it refused")
 {
     const vec3f far_x{limit, 0, 0}, past_x{above_limit, 0, 0};
     // Sphere: a ball of radius 1e9 centered 1e9 away.
@@ -414,7 +414,7 @@ TEST_CASE("magnitude policy: 64 mirrors at the limit fold points to 1.3e11 and t
     CHECK(non_finite_within_reach(s) == 0);
 }
 
-TEST_CASE("magnitude policy: fold steps at the limit; KIFS iterations bounded by how far they magnify")
+TEST_CASE("magnitude policy: fold steps at the limit, KIFS iterations bounded by how far they magnify")
 {
     refused([] { krs::plane_fold({1, 0, 0}, above_limit); }, "plane_fold.offset", "[-1e9, 1e9]");
     refused([] { krs::translate_step({0, above_limit, 0}); }, "translate_step.offset", "within 1e9");
