@@ -47,6 +47,7 @@
 #include "hypertree/store/store.hpp"
 #include "krs/core/bounds.hpp"
 #include "krs/core/lanes.hpp"
+#include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
 
 #include <algorithm>
@@ -349,18 +350,19 @@ struct bound_test {
     {
         bound_test t;
         t.by = by;
-        const auto down = [](double v) { float f = float(v); return double(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f; };
-        const auto up = [](double v) { float f = float(v); return double(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f; };
+        // Each bound is rounded outward to float by the library's one rule (krs/core/rounding.hpp).
+        using krs::float_at_least, krs::float_at_most;
         // The center is already float (krs::bound_around grew the radius by its rounding). holds()
         // computes dx^2 + dy^2 + dz^2 in float: three differences, three squares and two sums, a
         // relative error below 6 u = 3.6e-7 (u = 2^-24) for the point's own float position. So r^2
         // is taken in double, grown by 1e-6 relative (half a micron per metre of radius) and
         // rounded up: a point the double sphere holds is never rejected.
         const auto add_sphere = [&](const krs::bounding_sphere& s) {
-            t.spheres.push_back({s.center.x, s.center.y, s.center.z, up(double(s.radius) * double(s.radius) * (1 + 1e-6))});
+            t.spheres.push_back({s.center.x, s.center.y, s.center.z, float_at_least(double(s.radius) * double(s.radius) * (1 + 1e-6))});
         };
         const auto add_box = [&](const world_box& b) {
-            t.boxes.push_back({down(b.lo.x), down(b.lo.y), down(b.lo.z), up(b.hi.x), up(b.hi.y), up(b.hi.z)});
+            t.boxes.push_back({float_at_most(b.lo.x), float_at_most(b.lo.y), float_at_most(b.lo.z), float_at_least(b.hi.x),
+                               float_at_least(b.hi.y), float_at_least(b.hi.z)});
         };
         switch (by) {
         case bound_method::box: break;
