@@ -224,6 +224,16 @@ TEST_CASE("GLSL of every field type matches the C++ on llvmpipe, and every type 
                krs::bounding_sphere{{-1.0f, 0.0f, 0.5f}, 0.25f}},
         0.1f);
     check_distance("zones", cut, {0, 0.5f, 0}, {1.2f, 1.2f, 1.2f}, {"with_empty_zones"});
+    // Smooth blends (krs/compose/smooth.hpp): every operation, both shapes, the ball and block
+    // overlapping so every seam is sampled.
+    const vec3f seam{0.3f, 0.4f, 0}, reach{1.2f, 1.2f, 1.2f};
+    check_distance("smooth_union", krs::smooth_union(ball, block, {0.2f}), seam, reach, {"smooth_blend"});
+    check_distance("smooth_union_exp", krs::smooth_union(ball, block, {0.2f, krs::blend_shape::exponential}), seam,
+                   reach, {"smooth_blend"});
+    check_distance("smooth_intersect_exp",
+                   krs::smooth_intersection(ball, block, {0.15f, krs::blend_shape::exponential}), seam, reach,
+                   {"smooth_blend"});
+    check_distance("smooth_subtract", krs::smooth_subtraction(ball, block, {0.1f}), seam, reach, {"smooth_blend"});
 
     // A KIFS with every fold step kind.
     using steps = krs::fold_program<krs::abs_fold<krs::fold_x | krs::fold_z>, krs::plane_fold, krs::sort_fold,

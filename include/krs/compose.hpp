@@ -3,6 +3,7 @@
 // procedural bounds and empty zones (4.2, 6.4), and depth composition (6.3).
 
 #include "krs/compose/depth.hpp"
+#include "krs/compose/smooth.hpp"
 #include "krs/compose/union.hpp"
 #include "krs/compose/warp.hpp"
 #include "krs/compose/zones.hpp"
