@@ -8,6 +8,10 @@
 #   bad_glsl     a --glsl file that does not compile: status 1 and the compiler's message, naming the
 #                undeclared function, on stderr; no screenshot written
 #   no_display   no DISPLAY and no virtual display: status 1 and the one line saying so
+#   accumulate   a program red left of x = 8.5 and green below y = 4.5: the plain frame's pixel at
+#                (8, 4) sees neither (its center is on both edges); 16 accumulated samples see each
+#                edge over about half the pixel: 0.5 within 1/16 (the jitter's 15 Halton points and
+#                the center split each axis evenly up to one sample), every other pixel unchanged
 #   reload       the viewer started on a broken file and waiting (--exit-after-reload); once it has
 #                reported the error the file is rewritten with a good program of one colour, and the
 #                frame it writes must be that colour
@@ -66,6 +70,19 @@ no_display)
     must_say "$work/err.txt" "krs_view: cannot open a window: "
     must_say "$work/err.txt" "; run under xvfb-run or with a display"
     [ "$(wc -l <"$work/err.txt")" -eq 1 ] || { cat "$work/err.txt" >&2; fail "more than one line on stderr"; }
+    ;;
+accumulate)
+    need_xvfb
+    printf 'void mainImage(out vec4 c, in vec2 p) { c = vec4(p.x < 8.5 ? 1.0 : 0.0, p.y < 4.5 ? 1.0 : 0.0, 0.0, 1.0); }\n' \
+        >"$work/edges.glsl"
+    for run in plain accumulated; do
+        flag=() && [ "$run" = accumulated ] && flag=(--accumulate)
+        "$xvfb_run" -a "$view" --glsl "$work/edges.glsl" --frames 16 "${flag[@]}" --screenshot "$work/$run.png" \
+            --width 16 --height 8 || fail "krs_view ($run) failed"
+    done
+    "$check" coverage "$work/plain.png" 8 4 0 0 || fail "the plain frame is not the program at the pixel centers"
+    # 255 (1/2 -+ 1/16), rounded outward
+    "$check" coverage "$work/accumulated.png" 8 4 111 144 || fail "the accumulated frame is not the pixels' coverage"
     ;;
 reload)
     need_xvfb

@@ -4,6 +4,13 @@
 //                                                            every channel within 2/255
 //   check_view_frame colour FRAME.png R G B                 every pixel within 2/255 of the bytes
 //                                                            R G B
+//   check_view_frame coverage FRAME.png X Y LOW HIGH        the frame of a program whose red is 1
+//                                                            left of x = X + 1/2 and green 1 below
+//                                                            y = Y + 1/2 (pixels, y up), else 0:
+//                                                            red 255 left of column X and 0 right
+//                                                            of it, green so about row Y, blue 0,
+//                                                            and the half-covered column's red and
+//                                                            row's green bytes in [LOW, HIGH]
 //
 // 2/255 is the bound the GLSL tests hold the Shadertoy programs' frames to against the CPU
 // reference (tests/test_glsl_gpu.cpp): the kernels' normals and lengths use GLSL builtins a few ulp
@@ -103,7 +110,32 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "not every pixel is the colour\n");
         return 1;
     }
+    if (mode == "coverage" && argc == 7) {
+        const std::optional<image> frame = read_rgb(argv[2]);
+        if (!frame) return 1;
+        const int column = std::atoi(argv[3]), row = std::atoi(argv[4]), low = std::atoi(argv[5]), high = std::atoi(argv[6]);
+        long wrong = 0;
+        const auto expect = [&](int x, int y, int c, int got, int at, int position) {
+            const bool ok = position < at ? got == 255 : position > at ? got == 0 : got >= low && got <= high;
+            if (!ok && wrong++ < 5)
+                std::fprintf(stderr, "pixel (%d, %d from the bottom) channel %d is %d\n", x, y, c, got);
+        };
+        for (int r = 0; r < frame->height; ++r)
+            for (int x = 0; x < frame->width; ++x) {
+                const int y = frame->height - 1 - r; // files store the top row first
+                const unsigned char* p = &frame->rgb[(std::size_t(r) * std::size_t(frame->width) + std::size_t(x)) * 3];
+                expect(x, y, 0, p[0], column, x);
+                expect(x, y, 1, p[1], row, y);
+                expect(x, y, 2, p[2], -1, 0); // blue: 0 everywhere
+            }
+        const int y_byte = frame->rgb[(std::size_t(frame->height - 1 - row) * std::size_t(frame->width)) * 3 + 1];
+        const int x_byte = frame->rgb[std::size_t(column) * 3];
+        std::printf("%s: the half-covered column's red %d/255, row's green %d/255 (allowed [%d, %d]); %ld wrong values\n",
+                    argv[2], x_byte, y_byte, low, high, wrong);
+        return wrong == 0 ? 0 : 1;
+    }
     std::fprintf(stderr, "usage: check_view_frame match FRAME.png REFERENCE.png PERCENT\n"
-                         "       check_view_frame colour FRAME.png R G B\n");
+                         "       check_view_frame colour FRAME.png R G B\n"
+                         "       check_view_frame coverage FRAME.png X Y LOW HIGH\n");
     return 2;
 }
