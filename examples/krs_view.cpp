@@ -64,32 +64,41 @@ struct options {
 options parse(int argc, char** argv)
 {
     options o;
-    example::command_line args("krs_view", "A window running a scene's Shadertoy program (or your own) in real time. "
-                                           "Keys: space pauses time, P writes the frame as PNG, Esc quits; drag to turn.");
+    example::command_line args(
+        "krs_view", "A window running a scene's Shadertoy program (or your own) in real time. "
+                    "Keys: space pauses time, P writes the frame as PNG, Esc quits; drag to turn.");
     args.choice("--scene", o.scene, ex::scene_names(), "the example scene whose program runs");
-    args.text("--glsl", o.glsl, "run this Shadertoy program (mainImage) instead, reloaded when it changes", "FILE");
+    args.text("--glsl", o.glsl,
+              "run this Shadertoy program (mainImage) instead, reloaded when it changes", "FILE");
     args.integer("--width", o.width, 1, 16384, "the frame's width in pixels");
     args.integer("--height", o.height, 1, 16384, "the frame's height in pixels");
-    args.number("--time", o.time, 0.0, 1e6, false, "iTime at the start, seconds (headless: throughout)");
-    args.integer("--frames", o.frames, 1, 1000000, "headless: draw this many frames, print their time and exit");
-    args.text("--screenshot", o.screenshot, "headless: write the last frame to this PNG; interactive: where P writes "
-                                            "(default krs_view.png)",
+    args.number("--time", o.time, 0.0, 1e6, false,
+                "iTime at the start, seconds (headless: throughout)");
+    args.integer("--frames", o.frames, 1, 1000000,
+                 "headless: draw this many frames, print their time and exit");
+    args.text("--screenshot", o.screenshot,
+              "headless: write the last frame to this PNG; interactive: where P writes "
+              "(default krs_view.png)",
               "FILE.png");
-    args.app().add_flag("--accumulate", o.accumulate, "headless: each frame adds a jittered sample to the mean");
+    args.app().add_flag("--accumulate", o.accumulate,
+                        "headless: each frame adds a jittered sample to the mean");
     args.number("--exit-after-reload", o.reload_seconds, 0.0, 3600.0, true,
-                "headless, with --glsl: wait up to this many seconds for the file to change and compile, then draw "
-                "--frames of the new program");
+                "headless, with --glsl: wait up to this many seconds for the file to change and "
+                "compile, then draw --frames of the new program");
     args.parse(argc, argv);
     const auto given = [&](const char* name) { return args.app().count(name) > 0; };
-    if (given("--glsl") && given("--scene")) args.fail("--glsl, --scene: run one program, a file or a scene");
+    if (given("--glsl") && given("--scene"))
+        args.fail("--glsl, --scene: run one program, a file or a scene");
     if (given("--glsl") && !std::filesystem::is_regular_file(o.glsl))
         args.fail("--glsl: '" + o.glsl + "' is not a file");
-    if (given("--accumulate") && !o.headless()) args.fail("--accumulate: applies to --frames (a window accumulates when still)");
+    if (given("--accumulate") && !o.headless())
+        args.fail("--accumulate: applies to --frames (a window accumulates when still)");
     if (given("--exit-after-reload") && (!o.headless() || o.glsl.empty()))
         args.fail("--exit-after-reload: needs --glsl FILE and --frames N");
     if (o.screenshot.empty() && !o.headless()) o.screenshot = "krs_view.png";
-    if (!o.screenshot.ends_with(".png"))
-        args.fail("--screenshot: '" + o.screenshot + "' is not a .png file (frames are written as PNG)");
+    if (!o.screenshot.empty() && !o.screenshot.ends_with(".png"))
+        args.fail("--screenshot: '" + o.screenshot +
+                  "' is not a .png file (frames are written as PNG)");
     return o;
 }
 
@@ -152,9 +161,10 @@ struct viewer {
 
 bool write_frame(const example::progressive_frame& frame, const std::string& path)
 {
-    if (!example::write_png_bytes(path, frame.width(), frame.height(), frame.read_rgb())) return false;
-    std::printf("krs_view: wrote the %dx%d frame (%u sample%s) to %s\n", frame.width(), frame.height(), frame.samples(),
-                frame.samples() == 1 ? "" : "s", path.c_str());
+    if (!example::write_png_bytes(path, frame.width(), frame.height(), frame.read_rgb()))
+        return false;
+    std::printf("krs_view: wrote the %dx%d frame (%u sample%s) to %s\n", frame.width(),
+                frame.height(), frame.samples(), frame.samples() == 1 ? "" : "s", path.c_str());
     return true;
 }
 
@@ -185,8 +195,10 @@ int run_headless(viewer& v, example::progressive_frame& frame)
         const clock_type::time_point start = clock_type::now();
         while (v.reloads == 0) {
             if (milliseconds_since(start) > 1000.0 * double(o.reload_seconds)) {
-                std::fprintf(stderr, "krs_view: %s did not change into a program that compiles within %g s\n",
-                             v.name.c_str(), double(o.reload_seconds));
+                std::fprintf(
+                    stderr,
+                    "krs_view: %s did not change into a program that compiles within %g s\n",
+                    v.name.c_str(), double(o.reload_seconds));
                 return 1;
             }
             std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -207,10 +219,13 @@ int run_headless(viewer& v, example::progressive_frame& frame)
         (i == 0 ? first : rest) += ms;
         if (i > 0) fastest = std::min(fastest, ms);
     }
-    std::printf("krs_view: %s: %d frame%s of %dx%d on %s: the first %.2f ms (with the driver's compile)", v.name.c_str(),
-                o.frames, o.frames == 1 ? "" : "s", o.width, o.height,
-                reinterpret_cast<const char*>(glGetString(GL_RENDERER)), first);
-    if (o.frames > 1) std::printf(", then %.2f ms per frame (mean; fastest %.2f ms)", rest / (o.frames - 1), fastest);
+    std::printf(
+        "krs_view: %s: %d frame%s of %dx%d on %s: the first %.2f ms (with the driver's compile)",
+        v.name.c_str(), o.frames, o.frames == 1 ? "" : "s", o.width, o.height,
+        reinterpret_cast<const char*>(glGetString(GL_RENDERER)), first);
+    if (o.frames > 1)
+        std::printf(", then %.2f ms per frame (mean; fastest %.2f ms)", rest / (o.frames - 1),
+                    fastest);
     std::printf("\n");
     if (!o.screenshot.empty() && !write_frame(frame, o.screenshot)) return 1;
     return 0;
@@ -224,9 +239,12 @@ void on_key(GLFWwindow* window, int key, int, int action, int)
 {
     if (action != GLFW_PRESS) return;
     auto* requests = static_cast<key_requests*>(glfwGetWindowUserPointer(window));
-    if (key == GLFW_KEY_ESCAPE) glfwSetWindowShouldClose(window, GLFW_TRUE);
-    else if (key == GLFW_KEY_SPACE) requests->toggle_pause = true;
-    else if (key == GLFW_KEY_P) requests->screenshot = true;
+    if (key == GLFW_KEY_ESCAPE)
+        glfwSetWindowShouldClose(window, GLFW_TRUE);
+    else if (key == GLFW_KEY_SPACE)
+        requests->toggle_pause = true;
+    else if (key == GLFW_KEY_P)
+        requests->screenshot = true;
 }
 
 int run_window(viewer& v, example::gl_window& window, example::progressive_frame& frame)
@@ -259,7 +277,8 @@ int run_window(viewer& v, example::gl_window& window, example::progressive_frame
         }
         frame.resize(width, height);
         const auto [x, y] = window.pointer();
-        mouse.update(glfwGetMouseButton(window.handle(), GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS, x, y);
+        mouse.update(glfwGetMouseButton(window.handle(), GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS, x,
+                     y);
         if (!paused) time += delta;
         // Still (paused, and the pointer's iMouse as it was): one more sample of the same frame.
         // (A new size or program has already dropped the samples.)
@@ -286,10 +305,13 @@ int run_window(viewer& v, example::gl_window& window, example::progressive_frame
         }
         if (milliseconds_since(title_at) > 500.0 || shown_error != v.error) {
             char title[512];
-            std::snprintf(title, sizeof title, "krs_view: %s - %dx%d - %.1f ms per frame%s - %u sample%s", v.name.c_str(),
-                          width, height, drawn > 0 ? drawing_ms / drawn : 0.0, paused ? " - paused" : "",
-                          frame.samples(), frame.samples() == 1 ? "" : "s");
-            window.set_title(v.error.empty() ? title : std::string(title) + " - compile error: " + first_line(v.error));
+            std::snprintf(
+                title, sizeof title, "krs_view: %s - %dx%d - %.1f ms per frame%s - %u sample%s",
+                v.name.c_str(), width, height, drawn > 0 ? drawing_ms / drawn : 0.0,
+                paused ? " - paused" : "", frame.samples(), frame.samples() == 1 ? "" : "s");
+            window.set_title(v.error.empty()
+                                 ? title
+                                 : std::string(title) + " - compile error: " + first_line(v.error));
             shown_error = v.error;
             title_at = clock_type::now();
             drawing_ms = 0, drawn = 0;
@@ -320,13 +342,15 @@ int main(int argc, char** argv)
             v.watch.emplace(o.glsl);
             v.poll();
             if (!v.program && !v.error.empty() && o.reload_seconds > 0)
-                std::fprintf(stderr, "krs_view: waiting up to %g s for %s to change\n", double(o.reload_seconds),
-                             o.glsl.c_str());
+                std::fprintf(stderr, "krs_view: waiting up to %g s for %s to change\n",
+                             double(o.reload_seconds), o.glsl.c_str());
         }
         if (o.headless()) return run_headless(v, frame);
         return run_window(v, window, frame);
     } catch (const example::window_error& e) {
-        std::fprintf(stderr, "krs_view: cannot open a window: %s; run under xvfb-run or with a display\n", e.what());
+        std::fprintf(stderr,
+                     "krs_view: cannot open a window: %s; run under xvfb-run or with a display\n",
+                     e.what());
         return 1;
     }
 }

@@ -10,7 +10,8 @@
 
 namespace example {
 
-// The full-screen triangle from gl_VertexID alone (a core context still needs a vertex array bound).
+// The full-screen triangle from gl_VertexID alone (a core context still needs a vertex array
+// bound).
 inline const char* const fullscreen_triangle_vertex_shader = R"(#version 330 core
 void main() {
     vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
@@ -36,7 +37,8 @@ public:
 
     // Compiles and links; on failure returns an empty program and puts the log (which stage, then
     // the driver's own text) in `log`.
-    static gl_program build(const std::string& vertex, const std::string& fragment, std::string& log)
+    static gl_program build(const std::string& vertex, const std::string& fragment,
+                            std::string& log)
     {
         log.clear();
         const GLuint v = compile(GL_VERTEX_SHADER, vertex, "vertex shader", log);

@@ -90,7 +90,8 @@ public:
         int ww = 1, wh = 1;
         glfwGetWindowSize(window_, &ww, &wh);
         const auto [fw, fh] = framebuffer_size();
-        const double sx = double(fw) / double(ww > 0 ? ww : 1), sy = double(fh) / double(wh > 0 ? wh : 1);
+        const double sx = double(fw) / double(ww > 0 ? ww : 1),
+                     sy = double(fh) / double(wh > 0 ? wh : 1);
         return {float(x * sx), float(double(fh) - y * sy)};
     }
 

@@ -27,7 +27,8 @@ namespace example {
 inline float radical_inverse(std::uint32_t k, std::uint32_t base)
 {
     double inverse = 1.0 / double(base), scale = inverse, value = 0.0;
-    for (; k > 0; k /= base, scale *= inverse) value += double(k % base) * scale;
+    for (; k > 0; k /= base, scale *= inverse)
+        value += double(k % base) * scale;
     return float(value);
 }
 
@@ -73,14 +74,16 @@ void main() { krs_mean = texelFetch(krs_sum, ivec2(gl_FragCoord.xy), 0) / krs_sa
         const GLenum formats[2] = {GL_RGBA32F, GL_RGBA8};
         for (int i = 0; i < 2; ++i) {
             glBindTexture(GL_TEXTURE_2D, textures_[i]);
-            glTexImage2D(GL_TEXTURE_2D, 0, GLint(formats[i]), width, height, 0, GL_RGBA, i == 0 ? GL_FLOAT : GL_UNSIGNED_BYTE,
-                         nullptr);
+            glTexImage2D(GL_TEXTURE_2D, 0, GLint(formats[i]), width, height, 0, GL_RGBA,
+                         i == 0 ? GL_FLOAT : GL_UNSIGNED_BYTE, nullptr);
             glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
             glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
             glBindFramebuffer(GL_FRAMEBUFFER, framebuffers_[i]);
-            glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, textures_[i], 0);
+            glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                                   textures_[i], 0);
             if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-                throw window_error("the context cannot render into an RGBA32F and an RGBA8 texture");
+                throw window_error(
+                    "the context cannot render into an RGBA32F and an RGBA8 texture");
             glClearColor(0, 0, 0, 1); // a window shows black until a program draws
             glClear(GL_COLOR_BUFFER_BIT);
         }
@@ -126,8 +129,8 @@ void main() { krs_mean = texelFetch(krs_sum, ivec2(gl_FragCoord.xy), 0) / krs_sa
     {
         glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffers_[1]);
         glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-        glBlitFramebuffer(0, 0, width_, height_, 0, 0, drawable_width, drawable_height, GL_COLOR_BUFFER_BIT,
-                          GL_NEAREST);
+        glBlitFramebuffer(0, 0, width_, height_, 0, 0, drawable_width, drawable_height,
+                          GL_COLOR_BUFFER_BIT, GL_NEAREST);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
 
@@ -143,8 +146,10 @@ void main() { krs_mean = texelFetch(krs_sum, ivec2(gl_FragCoord.xy), 0) / krs_sa
         for (int y = 0; y < height_; ++y) // GL's rows go bottom-up
             for (int x = 0; x < width_; ++x)
                 for (int c = 0; c < 3; ++c)
-                    rgb[(std::size_t(height_ - 1 - y) * std::size_t(width_) + std::size_t(x)) * 3 + std::size_t(c)] =
-                        rgba[(std::size_t(y) * std::size_t(width_) + std::size_t(x)) * 4 + std::size_t(c)];
+                    rgb[(std::size_t(height_ - 1 - y) * std::size_t(width_) + std::size_t(x)) * 3 +
+                        std::size_t(c)] =
+                        rgba[(std::size_t(y) * std::size_t(width_) + std::size_t(x)) * 4 +
+                             std::size_t(c)];
         return rgb;
     }
 

@@ -73,7 +73,8 @@ public:
     static shadertoy_program build(const std::string& image, std::string& log)
     {
         shadertoy_program s;
-        s.program_ = gl_program::build(fullscreen_triangle_vertex_shader, shadertoy_fragment_shader(image), log);
+        s.program_ = gl_program::build(fullscreen_triangle_vertex_shader,
+                                       shadertoy_fragment_shader(image), log);
         if (!s.program_) return s;
         s.resolution_ = s.program_.uniform("iResolution");
         s.time_ = s.program_.uniform("iTime");
