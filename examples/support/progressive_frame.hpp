@@ -16,6 +16,7 @@
 // average at about 1/n rather than a random sequence's 1/sqrt(n).
 
 #include "gl_shader.hpp"
+#include "gl_window.hpp" // window_error
 
 #include <array>
 #include <cstdint>

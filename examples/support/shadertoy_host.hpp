@@ -13,6 +13,7 @@
 // ("0:12(5): error: ..." on Mesa), not the host's.
 
 #include "gl_shader.hpp"
+#include "gl_window.hpp"
 
 #include <array>
 #include <string>
