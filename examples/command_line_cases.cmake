@@ -207,3 +207,17 @@ if(KRS_WITH_GLTF)
     # The count printed is the file's: kernels that mesh to nothing are named and not counted.
     krs_case(krs_export    0 "mesh to nothing and are not written: kernel;8 parts, 320 instances" --scene tree --resolution 96 --instance-levels 8 --instances <out>/tree8.gltf)
 endif()
+
+# krs_view (refused before any window opens, so these rows need no display; what it draws:
+# scripts/check_krs_view.sh, tests example_krs_view_*)
+krs_case(krs_view          2 "--scene;'nosuch';one of tree|forest|terrain|"         --scene nosuch)
+krs_case(krs_view          2 "--width;'0';an integer in [1, 16384]"                --width 0)
+krs_case(krs_view          2 "--frames;'0';[1, 1000000]"                           --frames 0)
+krs_case(krs_view          2 "--time;'nan';a finite number in [0, 1000000]"        --time nan)
+krs_case(krs_view          2 "--glsl;missing.glsl' is not a file"                 --glsl <out>/missing.glsl)
+krs_case(krs_view          2 "--glsl, --scene"                                     --glsl <out>/missing.glsl --scene tree)
+krs_case(krs_view          2 "--accumulate;--frames"                               --accumulate)
+krs_case(krs_view          2 "--exit-after-reload;--glsl FILE"                     --exit-after-reload 5 --frames 2)
+krs_case(krs_view          2 "--exit-after-reload;'0';(0, 3600]"                   --exit-after-reload 0)
+krs_case(krs_view          2 "--screenshot;'k.jpg';.png"                           --frames 1 --screenshot k.jpg)
+krs_case(krs_view          0 "--scene;--glsl;--frames;--screenshot;--accumulate;--exit-after-reload;space pauses" --help)

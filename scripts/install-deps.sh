@@ -7,9 +7,11 @@
 #               tests write glTF/GLB through tinygltf and read PLY, OBJ and GLB back with assimp),
 #               Node.js and npm's gltf-validator (package.json, `npm ci` into node_modules/: every
 #               glTF/GLB the tests write is validated), Blender (scripts/check_blender.sh imports
-#               every export kind headless and renders a frame in Cycles)
+#               every export kind headless and renders a frame in Cycles), Xvfb and xauth (xvfb-run: the
+#               viewer's tests draw on a virtual display)
 #   --examples  compiler, CMake, ccache, GLM, xsimd, OpenImageIO (and its tools, which its CMake
-#               config names), CLI11, tinygltf (krs_export's .glb)
+#               config names), CLI11, tinygltf (krs_export's .glb), GLFW and libOpenGL (krs_view's
+#               window and GL functions)
 #   --all       all of the above plus Google Benchmark (the default)
 #   --peers     --all plus the peers the benchmarks compare with: Embree, OpenVDB
 # Only missing packages are installed; apt-get update runs only when something is missing, so a
@@ -21,8 +23,9 @@ mode="${1:---all}"
 base=(build-essential g++ cmake ccache libglm-dev libxsimd-dev)
 tests=(doctest-dev libegl-dev libopengl-dev libgl1-mesa-dri libegl-mesa0 glslang-tools spirv-tools python3
        libopenvdb-dev libnanovdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
-       libtinygltf-dev assimp-utils blender python3-numpy) # Blender's glTF importer needs numpy
-examples=(libopenimageio-dev openimageio-tools libcli11-dev libtinygltf-dev)
+       libtinygltf-dev assimp-utils blender python3-numpy # Blender's glTF importer needs numpy
+       xvfb xauth) # xvfb-run, for krs_view's tests; it needs xauth
+examples=(libopenimageio-dev openimageio-tools libcli11-dev libtinygltf-dev libglfw3-dev libopengl-dev)
 benchmarks=(libbenchmark-dev)
 peers=(libembree-dev libopenvdb-dev libboost-dev libboost-iostreams-dev zlib1g-dev) # OpenVDB's headers need Boost; its FindOpenVDB, ZLIB
 
@@ -33,7 +36,7 @@ case "$mode" in
     --all) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}") ;;
     --peers) wanted=("${base[@]}" "${tests[@]}" "${examples[@]}" "${benchmarks[@]}" "${peers[@]}") ;;
     -h | --help)
-        sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'
+        sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'
         exit 0
         ;;
     *)

@@ -8,6 +8,8 @@
 #include <EGL/eglext.h>
 #include <GL/glcorearb.h>
 
+#include "../../examples/support/gl_shader.hpp" // example::compile_shader: the examples' rule, shared
+
 #include <cstdio>
 #include <initializer_list>
 #include <stdexcept>
@@ -44,20 +46,12 @@ inline void require_context()
     ready = true;
 }
 
+// A shader that does not compile throws with the compiler's log (the test fails).
 inline GLuint compile(GLenum stage, const std::string& text)
 {
-    const GLuint shader = glCreateShader(stage);
-    const char* source = text.c_str();
-    glShaderSource(shader, 1, &source, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw std::runtime_error(std::string("shader compilation failed: ") + log);
-    }
+    std::string log;
+    const GLuint shader = example::compile_shader(stage, text, log);
+    if (shader == 0) throw std::runtime_error("shader compilation failed: " + log);
     return shader;
 }
 
@@ -70,10 +64,9 @@ inline GLuint link(std::initializer_list<GLuint> shaders)
     GLint ok = 0;
     glGetProgramiv(program, GL_LINK_STATUS, &ok);
     if (!ok) {
-        char log[4096] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
+        const std::string log = example::gl_info_log(program, glGetProgramiv, glGetProgramInfoLog);
         glDeleteProgram(program);
-        throw std::runtime_error(std::string("program link failed: ") + log);
+        throw std::runtime_error("program link failed: " + log);
     }
     return program;
 }
