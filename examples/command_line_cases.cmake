@@ -183,10 +183,17 @@ krs_case(krs_export        0 "--mesh;--resolution;--instances"                  
 krs_case(krs_export        0 "krs_export: rock: ;triangles;-> "                      --scene rock --resolution 8 --mesh <out>/rock.obj)
 krs_case(krs_export        2 "--projection-steps;'65';[0, 64]"                     --scene rock --projection-steps 65 --mesh <out>/x.ply)
 krs_case(krs_export        2 "--uv;--mesh"                                          --scene rock --uv)
+krs_case(krs_export        2 "--up;'x';y|z"                                         --scene rock --up x --mesh <out>/x.ply)
+krs_case(krs_export        2 "--gpu-instancing: only with --instances"              --scene rock --gpu-instancing --mesh <out>/x.ply)
 # Refusals found while meshing (status 1) name the option typed, not the library's field.
 krs_case(krs_export        1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --mesh <out>/x.ply)
 krs_case(krs_export        1 "--uv / --kernel-colors: needs a field that locates"   --scene kifs_menger --resolution 8 --uv --mesh <out>/x.ply)
 krs_case(krs_export        0 "krs_export: tree: ;triangles"                         --scene tree --resolution 16 --uv --kernel-colors --mesh <out>/tree.obj)
+# The similar shells mesh at the default resolution (issue 41: their inside was 0, never negative;
+# a few seconds), and a grid too coarse for the geometry says the field was never negative there.
+krs_case(krs_export        0 "krs_export: lotus: ;triangles"                        --scene lotus --mesh <out>/lotus.ply)
+krs_case(krs_export        0 "krs_export: cube_singularity: ;triangles"             --scene cube_singularity --mesh <out>/cubes.ply)
+krs_case(krs_export        1 "no triangle at resolution 40;never negative where sampled" --scene kifs_sierpinski --resolution 40 --mesh <out>/x.ply)
 if(KRS_WITH_GLTF)
     krs_case(krs_export    2 "--max-instances;'0'"                                  --scene tree --max-instances 0 --instances <out>/x.glb)
     krs_case(krs_export    1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --instances <out>/x.glb)
@@ -197,4 +204,6 @@ if(KRS_WITH_GLTF)
     krs_case(krs_export    0 "krs_export: tree: ;instances"                          --scene tree --resolution 8 --instances <out>/tree.glb)
     krs_case(krs_export    0 "krs_export: rock: ;instances"                          --scene rock --resolution 8 --instances <out>/rock.glb)
     krs_case(krs_export    0 "krs_export: terrain: ;instances"                       --scene terrain --resolution 8 --instances <out>/terrain.gltf)
+    # The count printed is the file's: kernels that mesh to nothing are named and not counted.
+    krs_case(krs_export    0 "mesh to nothing and are not written: kernel;8 parts, 320 instances" --scene tree --resolution 96 --instance-levels 8 --instances <out>/tree8.gltf)
 endif()

@@ -2,8 +2,8 @@
 // rasterizer (krs/mesh/extract.hpp; the writers krs/mesh/write.hpp and krs/mesh/gltf.hpp).
 //
 //   krs_export --scene NAME [--mesh FILE.ply|FILE.obj|FILE.glb|FILE.gltf] [--resolution N]
-//              [--memory-budget MB] [--projection-steps K] [--uv] [--kernel-colors]
-//              [--instances FILE.gltf|FILE.glb [--instance-levels K] [--max-instances M]]
+//              [--memory-budget MB] [--projection-steps K] [--uv] [--kernel-colors] [--up y|z]
+//              [--instances FILE.gltf|FILE.glb [--instance-levels K] [--max-instances M] [--gpu-instancing]]
 //
 // NAME is one of the scenes of krs/glsl/example_scenes.hpp (tree, forest, terrain, rock, coral,
 // grass, sponge, kifs_square, kifs_cube, kifs_menger, kifs_sierpinski, kifs_koch, lotus,
@@ -18,10 +18,21 @@
 // (krs/mesh/extract.hpp's mesh_options::attributes). A refusal found while meshing names the
 // option typed (--memory-budget, --resolution, ...), not the library's field.
 //
+// Colours are linear RGB, written as each format's readers take them: glTF's COLOR_0 linear
+// floats, PLY's bytes and OBJ's "r g b" sRGB-encoded (krs/mesh/write.hpp), so Blender shows the
+// same colour from all three. --up z writes the scene's up (+y) along the file's +z, for z-up
+// tools that read the coordinates as they are (Blender's PLY import); glTF stays upright in every
+// loader (a root node turns it back, krs/mesh/gltf.hpp), and Blender's OBJ import converts a y-up
+// OBJ itself.
+//
 // --instances writes a sequence scene (tree, forest, terrain, rock, grass, sponge) as instanced
-// glTF (krs/mesh/instances.hpp, EXT_mesh_gpu_instancing): every kernel of the top K mirror levels
-// (default 4) meshed once and placed by its instance transforms, the levels below meshed whole
-// and placed 2^K times; more than M instances (default 1048576) is refused. Unbounded kernels (the
+// glTF (krs/mesh/instances.hpp): every kernel of the top K mirror levels (default 4) meshed once
+// and placed by its instance transforms, the levels below meshed whole and placed 2^K times; more
+// than M instances (default 1048576) is refused. Each instance is a node referencing its shared
+// mesh (core glTF, which every loader places); --gpu-instancing writes EXT_mesh_gpu_instancing
+// instead (one node per mesh), listed as required, so a loader without it refuses the file
+// rather than showing each mesh once at the origin. The count printed is the file's: parts whose
+// kernel meshes to nothing at this resolution are named and not counted. Unbounded kernels (the
 // tree's ground, the rock's and terrain's facet planes) are meshed within the scene's box (the
 // sequence's own, or the box its tests sample), so every sequence scene exports.
 
@@ -106,13 +117,22 @@ int main(int argc, char** argv)
     std::string instances;
     int instance_levels = 4;
     long long max_instances = 1 << 20;
-    args.text("--instances", instances, "a sequence scene as instanced glTF (EXT_mesh_gpu_instancing): .gltf or .glb", "FILE");
+    args.text("--instances", instances, "a sequence scene as instanced glTF (a node per instance): .gltf or .glb", "FILE");
     args.integer("--instance-levels", instance_levels, 0, 64, "mirror levels expanded into instances (default 4)");
     args.integer("--max-instances", max_instances, 1, 1ll << 40, "the most instances allowed (default 1048576)");
     bool uv = false, kernel_colors = false;
     args.app().add_flag("--uv", uv, "per-vertex uv of each vertex's kernel (sequence scenes; --mesh only)");
-    args.app().add_flag("--kernel-colors", kernel_colors, "per-vertex colour by kernel (sequence scenes; --mesh only)");
+    args.app().add_flag("--kernel-colors", kernel_colors,
+                        "per-vertex colour by kernel (sequence scenes; --mesh only); linear RGB, written as glTF linear floats, "
+                        "PLY bytes and OBJ floats sRGB-encoded");
+    bool gpu_instancing = false;
+    args.app().add_flag("--gpu-instancing", gpu_instancing,
+                        "--instances with EXT_mesh_gpu_instancing (required by the file) instead of a node per instance");
+    std::string up_name = "y";
+    args.choice("--up", up_name, {"y", "z"}, "the file's up axis (default y; z for z-up tools such as Blender's PLY import)");
     args.parse(argc, argv);
+    const krs::up_axis up = up_name == "z" ? krs::up_axis::z : krs::up_axis::y;
+    if (gpu_instancing && instances.empty()) args.fail("--gpu-instancing: only with --instances");
     const std::size_t budget_bytes = std::size_t(budget_mb) << 20;
     const unsigned attributes = (uv ? krs::mesh_attribute::uv : 0u) | (kernel_colors ? krs::mesh_attribute::kernel_color : 0u);
     if (attributes != 0 && mesh.empty()) args.fail("--uv, --kernel-colors: only with --mesh");
@@ -151,11 +171,22 @@ int main(int argc, char** argv)
                 try {
                     const auto start = std::chrono::steady_clock::now();
                     const krs::instanced_scene is = krs::instance_meshes(s.field, io);
-                    krs::save_gltf_instances(is, instances, iext == ".glb");
+                    krs::gltf_instance_options go;
+                    go.gpu_instancing = gpu_instancing;
+                    go.up = up;
+                    krs::save_gltf_instances(is, instances, iext == ".glb", go);
                     std::size_t triangles = 0;
-                    for (const auto& p : is.parts) triangles += p.mesh.triangle_count() + p.mirrored.triangle_count();
-                    std::printf("krs_export: %s: %zu parts, %zu instances, %zu stored triangles, %.2f s -> %s\n", scene.c_str(),
-                                is.parts.size(), is.instance_count(), triangles,
+                    std::string empty;
+                    for (const auto& p : is.parts) {
+                        triangles += p.mesh.triangle_count() + p.mirrored.triangle_count();
+                        if (p.mesh.triangles.empty())
+                            empty += (empty.empty() ? "" : ", ") + p.name + " (" + std::to_string(p.direct.size() + p.reflected.size()) + ")";
+                    }
+                    if (!empty.empty())
+                        std::printf("krs_export: %s: at --resolution %d these parts mesh to nothing and are not written: %s\n",
+                                    scene.c_str(), resolution, empty.c_str());
+                    std::printf("krs_export: %s: %zu parts, %zu instances, %zu stored triangles, up %s, %.2f s -> %s\n", scene.c_str(),
+                                is.placed_part_count(), is.placed_instance_count(), triangles, up_name.c_str(),
                                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), instances.c_str());
                 } catch (const std::exception& e) {
                     std::fprintf(stderr, "krs_export: %s\n", in_option_words(e, budget_mb, budget_bytes).c_str());
@@ -190,16 +221,25 @@ int main(int argc, char** argv)
             bar.finish();
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             if (m.triangles.empty()) {
-                std::fprintf(stderr, "krs_export: the scene's surface gave no triangle at resolution %d: raise --resolution\n", resolution);
+                // Whether a finer grid can help: only where the field went below a cell's reach.
+                const double lowest = stats.lowest_distance / stats.cell_size;
+                std::fprintf(stderr, "krs_export: the scene's surface gave no triangle at resolution %d: %s (lowest %.3g cells)\n",
+                             resolution,
+                             lowest < 0 ? "the field is negative in the box but changes sign on no grid edge"
+                             : lowest > 0.5 * std::sqrt(3.0)
+                                 ? "the field is positive everywhere in the box: no resolution can mesh it"
+                                 : "the field was never negative where sampled: raise --resolution if the geometry is thinner "
+                                   "than a cell (a field that is 0 inside cannot be meshed)",
+                             lowest);
                 return;
             }
             double worst = 0;
             for (const krs::vec3f& p : m.positions) worst = std::max(worst, std::abs(s.field.distance(krs::vec3d(p))));
-            if (ext == ".ply") krs::save_ply(m, mesh);
-            else if (ext == ".obj") krs::save_obj(m, mesh);
+            if (ext == ".ply") krs::save_ply(m, mesh, up);
+            else if (ext == ".obj") krs::save_obj(m, mesh, up);
 #if defined(KRS_WITH_GLTF)
-            else if (ext == ".glb") krs::save_glb(m, mesh);
-            else krs::save_gltf(m, mesh);
+            else if (ext == ".glb") krs::save_glb(m, mesh, up);
+            else krs::save_gltf(m, mesh, up);
 #endif
             std::printf("krs_export: %s: %zu triangles, %zu vertices, cell %.4g, worst vertex |d| %.3g cells, %.2f s "
                         "(%.0f triangles/s) -> %s\n",

@@ -145,12 +145,16 @@ float krs_cube_singularity(vec3 p) {
     float k = floor(log(max(r, 1e-30)) * c.x);
     float inner = krs_cube_singularity_scale(k);
     float outer = inner * c.z;
-    float d = c.w * r;
+    float outside = c.w * r, inside = outside, own = 0.0;
     for (int j = -1; j <= 1; ++j) {
         float inner_j = j == 0 ? inner : krs_cube_singularity_scale(k + float(j));
         float outer_j = inner_j * c.z;
         float to_shell = max(max(inner_j - r, r - outer_j), 0.0);
-        d = min(d, max(krs_cube_singularity_in_shell(p, inner_j), to_shell));
+        float a = krs_cube_singularity_in_shell(p, inner_j);
+        if (j == 0) own = a;
+        outside = min(outside, max(a, to_shell));
+        inside = min(inside, max(-a, to_shell));
     }
+    float d = own < 0.0 ? -inside : outside;
     return d * krs_cube_singularity_data[71].y;
 }

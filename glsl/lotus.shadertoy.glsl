@@ -167,13 +167,17 @@ float krs_lotus(vec3 p) {
     float k = floor(log(max(r, 1e-30)) * c.x);
     float inner = krs_lotus_scale(k);
     float outer = inner * c.z;
-    float d = c.w * r;
+    float outside = c.w * r, inside = outside, own = 0.0;
     for (int j = -1; j <= 1; ++j) {
         float inner_j = j == 0 ? inner : krs_lotus_scale(k + float(j));
         float outer_j = inner_j * c.z;
         float to_shell = max(max(inner_j - r, r - outer_j), 0.0);
-        d = min(d, max(krs_lotus_in_shell(p, inner_j), to_shell));
+        float a = krs_lotus_in_shell(p, inner_j);
+        if (j == 0) own = a;
+        outside = min(outside, max(a, to_shell));
+        inside = min(inside, max(-a, to_shell));
     }
+    float d = own < 0.0 ? -inside : outside;
     return d * krs_lotus_data[25].y;
 }
 const vec3 KRS_ALBEDO = vec3(0.9, 0.55, 0.65);

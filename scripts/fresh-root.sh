@@ -104,6 +104,14 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 cp -L /etc/resolv.conf "$run/etc/resolv.conf"
+# The host's network trust, as its resolver and mirror: a host whose HTTPS goes through an
+# inspecting proxy keeps the proxy's CA in /usr/local/share/ca-certificates, and without it npm's
+# registry (install-deps.sh's `npm ci`) fails in the root with SELF_SIGNED_CERT_IN_CHAIN. The
+# ca-certificates package, when install-deps.sh installs it, adds these to the root's bundle.
+if compgen -G '/usr/local/share/ca-certificates/*.crt' >/dev/null; then
+    mkdir -p "$run/usr/local/share/ca-certificates"
+    cp -L /usr/local/share/ca-certificates/*.crt "$run/usr/local/share/ca-certificates/"
+fi
 mkdir -p "$run/root/krs" "$logs"
 # The commit is fixed here: the verdict names what was tested, even if HEAD moves during the run.
 commit="$(git -C "$checkout" rev-parse HEAD)"

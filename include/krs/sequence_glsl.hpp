@@ -53,7 +53,7 @@ void basic_sequence<Mirror, Kinds...>::glsl_emit(Out& out, const std::string& na
     {
         std::vector<std::size_t> kinds(kernels_.size());
         for (std::size_t k = 0; k < kernels_.size(); ++k) kinds[k] = kernels_[k].index();
-        out.record_kernels(name, kernel_at, kinds);
+        out.record_kernels(name, {kernel_at, std::move(kinds)});
     }
     // The per-level early exit of the C++ walk (distances() in krs/sequence.hpp): below the highest
     // kernel level, where L_i's bounding sphere is finite, the walk stops once the folded point is
@@ -158,13 +158,13 @@ void basic_sequence<Mirror, Kinds...>::glsl_uv_emit(Out& out, const std::string&
     // The kernels' parameters are the field's own (where its glsl_emit put them), so data packed
     // for the field moves the uv with it; each kernel with a uv adds one vec4 of its own after.
     const auto* recorded = out.recorded_kernels(field);
-    bool same = recorded && recorded->first.size() == kernels_.size();
-    for (std::size_t k = 0; same && k < kernels_.size(); ++k) same = recorded->second[k] == kernels_[k].index();
+    bool same = recorded && recorded->at.size() == kernels_.size();
+    for (std::size_t k = 0; same && k < kernels_.size(); ++k) same = recorded->kinds[k] == kernels_[k].index();
     if (!same)
         throw invalid_parameter("glsl.add_shading.field",
                                 "must name a sequence added before with the kernel kinds of kernel_uv_glsl's, in order",
                                 field);
-    const std::vector<std::size_t> kernel_at = recorded->first;
+    const std::vector<std::size_t> kernel_at = recorded->at;
     std::string body = "vec2 " + function + "(krs_location where) {\n    vec3 q = where.kernel_point;\n";
     for (std::size_t k = 0; k < kernels_.size(); ++k)
         std::visit(

@@ -39,6 +39,7 @@
 #include "krs/core/lanes.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/glsl/literal.hpp"
+#include "krs/glsl/names.hpp"
 #include "krs/trace/ray.hpp"
 
 #include <algorithm>
@@ -208,12 +209,12 @@ public:
     }
 
     // The same walk as GLSL (always the walk of every level: the reference walk is the CPU's), for
-    // the marcher of glsl.hpp: constants $_brick_side and $_brick_voxels (the geometry above), $_grid_reach and $_rounding_per_step (this walk's
-    // floats), `float $_margin_at_origin(vec3 from)`,
-    // `vec3 $_slopes(vec3 d)` and `int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell,
+    // the marcher of glsl.hpp: constants NAME_brick_side and NAME_brick_voxels (the geometry above), NAME_grid_reach and NAME_rounding_per_step (this walk's
+    // floats), `float NAME_margin_at_origin(vec3 from)`,
+    // `vec3 NAME_slopes(vec3 d)` and `int NAME_probe(vec3 p, vec3 slope, float margin, out ivec3 cell,
     // out float advance)`, which returns the sample's place (< 0: nothing to look at) and how many
-    // samples to advance, as probe() does for one lane. Every `$` is `name`; the caller emits
-    // $_origin, $_cells_per_unit, $_grid, $_step and `int $_place(ivec3)`
+    // samples to advance, as probe() does for one lane. NAME is `name` (krs::glsl::fill); the caller emits
+    // NAME_origin, NAME_cells_per_unit, NAME_grid, NAME_step and `int NAME_place(ivec3)`
     // (voxel_bricks::view::place) before it.
     std::string glsl(const std::string& name) const
     {
@@ -221,27 +222,27 @@ public:
         s += "const int " + name + "_brick_voxels = " + std::to_string(brick_voxels) + ";\n";
         s += "const float " + name + "_grid_reach = " + krs::glsl::float_literal(grid_reach_) + ";\n";
         s += "const float " + name + "_rounding_per_step = " + krs::glsl::float_literal(rounding_per_step_) + ";\n";
-        s += krs::glsl::with_name(R"(
+        s += krs::glsl::fill(R"(
 // brick_walk::margin_at_origin: steps a skip stops short of an empty brick's exit, but for t.
-float $_margin_at_origin(vec3 from) {
-    float reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + $_grid_reach;
-    return 1e-3 + reach * $_rounding_per_step;
+float NAME_margin_at_origin(vec3 from) {
+    float reach = max(max(abs(from.x), abs(from.y)), abs(from.z)) + NAME_grid_reach;
+    return 1e-3 + reach * NAME_rounding_per_step;
 }
 
 // brick_walk::probe for one ray: the place of the sample at p (< 0: none to look at), its cell,
 // and the samples to advance (1, or in an empty brick the whole steps to the exit of its empty cube).
-int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance) {
+int NAME_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance) {
     advance = 1.0;
     cell = ivec3(0);
-    vec3 f = vec3((p.x - $_origin.x) * $_cells_per_unit.x, (p.y - $_origin.y) * $_cells_per_unit.y,
-                  (p.z - $_origin.z) * $_cells_per_unit.z);
-    if (!(f.x >= 0.0 && f.y >= 0.0 && f.z >= 0.0 && f.x < float($_grid.x) && f.y < float($_grid.y) && f.z < float($_grid.z)))
+    vec3 f = vec3((p.x - NAME_origin.x) * NAME_cells_per_unit.x, (p.y - NAME_origin.y) * NAME_cells_per_unit.y,
+                  (p.z - NAME_origin.z) * NAME_cells_per_unit.z);
+    if (!(f.x >= 0.0 && f.y >= 0.0 && f.z >= 0.0 && f.x < float(NAME_grid.x) && f.y < float(NAME_grid.y) && f.z < float(NAME_grid.z)))
         return -1;
-    cell = ivec3(min(int(f.x), $_grid.x - 1), min(int(f.y), $_grid.y - 1), min(int(f.z), $_grid.z - 1));
-    int place = $_place(cell);
+    cell = ivec3(min(int(f.x), NAME_grid.x - 1), min(int(f.y), NAME_grid.y - 1), min(int(f.z), NAME_grid.z - 1));
+    int place = NAME_place(cell);
     if (place >= 0) return place;
     // The level e of the empty cube (voxel_bricks::view::empty_level): 4 << e voxels a side.
-    int side = $_brick_side << min((-1 - place) >> 6, 28);
+    int side = NAME_brick_side << min((-1 - place) >> 6, 28);
     float exit = 3.0e38;
     for (int a = 0; a < 3; ++a) {
         float lo = float(cell[a] & ~(side - 1));
@@ -249,19 +250,19 @@ int $_probe(vec3 p, vec3 slope, float margin, out ivec3 cell, out float advance)
         if (slope[a] > 0.0) exit = min(exit, (hi - f[a]) * slope[a]);
         else if (slope[a] < 0.0) exit = min(exit, (lo - f[a]) * slope[a]);
     }
-    float steps = ceil(exit / $_step - margin);
+    float steps = ceil(exit / NAME_step - margin);
     advance = steps > 1.0 ? min(steps, 1.0e6) : 1.0;
     return -1;
 }
 
 // brick_walk::slopes_of: the t to cross one cell along each axis, 0 for an axis not moved along.
-vec3 $_slopes(vec3 d) {
-    vec3 s = vec3(d.x * $_cells_per_unit.x, d.y * $_cells_per_unit.y, d.z * $_cells_per_unit.z);
+vec3 NAME_slopes(vec3 d) {
+    vec3 s = vec3(d.x * NAME_cells_per_unit.x, d.y * NAME_cells_per_unit.y, d.z * NAME_cells_per_unit.z);
     return vec3(s.x != 0.0 ? 1.0 / s.x : 0.0, s.y != 0.0 ? 1.0 / s.y : 0.0, s.z != 0.0 ? 1.0 / s.z : 0.0);
 }
 
 )",
-                                  name);
+                                  {{"NAME", name}});
         return s;
     }
 

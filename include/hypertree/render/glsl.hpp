@@ -80,8 +80,9 @@
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/render/voxel_bricks.hpp"
 #include "hypertree/render/voxel_shading.hpp"
-#include "krs/glsl/emitter.hpp"
+#include "krs/core/validate.hpp"
 #include "krs/glsl/literal.hpp"
+#include "krs/glsl/names.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -176,14 +177,8 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
                                   const march_options& options, const hypertree_glsl_options& glsl = {})
 {
     using krs::glsl::float_literal, krs::glsl::vec3_literal;
-    if (!krs::glsl::is_prefix(glsl.prefix))
-        throw krs::invalid_parameter("hypertree_glsl_options.prefix",
-                                     "must be lower-case letters, digits and _, start with a letter, end with _, not start with gl_ "
-                                     "and hold no __",
-                                     glsl.prefix);
-    if (!krs::glsl::is_name_part(glsl.name))
-        throw krs::invalid_parameter("hypertree_glsl_options.name",
-                                     "must be letters, digits and _, not starting with _ and without __ (it follows the prefix)", glsl.name);
+    krs::glsl::require_prefix("hypertree_glsl_options.prefix", glsl.prefix);
+    krs::glsl::require_name_part("hypertree_glsl_options.name", glsl.name);
     // The strides, offsets and level count below come from the bricks, the mapping from v: bricks
     // of another grid would read wrong or out-of-range texels without any GL error.
     const std::array<int, 3> grid{v.grid().x, v.grid().y, v.grid().z};
@@ -268,84 +263,85 @@ inline std::string hypertree_glsl(const hypervolume& v, const packed_bricks& bri
         s += krs::glsl::float_array(n + "_flow_soft", soft.data(), soft.size());
     }
 
-    // Functions. Each mirrors the marcher member of the same name; sums are spelled out where
+    // Functions (templates in krs::glsl::fill's dialect, NAME the tree's prefixed name). Each mirrors
+    // the marcher member of the same name; sums are spelled out where
     // GLSL's dot or length might associate differently from krs::dot (x, then y, then z).
-    s += krs::glsl::with_name(R"(float $_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+    s += krs::glsl::fill(R"(float NAME_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 // enter_box: the slab test, t0 >= 0; a ray that misses gets t0 >= t1. A zero direction component
 // becomes tiny so the division gives a huge finite slope instead of inf * 0 = NaN.
-void $_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
+void NAME_enter_box(vec3 o, vec3 d, out float t0, out float t1) {
     t0 = 0.0;
     t1 = 3.0e38;
     for (int a = 0; a < 3; ++a) {
         float safe = abs(d[a]) < 1e-30 ? 1e-30 : d[a];
         float inv = 1.0 / safe;
-        float ta = ($_box_lo[a] - o[a]) * inv, tb = ($_box_hi[a] - o[a]) * inv;
+        float ta = (NAME_box_lo[a] - o[a]) * inv, tb = (NAME_box_hi[a] - o[a]) * inv;
         t0 = max(t0, min(ta, tb));
         t1 = min(t1, max(ta, tb));
     }
 }
 
-)", n);
-    s += krs::glsl::with_name(R"(// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), or in an
+)", {{"NAME", n}});
+    s += krs::glsl::fill(R"(// voxel_bricks::view::place: the voxel's place in the bricks (rank * 64 + offset), or in an
 // empty brick -64 (e + 1) + offset, e the level of its empty cube.
-int $_place(ivec3 c) {
-    int brick = (c.x >> 2) + (c.y >> 2) * $_bricks_x + (c.z >> 2) * $_bricks_xy;
-    int rank = int(texelFetch($_bricks, $_rank_offset + brick).r);
+int NAME_place(ivec3 c) {
+    int brick = (c.x >> 2) + (c.y >> 2) * NAME_bricks_x + (c.z >> 2) * NAME_bricks_xy;
+    int rank = int(texelFetch(NAME_bricks, NAME_rank_offset + brick).r);
     return (rank << 6) | (c.x & 3) | ((c.y & 3) << 2) | ((c.z & 3) << 4);
 }
 
 // The voxel at a place >= 0: x = density, y = level. Byte k of word w is place 4 w + k.
-uvec2 $_voxel_at(int place) {
+uvec2 NAME_voxel_at(int place) {
     uint shift = uint(8 * (place & 3));
-    uint density = (texelFetch($_bricks, $_density_offset + (place >> 2)).r >> shift) & 255u;
-    uint level = (texelFetch($_bricks, $_level_offset + (place >> 2)).r >> shift) & 255u;
+    uint density = (texelFetch(NAME_bricks, NAME_density_offset + (place >> 2)).r >> shift) & 255u;
+    uint level = (texelFetch(NAME_bricks, NAME_level_offset + (place >> 2)).r >> shift) & 255u;
     return uvec2(density, level);
 }
 
 )",
-                           n);
+                           {{"NAME", n}});
     s += walk.glsl(n);
     s += "// Whether p lies in a part sphere (bound_method::spheres; else always).\n";
     if (spheres) {
-        s += krs::glsl::with_name("bool $_in_spheres(vec3 p) {\n    for (int i = 0; i < ", n) + integer(shape.spheres.size()) +
-             krs::glsl::with_name(R"(; ++i) {
-        vec3 d = p - $_spheres[i].xyz;
-        if ($_dot(d, d) <= $_spheres[i].w) return true;
+        s += krs::glsl::fill("bool NAME_in_spheres(vec3 p) {\n    for (int i = 0; i < ", {{"NAME", n}}) + integer(shape.spheres.size()) +
+             krs::glsl::fill(R"(; ++i) {
+        vec3 d = p - NAME_spheres[i].xyz;
+        if (NAME_dot(d, d) <= NAME_spheres[i].w) return true;
     }
     return false;
 }
 
 )",
-                               n);
+                               {{"NAME", n}});
     } else {
-        s += krs::glsl::with_name("bool $_in_spheres(vec3 p) {\n    return true;\n}\n\n", n);
+        s += krs::glsl::fill("bool NAME_in_spheres(vec3 p) {\n    return true;\n}\n\n", {{"NAME", n}});
     }
-    s += krs::glsl::with_name(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
+    s += krs::glsl::fill(R"(// shadow_transmittance: from p toward the light l, starting one step out (as the C++ marcher:
 // out of the shading voxel at step factor 1 on cubic voxels), with the primary ray's brick walk
 // and early exit.
-float $_shadow_transmittance(vec3 p, vec3 l) {
+float NAME_shadow_transmittance(vec3 p, vec3 l) {
     float t0, t1;
-    $_enter_box(p, l, t0, t1);
+    NAME_enter_box(p, l, t0, t1);
     float transmittance = 1.0;
     float base = max(t0, 0.0);
-    vec3 slope = $_slopes(l);
-    float margin0 = $_margin_at_origin(p);
+    vec3 slope = NAME_slopes(l);
+    float margin0 = NAME_margin_at_origin(p);
     for (float j = 1.0;;) {
-        float t = base + j * $_step;
-        if (!(t < t1 && transmittance >= $_min_transmittance)) break;
+        float t = base + j * NAME_step;
+        if (!(t < t1 && transmittance >= NAME_min_transmittance)) break;
         vec3 q = p + l * t;
         ivec3 cell;
         float advance;
-        int place = $_probe(q, slope, margin0 + t * $_rounding_per_step, cell, advance);
-        if (place >= 0 && $_in_spheres(q)) transmittance *= 1.0 - $_alpha[int($_voxel_at(place).x)];
+        int place = NAME_probe(q, slope, margin0 + t * NAME_rounding_per_step, cell, advance);
+        if (place >= 0 && NAME_in_spheres(q)) transmittance *= 1.0 - NAME_alpha[int(NAME_voxel_at(place).x)];
         j += advance;
     }
     return transmittance;
 }
 
 )",
-                           n);
+                           {{"NAME", n}});
     if (options.normals_by == normal_method::part_boxes) {
         // tree_shape::box_normal_at, in float as the CPU computes it.
         const std::string big = float_literal(std::numeric_limits<float>::max());
@@ -355,13 +351,13 @@ float $_shadow_transmittance(vec3 p, vec3 l) {
             s += krs::glsl::vec3_array(n + "_part_box_lo", lo);
             s += krs::glsl::vec3_array(n + "_part_box_hi", hi);
         }
-        s += krs::glsl::with_name("// tree_shape::box_normal_at: the outward normal of the nearest face of the part box p lies in.\n"
-                                  "vec3 $_normal(vec3 p) {\n"
+        s += krs::glsl::fill("// tree_shape::box_normal_at: the outward normal of the nearest face of the part box p lies in.\n"
+                                  "vec3 NAME_normal(vec3 p) {\n"
                                   "    float best_inside = " + big + ", best_outside = " + big + ";\n"
-                                  "    vec3 inside_n = vec3(0.0), outside_n = vec3(0.0);\n", n);
+                                  "    vec3 inside_n = vec3(0.0), outside_n = vec3(0.0);\n", {{"NAME", n}});
         if (!shape.part_boxes.empty()) {
             std::string loop = "    for (int i = 0; i < " + integer(shape.part_boxes.size()) + "; ++i) {\n" +
-                               krs::glsl::with_name(R"(        vec3 lo = $_part_box_lo[i], hi = $_part_box_hi[i];
+                               krs::glsl::fill(R"(        vec3 lo = NAME_part_box_lo[i], hi = NAME_part_box_hi[i];
         float nearest = BIG, beyond = -BIG, out2 = 0.0;
         vec3 near_n = vec3(-1.0, 0.0, 0.0), beyond_n = vec3(-1.0, 0.0, 0.0);
         for (int a = 0; a < 3; ++a) {
@@ -380,73 +376,72 @@ float $_shadow_transmittance(vec3 p, vec3 l) {
             best_outside = out2; outside_n = beyond_n;
         }
     }
-)", n);
-            for (std::string::size_type i; (i = loop.find("BIG")) != std::string::npos;) loop.replace(i, 3, big);
+)", {{"NAME", n}, {"BIG", big}});
             s += loop;
         }
         s += "    return best_inside < " + big + " ? inside_n : outside_n;\n}\n\n";
     } else {
-    s += krs::glsl::with_name(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
-vec3 $_normal(vec3 p) {
+    s += krs::glsl::fill(R"(// tree_shape::normal_at: the structure-flow normal (zero without flows).
+vec3 NAME_normal(vec3 p) {
     vec3 n = vec3(0.0);
-)", n);
+)", {{"NAME", n}});
     if (!shape.flows.empty()) {
         s += "    for (int i = 0; i < " + integer(shape.flows.size()) + "; ++i) {\n";
-        s += krs::glsl::with_name(R"(        vec3 d = p - $_flow_centroid[i];
-        vec3 radial = d - $_flow_axis[i] * $_dot(d, $_flow_axis[i]);
-        float w = 1.0 / ($_dot(d, d) + $_flow_soft[i]);
-        float len = sqrt($_dot(radial, radial));
+        s += krs::glsl::fill(R"(        vec3 d = p - NAME_flow_centroid[i];
+        vec3 radial = d - NAME_flow_axis[i] * NAME_dot(d, NAME_flow_axis[i]);
+        float w = 1.0 / (NAME_dot(d, d) + NAME_flow_soft[i]);
+        float len = sqrt(NAME_dot(radial, radial));
         if (len > 0.0) n += radial * (w / len);
     }
 )",
-                               n);
+                               {{"NAME", n}});
     }
-    s += krs::glsl::with_name(R"(    float len = sqrt($_dot(n, n));
+    s += krs::glsl::fill(R"(    float len = sqrt(NAME_dot(n, n));
     return len > 0.0 ? n / len : vec3(0.0);
 }
 
 )",
-                           n);
+                           {{"NAME", n}});
     }
     s += shading.glsl_shade(n);
     // The shading point: the voxel's center with shade_per_voxel (the marcher's per-voxel shading),
     // else the sample itself.
-    s += krs::glsl::with_name(options.shade_per_voxel ? "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return vec3($_center_x[cell.x], $_center_y[cell.y], $_center_z[cell.z]);\n}\n\n"
-                                                   : "vec3 $_shading_point(vec3 p, ivec3 cell) {\n    return p;\n}\n\n",
-                           n);
+    s += krs::glsl::fill(options.shade_per_voxel ? "vec3 NAME_shading_point(vec3 p, ivec3 cell) {\n    return vec3(NAME_center_x[cell.x], NAME_center_y[cell.y], NAME_center_z[cell.z]);\n}\n\n"
+                                                   : "vec3 NAME_shading_point(vec3 p, ivec3 cell) {\n    return p;\n}\n\n",
+                           {{"NAME", n}});
     s += "// march: samples at t0 + (k + 1/2) ds (computed from k, as the marcher does), front to back, until the ray leaves the box or the\n"
          "// transmittance falls below the minimum. Returns (premultiplied rgb, transmittance).\n";
     s += "vec4 " + glsl.prefix + "march_" + glsl.name + "(vec3 origin, vec3 direction) {\n";
-    s += krs::glsl::with_name(R"(    float t0, t1;
-    $_enter_box(origin, direction, t0, t1);
-    float ds = $_step;
+    s += krs::glsl::fill(R"(    float t0, t1;
+    NAME_enter_box(origin, direction, t0, t1);
+    float ds = NAME_step;
     vec3 color = vec3(0.0);
     float transmittance = 1.0;
-    vec3 slope = $_slopes(direction);
-    float margin0 = $_margin_at_origin(origin);
+    vec3 slope = NAME_slopes(direction);
+    float margin0 = NAME_margin_at_origin(origin);
     for (float k = 0.0;;) {
         float t = t0 + (k + 0.5) * ds;
         if (!(t < t1)) break;
         vec3 p = origin + direction * t;
         ivec3 cell;
         float advance;
-        int place = $_probe(p, slope, margin0 + t * $_rounding_per_step, cell, advance);
-        if (place >= 0 && $_in_spheres(p)) {
-            uvec2 v = $_voxel_at(place);
+        int place = NAME_probe(p, slope, margin0 + t * NAME_rounding_per_step, cell, advance);
+        if (place >= 0 && NAME_in_spheres(p)) {
+            uvec2 v = NAME_voxel_at(place);
             if (v.x != 0u) {
-                float a = $_alpha[int(v.x)];
-                vec3 c = $_shade($_shading_point(p, cell), int(v.y), -direction);
+                float a = NAME_alpha[int(v.x)];
+                vec3 c = NAME_shade(NAME_shading_point(p, cell), int(v.y), -direction);
                 color = color + transmittance * a * c;
                 transmittance = transmittance * (1.0 - a);
             }
         }
         k += advance;
-        if (!(transmittance >= $_min_transmittance)) break;
+        if (!(transmittance >= NAME_min_transmittance)) break;
     }
     return vec4(color, transmittance);
 }
 )",
-                           n);
+                           {{"NAME", n}});
     return s;
 }
 

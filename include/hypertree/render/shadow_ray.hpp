@@ -13,7 +13,7 @@
 // centre), so a voxel does not shadow itself. Below step factor 0.87, or on elongated voxels, the
 // first samples can fall in the voxel itself, which then dims its own light: shading depends on
 // the step factor there (a lone voxel of density 200: shadow 1.0 at step 1, 0.46 at 0.5). The
-// GLSL marcher keeps the same convention (glsl.hpp, $_shadow_transmittance). A sample the walk looks at multiplies the transmittance by (1 - alpha) of its
+// GLSL marcher keeps the same convention (glsl.hpp, NAME_shadow_transmittance). A sample the walk looks at multiplies the transmittance by (1 - alpha) of its
 // voxel (alpha: its opacity for one step); the ray ends when it leaves the box or the
 // transmittance falls below min_transmittance (the light is gone), and skips empty space as the
 // primary rays do (brick_walk.hpp). With cuts (the light sweep) the ray also stops at its first

@@ -22,6 +22,7 @@
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/render/voxel_bricks.hpp"
 #include "krs/glsl/literal.hpp"
+#include "krs/glsl/names.hpp"
 
 #include <algorithm>
 #include <array>
@@ -124,9 +125,10 @@ public:
         return lit;
     }
 
-    // The GLSL constants of the above, every `$` of a name being the caller's prefixed name:
-    // $_alpha[256], $_level_count and $_level_color[level_count], $_light_count, $_light_direction
-    // and $_light_color (when there are lights), the crown, the weights and the Lambert wrap.
+    // The GLSL constants of the above, NAME being the caller's prefixed name
+    // (krs::glsl::fill):
+    // NAME_alpha[256], NAME_level_count and NAME_level_color[level_count], NAME_light_count, NAME_light_direction
+    // and NAME_light_color (when there are lights), the crown, the weights and the Lambert wrap.
     std::string glsl_constants(const std::string& name, int levels) const
     {
         using krs::glsl::float_literal, krs::glsl::vec3_literal;
@@ -155,45 +157,45 @@ public:
         return s;
     }
 
-    // `vec3 $_shade(vec3 p, int level, vec3 view)`: lit() and with_specular() at shading point p,
-    // calling `float $_shadow_transmittance(vec3 p, vec3 l)` (with shadows on) and
-    // `vec3 $_normal(vec3 p)`, which the caller emits before it.
+    // `vec3 NAME_shade(vec3 p, int level, vec3 view)`: lit() and with_specular() at shading point p,
+    // calling `float NAME_shadow_transmittance(vec3 p, vec3 l)` (with shadows on) and
+    // `vec3 NAME_normal(vec3 p)`, which the caller emits before it.
     std::string glsl_shade(const std::string& name) const
     {
-        std::string s = krs::glsl::with_name(R"(// shade: Reeves' ambient falloff below the crown sphere, wrapped Lambert (and Blinn-Phong) with the flow
+        std::string s = krs::glsl::fill(R"(// shade: Reeves' ambient falloff below the crown sphere, wrapped Lambert (and Blinn-Phong) with the flow
 // normal, each light attenuated by its shadow ray (voxel_shading::lit and with_specular).
-vec3 $_shade(vec3 p, int level, vec3 view) {
-    vec3 base = $_level_color[min(level, $_level_count - 1)];
-    float depth = max(0.0, $_crown_radius - sqrt($_dot(p - $_crown_center, p - $_crown_center))) / max($_crown_radius, 1e-30);
-    float ambient = $_ambient * exp(-$_ambient_falloff * depth);
+vec3 NAME_shade(vec3 p, int level, vec3 view) {
+    vec3 base = NAME_level_color[min(level, NAME_level_count - 1)];
+    float depth = max(0.0, NAME_crown_radius - sqrt(NAME_dot(p - NAME_crown_center, p - NAME_crown_center))) / max(NAME_crown_radius, 1e-30);
+    float ambient = NAME_ambient * exp(-NAME_ambient_falloff * depth);
     vec3 light = vec3(ambient), specular = vec3(0.0);
-    vec3 n = $_normal(p);
+    vec3 n = NAME_normal(p);
     bool has_normal = n.x != 0.0 || n.y != 0.0 || n.z != 0.0;
 )",
-                                          name);
+                                          {{"NAME", name}});
         // (No lights: ambient only, and no loop over arrays GLSL could not declare with size 0.)
         if (!light_dirs_.empty()) {
             s += "    for (int i = 0; i < " + name + "_light_count; ++i) {\n";
-            s += krs::glsl::with_name("        vec3 l = $_light_direction[i];\n", name);
-            s += options_.shadows ? krs::glsl::with_name("        float shadow = $_shadow_transmittance(p, l);\n", name)
+            s += krs::glsl::fill("        vec3 l = NAME_light_direction[i];\n", {{"NAME", name}});
+            s += options_.shadows ? krs::glsl::fill("        float shadow = NAME_shadow_transmittance(p, l);\n", {{"NAME", name}})
                                   : "        float shadow = 1.0;\n";
-            s += krs::glsl::with_name(R"(        float lambert = has_normal ? max(0.0, $_dot(n, l)) * $_lambert_slope + $_lambert_floor : 1.0;
-        vec3 lc = $_light_color[i];
-        float d = $_diffuse * lambert * shadow;
+            s += krs::glsl::fill(R"(        float lambert = has_normal ? max(0.0, NAME_dot(n, l)) * NAME_lambert_slope + NAME_lambert_floor : 1.0;
+        vec3 lc = NAME_light_color[i];
+        float d = NAME_diffuse * lambert * shadow;
         light += d * lc;
 )",
-                                   name);
+                                   {{"NAME", name}});
             // GLSL leaves pow(0, 0) undefined where C gives 1: a shininess of 0 is emitted as the 1.
-            const std::string highlight = options_.shininess == 0 ? "1.0" : "pow(max(0.0, $_dot(n, h)), $_shininess)";
+            const std::string highlight = options_.shininess == 0 ? "1.0" : "pow(max(0.0, NAME_dot(n, h)), NAME_shininess)";
             if (options_.specular > 0)
-                s += krs::glsl::with_name(R"(        if (has_normal) {
+                s += krs::glsl::fill(R"(        if (has_normal) {
             vec3 h = l + view;
-            h = h / sqrt($_dot(h, h));
-            float s = $_specular * )" + highlight + R"( * shadow;
+            h = h / sqrt(NAME_dot(h, h));
+            float s = NAME_specular * )" + highlight + R"( * shadow;
             specular += s * lc;
         }
 )",
-                                       name);
+                                       {{"NAME", name}});
             s += "    }\n";
         }
         return s + "    return base * light + specular;\n}\n\n";

@@ -298,7 +298,7 @@ private:
                         using S = std::remove_cvref_t<decltype(s)>;
                         out.template library<S>();
                         const std::size_t k = index++;
-                        at.push_back(recorded ? recorded->first[k] : out.parameters(s, name + " step " + std::to_string(k)));
+                        at.push_back(recorded ? recorded->at[k] : out.parameters(s, name + " step " + std::to_string(k)));
                         const std::string call = std::string(S::glsl_name) + "_apply(p" + out.template arguments<S>(at.back()) + ")";
                         if (counted && counts_as_fold<S>)
                             program += "    q = " + call + ";\n"
@@ -310,7 +310,7 @@ private:
                     ...);
             },
             steps_);
-        if (!recorded) out.record_kernels(key, std::move(at), {});
+        if (!recorded) out.record_kernels(key, {std::move(at), {}});
         out.function(program + "    return p;\n}\n");
     }
 

@@ -13,7 +13,9 @@
 //                            its shell) and r (1 - 1/s), a lower bound of the distance to every
 //                            other shell that is continuous in r: the three-shell windows of
 //                            neighbouring shells then agree at their common boundary, and the field
-//                            is 1-Lipschitz and never overestimates. 3 shell evaluations.
+//                            is 1-Lipschitz and never overestimates. Inside the geometry the same
+//                            window with the prototype's field negated bounds the depth (below).
+//                            3 shell evaluations.
 //   seams::hidden_boundary   hidden geometry: the shell's two boundary spheres, cut off below
 //                            cutoff * r so they are never hit, brought into the min. Rays stop
 //                            short of the seam and enter the next shell; 1 shell evaluation plus
@@ -51,22 +53,28 @@
 // overestimate_margin() states the margin.
 // The prototype geometry must lie in the shell 1 <= |p| <= s; what leaves it is clipped by the
 // adjacent-shells fix and repeated overlapping by the others.
-
-#include "krs/core/rounding.hpp"
-#include "krs/core/validate.hpp"
-#include "krs/field.hpp"
-#include "krs/kernels/box.hpp"
-#include "krs/kernels/capsule.hpp"
-
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <limits>
-#include <numbers>
-#include <string>
-#include <string_view>
-#include <utility>
-#include <vector>
+//
+// The sign, adjacent shells. The geometry is G = union_j (G_j cap S_j), G_j the prototype's copy at
+// scale s^j (field a_j(p) = f(p / s^j) s^j) and S_j its shell; t_j = max(inner_j - r, r - outer_j,
+// 0) is p's distance to S_j. A point q of G_j cap S_j is at least max(a_j, t_j) from p, so
+//     D_out = min(r (1 - 1/s), min_j max(a_j, t_j))           (j = k-1, k, k+1)
+// never exceeds the distance to G. The complement of G is union_j (S_j \ G_j), and a point of
+// S_j \ G_j is at least max(-a_j, t_j) from p (-a_j bounds the distance to the complement of G_j
+// as a_j bounds the distance to G_j), so the same window with -a_j,
+//     D_in  = min(r (1 - 1/s), min_j max(-a_j, t_j)),
+// never exceeds the distance to the complement: the depth. p, in S_k, lies in G exactly when
+// a_k < 0; then D_out = 0 (its k term is max(a_k, 0)), and where a_k >= 0, D_in = 0 likewise. The
+// field is D_out where a_k >= 0 (the field before, bit for bit) and -D_in where a_k < 0: D_out -
+// D_in, exactly so but for rounding. Its magnitude never exceeds the distance to the surface on
+// either side. D_in is continuous and 1-Lipschitz by
+// D_out's argument (the windows agree at the seams), and the two vanish on each other's side, so
+// across the surface |d(x) - d(y)| <= |x - z| + |z - y| = |x - y| with z where the segment crosses
+// it: the field stays 1-Lipschitz. A prototype inside its shell gives D_in = -a_k, the no-seam
+// field's depth (-a_k <= the distance to the seam, which the other terms exceed); geometry that
+// continues across a seam stays negative through it, geometry cut there is 0 on the cut.
+// (The clamps of t_j at 0 alone, the field before issue 41, gave 0 everywhere inside.) The other
+// modes return the own shell's a_k inside (the hidden boundary's term is positive, the band and
+// step factor scale or keep a negative d), a depth bound for a prototype inside its shell.
 
 #include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
@@ -81,7 +89,6 @@
 #include <string>
 #include <string_view>
 #include <utility>
-#include <vector>
 
 namespace krs {
 
@@ -179,13 +186,20 @@ public:
             break;
         }
         default: {
-            d = T(other_shells_) * r;
+            // Outside: a lower bound of the distance to the geometry; inside: the same bound of
+            // the distance to its complement, from the prototype's field negated (the header
+            // comment). Which one holds is the sign of p's own shell's copy.
+            T outside = T(other_shells_) * r, inside = outside, own(0);
             for (int j = -1; j <= 1; ++j) {
                 const T inner_j = j == 0 ? inner : lane_exp((k + T(float(j))) * inv_density);
                 const T outer_j = inner_j * T(ratio_);
                 const T to_shell = max(max(inner_j - r, r - outer_j), T(0));
-                d = min(d, max(in_shell(p, inner_j), to_shell));
+                const T a = in_shell(p, inner_j);
+                if (j == 0) own = a;
+                outside = min(outside, max(a, to_shell));
+                inside = min(inside, max(-a, to_shell));
             }
+            d = select(own < T(0), -inside, outside);
             break;
         }
         }
@@ -272,13 +286,17 @@ public:
                     "    float d = min(" + name + "_in_shell(p, inner), boundary);\n";
             break;
         default:
-            body += "    float d = c.w * r;\n"
+            body += "    float outside = c.w * r, inside = outside, own = 0.0;\n"
                     "    for (int j = -1; j <= 1; ++j) {\n"
                     "        float inner_j = j == 0 ? inner : " + name + "_scale(k + float(j));\n"
                     "        float outer_j = inner_j * c.z;\n"
                     "        float to_shell = max(max(inner_j - r, r - outer_j), 0.0);\n"
-                    "        d = min(d, max(" + name + "_in_shell(p, inner_j), to_shell));\n"
-                    "    }\n";
+                    "        float a = " + name + "_in_shell(p, inner_j);\n"
+                    "        if (j == 0) own = a;\n"
+                    "        outside = min(outside, max(a, to_shell));\n"
+                    "        inside = min(inside, max(-a, to_shell));\n"
+                    "    }\n"
+                    "    float d = own < 0.0 ? -inside : outside;\n";
             break;
         }
         if (options_.seam_band > 0.0f) {

@@ -95,19 +95,6 @@ struct options {
                                         // that shades by the gradient needs only the distance)
 };
 
-// Whether `p` can start every global name of the text: lower-case letters, digits and _, starting
-// with a letter and ending with _ (prefix + name then never spells a keyword or built-in such as
-// `in` or `mix`), without GLSL's reserved __ and outside the implementation's gl_. Lower case,
-// because include guards carry the prefix in upper case: prefixes that differ only in case would
-// share guards, and the second snippet's library would vanish.
-inline bool is_prefix(std::string_view p)
-{
-    bool ok = p.size() >= 2 && p[0] >= 'a' && p[0] <= 'z' && p.back() == '_' && !p.starts_with("gl_") &&
-              p.find("__") == std::string_view::npos;
-    for (char c : p) ok = ok && is_name_char(c) && !(c >= 'A' && c <= 'Z');
-    return ok;
-}
-
 // The first name a GLSL text declares twice at global scope, or "" when none is. Global
 // declarations are the lines that start at column 0 (the emitter indents everything inside a body
 // or a block): `TYPE NAME(` functions, `[const] TYPE NAME[` or `NAME =` constants, `struct NAME`,
@@ -213,6 +200,14 @@ concept glsl_field = field<F> && glsl_type<F>;
 
 class emitter;
 
+// What emitter::record_kernels keeps of a composite's parts: the index of each part's first vec4
+// in the data, in the composite's order, and each part's kind (its index in the composite's type
+// list; empty where the parts have no kinds, as a KIFS program's steps).
+struct recorded_parts {
+    std::vector<std::size_t> at;
+    std::vector<std::size_t> kinds;
+};
+
 // Shading functions: the GLSL of krs/shade/ (soft shadow, ambient occlusion, fractal noise,
 // triplanar projection), compose/depth.hpp (depth output and the depth-buffer limit) and kernel uv,
 // next to their C++. Each such type has a member
@@ -260,7 +255,7 @@ public:
     {
         if (options_.target == target::shadertoy && options_.mode != data_mode::constants)
             throw invalid_parameter("glsl.options.mode", "Shadertoy has no buffers: use data_mode::constants");
-        require_prefix(options_.prefix);
+        require_prefix("glsl.options.prefix", options_.prefix);
         require_data_name(options_.data_name);
         array_ = std::string(internal_prefix) + options_.data_name;
     }
@@ -425,16 +420,13 @@ struct krs_kernel_shading {
     }
     // The data array's name as the composites write it (krs_..., renamed with the rest on output).
     const std::string& data_name() const { return array_; }
-    // Records where a sequence named `name` put its kernels' parameters (the index of each one's
-    // first vec4) and each one's kind (its index in the type list), for requests that read them.
-    // A KIFS program records its steps' parameters the same way under a key with spaces (no name
-    // has one), so that its distance and its colouring share them (krs/fractal/fold_steps.hpp).
-    void record_kernels(const std::string& name, std::vector<std::size_t> at, std::vector<std::size_t> kinds)
-    {
-        kernels_at_[name] = {std::move(at), std::move(kinds)};
-    }
+    // Records where a sequence named `name` put its kernels' parameters, for requests that read
+    // them (kernel_uv_glsl). A KIFS program records its steps' parameters the same way under a key
+    // with spaces (no name has one), so that its distance and its colouring share them
+    // (krs/fractal/fold_steps.hpp).
+    void record_kernels(const std::string& name, recorded_parts parts) { kernels_at_[name] = std::move(parts); }
     // What record_kernels recorded for `name`, or null.
-    const std::pair<std::vector<std::size_t>, std::vector<std::size_t>>* recorded_kernels(const std::string& name) const
+    const recorded_parts* recorded_kernels(const std::string& name) const
     {
         const auto it = kernels_at_.find(name);
         return it == kernels_at_.end() ? nullptr : &it->second;
@@ -443,35 +435,16 @@ struct krs_kernel_shading {
     void function(const std::string& text) { functions_ += text; }
     // A float as a GLSL literal that reads back as the same float.
     static std::string literal(float v) { return float_literal(v); }
-    // `text` with each whole word that is a key of `values` replaced by its value, and otherwise
-    // the key part of a word that is a key, _ and more (NAME_view_depth: a request's own helper
-    // names; the longest such key): how a shading function writes its GLSL (upper-case
-    // placeholders NAME, FIELD, HARDNESS, ...) with the names and validated values of one request.
-    // An exact match comes first, so MAX_STEPS is never MAX's value followed by _STEPS.
-    static std::string fill(std::string_view text, std::initializer_list<std::pair<std::string_view, std::string>> values)
+    // glsl::fill (krs/glsl/names.hpp), the one template dialect, for a composite's or a shading
+    // request's text: their headers reach it through Out and include nothing of krs/glsl/.
+    static std::string fill(std::string_view text, std::initializer_list<placeholder> values)
     {
-        std::string out;
-        for (std::size_t i = 0; i < text.size();) {
-            if (!is_name_char(text[i])) {
-                out += text[i++];
-                continue;
-            }
-            std::size_t end = i;
-            while (end < text.size() && is_name_char(text[end])) ++end;
-            const std::string_view word = text.substr(i, end - i);
-            const std::pair<std::string_view, std::string>* hit = nullptr;
-            for (const auto& v : values)
-                if (word == v.first) hit = &v;
-            if (!hit)
-                for (const auto& v : values)
-                    if (word.size() > v.first.size() && word.starts_with(v.first) && word[v.first.size()] == '_' &&
-                        (!hit || v.first.size() > hit->first.size()))
-                        hit = &v;
-            if (!hit) out += word;
-            else out += hit->second + std::string(word.substr(hit->first.size()));
-            i = end;
-        }
-        return out;
+        return glsl::fill(text, values);
+    }
+    // glsl::require_user_function_name, for a request that calls a function of the user's shader.
+    static void require_user_function_name(const char* parameter, const std::string& n)
+    {
+        glsl::require_user_function_name(parameter, n);
     }
 
     // `float NAME(vec3 p)` as the min of NAME_0 .. NAME_{count-1} in that order (the C++
@@ -489,20 +462,7 @@ private:
     // The text is written with this prefix and renamed to options.prefix by with_prefix.
     static constexpr std::string_view internal_prefix = "krs_";
 
-    static void require_name(const char* parameter, const std::string& n)
-    {
-        if (!is_name_part(n))
-            throw invalid_parameter(parameter, "must be letters, digits and _, not starting with _ and without __ (it "
-                                               "follows the prefix in GLSL names)", n);
-    }
-    static void require_prefix(const std::string& p)
-    {
-        if (!is_prefix(p))
-            throw invalid_parameter("glsl.options.prefix",
-                                    "must be lower-case letters, digits and _, start with a letter, end with _, not "
-                                    "start with gl_ and hold no __",
-                                    p);
-    }
+    static void require_name(const char* parameter, const std::string& n) { require_name_part(parameter, n); }
     static void require_data_name(const std::string& n) { require_name("glsl.options.data_name", n); }
 
     // A name the latest addition made twice (see twice_declared) puts the emitter back to `before`
@@ -521,34 +481,12 @@ private:
                                 name);
     }
 
-    // ASCII letters to upper case: include guards are the guarded names so, and carry the prefix so.
-    static std::string upper_case(std::string_view text)
-    {
-        std::string upper(text);
-        for (char& c : upper) c = c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c;
-        return upper;
-    }
-    // The text with every identifier that starts with krs_ starting with `prefix` instead, and every
-    // one that starts with KRS_ (include guards) with the prefix in upper case.
+    // The text with every word that starts with krs_ starting with `prefix` instead, and every one
+    // that starts with KRS_ (include guards) with the prefix in upper case.
     static std::string with_prefix(const std::string& text, const std::string& prefix)
     {
         if (prefix == internal_prefix) return text;
-        const std::string upper = upper_case(prefix);
-        std::string out;
-        out.reserve(text.size() + text.size() / 8);
-        for (std::size_t i = 0; i < text.size();) {
-            const bool token_start = i == 0 || !is_name_char(text[i - 1]);
-            if (token_start && text.compare(i, 4, "krs_") == 0) {
-                out += prefix;
-                i += 4;
-            } else if (token_start && text.compare(i, 4, "KRS_") == 0) {
-                out += upper;
-                i += 4;
-            } else {
-                out += text[i++];
-            }
-        }
-        return out;
+        return glsl::fill(text, {{"krs_", prefix}, {"KRS_", upper_case(prefix)}});
     }
     // Everything after the version and precision lines, before renaming.
     std::string internal_text() const
@@ -597,7 +535,7 @@ private:
     std::string constants_comments_; // what each data entry holds
     std::string functions_;          // the bodies
     std::vector<float> data_;
-    std::map<std::string, std::pair<std::vector<std::size_t>, std::vector<std::size_t>>> kernels_at_;
+    std::map<std::string, recorded_parts> kernels_at_;
 };
 
 // The data of `f` in the emitter's layout (std140 == std430 here): upload it to the block of code

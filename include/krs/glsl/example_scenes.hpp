@@ -192,12 +192,15 @@ inline scene<koch_curve> kifs_koch()
 }
 
 // The first frame of krs_fractals' zoom (scale 10^0): along an edge direction, where a cone is
-// free of the shell's cubes at every scale.
+// free of the shell's cubes at every scale. The box's faces x, y, z = +-3.45 cross no cube, so a
+// mesh of it closes: shell 1's diagonal cubes reach 3.402 on each axis, its axis cubes start at
+// 3.667 (shell k's cubes, half size h s^k with h = 0.2996, are centred s^k sqrt(s) from the origin,
+// s = e), and the padding cell of a mesh at resolution 32 or more stays short of them.
 inline scene<cube_singularity> cube_singularity_scene()
 {
     scene<cube_singularity> s{"cube_singularity", make_cube_singularity(1.0f),
                               view::look_at({-2.2f, 0.35f, -2.2f}, {0, 0, 0}, {0, 1, 0}, 50.0f, fractals_light, 20.0f),
-                              {0, 0, 0}, {2.0f, 2.0f, 2.0f}, {0.75f, 0.50f, 0.85f}};
+                              {0, 0, 0}, {3.45f, 3.45f, 3.45f}, {0.75f, 0.50f, 0.85f}};
     s.camera.max_elevation = 30.0f; // the diagonal's cubes (35.3 degrees) hold the eye's radius near 36
     return s;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // GLSL literals of C++ values: what every emitter (krs fields, the Shadertoy wrapper, hypertree
-// volumes) writes its constants with, so a constant reads back in GLSL as the same float; and
-// the text helpers emitters share (constant arrays of them, a template's `$` given a name).
+// volumes) writes its constants with, so a constant reads back in GLSL as the same float, and
+// constant arrays of them. Templates of GLSL text are krs/glsl/names.hpp's `fill`.
 
 #include "krs/core/vec3.hpp"
 
@@ -43,8 +43,9 @@ inline std::string vec3_array(const std::string& name, const std::vector<vec3f>&
     for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ",\n    " : "") + vec3_literal(values[i]);
     return s + ");\n";
 }
-// GLSL text with every `$` replaced by `name`: how an emitter writes a function once for any
-// prefixed name ($_step becomes krs_tree_step). The text must hold no other `$` (GLSL has none).
+// The old `$` dialect (every `$` replaced by `name`), superseded by glsl::fill (names.hpp). No
+// header of the library uses it; it stays only until shadertoy.hpp's rewrite (issue 34, i34-trace)
+// has landed, so that branch compiles whichever is merged first. Do not use it in new code.
 inline std::string with_name(std::string_view text, const std::string& name)
 {
     std::string s;

@@ -82,11 +82,13 @@
 #include "krs/mesh/mesh.hpp"
 #include "krs/trace/box_clip.hpp" // field_box
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <unordered_map>
 #include <variant>
@@ -140,6 +142,9 @@ struct mesh_stats {
     std::size_t cells_meshed = 0;    // leaf cells whose corners were evaluated
     std::size_t evaluations = 0;     // field evaluations, projection included
     std::size_t peak_bytes = 0;      // mesh plus edge table at the end (what the budget counts)
+    // The least distance evaluated. The field is 1-Lipschitz and skipped blocks keep their sign,
+    // so with no triangle it is >= lowest_distance - cell_size sqrt(3) / 2 everywhere in the grid.
+    double lowest_distance = std::numeric_limits<double>::infinity();
 };
 
 namespace detail {
@@ -274,6 +279,7 @@ private:
     {
         ++stats_.evaluations;
         const double d = f_.distance(p);
+        stats_.lowest_distance = std::min(stats_.lowest_distance, d);
         if (!std::isfinite(d)) throw invalid_parameter("field", "returned a distance that is not finite at " + detail::to_text(p), detail::to_text(d));
         return d;
     }

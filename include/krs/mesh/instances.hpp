@@ -1,7 +1,8 @@
 #pragma once
 // A sequence as instanced meshes (the KRS paper's section 4, the other GPU route: kernel instance
-// transforms computed, each kernel's geometry drawn with instancing). Its glTF form, with
-// EXT_mesh_gpu_instancing, is written by krs/mesh/gltf.hpp (save_gltf_instances).
+// transforms computed, each kernel's geometry drawn with instancing). Its glTF form, one node per
+// instance over shared meshes or EXT_mesh_gpu_instancing, is written by krs/mesh/gltf.hpp
+// (save_gltf_instances).
 //
 // With n mirrors and `instance_levels` = k (0 <= k <= n), the top k mirrors are expanded into
 // instance transforms and what lies below them is meshed whole:
@@ -69,11 +70,26 @@ struct instanced_part {
 
 struct instanced_scene {
     std::vector<instanced_part> parts;
+    // Every instance of every part, also of parts whose mesh has no triangle (a kernel smaller
+    // than a cell at this resolution): what the expansion places.
     std::size_t instance_count() const
     {
         std::size_t n = 0;
         for (const auto& p : parts) n += p.direct.size() + p.reflected.size();
         return n;
+    }
+    // The instances a file holds: those of the parts with a triangle (the writers leave the
+    // others out, krs/mesh/gltf.hpp), and how many parts those are.
+    std::size_t placed_instance_count() const
+    {
+        std::size_t n = 0;
+        for (const auto& p : parts)
+            if (!p.mesh.triangles.empty()) n += p.direct.size() + p.reflected.size();
+        return n;
+    }
+    std::size_t placed_part_count() const
+    {
+        return std::size_t(std::count_if(parts.begin(), parts.end(), [](const instanced_part& p) { return !p.mesh.triangles.empty(); }));
     }
 };
 

@@ -12,13 +12,25 @@
 // PLY's numbers are written byte by byte in little-endian order, never as a struct's memory, so a
 // file is the same on every machine:
 //     vertex: x y z nx ny nz s t red green blue
-//             float32 each but the colour, uint8 each (round(255 c)), as most PLY readers expect;
+//             float32 each but the colour, uint8 each, sRGB-encoded (round(255 srgb_encode(c)));
 //             nx ny nz, s t and the colour are left out for a mesh without normals, uvs or colours
 //     face:   uint8 3, then three uint32 vertex indices
 // OBJ's numbers are printed with 9 significant digits, which round-trip a float exactly: uvs as
 // "vt u v", colours as the common extension "v x y z r g b" (read by assimp, MeshLab, Blender).
+//
+// Colours. The mesh's are linear RGB (krs/mesh/mesh.hpp); PLY's bytes and OBJ's "r g b" are
+// written sRGB-encoded (krs/core/srgb.hpp), because their readers take them as display values:
+// Blender decodes both from sRGB to its linear colours, MeshLab shows them as they are. (glTF's
+// COLOR_0 is linear by its specification: krs/mesh/gltf.hpp writes the floats unchanged.) assimp
+// passes every format's numbers through as they are, so its users decode PLY's and OBJ's.
+//
+// Up axis. The mesh is y-up (krs's scenes); `up` turns positions and normals into the file's
+// frame (krs/io/up_axis.hpp). Blender's PLY importer takes the file as z-up (write up_axis::z for
+// it); its OBJ importer converts a y-up OBJ by default, as OBJ's convention is y-up.
 
+#include "krs/core/srgb.hpp"
 #include "krs/core/validate.hpp"
+#include "krs/io/up_axis.hpp"
 #include "krs/io/write_then_rename.hpp"
 #include "krs/mesh/mesh.hpp"
 
@@ -75,13 +87,13 @@ inline void put_u32(std::string& out, std::uint32_t v)
     for (int b = 0; b < 4; ++b) out.push_back(char(v >> (8 * b) & 0xff));
 }
 inline void put_f32(std::string& out, float v) { put_u32(out, std::bit_cast<std::uint32_t>(v)); }
-// A colour channel in [0, 1] as PLY's uint8.
-inline char color_byte(float c) { return char(std::uint8_t(std::lround(double(c) * 255.0))); }
+// A linear colour channel in [0, 1] as PLY's sRGB-encoded uint8.
+inline char color_byte(float c) { return char(std::uint8_t(std::lround(srgb_encode(double(c)) * 255.0))); }
 
 } // namespace detail
 
-// The mesh as binary little-endian PLY.
-inline std::string ply_bytes(const triangle_mesh& m)
+// The mesh as binary little-endian PLY, in the frame of `up`.
+inline std::string ply_bytes(const triangle_mesh& m, up_axis up = up_axis::y)
 {
     detail::require_mesh("ply_bytes", m);
     const bool normals = !m.normals.empty();
@@ -96,10 +108,10 @@ inline std::string ply_bytes(const triangle_mesh& m)
     out += "property list uchar uint vertex_indices\nend_header\n";
     out.reserve(out.size() + m.positions.size() * ((normals ? 24 : 12) + (uvs ? 8 : 0) + (colors ? 3 : 0)) + m.triangles.size() * 13);
     for (std::size_t v = 0; v < m.positions.size(); ++v) {
-        const vec3f& p = m.positions[v];
+        const vec3f p = to_file(up, m.positions[v]);
         detail::put_f32(out, p.x), detail::put_f32(out, p.y), detail::put_f32(out, p.z);
         if (normals) {
-            const vec3f& n = m.normals[v];
+            const vec3f n = to_file(up, m.normals[v]);
             detail::put_f32(out, n.x), detail::put_f32(out, n.y), detail::put_f32(out, n.z);
         }
         if (uvs) detail::put_f32(out, m.uvs[v][0]), detail::put_f32(out, m.uvs[v][1]);
@@ -116,18 +128,19 @@ inline std::string ply_bytes(const triangle_mesh& m)
 }
 
 // The mesh as Wavefront OBJ: "v" (with "r g b" when it has colours), "vt" (uvs), "vn" (normals)
-// and faces "f a/a/a ..." (1-based; the uv or normal index left out when there is none).
-inline std::string obj_text(const triangle_mesh& m)
+// and faces "f a/a/a ..." (1-based; the uv or normal index left out when there is none), in the
+// frame of `up`.
+inline std::string obj_text(const triangle_mesh& m, up_axis up = up_axis::y)
 {
     detail::require_mesh("obj_text", m);
     const bool normals = !m.normals.empty(), uvs = !m.uvs.empty(), colors = !m.colors.empty();
     std::string out = "# written by krs (krs/mesh/write.hpp)\n";
     char line[256];
     for (std::size_t v = 0; v < m.positions.size(); ++v) {
-        const vec3f& p = m.positions[v];
+        const vec3f p = to_file(up, m.positions[v]);
         if (colors)
             std::snprintf(line, sizeof line, "v %.9g %.9g %.9g %.9g %.9g %.9g\n", double(p.x), double(p.y), double(p.z),
-                          double(m.colors[v].x), double(m.colors[v].y), double(m.colors[v].z));
+                          srgb_encode(double(m.colors[v].x)), srgb_encode(double(m.colors[v].y)), srgb_encode(double(m.colors[v].z)));
         else
             std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", double(p.x), double(p.y), double(p.z));
         out += line;
@@ -136,7 +149,8 @@ inline std::string obj_text(const triangle_mesh& m)
         std::snprintf(line, sizeof line, "vt %.9g %.9g\n", double(t[0]), double(t[1]));
         out += line;
     }
-    for (const vec3f& n : m.normals) {
+    for (const vec3f& normal : m.normals) {
+        const vec3f n = to_file(up, normal);
         std::snprintf(line, sizeof line, "vn %.9g %.9g %.9g\n", double(n.x), double(n.y), double(n.z));
         out += line;
     }
@@ -155,17 +169,17 @@ inline std::string obj_text(const triangle_mesh& m)
     return out;
 }
 
-inline void save_ply(const triangle_mesh& m, const std::filesystem::path& path)
+inline void save_ply(const triangle_mesh& m, const std::filesystem::path& path, up_axis up = up_axis::y)
 {
     detail::require_output_path("save_ply", path);
-    const std::string bytes = ply_bytes(m); // checks the mesh before any file exists
+    const std::string bytes = ply_bytes(m, up); // checks the mesh before any file exists
     write_file("save_ply", path, bytes);
 }
 
-inline void save_obj(const triangle_mesh& m, const std::filesystem::path& path)
+inline void save_obj(const triangle_mesh& m, const std::filesystem::path& path, up_axis up = up_axis::y)
 {
     detail::require_output_path("save_obj", path);
-    const std::string text = obj_text(m);
+    const std::string text = obj_text(m, up);
     write_file("save_obj", path, text);
 }
 

@@ -15,7 +15,6 @@
 
 #include "krs/core/noise.hpp"
 #include "krs/core/validate.hpp"
-#include "krs/glsl/names.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -136,16 +135,9 @@ struct triplanar_projection {
     std::string pattern;     // a GLSL function name of the shader's, not starting with krs_ or gl_
     float sharpness = 4.0f;  // > 0
 
-    void validate() const
-    {
-        detail::validate_triplanar(sharpness);
-        if (!glsl::is_user_function_name(pattern))
-            throw invalid_parameter("triplanar_projection.pattern",
-                                    "must be a GLSL function name of the shader's: letters, digits and _, not "
-                                    "starting with a digit or _, without __, and not starting with gl_ (reserved) "
-                                    "or krs_ (the emitter renames such words to its prefix)",
-                                    pattern);
-    }
+    // The pattern's name is checked where it is written, by the emitter's name rules (krs/glsl/
+    // names.hpp, above this layer): glsl_shading, the only place it is used.
+    void validate() const { detail::validate_triplanar(sharpness); }
 
     static constexpr std::string_view glsl_source = R"(float NAME(vec3 p, vec3 n) {
     const float sharpness = SHARPNESS;
@@ -164,6 +156,7 @@ struct triplanar_projection {
     void glsl_shading(Out& out, const std::string& function, const std::string&) const
     {
         validate();
+        Out::require_user_function_name("triplanar_projection.pattern", pattern);
         out.function(Out::fill(glsl_source, {{"NAME", function}, {"SHARPNESS", Out::literal(sharpness)},
                                              {"PATTERN", pattern}}));
     }
