@@ -152,8 +152,10 @@ int main(int argc, char** argv)
             try {
                 if (text_wanted && !to_stdout(output))
                     krs::write_file("", output, [&](std::ostream& out) {
-                        out << text;
-                        krs::write_file("", reference, png_view);
+                        // Flushed first: a text the disk refuses fails here, before the PNG
+                        // is renamed into place (write_file reports the failed stream).
+                        out << text << std::flush;
+                        if (out) krs::write_file("", reference, png_view);
                     });
                 else {
                     krs::write_file("", reference, png_view);

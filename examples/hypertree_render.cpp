@@ -188,19 +188,20 @@ int main(int argc, char** argv)
     args.integer("--seed", o.seed, 0, 1 << 30, "seed of the generation");
     args.text("--output", o.output, "the PNG to write (.png; its directory must exist)", "FILE.png");
     args.text("--save-volume", o.save_volume, "also save the voxel store (binary, with a checksum; any name)", "FILE");
-    // A file name, ending as the format's files do (what Houdini and Blender look for).
-    const auto grid_file = [](const char* extension) {
-        return CLI::Validator(
-            [extension](std::string& text) {
-                if (text.size() <= std::string(extension).size() || !text.ends_with(extension))
-                    return "'" + text + "' is not a file name ending in " + extension;
-                if (!KRS_WITH_OPENVDB) return std::string("this build has no OpenVDB/NanoVDB (install libopenvdb-dev and libnanovdb-dev, then build again)");
-                return std::string();
-            },
-            "", "grid file");
-    };
-    args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")->check(grid_file(".vdb"));
-    args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")->check(grid_file(".nvdb"));
+    // The extension (what Houdini and Blender look for) is checked with the other outputs after
+    // parsing (support/output_path.hpp); here only that this build can write the grids at all.
+    const CLI::Validator grid_writer(
+        [](std::string&) {
+            if (!KRS_WITH_OPENVDB)
+                return std::string("this build has no OpenVDB/NanoVDB (install libopenvdb-dev and libnanovdb-dev, "
+                                   "then build again)");
+            return std::string();
+        },
+        "", "grid file");
+    args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")
+        ->check(grid_writer);
+    args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")
+        ->check(grid_writer);
     args.integer("--lod", o.lod, 1, 1600, "reduce the tree to N voxels along each axis before rendering (level of detail, section 9)")
         ->default_str("off");
     double clear_above = 0;

@@ -121,7 +121,15 @@ void write_checked_stream(const std::filesystem::path& file, Fill&& fill)
     errno = 0;
     std::ofstream out(file, std::ios::binary | std::ios::trunc);
     if (!out) throw save_error("cannot open it for writing: " + system_reason(errno, "the stream did not open"));
-    fill(static_cast<std::ostream&>(out));
+    try {
+        fill(static_cast<std::ostream&>(out));
+    } catch (const std::exception& e) {
+        // A writer that checks its own stream (hypertree's binary format, NanoVDB) throws its own
+        // words for a write the system refused; the system's reason is the one worth reporting.
+        const int error = errno;
+        if (out) throw;
+        throw save_error("writing failed: " + system_reason(error, e.what()));
+    }
     const auto failed = [&](const char* when) {
         return save_error(std::string(when) + ": " + system_reason(errno, "the output stream failed"));
     };
