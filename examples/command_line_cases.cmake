@@ -80,10 +80,10 @@ krs_case(hypertree_render  0 "rendered 16x16"                                   
                                                                                    --output <out>/hypertree.png)
 krs_case(hypertree_render  0 "rendered 16x16"                                      --preset B --resolution 16 --normals part_boxes --width 16
                                                                                    --height 16 --threads 1 --output <out>/hypertree.png)
-krs_case(hypertree_render  2 "--save-vdb;'tree.txt';ending in .vdb"                 --save-vdb tree.txt)
-krs_case(hypertree_render  2 "--save-nvdb;'.nvdb';ending in .nvdb"                  --save-nvdb .nvdb)
+krs_case(hypertree_render  2 "--save-vdb;'tree.txt';does not end in .vdb"          --save-vdb tree.txt)
+krs_case(hypertree_render  2 "--save-nvdb;'.nvdb';does not end in .nvdb"           --save-nvdb .nvdb)
 if(KRS_WITH_OPENVDB)
-    krs_case(hypertree_render 2 "--save-vdb;no directory"                          --save-vdb /dev/null/t.vdb)
+    krs_case(hypertree_render 2 "--save-vdb;/dev/null is not a directory"          --save-vdb /dev/null/t.vdb)
     krs_case(hypertree_render 0 "saved the grids to;t.vdb;t.nvdb;rendered 16x16"  --preset C --resolution 16 --width 16
                                                                                   --height 16 --threads 1 --output <out>/hypertree.png
                                                                                   --save-vdb <out>/t.vdb --save-nvdb <out>/t.nvdb)

@@ -58,7 +58,8 @@ inline std::string output_file_problem(const std::string& path, const std::vecto
     const std::string extension = detail::lower(std::filesystem::path(path).extension().string());
     if (!extensions.empty() && std::find(extensions.begin(), extensions.end(), extension) == extensions.end()) {
         std::string listed;
-        for (const std::string& e : extensions) listed += (listed.empty() ? "" : ", ") + e;
+        for (std::size_t i = 0; i < extensions.size(); ++i)
+            listed += (i == 0 ? "" : i + 1 == extensions.size() ? " or " : ", ") + extensions[i];
         return "'" + path + "' does not end in " + listed + " (the format" + (extensions.size() > 1 ? "s" : "") + " written)";
     }
     std::error_code ec;
