@@ -11,7 +11,12 @@ krs_case(krs_tree          2 "--width;'3x';an integer in [1, 16384]"            
 krs_case(krs_tree          2 "--width;'2.5'"                                       --width 2.5)
 krs_case(krs_tree          2 "--height;'1e9'"                                      --height 1e9)
 krs_case(krs_tree          2 "--height;'0';[1, 16384]"                             --height 0)
-krs_case(krs_tree          2 "--levels;'31';[1, 30]"                               --levels 31)
+krs_case(krs_tree          2 "--levels;'21';[1, 20]"                               --levels 21) # old: abort, exit 134
+krs_case(krs_tree          2 "--levels;'30';[1, 20]"                               --levels 30) # --help said [1, 30]
+# The top of --levels renders (3.1 M kernel instances, under krs::expand's 2^22): the range is
+# what the program takes, not a guess (about 10 s and 0.5 GB, the expansion's cost).
+krs_case(krs_tree          0 "kernel instances;wrote"                              --levels 20 --width 4 --height 4 --threads 2
+                                                                                   --output <out>/krs_tree_20.png)
 krs_case(krs_tree          2 "--threads;'-1';[0, 1024]"                            --threads -1)
 krs_case(krs_tree          2 "--seed;' 7'"                                         --seed " 7")
 krs_case(krs_tree          2 "--width;missing"                                     --width)
@@ -80,15 +85,42 @@ krs_case(hypertree_render  0 "rendered 16x16"                                   
                                                                                    --output <out>/hypertree.png)
 krs_case(hypertree_render  0 "rendered 16x16"                                      --preset B --resolution 16 --normals part_boxes --width 16
                                                                                    --height 16 --threads 1 --output <out>/hypertree.png)
-krs_case(hypertree_render  2 "--save-vdb;'tree.txt';ending in .vdb"                 --save-vdb tree.txt)
-krs_case(hypertree_render  2 "--save-nvdb;'.nvdb';ending in .nvdb"                  --save-nvdb .nvdb)
+krs_case(hypertree_render  2 "--save-vdb;'tree.txt';does not end in .vdb"          --save-vdb tree.txt)
+krs_case(hypertree_render  2 "--save-nvdb;'.nvdb';does not end in .nvdb"           --save-nvdb .nvdb)
 if(KRS_WITH_OPENVDB)
-    krs_case(hypertree_render 2 "--save-vdb;no directory"                          --save-vdb /dev/null/t.vdb)
+    krs_case(hypertree_render 2 "--save-vdb;/dev/null is not a directory"          --save-vdb /dev/null/t.vdb)
     krs_case(hypertree_render 0 "saved the grids to;t.vdb;t.nvdb;rendered 16x16"  --preset C --resolution 16 --width 16
                                                                                   --height 16 --threads 1 --output <out>/hypertree.png
                                                                                   --save-vdb <out>/t.vdb --save-nvdb <out>/t.nvdb)
 else()
     krs_case(hypertree_render 2 "--save-vdb;no OpenVDB"                            --save-vdb t.vdb)
+endif()
+
+# Paths that are no definition file, refused at once with the reason: before, /dev/zero was read
+# until memory ran out, a FIFO blocked forever and a 2 GB file was read whole before its first line
+# was refused (io::read_text_file: regular files of at most 16 MiB). The files are made here.
+if(PROGRAM STREQUAL "hypertree_render")
+    file(REMOVE "${WORK_DIR}/fifo.tree" "${WORK_DIR}/sparse.tree")
+    execute_process(COMMAND mkfifo "${WORK_DIR}/fifo.tree")
+    file(TOUCH "${WORK_DIR}/sparse.tree")
+    execute_process(COMMAND truncate --size=2G "${WORK_DIR}/sparse.tree")
+    file(WRITE "${WORK_DIR}/zero.forest" "RESOLUTION 8\nSTORAGETYPE dense\nTREE /dev/zero\n")
+endif()
+krs_case(hypertree_render  1 "/dev/zero:1:1: cannot read the definition file: it is not a regular file"
+                             --tree /dev/zero --output <out>/x.png)
+krs_case(hypertree_render  1 "fifo.tree:1:1: cannot read the definition file: it is not a regular file"
+                             --tree <out>/fifo.tree --output <out>/x.png)
+krs_case(hypertree_render  1 "sparse.tree:1:1: cannot read the definition file: it is 2147483648 bytes, over the limit of 16777216"
+                             --tree <out>/sparse.tree --output <out>/x.png)
+krs_case(hypertree_render  1 ":1:1: cannot read the definition file: it is a directory" --tree <out> --output <out>/x.png)
+krs_case(hypertree_render  1 "none.tree:1:1: cannot read the definition file: No such file or directory"
+                             --tree <out>/none.tree --output <out>/x.png)
+krs_case(hypertree_render  1 "/dev/zero:1:1: cannot read the forest file: it is not a regular file"
+                             --forest /dev/zero --output <out>/x.png)
+krs_case(hypertree_render  1 "zero.forest:3:1: cannot read the tree file '/dev/zero': it is not a regular file"
+                             --forest <out>/zero.forest --output <out>/x.png)
+if(PROGRAM STREQUAL "hypertree_render")
+    file(REMOVE "${WORK_DIR}/fifo.tree" "${WORK_DIR}/sparse.tree")
 endif()
 
 # krs_scenes

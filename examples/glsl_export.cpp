@@ -19,6 +19,7 @@
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/output_path.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -32,36 +33,34 @@ namespace {
 
 bool to_stdout(const std::string& path) { return path.empty() || path == "-"; }
 
-// Writes text to path (empty or -: stdout); a file half written is removed.
+// The extensions a GLSL text file may have (--output).
+const std::vector<std::string> glsl_extensions{".glsl", ".frag"};
+
+// Writes text to path (empty or -: stdout) through krs::write_file: whole or not at all, an
+// earlier file untouched when it fails.
 bool write(const std::string& path, const std::string& text)
 {
     if (to_stdout(path)) {
-        std::cout << text;
-        return bool(std::cout);
+        std::cout << text << std::flush;
+        if (std::cout) return true;
+        std::fprintf(stderr, "glsl_export: cannot write to stdout\n");
+        return false;
     }
-    std::ofstream out(path, std::ios::binary);
-    const bool opened = out.is_open();
-    out << text;
-    out.close(); // flushes: a full disk shows here
-    if (opened && !out.fail()) return true;
-    std::fprintf(stderr, "glsl_export: cannot write %s\n", path.c_str());
-    std::error_code ignored;
-    if (opened) std::filesystem::remove(path, ignored); // only what this call created or truncated
-    return false;
+    try {
+        krs::write_file("", path, text);
+        return true;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "glsl_export: %s\n", e.what());
+        return false;
+    }
 }
 
-bool ends_with_png(std::string path)
-{
-    std::transform(path.begin(), path.end(), path.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return path.size() > 4 && path.ends_with(".png");
-}
-
-// RGBA rows bottom-up (as the GPU reads them back) to an RGB PNG, top row first. The values are
-// already encoded for display (the program takes sqrt of the colour), so no gamma is applied, and
-// each is stored as an 8-bit framebuffer stores it (krs::glsl::framebuffer_byte: ties to even),
-// handed to write_png as that byte over 255 (which its round(255 v) gives back exactly); alpha is
-// 1 everywhere and left out.
-bool write_reference(const std::string& path, const std::vector<float>& rgba, int width, int height)
+// RGBA rows bottom-up (as the GPU reads them back) to the bytes of an RGB PNG, top row first. The
+// values are already encoded for display (the program takes sqrt of the colour), so no gamma is
+// applied, and each is stored as an 8-bit framebuffer stores it (krs::glsl::framebuffer_byte: ties
+// to even), handed to png_bytes as that byte over 255 (which its round(255 v) gives back exactly);
+// alpha is 1 everywhere and left out.
+std::vector<unsigned char> reference_png(const std::vector<float>& rgba, int width, int height)
 {
     std::vector<float> rgb(std::size_t(width) * std::size_t(height) * 3);
     for (int y = 0; y < height; ++y)
@@ -71,9 +70,7 @@ bool write_reference(const std::string& path, const std::vector<float>& rgba, in
                     float(krs::glsl::framebuffer_byte(
                         rgba[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 4 + std::size_t(c)])) /
                     255.0f;
-    if (!example::write_png(path, width, height, rgb, 1.0f)) return false;
-    std::fprintf(stderr, "glsl_export: wrote the %dx%d reference frame to %s\n", width, height, path.c_str());
-    return true;
+    return example::png_bytes(width, height, rgb, 1.0f);
 }
 
 } // namespace
@@ -89,7 +86,7 @@ int main(int argc, char** argv)
     args.choice("--mode", mode, {"constants", "buffer", "uniform-buffer"},
                 "the scene's data as constants, in a buffer (UBO for 330 and ES, SSBO for 450), or in a "
                 "uniform buffer (450: at binding 0, for Vulkan)");
-    args.text("--output", output, "the file to write (default and -: stdout)", "FILE");
+    args.text("--output", output, "the file to write: .glsl or .frag (default and -: stdout)", "FILE.glsl");
     std::string prefix = "krs_";
     args.app()
         .add_option("--prefix", prefix, "the start of every global name of a snippet (default krs_)")
@@ -101,7 +98,7 @@ int main(int argc, char** argv)
                                                               "digits and _, a letter first and _ last, not gl_, no __)";
             },
             "", "prefix"));
-    args.text("--all", all, "write every scene in every target and mode into this folder", "DIR");
+    args.text("--all", all, "write every scene in every target and mode into this folder (made if missing)", "DIR");
     std::string reference;
     int width = 640, height = 360;
     args.text("--reference", reference, "write the CPU reference frame of the scene's Shadertoy program to this PNG file",
@@ -115,9 +112,11 @@ int main(int argc, char** argv)
     if (reference.empty() && (args.app().count("--width") > 0 || args.app().count("--height") > 0))
         args.fail("--width, --height: apply to the reference frame: give --reference FILE.png");
     if (!reference.empty() && !all.empty()) args.fail("--reference: writes one scene's frame, not with --all");
-    // OpenImageIO picks the format by the extension: a .jpg would be lossy, not the 8-bit values.
-    if (args.app().count("--reference") > 0 && !ends_with_png(reference))
-        args.fail("--reference: '" + reference + "' is not a .png file (the frame is written as PNG only)");
+    // Refused before the work, the same way in every program (support/output_path.hpp); the frame
+    // is PNG only (a .jpg would be lossy, not the 8-bit values).
+    if (!reference.empty()) example::require_output_file(args, "--reference", reference, {".png"});
+    if (!to_stdout(output)) example::require_output_file(args, "--output", output, glsl_extensions);
+    if (!all.empty()) example::require_output_folder(args, "--all", all);
     try {
         if (!all.empty()) {
             bool ok = true;
@@ -143,18 +142,35 @@ int main(int argc, char** argv)
         bool ok = false;
         ex::for_each_scene([&](const auto& s) {
             if (s.name != scene) return;
-            // Both made in memory first (either may throw), then written; a failed PNG takes the
-            // text file written just before it away too, so the command leaves both or neither.
+            // Both made in memory first (either may throw), then written. With a file for each,
+            // the text's temporary is renamed only after the PNG is in place, so a failed PNG
+            // leaves the earlier text file (and PNG) as they were: both or neither.
             const bool text_wanted = reference.empty() || !output.empty();
             const std::string text = text_wanted ? ex::file_text(s, kind, prefix) : std::string();
-            const std::vector<float> frame =
-                reference.empty() ? std::vector<float>() : ex::reference_frame(s, s.camera, width, height);
-            ok = !text_wanted || write(output, text);
-            if (ok && !reference.empty()) {
-                ok = write_reference(reference, frame, width, height);
-                std::error_code ignored;
-                if (!ok && text_wanted && !to_stdout(output)) std::filesystem::remove(output, ignored);
+            if (reference.empty()) {
+                ok = write(output, text);
+                return;
             }
+            const std::vector<unsigned char> png = reference_png(ex::reference_frame(s, s.camera, width, height), width, height);
+            const std::string_view png_view(reinterpret_cast<const char*>(png.data()), png.size());
+            try {
+                if (text_wanted && !to_stdout(output))
+                    krs::write_file("", output, [&](std::ostream& out) {
+                        // Flushed first: a text the disk refuses fails here, before the PNG
+                        // is renamed into place (write_file reports the failed stream).
+                        out << text << std::flush;
+                        if (out) krs::write_file("", reference, png_view);
+                    });
+                else {
+                    krs::write_file("", reference, png_view);
+                    if (text_wanted && !write(output, text)) return;
+                }
+            } catch (const std::exception& e) {
+                std::fprintf(stderr, "glsl_export: %s\n", e.what());
+                return;
+            }
+            std::fprintf(stderr, "glsl_export: wrote the %dx%d reference frame to %s\n", width, height, reference.c_str());
+            ok = true;
         });
         return ok ? 0 : 1;
     } catch (const std::exception& e) {

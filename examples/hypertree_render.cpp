@@ -37,6 +37,7 @@
 #include "hypertree/render/render.hpp"
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/output_path.hpp"
 #include "support/progress.hpp"
 
 #ifndef KRS_WITH_OPENVDB
@@ -68,7 +69,7 @@ using clock_type = std::chrono::steady_clock;
 double seconds_since(clock_type::time_point t0) { return std::chrono::duration<double>(clock_type::now() - t0).count(); }
 
 struct settings {
-    std::string tree_file, forest_file, preset = "A", output = "out/hypertree.png", save_volume, save_vdb, save_nvdb;
+    std::string tree_file, forest_file, preset = "A", output = "hypertree.png", save_volume, save_vdb, save_nvdb;
     std::optional<int> resolution;
     storage_type store = storage_type::bit_array;
     int width = 480, height = 480, supersampling = 0, threads = 0; // supersampling 0 = auto
@@ -151,7 +152,7 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     const auto t1 = clock_type::now();
     const image img = render<krs::packet_f>(marcher, camera, rs);
     const double render_seconds = seconds_since(t1);
-    if (!example::write_png(o.output, img.width, img.height, img.rgb)) return 1;
+    if (!example::write_png("hypertree_render", o.output, img.width, img.height, img.rgb)) return 1;
     std::printf("%zu voxels, %s store %.2f MB built in %.1f ms; created in %.1f ms\n", store.nonempty_count(),
                 std::string(name_of(o.store)).c_str(), double(store.memory_bytes()) / 1e6, store_seconds * 1e3, creation_seconds * 1e3);
     std::printf("rendered %dx%d, supersampling %d, %d thread(s), in %.1f ms (%.2f M lookups) -> %s\n", img.width, img.height,
@@ -185,21 +186,22 @@ int main(int argc, char** argv)
     args.number("--density-scale", o.density_scale, 0, 100, true, "k of section 8.1");
     args.integer("--threads", o.threads, 0, 1024, "threads (0: all cores)");
     args.integer("--seed", o.seed, 0, 1 << 30, "seed of the generation");
-    args.text("--output", o.output, "the PNG to write", "FILE");
-    args.text("--save-volume", o.save_volume, "also save the voxel store (binary, with a checksum)", "FILE");
-    // A file name, ending as the format's files do (what Houdini and Blender look for).
-    const auto grid_file = [](const char* extension) {
-        return CLI::Validator(
-            [extension](std::string& text) {
-                if (text.size() <= std::string(extension).size() || !text.ends_with(extension))
-                    return "'" + text + "' is not a file name ending in " + extension;
-                if (!KRS_WITH_OPENVDB) return std::string("this build has no OpenVDB/NanoVDB (install libopenvdb-dev and libnanovdb-dev, then build again)");
-                return std::string();
-            },
-            "", "grid file");
-    };
-    args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")->check(grid_file(".vdb"));
-    args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")->check(grid_file(".nvdb"));
+    args.text("--output", o.output, "the PNG to write (.png; its directory must exist)", "FILE.png");
+    args.text("--save-volume", o.save_volume, "also save the voxel store (binary, with a checksum; any name)", "FILE");
+    // The extension (what Houdini and Blender look for) is checked with the other outputs after
+    // parsing (support/output_path.hpp); here only that this build can write the grids at all.
+    const CLI::Validator grid_writer(
+        [](std::string&) {
+            if (!KRS_WITH_OPENVDB)
+                return std::string("this build has no OpenVDB/NanoVDB (install libopenvdb-dev and libnanovdb-dev, "
+                                   "then build again)");
+            return std::string();
+        },
+        "", "grid file");
+    args.text("--save-vdb", o.save_vdb, "also save the store as OpenVDB grids: density, level, part", "FILE.vdb")
+        ->check(grid_writer);
+    args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")
+        ->check(grid_writer);
     args.integer("--lod", o.lod, 1, 1600, "reduce the tree to N voxels along each axis before rendering (level of detail, section 9)")
         ->default_str("off");
     double clear_above = 0;
@@ -235,18 +237,13 @@ int main(int argc, char** argv)
     }
     if (normals == "line_flow" && !o.forest_file.empty())
         args.fail("--normals line_flow needs one tree with a line generator (--tree or --preset), not a --forest");
-    // Refused before the tree is generated, which can take minutes: an output whose folder cannot
-    // be made (folders are made as for the PNG).
-    for (const auto& [option, path] : {std::pair{"--save-vdb", o.save_vdb}, std::pair{"--save-nvdb", o.save_nvdb}}) {
-        if (path.empty()) continue;
-        const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-        std::error_code ec;
-        if (!parent.empty() && (std::filesystem::create_directories(parent, ec), !std::filesystem::is_directory(parent, ec))) {
-            std::fprintf(stderr, "%s: %s: '%s' cannot be written: no directory %s can be made there\n", args.program().c_str(), option,
-                         path.c_str(), parent.string().c_str());
-            return 2;
-        }
-    }
+    // Refused before the tree is generated, which can take minutes (support/output_path.hpp).
+    example::require_output_file(args, "--output", o.output, {".png"});
+    if (!o.save_vdb.empty()) example::require_output_file(args, "--save-vdb", o.save_vdb, {".vdb"});
+    if (!o.save_nvdb.empty()) example::require_output_file(args, "--save-nvdb", o.save_nvdb, {".nvdb"});
+    // The binary format has no extension of its own: any name whose directory takes a file.
+    if (!o.save_volume.empty())
+        example::require_output_file(args, "--save-volume", o.save_volume, {});
     if (resolution_option->count() > 0) o.resolution = resolution;
     const bool store_given = store_option->count() > 0;
     o.store = storage_type(std::find(store_names.begin(), store_names.end(), store) - store_names.begin());

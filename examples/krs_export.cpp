@@ -45,6 +45,7 @@
 #include "krs/mesh/instances.hpp"
 
 #include "support/command_line.hpp"
+#include "support/output_path.hpp"
 #include "support/progress.hpp"
 
 #include <algorithm>
@@ -137,11 +138,12 @@ int main(int argc, char** argv)
     if (attributes != 0 && mesh.empty()) args.fail("--uv, --kernel-colors: only with --mesh");
     if (mesh.empty() && instances.empty())
         args.fail("--mesh: give the file to write (FILE.ply, FILE.obj, FILE.glb or FILE.gltf), or --instances FILE.gltf");
+    // A format krs_export writes, a directory that takes the file, not a directory: checked as
+    // every program checks its outputs (support/output_path.hpp).
+    if (!mesh.empty()) example::require_output_file(args, "--mesh", mesh, {".ply", ".obj", ".glb", ".gltf"});
+    if (!instances.empty()) example::require_output_file(args, "--instances", instances, {".gltf", ".glb"});
     const std::string ext = lower_extension(mesh);
-    if (!mesh.empty() && ext != ".ply" && ext != ".obj" && ext != ".glb" && ext != ".gltf")
-        args.fail("--mesh: '" + mesh + "' is not a .ply, .obj, .glb or .gltf file");
     const std::string iext = lower_extension(instances);
-    if (!instances.empty() && iext != ".glb" && iext != ".gltf") args.fail("--instances: '" + instances + "' is not a .gltf or .glb file");
 #if !defined(KRS_WITH_GLTF)
     if (!instances.empty()) args.fail("--instances: this build has no glTF writer (it needs tinygltf, libtinygltf-dev)");
 #endif

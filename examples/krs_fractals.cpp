@@ -43,6 +43,7 @@
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/output_path.hpp"
 #include "support/tiles.hpp"
 
 #include <algorithm>
@@ -75,7 +76,7 @@ options parse(int argc, char** argv)
     args.integer("--width", o.width, 1, 8192, "image width in pixels");
     args.integer("--height", o.height, 1, 8192, "image height in pixels");
     args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
-    args.text("--output-dir", o.output_dir, "the folder the PNG files go to", "DIR");
+    args.text("--output-dir", o.output_dir, "the folder the PNG files go to (made if missing)", "DIR");
     args.choice("--colouring", o.colouring, {"on", "off"}, "colour the KIFS frames by orbit traps and fold counts");
     args.choice("--slice", o.slice, {"sphere", "square", "cube", "menger", "sierpinski", "koch", "lotus", "cube_singularity"},
                 "write a cross-section of this field's distance and gradient instead of the frames");
@@ -90,6 +91,7 @@ options parse(int argc, char** argv)
     if (o.slice.empty())
         for (const CLI::Option* given : {plane, offset, extent, spacing})
             if (given->count() > 0) args.fail(given->get_name() + " needs --slice FIELD");
+    example::require_output_folder(args, "--output-dir", o.output_dir);
     o.threads = example::thread_count(o.threads);
     return o;
 }
@@ -165,7 +167,7 @@ double render(const options& opt, const std::string& name,
     for (const ray_counts& c : counts) total.rays += c.rays, total.steps += c.steps;
 
     const std::string path = opt.output_dir + "/" + name + ".png";
-    if (!example::write_png(path, opt.width, opt.height, pixels)) std::exit(1);
+    if (!example::write_png("krs_fractals", path, opt.width, opt.height, pixels)) std::exit(1);
     std::printf("%-16s %6.2f s  %7.2f core-us per ray  %6.1f steps per ray  -> %s\n", name.c_str(), seconds,
                 1e6 * seconds * opt.threads / double(std::max(total.rays, 1LL)),
                 double(total.steps) / double(std::max(total.rays, 1LL)), path.c_str());
@@ -222,8 +224,8 @@ int write_slice(const options& opt, const F& field)
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const std::string stem = opt.output_dir + "/slice_" + opt.slice;
-    if (!example::write_png(stem + "_distance.png", opt.width, opt.height, image.distance_image()) ||
-        !example::write_png(stem + "_gradient.png", opt.width, opt.height, image.gradient_image()))
+    if (!example::write_png("krs_fractals", stem + "_distance.png", opt.width, opt.height, image.distance_image()) ||
+        !example::write_png("krs_fractals", stem + "_gradient.png", opt.width, opt.height, image.gradient_image()))
         return 1;
     std::printf("slice %s: %dx%d, plane %s at %g, extent %g, iso spacing %g, gradient step %.3g: flagged %zu of %zu "
                 "pixels (slope along the gradient > 1 + %g, or a distance not finite: %zu pixels, magenta), max slope %.5g, "

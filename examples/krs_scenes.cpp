@@ -44,6 +44,7 @@
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/output_path.hpp"
 #include "support/tiles.hpp"
 
 #include <algorithm>
@@ -265,7 +266,7 @@ double render(const options& opt, const std::string& name, const complexity& sce
     for (const ray_counts& c : counts) total.add(c);
 
     const std::string path = opt.output_dir + "/" + name + ".png";
-    if (!example::write_png(path, opt.width, opt.height, pixels)) std::exit(1);
+    if (!example::write_png("krs_scenes", path, opt.width, opt.height, pixels)) std::exit(1);
     const double rays = double(total.primary + total.secondary);
     std::printf("%-8s %7.2f s  (%dx%d, %d threads) -> %s\n", name.c_str(), seconds, opt.width, opt.height, opt.threads,
                 path.c_str());
@@ -685,10 +686,11 @@ options parse(int argc, char** argv)
     std::vector<std::string> names;
     for (const scene_entry& e : scenes) names.emplace_back(e.name);
     args.choice("--only", o.only, names, "render this scene only (default: all)");
-    args.text("--output-dir", o.output_dir, "the folder the PNG files go to", "DIR");
+    args.text("--output-dir", o.output_dir, "the folder the PNG files go to (made if missing)", "DIR");
     args.number("--reflectivity", o.reflectivity, 0.0, 1.0, false, "mirrors scene: reflectivity of the spheres at normal incidence "
                  "(Schlick), each hit tracing one reflected ray; 0: no reflections");
     args.parse(argc, argv);
+    example::require_output_folder(args, "--output-dir", o.output_dir);
     o.threads = example::thread_count(o.threads);
     return o;
 }
@@ -698,12 +700,6 @@ options parse(int argc, char** argv)
 int main(int argc, char** argv)
 {
     const options opt = parse(argc, argv);
-    std::error_code made;
-    std::filesystem::create_directories(opt.output_dir, made);
-    if (made) {
-        std::fprintf(stderr, "krs_scenes: cannot create --output-dir %s: %s\n", opt.output_dir.c_str(), made.message().c_str());
-        return 1;
-    }
     double total = 0;
     int rendered = 0;
     for (const scene_entry& e : scenes) {

@@ -19,6 +19,7 @@
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
+#include "support/output_path.hpp"
 #include "support/progress.hpp"
 #include "support/tiles.hpp"
 
@@ -50,10 +51,13 @@ options parse(int argc, char** argv)
     args.integer("--width", o.width, 1, 16384, "image width in pixels");
     args.integer("--height", o.height, 1, 16384, "image height in pixels");
     args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
-    args.integer("--levels", o.levels, 1, 30, "branching levels of the tree");
+    // At most 20: each level doubles the twigs, and 21 levels make 6.3 M kernel instances, over
+    // the 4.19 M (2^22) that krs::expand takes (the renderer expands every instance).
+    args.integer("--levels", o.levels, 1, 20, "branching levels of the tree (20 makes ~3.1 M kernel instances)");
     args.integer("--seed", o.seed, 0, 1 << 30, "seed of the tree's random growth");
-    args.text("--output", o.output, "the PNG to write", "FILE");
+    args.text("--output", o.output, "the PNG to write (.png; its directory must exist)", "FILE.png");
     args.parse(argc, argv);
+    example::require_output_file(args, "--output", o.output, {".png"});
     o.threads = example::thread_count(o.threads);
     return o;
 }
@@ -66,9 +70,8 @@ krs::vec3f sky(const krs::vec3f& d)
 
 } // namespace
 
-int main(int argc, char** argv)
+int render(const options& opt)
 {
-    const options opt = parse(argc, argv);
     krs::model::tree_style style;
     style.levels = opt.levels;
     style.seed = opt.seed;
@@ -213,7 +216,20 @@ int main(int argc, char** argv)
                 seconds, opt.threads, 1e6 * seconds * opt.threads / rays, double(steps.load()) / rays, W,
                 100.0 * double(hits.load()) / rays);
 
-    if (!example::write_png(opt.output, opt.width, opt.height, pixels)) return 1;
+    if (!example::write_png("krs_tree", opt.output, opt.width, opt.height, pixels)) return 1;
     std::printf("wrote %s (%dx%d)\n", opt.output.c_str(), opt.width, opt.height);
     return 0;
+}
+
+// A failure while working (a tree the expansion refuses, an image that cannot be written) is a
+// message and exit status 1, never an abort.
+int main(int argc, char** argv)
+{
+    const options opt = parse(argc, argv);
+    try {
+        return render(opt);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "krs_tree: %s\n", e.what());
+        return 1;
+    }
 }

@@ -33,6 +33,7 @@
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
 #include "support/file_watch.hpp"
+#include "support/output_path.hpp"
 #include "support/gl_window.hpp"
 #include "support/progressive_frame.hpp"
 #include "support/shadertoy_host.hpp"
@@ -99,6 +100,9 @@ options parse(int argc, char** argv)
     if (!o.screenshot.empty() && !o.screenshot.ends_with(".png"))
         args.fail("--screenshot: '" + o.screenshot +
                   "' is not a .png file (frames are written as PNG)");
+    // Where a run ends in a screenshot, its path is checked before the window opens, as every
+    // program's outputs are (support/output_path.hpp).
+    if (o.headless() && !o.screenshot.empty()) example::require_output_file(args, "--screenshot", o.screenshot, {".png"});
     return o;
 }
 
@@ -161,8 +165,11 @@ struct viewer {
 
 bool write_frame(const example::progressive_frame& frame, const std::string& path)
 {
-    if (!example::write_png_bytes(path, frame.width(), frame.height(), frame.read_rgb()))
-        return false;
+    // The framebuffer's bytes as values b / 255, which write_png's round(255 v) gives back exactly.
+    const std::vector<unsigned char> bytes = frame.read_rgb();
+    std::vector<float> rgb(bytes.size());
+    std::transform(bytes.begin(), bytes.end(), rgb.begin(), [](unsigned char b) { return float(b) / 255.0f; });
+    if (!example::write_png("krs_view", path, frame.width(), frame.height(), rgb, 1.0f)) return false;
     std::printf("krs_view: wrote the %dx%d frame (%u sample%s) to %s\n", frame.width(),
                 frame.height(), frame.samples(), frame.samples() == 1 ? "" : "s", path.c_str());
     return true;

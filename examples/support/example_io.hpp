@@ -5,6 +5,7 @@
 
 #include "krs/io/write_then_rename.hpp"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -24,49 +26,49 @@ inline int thread_count(int requested)
     return requested > 0 ? requested : int(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-// RGB bytes (row-major, top row first) as a PNG, creating the folder. The file is written whole or
-// not at all (krs/io/write_then_rename.hpp: a temporary file beside it, renamed over the path once
-// closed), so a viewer of the path never reads half an image and a failed write leaves any earlier
-// file as it was. Returns false after printing the reason.
-inline bool write_png_bytes(const std::string& path, int width, int height,
-                            const std::vector<unsigned char>& bytes)
+// The PNG file of linear RGB floats (row-major, top row first), 8-bit sRGB-ish (gamma 2.2), made
+// in memory by OpenImageIO. `gamma` 1 writes values that are already encoded for display (a
+// shader's output) as they are: round(255 v), as a GL framebuffer of 8-bit channels stores them.
+// Throws std::runtime_error with OpenImageIO's reason when it cannot encode the image.
+inline std::vector<unsigned char> png_bytes(int width, int height, const std::vector<float>& rgb, float gamma = 2.2f)
 {
-    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-    std::error_code made;
-    if (!folder.empty()) std::filesystem::create_directories(folder, made);
-    try {
-        krs::detail::write_then_rename(
-            "write_png", path, [&](const std::filesystem::path& partial) {
-                // The format from the path's extension: the temporary name ends in ".partial-...".
-                auto file = OIIO::ImageOutput::create(path);
-                if (!file) throw std::runtime_error(OIIO::geterror());
-                const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-                // close() flushes: it can fail too (a full disk).
-                if (!file->open(partial.string(), spec) ||
-                    !file->write_image(OIIO::TypeDesc::UINT8, bytes.data()) || !file->close())
-                    throw std::runtime_error(file->geterror());
-            });
-        return true;
-    } catch (const krs::save_error& e) {
-        std::fprintf(stderr, "cannot write %s: %s%s%s\n", path.c_str(), e.what(), made ? "; " : "",
-                     made ? made.message().c_str() : "");
-        return false;
-    }
-}
-
-// Writes linear RGB floats (row-major, top row first) as an 8-bit sRGB-ish PNG (gamma 2.2), as
-// write_png_bytes writes. `gamma` 1 writes values that are already encoded for display (a shader's
-// output) as they are: round(255 v), as a GL framebuffer of 8-bit channels stores them.
-inline bool write_png(const std::string& path, int width, int height, const std::vector<float>& rgb,
-                      float gamma = 2.2f)
-{
-    std::vector<unsigned char> bytes(rgb.size());
+    std::vector<unsigned char> pixels(rgb.size());
     for (std::size_t i = 0; i < rgb.size(); ++i) {
         const float v = std::clamp(rgb[i], 0.0f, 1.0f);
-        bytes[i] =
-            (unsigned char)std::lround(255.0f * (gamma == 1.0f ? v : std::pow(v, 1.0f / gamma)));
+        pixels[i] = (unsigned char)std::lround(255.0f * (gamma == 1.0f ? v : std::pow(v, 1.0f / gamma)));
     }
-    return write_png_bytes(path, width, height, bytes);
+    // Encoded into memory (an IOProxy, which OIIO's PNG writer supports), not into the file: OIIO's
+    // own file writes go unchecked (a full disk gave a truncated PNG and success), while
+    // krs::write_file checks every write of the bytes it is given.
+    std::vector<unsigned char> encoded;
+    OIIO::Filesystem::IOVecOutput memory(encoded);
+    auto out = OIIO::ImageOutput::create("png");
+    if (!out) throw std::runtime_error("OpenImageIO has no PNG writer: " + OIIO::geterror());
+    const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    const bool written = out->set_ioproxy(&memory) && out->open("memory.png", spec) &&
+                         out->write_image(OIIO::TypeDesc::UINT8, pixels.data());
+    const bool closed = out->close(); // close() finishes the PNG: it can fail too
+    if (!written || !closed || out->has_error()) {
+        const std::string why = out->geterror();
+        throw std::runtime_error("OpenImageIO could not encode the PNG: " + (why.empty() ? std::string("no reason given") : why));
+    }
+    return encoded;
+}
+
+// Writes the image as a PNG file at `path` through krs::write_file (a temporary beside it, every
+// write checked, renamed over it when whole; no folder is made). Returns false after printing
+// "<program>: <path>: <what failed>: <the system's reason>"; an earlier file at `path` is untouched.
+inline bool write_png(const std::string& program, const std::string& path, int width, int height, const std::vector<float>& rgb,
+                      float gamma = 2.2f)
+{
+    try {
+        const std::vector<unsigned char> bytes = png_bytes(width, height, rgb, gamma);
+        krs::write_file("", path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+        return true;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+        return false;
+    }
 }
 
 } // namespace example

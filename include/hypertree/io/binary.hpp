@@ -400,16 +400,12 @@ void save(const S& store, std::ostream& out)
     writer.finish();
 }
 
-// Writes to a temporary file beside `path` (detail::create_partial_file) and renames it over `path`
-// once complete, so a failed save never leaves a truncated file where a good one was.
+// Writes through krs::write_file (a temporary beside `path`, every write checked, renamed over
+// `path` once complete), so a failed save never leaves a truncated file where a good one was.
 template <voxel_store S>
 void save(const S& store, const std::filesystem::path& path)
 {
-    detail::write_then_rename("hypertree save", path, [&](const std::filesystem::path& partial) {
-        std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-        if (!out) throw save_error("cannot open it for writing");
-        save(store, out);
-    });
+    krs::write_file("hypertree save", path, [&](std::ostream& out) { save(store, out); });
 }
 
 // The checked hypervolume and voxel list of a saved tree, without building a store (to convert

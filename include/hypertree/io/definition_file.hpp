@@ -673,9 +673,10 @@ inline parsed_tree parse_definition(std::string_view text, std::string_view file
 // Reads and parses a definition file; messages name it as `path` is written.
 inline parsed_tree load_definition(const std::filesystem::path& path)
 {
-    const std::optional<std::string> text = io::read_text_file(path);
-    if (!text) throw definition_error(path.string(), {1, 1}, "cannot read the definition file");
-    return parse_definition(*text, path.string());
+    const io::text_file file = io::read_text_file(path);
+    if (!file.problem.empty())
+        throw definition_error(path.string(), {1, 1}, "cannot read the definition file: " + file.problem);
+    return parse_definition(file.text, path.string());
 }
 
 } // namespace hypertree

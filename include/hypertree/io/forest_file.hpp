@@ -131,15 +131,17 @@ struct loaded_forest {
 
 inline loaded_forest load_forest(const std::filesystem::path& path)
 {
-    const std::optional<std::string> text = io::read_text_file(path);
-    if (!text) throw definition_error(path.string(), {1, 1}, "cannot read the forest file");
+    const io::text_file file = io::read_text_file(path);
+    if (!file.problem.empty())
+        throw definition_error(path.string(), {1, 1}, "cannot read the forest file: " + file.problem);
     loaded_forest forest;
-    forest.listing = parse_forest(*text, path.string());
+    forest.listing = parse_forest(file.text, path.string());
     for (const forest_tree& tree : forest.listing.trees) {
-        const std::optional<std::string> tree_text = io::read_text_file(tree.file);
-        if (!tree_text)
-            throw definition_error(forest.listing.file_name, tree.at, "cannot read the tree file '" + tree.file.string() + "'");
-        forest.trees.push_back(parse_definition(*tree_text, tree.file.string()));
+        const io::text_file tree_file = io::read_text_file(tree.file);
+        if (!tree_file.problem.empty())
+            throw definition_error(forest.listing.file_name, tree.at,
+                                   "cannot read the tree file '" + tree.file.string() + "': " + tree_file.problem);
+        forest.trees.push_back(parse_definition(tree_file.text, tree.file.string()));
         // Render-time noise is one field for the whole march, which renders every tree at once: a
         // tree cannot carry its own. Refused at its line rather than dropped.
         if (const auto& at = forest.trees.back().render_perturb_at)

@@ -17,6 +17,7 @@
 #include "krs/core/validate.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -191,16 +192,50 @@ inline source_position end_of_input(std::string_view text)
     return at;
 }
 
-// A whole file as text, or nothing when it cannot be read.
-inline std::optional<std::string> read_text_file(const std::filesystem::path& path)
+// The largest definition or forest file read, in bytes (16 MiB). The example files are a few
+// kilobytes; the limit is what keeps a wrong path (a 2 GB file, a log) from being read whole into
+// memory before the parser refuses its first line.
+inline constexpr std::uintmax_t max_text_file_bytes = std::uintmax_t(16) << 20;
+
+// A definition or forest file's text, or why it cannot be read (`problem`, the text then empty).
+struct text_file {
+    std::string text;
+    std::string problem;
+};
+
+// Reads `path` whole when it is a regular file of at most max_text_file_bytes. Anything else is
+// refused before it is opened: opening a FIFO blocks until a writer comes, and a device such as
+// /dev/zero never ends. The limit is checked on the size the file reports and again while reading
+// (a file that grows, or one of /proc that reports 0), so at most max_text_file_bytes + 1 bytes
+// are read. `problem` gives the system's reason where there is one.
+inline text_file read_text_file(const std::filesystem::path& path)
 {
-    std::error_code ignored;
-    if (std::filesystem::is_directory(path, ignored)) return std::nullopt;
+    const std::string limit = "the limit of " + std::to_string(max_text_file_bytes) + " bytes (" +
+                              std::to_string(max_text_file_bytes >> 20) + " MiB)";
+    std::error_code ec;
+    const std::filesystem::file_status status = std::filesystem::status(path, ec);
+    if (!std::filesystem::exists(status))
+        return {{}, ec ? ec.message() : std::string("No such file or directory")};
+    if (std::filesystem::is_directory(status)) return {{}, "it is a directory"};
+    if (!std::filesystem::is_regular_file(status))
+        return {{}, "it is not a regular file (a FIFO, a device or a socket); only regular files are read"};
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size > max_text_file_bytes)
+        return {{}, "it is " + std::to_string(size) + " bytes, over " + limit};
+    errno = 0;
     std::ifstream in(path, std::ios::binary);
-    if (!in) return std::nullopt;
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) return std::nullopt;
-    return text;
+    const auto system_reason = [](const char* fallback) {
+        return errno != 0 ? std::generic_category().message(errno) : std::string(fallback);
+    };
+    if (!in) return {{}, system_reason("it cannot be opened")};
+    std::string text;
+    char block[1 << 16];
+    while (in.read(block, sizeof block) || in.gcount() > 0) {
+        text.append(block, std::size_t(in.gcount()));
+        if (text.size() > max_text_file_bytes) return {{}, "it holds more than " + limit};
+    }
+    if (in.bad()) return {{}, system_reason("reading it failed")};
+    return {std::move(text), {}};
 }
 
 // What a number must satisfy beyond being one.

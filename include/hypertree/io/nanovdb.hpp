@@ -110,13 +110,7 @@ void save_nvdb(const S& store, const std::filesystem::path& path, const nvdb_gri
     std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> handles;
     handles.push_back(std::move(g.density));
     handles.push_back(std::move(g.level));
-    detail::write_then_rename("save_nvdb", path, [&](const std::filesystem::path& partial) {
-        std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error("cannot open it for writing");
-        nanovdb::io::writeGrids(out, handles, nanovdb::io::Codec::NONE);
-        out.flush();
-        if (!out) throw std::runtime_error("the output stream failed while writing");
-    });
+    krs::write_file("save_nvdb", path, [&](std::ostream& out) { nanovdb::io::writeGrids(out, handles, nanovdb::io::Codec::NONE); });
 }
 
 } // namespace hypertree

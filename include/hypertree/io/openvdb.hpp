@@ -141,6 +141,18 @@ vdb_grids to_openvdb(const S& store, const vdb_grid_names& names = {})
     return g;
 }
 
+namespace detail {
+
+// openvdb::io::File::write opens its own std::ofstream and never looks at it again, so a full
+// disk leaves a truncated .vdb it reports as written. Its base, io::Archive, writes the same file
+// (header, grid offsets, grids: `seekable`, as File does) to a stream given to it; this exposes
+// that, so the stream is krs::write_file's, whose every write is checked.
+struct vdb_file_writer : openvdb::io::Archive {
+    void write_to(std::ostream& out, const openvdb::GridCPtrVec& grids) const { Archive::write(out, grids, /*seekable=*/true); }
+};
+
+} // namespace detail
+
 // Writes the store's three grids to an OpenVDB file (.vdb). Refuses an empty store, an empty
 // path or a directory, and bad names (invalid_parameter); a failed write is a save_error naming
 // the path, and leaves no file behind.
@@ -153,12 +165,7 @@ void save_vdb(const S& store, const std::filesystem::path& path, const vdb_grid_
         throw invalid_parameter("save_vdb store", "must hold at least one non-empty voxel (an empty tree has no grid to write)",
                                 "0 voxels");
     const vdb_grids g = to_openvdb(store, names);
-    detail::write_then_rename("save_vdb", path, [&](const std::filesystem::path& partial) {
-        openvdb::GridPtrVec grids{g.density, g.level, g.part};
-        openvdb::io::File file(partial.string());
-        file.write(grids); // throws openvdb::IoError when the file cannot be opened
-        file.close();
-    });
+    krs::write_file("save_vdb", path, [&](std::ostream& out) { detail::vdb_file_writer().write_to(out, {g.density, g.level, g.part}); });
 }
 
 namespace detail {

@@ -1,19 +1,26 @@
 #pragma once
-// Files written whole or not at all: a save writes a new temporary file beside its path and
-// renames it over the path once complete, so a reader never sees half a file and a failed save
-// (a full disk, an exception from the caller's data, a budget refused half way) leaves nothing
-// behind and any earlier file at the path as it was. Shared by every writer of krs (meshes,
-// krs/mesh/write.hpp) and of hypertree (hypertree/io/binary.hpp and the VDB writers), which may
-// include krs but never the reverse.
+// Files written whole or not at all, the one way every writer of krs, hypertree and the examples
+// reaches the disk (meshes: krs/mesh/write.hpp, gltf.hpp; volumes: hypertree/io/binary.hpp, the
+// VDB writers; the examples' PNG, GLSL and CSV files): write_file writes a new temporary file
+// beside its path, checks every write and the close (a full disk, a file size limit or a quota
+// fails the write, and a stream that failed is never renamed), and renames it over the path only
+// once complete. So a reader never sees half a file, and a failed save (a full disk, an exception
+// from the caller's data, a budget refused half way) leaves no temporary behind and any earlier
+// file at the path as it was; the save_error names the path and the system's reason (errno's
+// text: "No space left on device", "File too large", "Permission denied"). What is not promised:
+// that the file survives a power cut (no fsync), only that a reader sees the old or the new file.
 
 #include "krs/core/validate.hpp"
 
 #include <atomic>
+#include <concepts>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -64,12 +71,14 @@ inline std::filesystem::path create_partial_file(const std::filesystem::path& pa
 template <class Write>
 void write_then_rename(std::string_view caller, const std::filesystem::path& path, Write&& write)
 {
-    const auto message = [&](const std::string& text) { return std::string(caller) + ": " + path.string() + ": " + text; };
+    // "<caller>: " leads, unless the caller is empty (a program that names itself instead).
+    const std::string lead = caller.empty() ? std::string() : std::string(caller) + ": ";
+    const auto message = [&](const std::string& text) { return lead + path.string() + ": " + text; };
     std::filesystem::path partial;
     try {
         partial = create_partial_file(path);
     } catch (const save_error& e) {
-        throw save_error(std::string(caller) + ": " + e.what());
+        throw save_error(lead + e.what());
     }
     const auto fail = [&](const std::string& text) {
         std::error_code ignored;
@@ -79,7 +88,7 @@ void write_then_rename(std::string_view caller, const std::filesystem::path& pat
     try {
         write(partial);
     } catch (const std::exception& e) {
-        throw fail("cannot write " + partial.string() + ": " + e.what());
+        throw fail(e.what());
     }
     std::error_code failure;
     std::filesystem::rename(partial, path, failure);
@@ -96,5 +105,59 @@ inline void require_output_path(std::string_view caller, const std::filesystem::
         throw invalid_parameter(std::string(caller) + " path", "must name a file, not a directory", path.string());
 }
 
+// The system's reason for the last failed call (errno's text), or a stated fallback when the
+// failing layer left none (a std::ostream that failed without a system call failing).
+inline std::string system_reason(int error, std::string_view fallback)
+{
+    return error != 0 ? std::string(std::strerror(error)) : std::string(fallback);
+}
+
+// Opens `file` (a temporary from create_partial_file), lets fill(std::ostream&) write it, then
+// checks the stream after a flush and after the close: a write refused by the system (a full
+// disk) sets the stream's badbit and errno, which becomes the save_error's reason.
+template <class Fill>
+void write_checked_stream(const std::filesystem::path& file, Fill&& fill)
+{
+    errno = 0;
+    std::ofstream out(file, std::ios::binary | std::ios::trunc);
+    if (!out) throw save_error("cannot open it for writing: " + system_reason(errno, "the stream did not open"));
+    try {
+        fill(static_cast<std::ostream&>(out));
+    } catch (const std::exception& e) {
+        // A writer that checks its own stream (hypertree's binary format, NanoVDB) throws its own
+        // words for a write the system refused; the system's reason is the one worth reporting.
+        const int error = errno;
+        if (out) throw;
+        throw save_error("writing failed: " + system_reason(error, e.what()));
+    }
+    const auto failed = [&](const char* when) {
+        return save_error(std::string(when) + ": " + system_reason(errno, "the output stream failed"));
+    };
+    if (!out) throw failed("writing failed");
+    out.flush(); // what the stream still holds, so that a full disk shows here rather than never
+    if (!out) throw failed("writing failed");
+    out.close();
+    if (!out) throw failed("closing failed");
+}
+
 } // namespace detail
+
+// The one way to write a file whole: fill(std::ostream&) writes the content, or `bytes` is it.
+// Checks the path (not empty, not a directory: invalid_parameter "<caller> path"), writes a
+// temporary beside it with every write and the close checked, renames it over `path` once whole.
+// Any failure is a save_error "<caller>: <path>: <what failed>: <the system's reason>", the
+// temporary removed and an earlier file at `path` untouched.
+template <class Fill>
+    requires std::invocable<Fill&, std::ostream&>
+void write_file(std::string_view caller, const std::filesystem::path& path, Fill&& fill)
+{
+    detail::require_output_path(caller, path);
+    detail::write_then_rename(caller, path, [&](const std::filesystem::path& partial) { detail::write_checked_stream(partial, fill); });
+}
+
+inline void write_file(std::string_view caller, const std::filesystem::path& path, std::string_view bytes)
+{
+    write_file(caller, path, [&](std::ostream& out) { out.write(bytes.data(), std::streamsize(bytes.size())); });
+}
+
 } // namespace krs

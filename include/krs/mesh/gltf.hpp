@@ -301,14 +301,10 @@ namespace detail {
 
 inline void save_gltf_model(std::string_view caller, const tinygltf::Model& model, const std::filesystem::path& path, bool binary)
 {
-    write_then_rename(caller, path, [&](const std::filesystem::path& partial) {
-        std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error("cannot open it for writing");
+    write_file(caller, path, [&](std::ostream& out) {
         tinygltf::TinyGLTF writer;
         if (!writer.WriteGltfSceneToStream(&model, out, /*prettyPrint=*/!binary, /*writeBinary=*/binary))
             throw std::runtime_error("tinygltf could not write the model");
-        out.close();
-        if (!out) throw std::runtime_error("writing failed");
     });
 }
 

@@ -90,15 +90,6 @@ inline void put_f32(std::string& out, float v) { put_u32(out, std::bit_cast<std:
 // A linear colour channel in [0, 1] as PLY's sRGB-encoded uint8.
 inline char color_byte(float c) { return char(std::uint8_t(std::lround(srgb_encode(double(c)) * 255.0))); }
 
-inline void write_all(const std::filesystem::path& file, const std::string& bytes)
-{
-    std::ofstream out(file, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot open it for writing");
-    out.write(bytes.data(), std::streamsize(bytes.size()));
-    out.close();
-    if (!out) throw std::runtime_error("writing failed");
-}
-
 } // namespace detail
 
 // The mesh as binary little-endian PLY, in the frame of `up`.
@@ -182,14 +173,14 @@ inline void save_ply(const triangle_mesh& m, const std::filesystem::path& path, 
 {
     detail::require_output_path("save_ply", path);
     const std::string bytes = ply_bytes(m, up); // checks the mesh before any file exists
-    detail::write_then_rename("save_ply", path, [&](const std::filesystem::path& partial) { detail::write_all(partial, bytes); });
+    write_file("save_ply", path, bytes);
 }
 
 inline void save_obj(const triangle_mesh& m, const std::filesystem::path& path, up_axis up = up_axis::y)
 {
     detail::require_output_path("save_obj", path);
     const std::string text = obj_text(m, up);
-    detail::write_then_rename("save_obj", path, [&](const std::filesystem::path& partial) { detail::write_all(partial, text); });
+    write_file("save_obj", path, text);
 }
 
 } // namespace krs
