@@ -12,6 +12,8 @@
 # "<out>" in an argument stands for WORK_DIR, where rows may write files.
 # Every row runs; the failures are listed together.
 
+include("${CMAKE_CURRENT_LIST_DIR}/run_report.cmake")
+
 foreach(variable PROGRAM EXECUTABLE CASES WORK_DIR)
     if(NOT DEFINED ${variable})
         message(FATAL_ERROR "check_command_lines: -D${variable}=... is required")
@@ -62,13 +64,7 @@ function(krs_case program status say)
             list(APPEND problems "${stream} does not say \"${text}\"")
         endif()
     endforeach()
-    if(problems)
-        string(JOIN "; " problems ${problems})
-        set_property(GLOBAL APPEND_STRING PROPERTY krs_failures
-                     "\n  ${shown}\n    ${problems}\n    stdout: ${out}\n    stderr: ${err}")
-    else()
-        message(STATUS "ok (${result}): ${shown}")
-    endif()
+    krs_report_run("${shown}" "${result}" "${problems}" "${out}" "${err}")
 endfunction()
 
 include("${CASES}")

@@ -27,6 +27,7 @@
 # the probe of support/output_path.hpp) and make no directory.
 
 cmake_policy(VERSION 3.20)
+include("${CMAKE_CURRENT_LIST_DIR}/run_report.cmake")
 
 foreach(variable PROGRAM EXECUTABLE LIMITER CASES WORK_DIR PART)
     if(NOT DEFINED ${variable})
@@ -134,13 +135,7 @@ function(krs_run kind row_dir earlier status must_say limit)
             list(APPEND problems "a directory was made: ${path}")
         endif()
     endforeach()
-    if(problems)
-        string(JOIN "; " problems ${problems})
-        set_property(GLOBAL APPEND_STRING PROPERTY krs_failures
-                     "\n  [${kind}] ${shown}\n    ${problems}\n    stdout: ${out}\n    stderr: ${err}")
-    else()
-        message(STATUS "ok [${kind}] (${result}): ${shown}")
-    endif()
+    krs_report_run("[${kind}] ${shown}" "${result}" "${problems}" "${out}" "${err}")
 endfunction()
 
 set_property(GLOBAL PROPERTY krs_rows 0)
