@@ -26,7 +26,8 @@
 // at the first). Built with the benchmarks when the GLSL tests are on (KRS_GLSL_TESTS: Mesa, EGL).
 
 #include "krs/glsl/emitter.hpp"
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 #include "support/gl_program.hpp" // tests/support: the GLSL tests' context, compile and link
 #include "support/text.hpp"
 #include "support/timing.hpp"
@@ -180,8 +181,8 @@ int main(int argc, char** argv)
                                  1e3 * early.seconds, 1e3 * full.seconds, ratio, equal);
         }
     };
-    row(krs::glsl::examples::tree());
-    row(krs::glsl::examples::forest());
+    row(krs::scenes::tree_scene::build());
+    row(krs::scenes::forest_scene::build());
     std::printf("\nCSV: %s\n", csv_path.c_str());
     return 0;
 }

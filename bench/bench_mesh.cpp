@@ -23,7 +23,8 @@
 // alternating rounds; `percell_cpu` is its CPU time, `share_x` the ratio, `same` whether its mesh
 // equals the shared one vertex for vertex and triangle for triangle (it must).
 
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 #include "krs/kernels/torus.hpp"
 #include "krs/mesh/extract.hpp"
 
@@ -260,16 +261,16 @@ int main(int argc, char** argv)
     std::vector<row> rows;
     const krs::torus torus({0, 0, 0}, {0.2f, 0.3f, 1.0f}, 1.0f, 0.3f);
     measure("torus", torus, krs::bounding_box::unbounded(), max_resolution, std::max(dense_max, 128), rounds, rows);
-    namespace ex = krs::glsl::examples;
+    namespace ex = krs::scenes;
     // A scene's own box, or the box its tests sample where it has none (as krs_export does).
     const auto scene_box = [](const auto& scene) {
         if (krs::field_box(scene.field).is_bounded()) return krs::bounding_box::unbounded();
         const krs::vec3d c(scene.sample_center), h(scene.sample_half);
         return krs::box_around(c - h, c + h);
     };
-    const auto rock = ex::rock();
+    const auto rock = ex::rock_scene::build();
     measure("rock", rock.field, scene_box(rock), std::min(max_resolution, 128), dense_max, rounds, rows);
-    const auto menger = ex::kifs_menger();
+    const auto menger = ex::kifs_menger_scene::build();
     measure("kifs_menger", menger.field, scene_box(menger), std::min(max_resolution, 128), dense_max, rounds, rows);
     std::printf("\n(mem_MB: mesh + edge table counted by the extractor; errors in cells; equal: sparse mesh == dense mesh; percell_cpu: corners evaluated per cell as before, share_x its CPU time over cpu_s, same: its mesh == the shared one; est_x: cpu_s (with the up-front estimate, the default) over the same extraction with estimate_first = false, same rounds; coarse_x: the estimate's coarse pass alone over that)\n");
     std::printf("load average after: %s\n", bench::load_average().c_str());

@@ -128,10 +128,16 @@ krs_case(krs_scenes        2 "--width;'0';[1, 8192]"                            
 krs_case(krs_scenes        2 "--height;'abc'"                                      --height abc)
 krs_case(krs_scenes        2 "--seed;'2.5'"                                        --seed 2.5)
 krs_case(krs_scenes        2 "--threads;'1025';[0, 1024]"                          --threads 1025)
-krs_case(krs_scenes        2 "--only;'sky';one of forest|terrain|rock|mirrors|coral|sponge|grass" --only sky)
+# The scenes are the list's (krs/scenes/example_scenes.hpp) that krs_scenes renders, in its order;
+# --only is --scene's older name.
+krs_case(krs_scenes        2 "--scene;'sky';one of forest|terrain|rock|mirrors|coral|grass|sponge" --scene sky)
+krs_case(krs_scenes        2 "--scene;'sky';one of forest|"                        --only sky)
+krs_case(krs_scenes        2 "--scene;'kifs_koch';one of forest|"                  --scene kifs_koch)
 krs_case(krs_scenes        2 "--output-dir;missing"                                --output-dir)
-krs_case(krs_scenes        2 "--scene"                                             --scene rock)
-krs_case(krs_scenes        0 "--only;--output-dir"                                 -h)
+krs_case(krs_scenes        0 "--scene;--only: its older name;--list-scenes;--seed;--output-dir" -h)
+krs_case(krs_scenes        0 "forest ;2^6 trees;mirrors ;figure 5;sponge ;(--seed)"  --list-scenes)
+krs_case(krs_scenes        0 "total:;1 scene"                                      --scene rock --seed 4 --width 8 --height 8 --threads 1
+                                                                                   --output-dir <out>)
 krs_case(krs_scenes        0 "total:;1 scene"                                      --only mirrors --width 8 --height 8 --threads 1
                                                                                    --output-dir <out>)
 krs_case(krs_scenes        2 "--reflectivity;'1.5';[0, 1]"                         --reflectivity 1.5)
@@ -149,16 +155,29 @@ krs_case(krs_fractals      0 "total:;12 frames"                                 
 krs_case(krs_fractals      0 "total:;12 frames"                                    --width 4 --height 4 --threads 1 --colouring off
                                                                                    --output-dir <out>)
 krs_case(krs_fractals      2 "--colouring;'yes';one of on|off"                     --colouring yes)
+# One frame of the list, or the zoom (cube_singularity's seven frames).
+krs_case(krs_fractals      0 "kifs_koch;total:;1 frames"                           --scene kifs_koch --width 4 --height 4 --threads 1
+                                                                                   --output-dir <out>)
+krs_case(krs_fractals      0 "zoom_6;total:;7 frames"                              --scene cube_singularity --width 4 --height 4
+                                                                                   --threads 1 --output-dir <out>)
+krs_case(krs_fractals      2 "--scene;'tree';one of kifs_square|kifs_cube|kifs_menger|kifs_sierpinski|kifs_koch|cube_singularity"
+                                                                                   --scene tree)
+krs_case(krs_fractals      0 "kifs_square ;kifs_koch ;cube_singularity "           --list-scenes)
+krs_case(krs_fractals      2 "--slice, --scene"                                    --slice sphere --scene kifs_koch)
 # The cross-section view (krs/cross_section.hpp): a sphere overestimates nowhere, the Menger
 # sponge's slice is written as two PNGs; what the images hold is tests/test_cross_section.cpp's.
 krs_case(krs_fractals      0 "slice sphere: 32x24;flagged 0 of 768 pixels;slice_sphere_distance.png;slice_sphere_gradient.png"
                                                                                    --slice sphere --width 32 --height 24 --output-dir <out>)
-krs_case(krs_fractals      0 "slice menger: 24x24, plane xz at 0.1;slice_menger_gradient.png"
+krs_case(krs_fractals      0 "slice kifs_menger: 24x24, plane xz at 0.1;slice_kifs_menger_gradient.png"
                                                                                    --slice menger --slice-plane xz --slice-offset 0.1
                                                                                    --slice-extent 1.2 --slice-spacing 0.1 --width 24 --height 24
                                                                                    --output-dir <out>)
-krs_case(krs_fractals      2 "--slice;'torus';one of sphere|square|cube|menger|sierpinski|koch|lotus|cube_singularity"
-                                                                                   --slice torus)
+krs_case(krs_fractals      2 "--slice;'torus';one of sphere|tree|forest|"          --slice torus)
+# Any scene of the list slices, a seeded one at --seed.
+krs_case(krs_fractals      0 "slice rock: 8x8;slice_rock_distance.png"             --slice rock --seed 5 --width 8 --height 8
+                                                                                   --output-dir <out>)
+krs_case(krs_fractals      0 "slice kifs_koch: 8x8"                                --slice kifs_koch --width 8 --height 8
+                                                                                   --output-dir <out>)
 krs_case(krs_fractals      2 "--slice-plane;'xw';one of xy|xz|yz"                  --slice menger --slice-plane xw)
 krs_case(krs_fractals      2 "--slice-spacing;'0';a finite number in (0, 1000000]" --slice menger --slice-spacing 0)
 krs_case(krs_fractals      2 "--slice-extent;'nan'"                                --slice menger --slice-extent nan)
@@ -190,7 +209,13 @@ krs_case(glsl_export       2 "--reference;--all"                                
 krs_case(glsl_export       2 "--reference;missing"                                 --reference)
 krs_case(glsl_export       2 "--reference;'k.jpg';.png"                            --reference k.jpg)
 krs_case(glsl_export       2 "--reference;'k.png.exr';.png"                        --reference k.png.exr)
-krs_case(glsl_export       0 "--scene;--target;--mode"                             --help)
+krs_case(glsl_export       0 "--scene;--target;--mode;--list-scenes;--seed"         --help)
+krs_case(glsl_export       0 "tree ;mirrors ;figure 5;lotus ;cube_singularity ;(--seed)" --list-scenes)
+krs_case(glsl_export       2 "--seed;--all"                                        --all <out> --seed 2)
+krs_case(glsl_export       2 "--seed;'-1';[0, 1073741824]"                         --seed -1)
+krs_case(glsl_export       0 ""                                                    --scene mirrors --target 330 --output <out>/mirrors.glsl)
+krs_case(glsl_export       0 ""                                                    --scene forest --seed 9 --target shadertoy
+                                                                                   --output <out>/forest9.shadertoy.glsl)
 krs_case(glsl_export       0 ""                                                    --scene sponge --target 330 --output <out>/sponge.glsl)
 krs_case(glsl_export       0 ""                                                    --scene tree --target 450 --mode uniform-buffer
                                                                                    --output <out>/tree.ubo450.glsl)
@@ -211,7 +236,8 @@ krs_case(krs_export        2 "--mesh;'x.stl';.ply, .obj, .glb or .gltf"         
 krs_case(krs_export        2 "--mesh;--instances"                                   --scene rock)
 krs_case(krs_export        2 "--instances;'x.ply';.gltf or .glb"                    --scene sponge --instances x.ply)
 krs_case(krs_export        2 "--instance-levels;'-1';[0, 64]"                       --scene sponge --instance-levels -1 --instances <out>/x.gltf)
-krs_case(krs_export        0 "--mesh;--resolution;--instances"                      --help)
+krs_case(krs_export        0 "--mesh;--resolution;--instances;--list-scenes;--seed"  --help)
+krs_case(krs_export        0 "krs_export: mirrors: ;triangles"                      --scene mirrors --resolution 24 --mesh <out>/mirrors.ply)
 krs_case(krs_export        0 "krs_export: rock: ;triangles;-> "                      --scene rock --resolution 8 --mesh <out>/rock.obj)
 krs_case(krs_export        2 "--projection-steps;'65';[0, 64]"                     --scene rock --projection-steps 65 --mesh <out>/x.ply)
 krs_case(krs_export        2 "--uv;--mesh"                                          --scene rock --uv)
@@ -231,6 +257,8 @@ if(KRS_WITH_GLTF)
     krs_case(krs_export    1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --instances <out>/x.glb)
     krs_case(krs_export    1 "--max-instances: exceeded;at --instance-levels 4;lower --instance-levels;(got 3)" --scene tree --max-instances 3 --instances <out>/x.glb)
     krs_case(krs_export    1 "--instance-levels: must be at most"                   --scene rock --instance-levels 64 --instances <out>/x.glb)
+    krs_case(krs_export    1 "'mirrors' is not a sequence (tree, forest, terrain, rock, grass, sponge are)"
+                                                                                    --scene mirrors --instances <out>/x.glb)
     # Scenes with planes (the tree's ground, the rock's and terrain's facets) export as instances:
     # their planes are meshed within the scene's box.
     krs_case(krs_export    0 "krs_export: tree: ;instances"                          --scene tree --resolution 8 --instances <out>/tree.glb)
@@ -253,3 +281,11 @@ krs_case(krs_view          2 "--exit-after-reload;--glsl FILE"                  
 krs_case(krs_view          2 "--exit-after-reload;'0';(0, 3600]"                   --exit-after-reload 0)
 krs_case(krs_view          2 "--screenshot;'k.jpg';.png"                           --frames 1 --screenshot k.jpg)
 krs_case(krs_view          0 "--scene;--glsl;--frames;--screenshot;--accumulate;--exit-after-reload;space pauses" --help)
+krs_case(krs_view          0 "tree ;grass ;kifs_menger "                           --list-scenes)
+krs_case(krs_view          2 "--glsl, --scene, --seed"                             --glsl <out>/missing.glsl --seed 3)
+
+# hello_krs, hello_hypertree: no options, and they say so
+krs_case(hello_krs         0 "usage: ;no options"                                  --help)
+krs_case(hello_krs         2 "usage: ;no options"                                  --levels 3)
+krs_case(hello_hypertree   0 "usage: ;no options"                                  -h)
+krs_case(hello_hypertree   2 "usage: ;no options"                                  --seed 3)

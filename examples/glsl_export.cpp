@@ -6,18 +6,19 @@
 //   glsl_export --scene NAME --reference FILE.png [--width W] [--height H]
 //   glsl_export --all DIR      regenerates every file of the repository's glsl/ folder
 //
-// NAME is one of the scenes of krs/glsl/example_scenes.hpp (tree, forest, terrain, rock, coral,
-// grass, sponge, kifs_square, kifs_cube, kifs_menger, kifs_sierpinski, kifs_koch, lotus,
-// cube_singularity). Snippets have no #version line (paste them after your own); a shadertoy
+// NAME is one of the scenes of krs/scenes/example_scenes.hpp (--list-scenes prints them; --seed S
+// builds the scenes that draw random numbers at seed S instead of their own). Snippets have no #version line (paste them after your own); a shadertoy
 // target writes the whole program for Shadertoy's Image tab. --reference renders that program's
 // math in C++ (krs::glsl::render_reference) at W x H (default 640 x 360) as the program shows it
 // at iTime = 0 with no mouse drag: hold a GPU frame of the program at the same size against it
 // (8-bit values, as a framebuffer stores them). With --output as well, both files are written, or
 // neither: both are made in memory first, and a file whose writing fails is removed.
 
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 
 #include "support/command_line.hpp"
+#include "support/scene_choice.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 
@@ -77,11 +78,11 @@ std::vector<unsigned char> reference_png(const std::vector<float>& rgba, int wid
 
 int main(int argc, char** argv)
 {
-    namespace ex = krs::glsl::examples;
+    namespace ex = krs::scenes;
     std::string scene = "tree", target = "450", mode = "constants", output, all;
     example::command_line args("glsl_export", "Writes an example scene's GLSL to a file or stdout; --all DIR "
                                               "regenerates every file of the repository's glsl/ folder.");
-    args.choice("--scene", scene, ex::scene_names(), "the scene");
+    const example::scene_choice scenes(args, scene, example::all_scene_names(), "the scene");
     args.choice("--target", target, {"330", "450", "es300", "shadertoy"}, "the GLSL dialect");
     args.choice("--mode", mode, {"constants", "buffer", "uniform-buffer"},
                 "the scene's data as constants, in a buffer (UBO for 330 and ES, SSBO for 450), or in a "
@@ -112,6 +113,7 @@ int main(int argc, char** argv)
     if (reference.empty() && (args.app().count("--width") > 0 || args.app().count("--height") > 0))
         args.fail("--width, --height: apply to the reference frame: give --reference FILE.png");
     if (!reference.empty() && !all.empty()) args.fail("--reference: writes one scene's frame, not with --all");
+    if (scenes.seed() && !all.empty()) args.fail("--seed: the glsl/ folder (--all) holds every scene at its own seed");
     // Refused before the work, the same way in every program (support/output_path.hpp); the frame
     // is PNG only (a .jpg would be lossy, not the 8-bit values).
     if (!reference.empty()) example::require_output_file(args, "--reference", reference, {".png"});
@@ -140,8 +142,7 @@ int main(int argc, char** argv)
         else if (mode == "buffer") kind.mode = krs::glsl::data_mode::buffer;
         else kind.mode = krs::glsl::data_mode::uniform_buffer; // the only word left: --mode checked it
         bool ok = false;
-        ex::for_each_scene([&](const auto& s) {
-            if (s.name != scene) return;
+        ex::with_scene(scene, scenes.seed(), [&](const auto& s) {
             // Both made in memory first (either may throw), then written. With a file for each,
             // the text's temporary is renamed only after the PNG is in place, so a failed PNG
             // leaves the earlier text file (and PNG) as they were: both or neither.

@@ -1,9 +1,15 @@
 #include <hypertree/hypertree.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <string_view>
 #include <numbers>
 
-int main() {
+int main(int argc, char** argv) {
+    if (argc > 1) {                          // no options: -h and --help say so, others are refused
+        const bool help = std::string_view(argv[1]) == "-h" || std::string_view(argv[1]) == "--help";
+        std::fprintf(help ? stdout : stderr, "usage: hello_hypertree (no options): a hypertree built into voxels, drawn as text\n");
+        return help ? 0 : 2;
+    }
     using namespace hypertree;
     using branch = pipeline<scale, rotate, rotate, translate>;       // a transform is a type
     ifs<branch> tree;

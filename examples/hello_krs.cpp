@@ -2,8 +2,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string_view>
 
-int main() {
+int main(int argc, char** argv) {
+    if (argc > 1) {                          // no options: -h and --help say so, others are refused
+        const bool help = std::string_view(argv[1]) == "-h" || std::string_view(argv[1]) == "--help";
+        std::fprintf(help ? stdout : stderr, "usage: hello_krs (no options): a bush of 512 KRS instances drawn as text\n");
+        return help ? 0 : 2;
+    }
     using scene = krs::sequence<krs::sphere, krs::torus_capsule>;
     scene::builder b;
     b.kernel(krs::sphere({0.3f, 1.1f, 0}, 0.25f));                                // K0: a leaf ball

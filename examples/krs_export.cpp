@@ -5,10 +5,9 @@
 //              [--memory-budget MB] [--projection-steps K] [--uv] [--kernel-colors] [--up y|z]
 //              [--instances FILE.gltf|FILE.glb [--instance-levels K] [--max-instances M] [--gpu-instancing]]
 //
-// NAME is one of the scenes of krs/glsl/example_scenes.hpp (tree, forest, terrain, rock, coral,
-// grass, sponge, kifs_square, kifs_cube, kifs_menger, kifs_sierpinski, kifs_koch, lotus,
-// cube_singularity). The mesh covers the scene's bounding box, or for a scene without one (a
-// ground plane) the box its tests sample, with N cells along the box's longest side (default
+// NAME is one of the scenes of krs/scenes/example_scenes.hpp (--list-scenes prints them; --seed S
+// builds the seeded ones at S). The mesh covers the scene's bounding box, or for a scene without
+// one (a ground plane) the box its tests sample, with N cells along the box's longest side (default
 // 128). Progress goes to stderr; the summary (triangles, vertices, worst vertex distance to the
 // zero set in cells, time) to stdout. .glb and .gltf need a build with tinygltf (krs::mesh_gltf).
 // A mesh over the memory budget (default 1024 MB) is refused before the file is written (one a
@@ -25,7 +24,7 @@
 // loader (a root node turns it back, krs/mesh/gltf.hpp), and Blender's OBJ import converts a y-up
 // OBJ itself.
 //
-// --instances writes a sequence scene (tree, forest, terrain, rock, grass, sponge) as instanced
+// --instances writes a scene that is a sequence (its refusal of any other names them) as instanced
 // glTF (krs/mesh/instances.hpp): every kernel of the top K mirror levels (default 4) meshed once
 // and placed by its instance transforms, the levels below meshed whole and placed 2^K times; more
 // than M instances (default 1048576) is refused. Each instance is a node referencing its shared
@@ -36,7 +35,6 @@
 // tree's ground, the rock's and terrain's facet planes) are meshed within the scene's box (the
 // sequence's own, or the box its tests sample), so every sequence scene exports.
 
-#include "krs/glsl/example_scenes.hpp"
 #include "krs/mesh/extract.hpp"
 #include "krs/mesh/write.hpp"
 #if defined(KRS_WITH_GLTF)
@@ -45,6 +43,7 @@
 #include "krs/mesh/instances.hpp"
 
 #include "support/command_line.hpp"
+#include "support/scene_choice.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
 
@@ -100,16 +99,27 @@ std::string lower_extension(const std::string& path)
     return e;
 }
 
+// The scenes that are sequences, for the --instances refusal: "tree, forest, ..." from the list.
+std::string sequence_scene_names()
+{
+    std::string names;
+    krs::scenes::for_each_scene_entry([&]<class E>() {
+        if constexpr (krs::glsl::kernel_shaded<krs::scenes::field_of<E>>)
+            names += (names.empty() ? "" : ", ") + std::string(E::name);
+    });
+    return names;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
 {
-    namespace ex = krs::glsl::examples;
+    namespace ex = krs::scenes;
     std::string scene = "tree", mesh;
     int resolution = 128, steps = 4;
     long long budget_mb = 1024;
     example::command_line args("krs_export", "Writes an example scene as a triangle mesh (PLY, OBJ, GLB or glTF).");
-    args.choice("--scene", scene, ex::scene_names(), "the scene");
+    const example::scene_choice scenes(args, scene, example::all_scene_names(), "the scene");
     args.text("--mesh", mesh, "the mesh file to write: .ply (binary), .obj, .glb or .gltf", "FILE");
     args.integer("--resolution", resolution, 1, krs::max_mesh_resolution, "cells along the scene box's longest side (default 128)");
     args.integer("--projection-steps", steps, 0, 64, "Newton steps moving each vertex onto the surface (default 4)");
@@ -153,8 +163,7 @@ int main(int argc, char** argv)
 #endif
 
     int status = 1;
-    ex::for_each_scene([&](const auto& s) {
-        if (s.name != scene) return;
+    ex::with_scene(scene, scenes.seed(), [&](const auto& s) {
         if (!instances.empty()) {
 #if defined(KRS_WITH_GLTF)
             krs::instance_options io;
@@ -193,8 +202,8 @@ int main(int argc, char** argv)
                     return;
                 }
             } else {
-                std::fprintf(stderr, "krs_export: --instances: the scene '%s' is not a sequence (tree, forest, terrain, rock, grass, "
-                                     "sponge are)\n", scene.c_str());
+                std::fprintf(stderr, "krs_export: --instances: the scene '%s' is not a sequence (%s are)\n", scene.c_str(),
+                             sequence_scene_names().c_str());
                 return;
             }
 #endif

@@ -14,6 +14,10 @@
 // (core-microseconds) and mean march steps per ray.
 //
 //     krs_fractals [--width W] [--height H] [--threads N] [--output-dir DIR] [--colouring on|off]
+//                  [--scene NAME] [--list-scenes]
+//
+// The frames are the example scenes of krs/scenes/example_scenes.hpp (their fields, cameras, light
+// and albedos): --scene renders one of them (cube_singularity: its zoom), --list-scenes names them.
 //
 // The cross-section view for debugging a field (krs/cross_section.hpp) instead of the frames:
 //
@@ -25,8 +29,9 @@
 // along the gradient exceeds 1: there the field overestimates and a sphere tracer may step
 // through), W x H pixels over the
 // square [-E, E] (the shorter side scaled to keep pixels square) of the plane at Z along its
-// normal, and prints how many pixels overestimate. FIELD is one of sphere (a reference: none may),
-// square, cube, menger, sierpinski, koch, lotus, cube_singularity.
+// normal, and prints how many pixels overestimate. FIELD is sphere (a reference: none may) or any
+// example scene (glsl_export --list-scenes lists them all); square, cube, menger,
+// sierpinski and koch, the older names of the kifs_ scenes, are still taken.
 //
 // Threads render 16x16 tiles taken from a shared counter (support/tiles.hpp); the library itself
 // starts no threads.
@@ -34,9 +39,8 @@
 #include "krs/cross_section.hpp"
 #include "krs/fractal/kifs.hpp"
 #include "krs/fractal/kifs_colour.hpp"
-#include "krs/fractal/kifs_presets.hpp"
-#include "krs/fractal/shell_presets.hpp"
 #include "krs/kernels/sphere.hpp"
+#include "krs/scenes/example_scenes.hpp"
 #include "krs/shade/normal.hpp"
 #include "krs/trace/camera.hpp"
 #include "krs/trace/sphere_trace.hpp"
@@ -44,6 +48,7 @@
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
+#include "support/scene_choice.hpp"
 #include "support/tiles.hpp"
 
 #include <algorithm>
@@ -52,19 +57,38 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <optional>
+#include <type_traits>
+#include <utility>
 #include <string>
 #include <vector>
 
 namespace {
 
 using krs::vec3f;
+namespace ex = krs::scenes;
+
+// The frames of the gallery, and the scene whose zoom follows them.
+template <class E>
+constexpr bool gallery_entry = std::is_same_v<E, ex::kifs_square_scene> || std::is_same_v<E, ex::kifs_cube_scene> ||
+                               std::is_same_v<E, ex::kifs_menger_scene> ||
+                               std::is_same_v<E, ex::kifs_sierpinski_scene> || std::is_same_v<E, ex::kifs_koch_scene>;
+using zoom_entry = ex::cube_singularity_scene;
+
+// The older --slice names of the KIFS scenes (before the scenes had one name in every program).
+const std::pair<const char*, std::string_view> slice_aliases[] = {{"square", ex::kifs_square_scene::name},
+                                                                   {"cube", ex::kifs_cube_scene::name},
+                                                                   {"menger", ex::kifs_menger_scene::name},
+                                                                   {"sierpinski", ex::kifs_sierpinski_scene::name},
+                                                                   {"koch", ex::kifs_koch_scene::name}};
 
 struct options {
     int width = 256, height = 192, threads = 0;
-    std::string output_dir = ".";
+    std::string output_dir = ".", scene;
     std::string colouring = "on";
     // The cross-section view (empty slice: render the frames).
     std::string slice, slice_plane = "xy";
+    std::optional<std::uint32_t> seed; // --seed: the sliced scene's, else its own
     float slice_offset = 0.0f, slice_extent = 1.5f, slice_spacing = 0.05f;
 };
 
@@ -78,8 +102,17 @@ options parse(int argc, char** argv)
     args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
     args.text("--output-dir", o.output_dir, "the folder the PNG files go to (made if missing)", "DIR");
     args.choice("--colouring", o.colouring, {"on", "off"}, "colour the KIFS frames by orbit traps and fold counts");
-    args.choice("--slice", o.slice, {"sphere", "square", "cube", "menger", "sierpinski", "koch", "lotus", "cube_singularity"},
-                "write a cross-section of this field's distance and gradient instead of the frames");
+    std::vector<std::string> frames;
+    ex::for_each_scene_entry([&]<class E>() {
+        if (gallery_entry<E> || std::is_same_v<E, zoom_entry>) frames.emplace_back(E::name);
+    });
+    const example::scene_choice choice(args, o.scene, frames, "render this frame only (cube_singularity: its zoom)");
+    std::vector<std::string> fields{"sphere"};
+    for (const std::string& n : example::all_scene_names()) fields.push_back(n);
+    for (const auto& [alias, name] : slice_aliases) fields.emplace_back(alias);
+    args.choice("--slice", o.slice, fields,
+                "write a cross-section of this field's distance and gradient instead of the frames (square, cube, "
+                "menger, sierpinski, koch: older names of the kifs_ scenes)");
     CLI::Option* plane = args.choice("--slice-plane", o.slice_plane, {"xy", "xz", "yz"}, "the plane of the slice");
     CLI::Option* offset = args.number("--slice-offset", o.slice_offset, -1e6, 1e6, false,
                                       "the slice's position along the plane's normal");
@@ -88,9 +121,13 @@ options parse(int argc, char** argv)
     CLI::Option* spacing = args.number("--slice-spacing", o.slice_spacing, 0.0, 1e6, true,
                                        "world distance between iso lines");
     args.parse(argc, argv);
+    o.seed = choice.seed();
     if (o.slice.empty())
         for (const CLI::Option* given : {plane, offset, extent, spacing})
             if (given->count() > 0) args.fail(given->get_name() + " needs --slice FIELD");
+    if (!o.slice.empty() && !o.scene.empty()) args.fail("--slice, --scene: a slice or frames, not both");
+    for (const auto& [alias, name] : slice_aliases)
+        if (o.slice == alias) o.slice = name;
     example::require_output_folder(args, "--output-dir", o.output_dir);
     o.threads = example::thread_count(o.threads);
     return o;
@@ -100,14 +137,12 @@ struct ray_counts {
     long long rays = 0, steps = 0;
 };
 
-const vec3f light_direction = krs::normalize(vec3f{0.5f, 0.8f, 0.35f});
-
 // Traces one camera ray through `field` and shades the hit with a gradient normal: Lambert from one
-// light, a sky term, and a cheap occlusion from the step count (rays that crept through crevices).
-// `albedo(p)` gives the surface colour at the hit point p.
+// light (toward `light`, unit), a sky term, and a cheap occlusion from the step count (rays that
+// crept through crevices). `albedo(p)` gives the surface colour at the hit point p.
 template <class F, class Albedo>
-vec3f shade_pixel(const F& field, const krs::pinhole_camera& camera, const krs::trace_options& trace, float x,
-                  float y, const Albedo& albedo, ray_counts& counts)
+vec3f shade_pixel(const F& field, const krs::pinhole_camera& camera, const krs::trace_options& trace,
+                  const vec3f& light, float x, float y, const Albedo& albedo, ray_counts& counts)
 {
     const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
     const krs::hit<float> h = krs::sphere_trace(field, r, trace);
@@ -117,7 +152,7 @@ vec3f shade_pixel(const F& field, const krs::pinhole_camera& camera, const krs::
     const vec3f p = krs::point_at(r, h.t);
     vec3f n = krs::surface_normal(field, p, 0.5f * trace.threshold(h.t));
     if (krs::dot(n, r.direction) > 0) n = -n;
-    const float diffuse = std::max(krs::dot(n, light_direction), 0.0f);
+    const float diffuse = std::max(krs::dot(n, light), 0.0f);
     const float occlusion = std::clamp(1.0f - float(h.steps) / float(trace.max_steps) * 2.5f, 0.15f, 1.0f);
     const float ambient = 0.25f + 0.15f * n.y;
     const float k = (0.8f * diffuse + ambient) * occlusion;
@@ -175,16 +210,15 @@ double render(const options& opt, const std::string& name,
     return seconds;
 }
 
+// A gallery frame: the scene's field, camera, march settings and albedo (`base`).
 template <class Program, class Kernel>
-double gallery_frame(const options& opt, const std::string& name, const krs::kifs<Program, Kernel>& field, const vec3f& eye,
-                     const vec3f& target, const vec3f& base)
+double gallery_frame(const options& opt, const ex::scene<krs::kifs<Program, Kernel>>& s)
 {
-    const krs::pinhole_camera camera(eye, target, {0, 1, 0}, 40.0f, opt.width, opt.height);
-    krs::trace_options trace;
-    trace.pixel_footprint = camera.pixel_footprint() * 0.5f;
-    trace.threshold_floor = 1e-5f;
-    trace.max_distance = 20.0f;
-    trace.max_steps = 256;
+    const krs::kifs<Program, Kernel>& field = s.field;
+    const std::string& name = s.name;
+    const vec3f& base = s.albedo;
+    const krs::pinhole_camera camera = s.camera.with_size(opt.width, opt.height);
+    krs::trace_options trace = s.program.primary(camera);
     trace.validate();
     // The colour is a separate call at the hit: the march runs kifs::distance alone.
     const bool coloured = opt.colouring == "on";
@@ -192,7 +226,7 @@ double gallery_frame(const options& opt, const std::string& name, const krs::kif
         return coloured ? orbit_albedo(krs::kifs_colour(field, p, gallery_traps), base) : base;
     };
     return render(opt, name, [&](float x, float y, ray_counts& c) {
-        return shade_pixel(field, camera, trace, x, y, albedo, c);
+        return shade_pixel(field, camera, trace, s.program.to_light, x, y, albedo, c);
     });
 }
 
@@ -240,15 +274,36 @@ int write_slice(const options& opt, const F& field)
 
 int slice_main(const options& opt)
 {
-    const std::string& f = opt.slice;
-    if (f == "sphere") return write_slice(opt, krs::sphere({0, 0, 0}, 1.0f));
-    if (f == "square") return write_slice(opt, krs::make_square_fractal(6, 0.3f));
-    if (f == "cube") return write_slice(opt, krs::make_cube_fractal(5));
-    if (f == "menger") return write_slice(opt, krs::make_menger_sponge(4));
-    if (f == "sierpinski") return write_slice(opt, krs::make_sierpinski_tetrahedron(9));
-    if (f == "koch") return write_slice(opt, krs::make_koch_curve(6, 0.01f));
-    if (f == "lotus") return write_slice(opt, krs::make_recursive_lotus(1.0f));
-    return write_slice(opt, krs::make_cube_singularity(1.0f));
+    if (opt.slice == "sphere") return write_slice(opt, krs::sphere({0, 0, 0}, 1.0f));
+    int status = 2;
+    ex::with_scene(opt.slice, opt.seed, [&](const auto& s) { status = write_slice(opt, s.field); });
+    return status;
+}
+
+// The zoom into the cube singularity at scales 10^0 ... 10^-6: the scene's camera moved toward
+// its pivot (the origin) by each scale, its march's limits scaled alike.
+double zoom(const options& opt, int& frames)
+{
+    const auto s = zoom_entry::build();
+    double total = 0;
+    for (int k = 0; k <= 6; ++k) {
+        const float scale = std::pow(10.0f, -float(k));
+        // Along an edge direction (-1, 0, -1): the shell's cubes sit on the axes and diagonals, so
+        // a cone about this direction is free at every scale and the camera never stands in a cube.
+        const krs::pinhole_camera rest = s.camera.with_size(opt.width, opt.height);
+        const krs::pinhole_camera camera(rest.eye() * scale, rest.pivot() * scale, rest.vertical(),
+                                         2.0f * std::atan(rest.tan_half_fov()) * 180.0f / 3.14159265f, opt.width,
+                                         opt.height);
+        krs::trace_options trace = s.program.primary(camera);
+        trace.threshold_floor *= scale;
+        trace.max_distance *= scale;
+        trace.validate();
+        total += render(opt, "zoom_" + std::to_string(k), [&](float x, float y, ray_counts& c) {
+            return shade_pixel(s.field, camera, trace, s.program.to_light, x, y, [&](const vec3f&) { return s.albedo; }, c);
+        });
+        ++frames;
+    }
+    return total;
 }
 
 } // namespace
@@ -260,38 +315,15 @@ int main(int argc, char** argv)
     double total = 0;
     int frames = 0;
 
-    // ---- KIFS gallery ----
-    total += gallery_frame(opt, "kifs_square", krs::make_square_fractal(6, 0.3f), {0.9f, 1.6f, -4.2f}, {0, 0, 0},
-                           {0.85f, 0.55f, 0.30f});
-    total += gallery_frame(opt, "kifs_cube", krs::make_cube_fractal(5), {2.6f, 2.2f, -3.2f}, {0, 0, 0},
-                           {0.45f, 0.65f, 0.85f});
-    total += gallery_frame(opt, "kifs_menger", krs::make_menger_sponge(4), {2.2f, 1.8f, -2.8f}, {0, 0, 0},
-                           {0.80f, 0.78f, 0.72f});
-    total += gallery_frame(opt, "kifs_sierpinski", krs::make_sierpinski_tetrahedron(9), {2.2f, 1.2f, -3.0f},
-                           {0, 0, 0}, {0.90f, 0.70f, 0.35f});
-    total += gallery_frame(opt, "kifs_koch", krs::make_koch_curve(6, 0.01f), {0.0f, 0.45f, -1.6f}, {0, 0.3f, 0},
-                           {0.55f, 0.85f, 0.55f});
-    frames += 5;
-
-    // ---- log-spherical zoom: scales 10^0 ... 10^-6 ----
-    const krs::cube_singularity singularity = krs::make_cube_singularity(1.0f);
-    for (int k = 0; k <= 6; ++k) {
-        const float scale = std::pow(10.0f, -float(k));
-        // Along an edge direction (-1, 0, -1): the shell's cubes sit on the axes and diagonals, so
-        // a cone about this direction is free at every scale and the camera never stands in a cube.
-        const vec3f eye = vec3f{-2.2f, 0.35f, -2.2f} * scale;
-        const krs::pinhole_camera camera(eye, {0, 0, 0}, {0, 1, 0}, 50.0f, opt.width, opt.height);
-        krs::trace_options trace;
-        trace.pixel_footprint = camera.pixel_footprint() * 0.5f;
-        trace.threshold_floor = 1e-5f * scale;
-        trace.max_distance = 20.0f * scale;
-        trace.max_steps = 256;
-        trace.validate();
-        total += render(opt, "zoom_" + std::to_string(k), [&](float x, float y, ray_counts& c) {
-            return shade_pixel(singularity, camera, trace, x, y, [](const vec3f&) { return vec3f{0.75f, 0.50f, 0.85f}; }, c);
-        });
-        ++frames;
-    }
+    ex::for_each_scene_entry([&]<class E>() {
+        if (!opt.scene.empty() && opt.scene != E::name) return;
+        if constexpr (gallery_entry<E>) {
+            total += gallery_frame(opt, E::build());
+            ++frames;
+        } else if constexpr (std::is_same_v<E, zoom_entry>) {
+            total += zoom(opt, frames);
+        }
+    });
     std::printf("total: %.2f s for %d frames (%dx%d, %d threads)\n", total, frames, opt.width, opt.height, opt.threads);
     return 0;
 }

@@ -8,12 +8,16 @@
 //                  triplanar noise texture in world space (6.2)
 //     rock.png     a faceted rock, flat (left) and smooth (right, Algorithm 2) shaded, figure 7;
 //                  inside a procedural bound (4.2)
-//     mirrors.png  512 spheres from 9 mirrors: axis-aligned (left) and unaligned (right), figure 5;
+//     mirrors.png  512 spheres from 9 mirrors: axis-aligned (left) beside unaligned, figure 5;
 //                  with --reflectivity F0 > 0 the spheres are glossy: each hit traces one
 //                  reflected ray (6.5) with the same tracer and mixes in what it sees
 //     coral.png    capsules and spheres, displaced by a Lipschitz noise warp (5.2)
 //     sponge.png   a Menger-like sponge of box kernels and mirrors, with ambient occlusion (6.5)
 //     grass.png    a clump of blades scattered by unaligned mirrors
+//
+// The scenes are the example scenes of krs/scenes/example_scenes.hpp, at its parameters, cameras
+// and lights (the GLSL of glsl/ and krs_export's meshes are of the same scenes); this program
+// dresses them: textures, a terrain under the forest, a plane under the rock, coral and sponge.
 //
 // Every scene has soft shadows and ambient occlusion from sphere-traced secondary rays (6.5),
 // computed a packet of pixels at a time (krs::packet_f lanes) once a tile's primary rays are traced.
@@ -21,8 +25,8 @@
 // tessellation assumed is at `complexity` below), its time per ray (primary and secondary rays,
 // in core-microseconds) and the mean march steps of a primary ray.
 //
-//     krs_scenes [--width W] [--height H] [--threads N] [--seed S] [--only NAME] [--output-dir DIR]
-//                [--reflectivity F0]
+//     krs_scenes [--width W] [--height H] [--threads N] [--seed S] [--scene NAME] [--output-dir DIR]
+//                [--reflectivity F0] [--list-scenes]
 //
 // Threads render 16x16 tiles taken from a shared counter (support/tiles.hpp); the library itself
 // starts no threads.
@@ -33,8 +37,8 @@
 #include "krs/model/forest.hpp"
 #include "krs/model/forest_ground.hpp"
 #include "krs/model/grass.hpp"
-#include "krs/model/mirror_cloud.hpp"
 #include "krs/model/terrain.hpp"
+#include "krs/scenes/example_scenes.hpp"
 #include "krs/shade/global.hpp"
 #include "krs/shade/kernel_light.hpp"
 #include "krs/shade/normal.hpp"
@@ -45,6 +49,7 @@
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
+#include "support/scene_choice.hpp"
 #include "support/tiles.hpp"
 
 #include <algorithm>
@@ -53,6 +58,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -60,10 +66,11 @@
 namespace {
 
 using krs::vec3f;
+namespace ex = krs::scenes;
 
 struct options {
     int width = 480, height = 360, threads = 0;
-    unsigned seed = 1;
+    std::optional<std::uint32_t> seed; // --seed, else each scene's own
     std::string only, output_dir = ".";
     float reflectivity = 0.0f; // mirrors scene: the spheres' reflectivity at normal incidence (0: none)
 };
@@ -77,19 +84,6 @@ vec3f mul(const vec3f& a, const vec3f& b) { return {a.x * b.x, a.y * b.y, a.z * 
 // GLSL's mix (krs::mix, vec3.hpp) with the weight clamped to [0, 1].
 vec3f mix_clamped(const vec3f& a, const vec3f& b, float t) { return krs::mix(a, b, std::clamp(t, 0.0f, 1.0f)); }
 
-// A field moved by `offset` (the second forest stands beside the first).
-template <class F>
-struct shifted {
-    F field;
-    vec3f offset;
-    template <class T>
-    T distance(const krs::vec3<T>& p) const
-    {
-        return field.distance(p - krs::vec3<T>(offset));
-    }
-};
-
-const vec3f sun_direction = krs::normalize(vec3f{0.55f, 0.65f, -0.35f});
 const vec3f sun_color{1.0f, 0.95f, 0.85f}, sky_light{0.30f, 0.36f, 0.45f};
 
 // Per-thread counters: rays traced (primary, and secondary: one per soft-shadow march and one per
@@ -152,16 +146,17 @@ constexpr std::size_t lanes = krs::lane_count<P>;
 using lighting = std::function<void(int kind, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& threshold,
                                     const krs::mask_t<P>& facing, P& shadow, P& occlusion)>;
 
-// The usual setup: sun shadows of hardness 12 searched `reach` far, 5 occlusion samples `ao_step` apart.
+// The usual setup: shadows toward the sun `sun` of hardness 12 searched `reach` far, 5 occlusion
+// samples `ao_step` apart.
 template <class F>
-void light_packet(const F& field, float reach, float ao_step, const krs::vec3<P>& p, const krs::vec3<P>& n,
-                  const P& threshold, const krs::mask_t<P>& facing, P& shadow, P& occlusion)
+void light_packet(const F& field, const vec3f& sun, float reach, float ao_step, const krs::vec3<P>& p,
+                  const krs::vec3<P>& n, const P& threshold, const krs::mask_t<P>& facing, P& shadow, P& occlusion)
 {
     krs::soft_shadow_options s;
     s.hardness = 12.0f;
     s.max_distance = reach;
     s.max_steps = 160;
-    shadow = krs::soft_shadow(field, p, n, krs::vec3<P>(sun_direction), s, facing, threshold);
+    shadow = krs::soft_shadow(field, p, n, krs::vec3<P>(sun), s, facing, threshold);
     krs::ambient_occlusion_options a;
     a.step = ao_step;
     a.samples = 5;
@@ -194,14 +189,21 @@ complexity complexity_of(const krs::basic_sequence<Mirror, Kinds...>& s)
     return c;
 }
 
-krs::trace_options tracing(const krs::pinhole_camera& camera, float max_distance)
+// How a scene of the list is seen here: its camera at this frame's size (or half its width, for the
+// figures of two halves), its program's march settings (threshold, far limit, steps) for primary
+// rays, and its light.
+struct view {
+    krs::pinhole_camera camera;
+    krs::trace_options trace;
+    vec3f sun;
+};
+template <class F>
+view view_of(const ex::scene<F>& s, int width, int height)
 {
-    krs::trace_options t;
-    t.pixel_footprint = camera.pixel_footprint() * 0.5f;
-    t.max_distance = max_distance;
-    t.threshold_floor = 1e-5f;
-    t.max_steps = 400;
-    return t.validate(), t;
+    const krs::pinhole_camera camera = s.camera.with_size(width, height);
+    krs::trace_options trace = s.program.primary(camera);
+    trace.validate();
+    return {camera, trace, s.program.to_light};
 }
 
 // Renders `pixel(x, y, counts) -> lit` into dir/name.png with tiles over threads, the light of
@@ -283,14 +285,11 @@ double render(const options& opt, const std::string& name, const complexity& sce
 
 double forest_scene(const options& opt)
 {
-    krs::model::forest_parameters fp;
-    fp.tree.levels = 9;
-    fp.tree.leaves_per_twig = 3;
-    fp.tree.leaf_radius = 0.12f;
-    fp.tree.seed = opt.seed;
-    fp.doublings = 6;
+    using entry = ex::forest_scene;
+    const std::uint32_t seed = opt.seed.value_or(entry::default_seed);
+    const view v = view_of(entry::build(seed), opt.width, opt.height);
+    krs::model::forest_parameters fp = entry::parameters(seed);
     fp.ground_height.reset(); // the ground is the terrain below
-    fp.seed = opt.seed;
     const krs::model::forest forest = krs::model::build_forest(fp);
     // The terrain folded by the forest's own mirrors (section 7.2): every trunk base on the ground.
     krs::model::terrain_parameters tp;
@@ -298,7 +297,7 @@ double forest_scene(const options& opt)
     tp.size = 3.0f * forest.crown.radius;
     tp.slope = 0.22f;
     tp.extra_planes = 2;
-    tp.seed = opt.seed + 3;
+    tp.seed = seed + 3;
     const krs::model::plane_sequence ground = krs::model::build_forest_ground(fp, forest, tp);
     // One tree is "broken off" (section 6.4): an empty zone removes it from the KRS, and user
     // geometry (a fallen trunk and crown, which a physics engine could move) stands in for it.
@@ -324,26 +323,23 @@ double forest_scene(const options& opt)
                 forest.tree_instances, ground.mirror_count());
 
     const float span = forest.bound.radius;
-    const vec3f eye = look + vec3f{-0.25f * span, 0.45f * span, -1.05f * span};
-    const krs::pinhole_camera camera(eye, look - vec3f{0, 0.15f * span, 0}, {0, 1, 0}, 45.0f, opt.width, opt.height);
-    const krs::trace_options trace = tracing(camera, 6 * span);
     const krs::fractal_noise ground_noise(4, 0.3f);
     complexity c = complexity_of(forest.sequence);
     c += complexity_of(ground);
 
     return render(opt, "forest", c, [&](float x, float y, ray_counts& counts) -> lit {
-        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
-        const auto h = krs::union_trace(scene, r, trace);
+        const krs::ray<float> r = v.camera.primary_ray(x + 0.5f, y + 0.5f);
+        const auto h = krs::union_trace(scene, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
-        const float threshold = trace.threshold(h.t);
+        const float threshold = v.trace.threshold(h.t);
         vec3f n{0, 1, 0}, albedo{0.35f, 0.30f, 0.18f};
         float diffuse = 0;
         if (h.nearest == 1) {
             // Terrain: Algorithm 2 smooths the creases of the folded planes.
-            const float band = krs::smoothing_threshold(h.t, camera.pixel_footprint(), 6.0f) + 0.05f;
-            const auto k = krs::shade_in_kernel_space(ground, p, sun_direction, -r.direction, band);
+            const float band = krs::smoothing_threshold(h.t, v.camera.pixel_footprint(), 6.0f) + 0.05f;
+            const auto k = krs::shade_in_kernel_space(ground, p, v.sun, -r.direction, band);
             diffuse = std::max(krs::dot(k.normal, k.light), 0.0f);
             n = ground.normal(p);
             albedo = mix_clamped(albedo, vec3f{0.22f, 0.32f, 0.12f}, 0.5f + 0.5f * ground_noise(p));
@@ -364,54 +360,47 @@ double forest_scene(const options& opt)
                 const float groove = 0.5f + 0.5f * std::sin(uv.v * 6.2831853f * 7.0f + 9.0f * uv.u);
                 albedo = vec3f{0.30f, 0.21f, 0.14f} * (0.7f + 0.3f * groove);
             } else {
-                const float v = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
-                albedo = vec3f{0.16f + 0.12f * v, 0.38f + 0.1f * v, 0.08f};
+                const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
+                albedo = vec3f{0.16f + 0.12f * tint, 0.38f + 0.1f * tint, 0.08f};
             }
         }
-        if (h.nearest != 1) diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        if (h.nearest != 1) diffuse = std::max(krs::dot(n, v.sun), 0.0f);
         return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts));
     }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
-        light_packet(exact, span, 0.3f, p, n, th, facing, s, a);
+        light_packet(exact, v.sun, span, 0.3f, p, n, th, facing, s, a);
     });
 }
 
 double terrain_scene(const options& opt)
 {
-    krs::model::terrain_parameters t;
-    t.levels = 28;
-    t.size = 60.0f;
-    t.slope = 0.32f;
-    t.seed = opt.seed;
-    const krs::model::plane_sequence terrain = krs::model::build_terrain(t);
-    const vec3f eye{-18.0f, 0.0f, -22.0f};
-    const float ground = -terrain.distance(eye); // terrain height under the eye, roughly
-    const vec3f eye_up = eye + vec3f{0, ground + 7.0f, 0};
-    const krs::pinhole_camera camera(eye_up, vec3f{6.0f, ground - 2.0f, 10.0f}, {0, 1, 0}, 55.0f, opt.width, opt.height);
-    const krs::trace_options trace = tracing(camera, 200.0f);
+    using entry = ex::terrain_scene;
+    const auto registered = entry::build(opt.seed.value_or(entry::default_seed));
+    const krs::model::plane_sequence& terrain = registered.field;
+    const view v = view_of(registered, opt.width, opt.height);
     const krs::fractal_noise detail(5, 0.5f);
 
     return render(opt, "terrain", complexity_of(terrain), [&](float x, float y, ray_counts& counts) -> lit {
-        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
-        const krs::hit<float> h = krs::sphere_trace(terrain, r, trace);
+        const krs::ray<float> r = v.camera.primary_ray(x + 0.5f, y + 0.5f);
+        const krs::hit<float> h = krs::sphere_trace(terrain, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         // Algorithm 2: light and view carried into the plane kernel's space, blended over a band
         // a few pixels wide at this depth, so creases shade smoothly at every distance.
-        const float band = krs::smoothing_threshold(h.t, camera.pixel_footprint(), 6.0f) + 0.03f;
-        const auto k = krs::shade_in_kernel_space(terrain, p, sun_direction, -r.direction, band);
+        const float band = krs::smoothing_threshold(h.t, v.camera.pixel_footprint(), 6.0f) + 0.03f;
+        const auto k = krs::shade_in_kernel_space(terrain, p, v.sun, -r.direction, band);
         const float diffuse = std::max(krs::dot(k.normal, k.light), 0.0f);
         const vec3f n = terrain.normal(p);
         // World-space texture (triplanar noise): steep faces are rock, flat ones grass.
-        auto pattern = [&](float u, float v) { return detail(vec3f{u, v, 0.37f * (u - v)}); };
+        auto pattern = [&](float u, float w) { return detail(vec3f{u, w, 0.37f * (u - w)}); };
         const float rock = krs::triplanar(pattern, p * 0.8f, n);
         const vec3f grass{0.22f, 0.34f, 0.10f}, stone{0.45f, 0.41f, 0.36f};
         const vec3f albedo = mix_clamped(grass, stone, (0.955f - n.y) * 10.0f + 1.2f * rock) * (0.75f + 0.25f * rock);
-        const lit c = mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));
+        const lit c = mul(albedo, light_surface(0, p, n, diffuse, v.trace.threshold(h.t), counts));
         const float fog = 1.0f - std::exp(-h.t / 400.0f);
         return fade_to(c, sky(r.direction), fog);
     }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
-        light_packet(terrain, 60.0f, 0.6f, p, n, th, facing, s, a);
+        light_packet(terrain, v.sun, 60.0f, 0.6f, p, n, th, facing, s, a);
     });
 }
 
@@ -420,19 +409,15 @@ double terrain_scene(const options& opt)
 // across each mirror over a band proportional to the hit's depth, i.e. to the pixel footprint).
 double rock_scene(const options& opt)
 {
-    krs::model::rock_parameters rp;
-    rp.radius = 1.0f;
-    rp.center = {0, 0.6f, 0};
-    rp.folds = 16;
-    rp.seed = opt.seed;
-    const krs::model::rock rock = krs::model::build_rock(rp);
+    using entry = ex::rock_scene;
+    const std::uint32_t seed = opt.seed.value_or(entry::default_seed);
+    const krs::model::rock rock = krs::model::build_rock(entry::parameters(seed));
     using rock_field = krs::bounded<krs::model::plane_sequence>;
     const krs::union_of<rock_field, krs::plane> scene(rock_field(rock.sequence, rock.bound, 0.2f),
                                                       krs::plane({0, 1, 0}, 0.0f));
     const krs::union_of<krs::model::plane_sequence, krs::plane> exact(rock.sequence, krs::plane({0, 1, 0}, 0.0f));
     const int half = std::max(1, opt.width / 2);
-    const krs::pinhole_camera camera({3.4f, 2.9f, -4.7f}, {0, 0.6f, 0}, {0, 1, 0}, 40.0f, half, opt.height);
-    const krs::trace_options trace = tracing(camera, 60.0f);
+    const view v = view_of(entry::build(seed), half, opt.height);
     const krs::fractal_noise grain(4, 3.0f);
     // The smoothing band: this many pixel footprints wide at the hit's depth (paper: e_threshold
     // inversely proportional to depth resolution), so the look does not change with distance.
@@ -442,51 +427,40 @@ double rock_scene(const options& opt)
 
     return render(opt, "rock", c, [&](float x, float y, ray_counts& counts) -> lit {
         const bool smooth = x >= float(half);
-        const krs::ray<float> r = camera.primary_ray((smooth ? x - float(half) : x) + 0.5f, y + 0.5f);
+        const krs::ray<float> r = v.camera.primary_ray((smooth ? x - float(half) : x) + 0.5f, y + 0.5f);
         if (int(x) == half) return vec3f{1, 1, 1}; // the divider
-        const auto h = krs::union_trace(scene, r, trace);
+        const auto h = krs::union_trace(scene, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
         if (h.nearest == 1) {
             const vec3f sand = vec3f{0.55f, 0.50f, 0.40f} * (0.9f + 0.1f * grain(p));
-            return mul(sand, light_surface(0, p, {0, 1, 0}, sun_direction.y, trace.threshold(h.t), counts));
+            return mul(sand, light_surface(0, p, {0, 1, 0}, std::max(v.sun.y, 0.0f), v.trace.threshold(h.t), counts));
         }
-        const float band = smooth ? krs::smoothing_threshold(h.t, camera.pixel_footprint(), band_pixels) : 0.0f;
-        const auto k = krs::shade_in_kernel_space(rock.sequence, p, sun_direction, -r.direction, band);
+        const float band = smooth ? krs::smoothing_threshold(h.t, v.camera.pixel_footprint(), band_pixels) : 0.0f;
+        const auto k = krs::shade_in_kernel_space(rock.sequence, p, v.sun, -r.direction, band);
         const krs::phong_terms ph = krs::phong(k, 24.0f);
         const vec3f n = rock.sequence.normal(p);
         const vec3f albedo = vec3f{0.45f, 0.42f, 0.40f} * (0.75f + 0.25f * grain(p));
-        const lit light = light_surface(1, p, n, ph.diffuse, trace.threshold(h.t), counts);
+        const lit light = light_surface(1, p, n, ph.diffuse, v.trace.threshold(h.t), counts);
         return mul(albedo, light) + sun_color * (0.15f * ph.specular);
     }, [&](int kind, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
-        light_packet(exact, 10.0f, kind == 0 ? 0.15f : 0.1f, p, n, th, facing, s, a); // 0: the ground, 1: the rock
+        light_packet(exact, v.sun, 10.0f, kind == 0 ? 0.15f : 0.1f, p, n, th, facing, s, a); // 0: the ground, 1: the rock
     });
 }
 
-// Figure 5: one sphere multiplied by 9 mirrors into 512 spheres (krs/model/mirror_cloud.hpp).
-// Left: the mirrors alternate between the x, y and z axes, and the copies form a lattice whose
-// symmetry the eye sees at once. Right: each mirror's normal is random, and the same 512 spheres
-// read as a natural cluster.
+// Figure 5 (ex::mirrors_scene): 512 spheres from one sphere and 9 mirrors, twice. Left: the
+// mirrors alternate between the x, y and z axes, and the copies form a lattice whose symmetry the
+// eye sees at once. Right: each mirror's normal is random, and the same 512 spheres read as a
+// natural cluster.
 double mirrors_scene(const options& opt)
 {
-    krs::model::mirror_cloud_parameters cloud;
-    cloud.doublings = 9;
-    cloud.gap = 0.3f;
-    cloud.seed = opt.seed;
-    const auto aligned = krs::model::build_aligned_cloud(cloud);
-    const auto unaligned = krs::model::build_scattered_cloud(cloud);
-    const int half = std::max(1, opt.width / 2);
-    struct view {
-        krs::pinhole_camera camera;
-        krs::trace_options trace;
-    };
-    auto view_of = [&](const krs::bounding_sphere& b) {
-        const krs::pinhole_camera camera(b.center + vec3f{0.55f, 0.5f, -1.0f} * (1.9f * b.radius), b.center, {0, 1, 0},
-                                         40.0f, half, opt.height);
-        return view{camera, tracing(camera, 8 * b.radius)};
-    };
-    const view left = view_of(aligned.bound()), right = view_of(unaligned.bound());
+    using entry = ex::mirrors_scene;
+    const auto registered = entry::build(opt.seed.value_or(entry::default_seed));
+    const ex::mirrors_field& clouds = registered.field;
+    const auto& aligned = clouds.component<0>();
+    const auto& unaligned = clouds.component<1>();
+    const view v = view_of(registered, opt.width, opt.height);
     complexity c = complexity_of(aligned);
     c += complexity_of(unaligned);
 
@@ -494,17 +468,25 @@ double mirrors_scene(const options& opt)
         const float tint = float((where.reflections * 0x9E3779B97F4A7C15ull) >> 40 & 0xff) / 255.0f;
         return mix_clamped(vec3f{0.75f, 0.35f, 0.25f}, vec3f{0.85f, 0.75f, 0.35f}, tint);
     };
-    auto shade = [&](int kind, const auto& cloud, const view& v, const krs::ray<float>& r, ray_counts& counts) -> lit {
-        const krs::hit<float> h = krs::sphere_trace(cloud, r, v.trace);
+    // A hit's location and normal in the cloud union_trace found nearest (0: aligned, 1: not).
+    auto locate = [&](const vec3f& p, std::size_t cloud) {
+        const auto in = [&](const auto& c) {
+            const krs::location<float> where = c.locate(p);
+            return std::pair{where, c.normal(where)};
+        };
+        return cloud == 0 ? in(aligned) : in(unaligned);
+    };
+    return render(opt, "mirrors", c, [&](float x, float y, ray_counts& counts) -> lit {
+        const krs::ray<float> r = v.camera.primary_ray(x + 0.5f, y + 0.5f);
+        const auto h = krs::union_trace(clouds, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
-        const krs::location<float> where = cloud.locate(p);
-        const vec3f n = cloud.normal(where);
+        const auto [where, n] = locate(p, h.nearest);
         const vec3f albedo = albedo_of(where);
-        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        const float diffuse = std::max(krs::dot(n, v.sun), 0.0f);
         const float threshold = v.trace.threshold(h.t);
-        lit here = mul(albedo, light_surface(kind, p, n, diffuse, threshold, counts));
+        lit here = mul(albedo, light_surface(0, p, n, diffuse, threshold, counts));
         if (!(opt.reflectivity > 0.0f)) return here; // no reflected ray: the image without reflections
         // Section 6.5: one reflected ray, traced by the same sphere tracer from the hit lifted two
         // thresholds off the sphere; its hit threshold starts at the primary's (the footprint
@@ -512,13 +494,12 @@ double mirrors_scene(const options& opt)
         const krs::ray<float> bounce = krs::reflection_ray(p, n, r.direction, 2.0f * threshold);
         krs::trace_options o = v.trace;
         o.threshold_floor = threshold;
-        const krs::hit<float> hb = krs::sphere_trace(cloud, bounce, o);
+        const auto hb = krs::union_trace(clouds, bounce, o);
         ++counts.secondary;
         vec3f seen = sky(bounce.direction);
         if (hb.found) {
-            const krs::location<float> there = cloud.locate(krs::point_at(bounce, hb.t));
-            const vec3f m = cloud.normal(there);
-            seen = mul(albedo_of(there), sun_color * std::max(krs::dot(m, sun_direction), 0.0f) + sky_light);
+            const auto [there, m] = locate(krs::point_at(bounce, hb.t), hb.nearest);
+            seen = mul(albedo_of(there), sun_color * std::max(krs::dot(m, v.sun), 0.0f) + sky_light);
         }
         // mix(lit, seen, w) = lit (1 - w) + seen w, and lit's shadow and occlusion terms
         // are still to come (packets, after the tile): scale them by 1 - w now, fold seen into the base.
@@ -527,70 +508,56 @@ double mirrors_scene(const options& opt)
         here.sun = here.sun * (1.0f - weight);
         here.sky = here.sky * (1.0f - weight);
         return here;
-    };
-    return render(opt, "mirrors", c, [&](float x, float y, ray_counts& counts) -> lit {
-        if (int(x) == half) return vec3f{1, 1, 1};
-        if (x < float(half)) return shade(0, aligned, left, left.camera.primary_ray(x + 0.5f, y + 0.5f), counts);
-        return shade(1, unaligned, right, right.camera.primary_ray(x - float(half) + 0.5f, y + 0.5f), counts);
-    }, [&](int kind, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
-        if (kind == 0) light_packet(aligned, 4.0f * aligned.bound().radius, 0.1f, p, n, th, facing, s, a);
-        else light_packet(unaligned, 4.0f * unaligned.bound().radius, 0.1f, p, n, th, facing, s, a);
+    }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
+        light_packet(clouds, v.sun, 4.0f * aligned.bound().radius, 0.1f, p, n, th, facing, s, a);
     });
 }
 
 double coral_scene(const options& opt)
 {
-    krs::model::coral_parameters cp;
-    cp.levels = 11;
-    cp.seed = opt.seed;
-    const krs::model::coral_sequence coral = krs::model::build_coral(cp);
+    using entry = ex::coral_scene;
+    const std::uint32_t seed = opt.seed.value_or(entry::default_seed);
+    const auto registered = entry::build(seed);
     // Symmetry broken by a noise warp (section 5.2); the distance is divided by its bound.
-    using warped = krs::lipschitz_warp<krs::model::coral_sequence, krs::noise_warp>;
-    const warped bent(coral, krs::noise_warp(0.02f, 4.0f));
-    const krs::union_of<warped, krs::plane> scene(bent, krs::plane({0, 1, 0}, 0.0f));
+    const ex::coral_field& bent = registered.field;
+    const krs::union_of<ex::coral_field, krs::plane> scene(bent, krs::plane({0, 1, 0}, 0.0f));
+    const krs::model::coral_sequence coral = krs::model::build_coral(entry::parameters(seed));
     const krs::bounding_sphere b = coral.bound();
-    const vec3f look = b.center;
-    const krs::pinhole_camera camera(look + vec3f{0.3f, 0.35f, -1.0f} * (1.15f * b.radius), look, {0, 1, 0}, 42.0f,
-                                     opt.width, opt.height);
-    krs::trace_options trace = tracing(camera, 8 * b.radius);
-    trace.max_steps = 600;
+    const view v = view_of(registered, opt.width, opt.height);
     const krs::fractal_noise spots(3, 6.0f);
 
     complexity c = complexity_of(coral);
     c.instances += 1, c.triangles += 2;
 
     return render(opt, "coral", c, [&](float x, float y, ray_counts& counts) -> lit {
-        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
-        const auto h = krs::union_trace(scene, r, trace);
+        const krs::ray<float> r = v.camera.primary_ray(x + 0.5f, y + 0.5f);
+        const auto h = krs::union_trace(scene, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return vec3f{0.05f, 0.22f, 0.35f} * (0.6f + 0.4f * r.direction.y);
         const vec3f p = krs::point_at(r, h.t);
-        const float threshold = trace.threshold(h.t);
+        const float threshold = v.trace.threshold(h.t);
         vec3f n{0, 1, 0}, albedo{0.60f, 0.55f, 0.42f};
         if (h.nearest == 0) {
             n = krs::gradient_normal(bent, p, 2.0f * threshold);
             albedo = mix_clamped(vec3f{0.85f, 0.35f, 0.30f}, vec3f{0.95f, 0.65f, 0.45f}, 0.5f + 0.7f * spots(p));
         }
-        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        const float diffuse = std::max(krs::dot(n, v.sun), 0.0f);
         return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts));
     }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
-        light_packet(scene, 2 * b.radius, 0.04f * b.radius, p, n, th, facing, s, a);
+        light_packet(scene, v.sun, 2 * b.radius, 0.04f * b.radius, p, n, th, facing, s, a);
     });
 }
 
 double sponge_scene(const options& opt)
 {
-    krs::model::sponge_parameters sp;
-    sp.levels = 3;
-    sp.size = 2.0f;
-    sp.center = {0, 1.0f, 0};
+    using entry = ex::sponge_scene;
+    const krs::model::sponge_parameters sp = entry::parameters();
     const krs::model::sponge sponge = krs::model::build_sponge(sp);
     using sponge_field = krs::bounded<krs::model::sponge_sequence>;
     const krs::union_of<sponge_field, krs::plane> scene(
         sponge_field(sponge.sequence, {sp.center, 0.5f * sp.size * 1.7321f}, 0.1f), krs::plane({0, 1, 0}, 0.0f));
     const krs::union_of<krs::model::sponge_sequence, krs::plane> exact(sponge.sequence, krs::plane({0, 1, 0}, 0.0f));
-    const krs::pinhole_camera camera({2.4f, 2.9f, -3.3f}, {0, 0.9f, 0}, {0, 1, 0}, 42.0f, opt.width, opt.height);
-    const krs::trace_options trace = tracing(camera, 60.0f);
+    const view v = view_of(entry::build(), opt.width, opt.height);
 
     // The KRS has 2^21 box instances, but the sign and sorting folds make them coincide in groups:
     // the sponge shows 20^levels distinct cubes, which is what a mesh would need.
@@ -599,18 +566,18 @@ double sponge_scene(const options& opt)
                 sponge.cube_count);
 
     return render(opt, "sponge", c, [&](float x, float y, ray_counts& counts) -> lit {
-        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
-        const auto h = krs::union_trace(scene, r, trace);
+        const krs::ray<float> r = v.camera.primary_ray(x + 0.5f, y + 0.5f);
+        const auto h = krs::union_trace(scene, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
-        const float threshold = trace.threshold(h.t);
+        const float threshold = v.trace.threshold(h.t);
         vec3f n{0, 1, 0}, albedo{0.55f, 0.55f, 0.52f};
         if (h.nearest == 0) {
             n = sponge.sequence.normal(p);
             albedo = {0.75f, 0.62f, 0.45f};
         }
-        const float diffuse = std::max(krs::dot(n, sun_direction), 0.0f);
+        const float diffuse = std::max(krs::dot(n, v.sun), 0.0f);
         return mul(albedo, light_surface(0, p, n, diffuse, threshold, counts, vec3f{0.45f, 0.5f, 0.6f}));
     }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
         // Deeper occlusion than the other scenes: the sponge's cavities are the subject.
@@ -622,32 +589,23 @@ double sponge_scene(const options& opt)
         krs::soft_shadow_options so;
         so.max_distance = 6.0f;
         so.hardness = 16.0f;
-        s = krs::soft_shadow(exact, p, n, krs::vec3<P>(sun_direction), so, facing, th);
+        s = krs::soft_shadow(exact, p, n, krs::vec3<P>(v.sun), so, facing, th);
     });
 }
 
 double grass_scene(const options& opt)
 {
-    krs::model::grass_parameters gp;
-    gp.doublings = 12;
-    gp.blades_per_clump = 10;
-    gp.seed = opt.seed;
+    using entry = ex::grass_scene;
+    const std::uint32_t seed = opt.seed.value_or(entry::default_seed);
+    const krs::model::grass_parameters gp = entry::parameters(seed);
     const krs::model::grass_field grass = krs::model::build_grass(gp);
     std::printf("grass: %zu clumps, %zu blades\n", grass.clump_count, grass.blade_count);
-    // From beside the first clump (at the origin), looking into the field.
-    vec3f into = grass.bound.center;
-    into.y = 0;
-    into = krs::length(into) > 1e-3f ? krs::normalize(into) : vec3f{0, 0, 1};
-    const vec3f eye = vec3f{0, gp.ground_height + 0.7f, 0} - into * 0.8f;
-    const krs::pinhole_camera camera(eye, eye + into * 3.0f - vec3f{0, 0.9f, 0}, {0, 1, 0}, 50.0f, opt.width,
-                                     opt.height);
-    krs::trace_options trace = tracing(camera, 40.0f);
-    trace.max_steps = 600;
+    const view v = view_of(entry::build(seed), opt.width, opt.height);
     const krs::fractal_noise tint(3, 0.8f);
 
     return render(opt, "grass", complexity_of(grass.sequence), [&](float x, float y, ray_counts& counts) -> lit {
-        const krs::ray<float> r = camera.primary_ray(x + 0.5f, y + 0.5f);
-        const krs::hit<float> h = krs::sphere_trace(grass.sequence, r, trace);
+        const krs::ray<float> r = v.camera.primary_ray(x + 0.5f, y + 0.5f);
+        const krs::hit<float> h = krs::sphere_trace(grass.sequence, r, v.trace);
         ++counts.primary, counts.primary_steps += h.steps;
         if (!h.found) return sky(r.direction);
         const vec3f p = krs::point_at(r, h.t);
@@ -659,21 +617,23 @@ double grass_scene(const options& opt)
             const float height = std::clamp((p.y - gp.ground_height) / gp.blade_height, 0.0f, 1.0f);
             albedo = mix_clamped(vec3f{0.10f, 0.22f, 0.05f}, vec3f{0.42f, 0.55f, 0.18f}, height + 0.3f * tint(p));
         }
-        const float diffuse = std::abs(krs::dot(n, sun_direction)); // thin blades pass light through
-        return mul(albedo, light_surface(0, p, n, diffuse, trace.threshold(h.t), counts));
+        const float diffuse = std::abs(krs::dot(n, v.sun)); // thin blades pass light through
+        return mul(albedo, light_surface(0, p, n, diffuse, v.trace.threshold(h.t), counts));
     }, [&](int, const krs::vec3<P>& p, const krs::vec3<P>& n, const P& th, const krs::mask_t<P>& facing, P& s, P& a) {
-        light_packet(grass.sequence, 3.0f, 0.03f, p, n, th, facing, s, a);
+        light_packet(grass.sequence, v.sun, 3.0f, 0.03f, p, n, th, facing, s, a);
     });
 }
 
-// The scenes in the order they render: --only takes its names from here.
+// The scenes this program renders, by their entries in the list, in the list's order: --scene
+// takes its names from here.
 struct scene_entry {
-    const char* name;
+    std::string_view name;
     double (*run)(const options&);
 };
-const scene_entry scenes[] = {{"forest", forest_scene}, {"terrain", terrain_scene}, {"rock", rock_scene},
-                              {"mirrors", mirrors_scene}, {"coral", coral_scene},     {"sponge", sponge_scene},
-                              {"grass", grass_scene}};
+const scene_entry scenes[] = {{ex::forest_scene::name, forest_scene}, {ex::terrain_scene::name, terrain_scene},
+                              {ex::rock_scene::name, rock_scene},     {ex::mirrors_scene::name, mirrors_scene},
+                              {ex::coral_scene::name, coral_scene},   {ex::grass_scene::name, grass_scene},
+                              {ex::sponge_scene::name, sponge_scene}};
 
 options parse(int argc, char** argv)
 {
@@ -682,14 +642,14 @@ options parse(int argc, char** argv)
     args.integer("--width", o.width, 1, 8192, "image width in pixels");
     args.integer("--height", o.height, 1, 8192, "image height in pixels");
     args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
-    args.integer("--seed", o.seed, 0, 1 << 30, "seed of the scenes' random placement");
     std::vector<std::string> names;
     for (const scene_entry& e : scenes) names.emplace_back(e.name);
-    args.choice("--only", o.only, names, "render this scene only (default: all)");
+    const example::scene_choice choice(args, o.only, names, "render this scene only (default: all)", "--only");
     args.text("--output-dir", o.output_dir, "the folder the PNG files go to (made if missing)", "DIR");
     args.number("--reflectivity", o.reflectivity, 0.0, 1.0, false, "mirrors scene: reflectivity of the spheres at normal incidence "
                  "(Schlick), each hit tracing one reflected ray; 0: no reflections");
     args.parse(argc, argv);
+    o.seed = choice.seed();
     example::require_output_folder(args, "--output-dir", o.output_dir);
     o.threads = example::thread_count(o.threads);
     return o;

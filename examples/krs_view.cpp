@@ -1,6 +1,7 @@
 // krs_view: a window onto the emitted GLSL. It runs a whole Shadertoy program on the GPU, in real
 // time: the program of an example scene (--scene NAME, as glsl_export writes it,
-// krs/glsl/example_scenes.hpp) or a user's own file (--glsl FILE, any Shadertoy Image tab).
+// krs/scenes/example_scenes.hpp; --list-scenes prints them, --seed S builds a seeded one at S) or
+// a user's own file (--glsl FILE, any Shadertoy Image tab).
 //
 //   krs_view [--scene NAME | --glsl FILE] [--width W --height H] [--time T]
 //   krs_view ... --frames N [--screenshot FILE.png] [--accumulate]      (headless)
@@ -28,7 +29,8 @@
 // A window needs a display: with none, or no OpenGL 3.3 core context, it prints one line and
 // exits 1 (run it under `xvfb-run -a` on a machine without a screen: Mesa's llvmpipe draws there).
 
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 
 #include "support/command_line.hpp"
 #include "support/example_io.hpp"
@@ -36,6 +38,7 @@
 #include "support/output_path.hpp"
 #include "support/gl_window.hpp"
 #include "support/progressive_frame.hpp"
+#include "support/scene_choice.hpp"
 #include "support/shadertoy_host.hpp"
 
 #include <algorithm>
@@ -49,11 +52,12 @@
 
 namespace {
 
-namespace ex = krs::glsl::examples;
+namespace ex = krs::scenes;
 using clock_type = std::chrono::steady_clock;
 
 struct options {
     std::string scene = "tree", glsl, screenshot;
+    std::optional<std::uint32_t> seed; // --seed: the scene's, else its own
     int width = ex::frame_width, height = ex::frame_height;
     int frames = 0; // 0: interactive
     float time = 0;
@@ -68,7 +72,7 @@ options parse(int argc, char** argv)
     example::command_line args(
         "krs_view", "A window running a scene's Shadertoy program (or your own) in real time. "
                     "Keys: space pauses time, P writes the frame as PNG, Esc quits; drag to turn.");
-    args.choice("--scene", o.scene, ex::scene_names(), "the example scene whose program runs");
+    const example::scene_choice scenes(args, o.scene, example::all_scene_names(), "the example scene whose program runs");
     args.text("--glsl", o.glsl,
               "run this Shadertoy program (mainImage) instead, reloaded when it changes", "FILE");
     args.integer("--width", o.width, 1, 16384, "the frame's width in pixels");
@@ -87,9 +91,10 @@ options parse(int argc, char** argv)
                 "headless, with --glsl: wait up to this many seconds for the file to change and "
                 "compile, then draw --frames of the new program");
     args.parse(argc, argv);
+    o.seed = scenes.seed();
     const auto given = [&](const char* name) { return args.app().count(name) > 0; };
-    if (given("--glsl") && given("--scene"))
-        args.fail("--glsl, --scene: run one program, a file or a scene");
+    if (given("--glsl") && (given("--scene") || given("--seed")))
+        args.fail("--glsl, --scene, --seed: run one program, a file or a scene");
     if (given("--glsl") && !std::filesystem::is_regular_file(o.glsl))
         args.fail("--glsl: '" + o.glsl + "' is not a file");
     if (given("--accumulate") && !o.headless())
@@ -107,12 +112,10 @@ options parse(int argc, char** argv)
 }
 
 // The program's text and its name in messages: the scene's, emitted here as glsl_export writes it.
-std::string scene_program(const std::string& name)
+std::string scene_program(const std::string& name, std::optional<std::uint32_t> seed)
 {
     std::string text;
-    ex::for_each_scene([&](const auto& s) {
-        if (s.name == name) text = ex::file_text(s, ex::shadertoy_file);
-    });
+    ex::with_scene(name, seed, [&](const auto& s) { text = ex::file_text(s, ex::shadertoy_file); });
     return text;
 }
 
@@ -335,7 +338,7 @@ int main(int argc, char** argv)
     viewer v{o, o.glsl.empty() ? o.scene : o.glsl, {}, {}, {}, 0, 0};
     std::string text;
     try {
-        if (o.glsl.empty()) text = scene_program(o.scene);
+        if (o.glsl.empty()) text = scene_program(o.scene, o.seed);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "krs_view: %s\n", e.what());
         return 1;

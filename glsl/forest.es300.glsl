@@ -81,7 +81,7 @@ vec3 krs_mirror_fold(vec3 p, vec4 m) {
 }
 vec3 krs_mirror_reflect_direction(vec3 w, vec4 m) { return w - m.xyz * (2.0 * dot(m.xyz, w)); }
 #endif
-const vec4 krs_forest_data[93] = vec4[93](
+const vec4 krs_forest_data[95] = vec4[95](
     vec4(0.8916828, -0.25330064, -0.3751541, -1.3240795),
     vec4(-0.42183313, -0.28242838, 0.86156315, -1.5855871),
     vec4(-0.28327295, -0.10174031, -0.95362747, -1.6781133),
@@ -95,6 +95,7 @@ const vec4 krs_forest_data[93] = vec4[93](
     vec4(0.97603166, 0.0, -0.21762864, 18.482454),
     vec4(0.76455605, 0.0, 0.6445573, 40.437904),
     vec4(0.71022093, 0.0, -0.70397884, 40.57396),
+    vec4(0.6126144, 0.0, 0.7903819, 85.17805),
     vec4(0.96035695, 7.5755997, 0.8814608, 2.6361063),
     vec4(-0.20294254, -2.1807617e-07, -0.97919065, 0.9230764),
     vec4(0.9504644, 0.24044271, -0.19698893, 0.05611686),
@@ -174,7 +175,8 @@ const vec4 krs_forest_data[93] = vec4[93](
     vec4(5.03968, 6.205453, -0.74849844, 12.316513),
     vec4(7.697253, 6.205453, 6.1534276, 19.713158),
     vec4(19.711084, 6.205453, 3.4746685, 32.02326),
-    vec4(37.393776, 6.205453, 18.382023, 55.153645));
+    vec4(37.393776, 6.205453, 18.382023, 55.153645),
+    vec4(56.538967, 6.205453, -0.59490395, 82.11304));
 // krs_forest_data[0...0]: krs_forest mirror 0 (krs_mirror)
 // krs_forest_data[1...1]: krs_forest mirror 1 (krs_mirror)
 // krs_forest_data[2...2]: krs_forest mirror 2 (krs_mirror)
@@ -188,144 +190,151 @@ const vec4 krs_forest_data[93] = vec4[93](
 // krs_forest_data[10...10]: krs_forest mirror 10 (krs_mirror)
 // krs_forest_data[11...11]: krs_forest mirror 11 (krs_mirror)
 // krs_forest_data[12...12]: krs_forest mirror 12 (krs_mirror)
-// krs_forest_data[13...19]: krs_forest kernel 0 (level 0) (krs_torus_capsule)
-// krs_forest_data[20...20]: krs_forest kernel 1 (level 0) (krs_sphere)
-// krs_forest_data[21...21]: krs_forest kernel 2 (level 0) (krs_sphere)
-// krs_forest_data[22...22]: krs_forest kernel 3 (level 0) (krs_sphere)
-// krs_forest_data[23...29]: krs_forest kernel 4 (level 1) (krs_torus_capsule)
-// krs_forest_data[30...36]: krs_forest kernel 5 (level 2) (krs_torus_capsule)
-// krs_forest_data[37...43]: krs_forest kernel 6 (level 3) (krs_torus_capsule)
-// krs_forest_data[44...50]: krs_forest kernel 7 (level 4) (krs_torus_capsule)
-// krs_forest_data[51...57]: krs_forest kernel 8 (level 5) (krs_torus_capsule)
-// krs_forest_data[58...64]: krs_forest kernel 9 (level 6) (krs_torus_capsule)
-// krs_forest_data[65...71]: krs_forest kernel 10 (level 7) (krs_torus_capsule)
-// krs_forest_data[72...78]: krs_forest kernel 11 (level 8) (krs_torus_capsule)
-// krs_forest_data[79...79]: krs_forest kernel 12 (level 13) (krs_plane)
-// krs_forest_data[80]: krs_forest bound of level 0 (center, radius with margin)
-// krs_forest_data[81]: krs_forest bound of level 1 (center, radius with margin)
-// krs_forest_data[82]: krs_forest bound of level 2 (center, radius with margin)
-// krs_forest_data[83]: krs_forest bound of level 3 (center, radius with margin)
-// krs_forest_data[84]: krs_forest bound of level 4 (center, radius with margin)
-// krs_forest_data[85]: krs_forest bound of level 5 (center, radius with margin)
-// krs_forest_data[86]: krs_forest bound of level 6 (center, radius with margin)
-// krs_forest_data[87]: krs_forest bound of level 7 (center, radius with margin)
-// krs_forest_data[88]: krs_forest bound of level 8 (center, radius with margin)
-// krs_forest_data[89]: krs_forest bound of level 9 (center, radius with margin)
-// krs_forest_data[90]: krs_forest bound of level 10 (center, radius with margin)
-// krs_forest_data[91]: krs_forest bound of level 11 (center, radius with margin)
-// krs_forest_data[92]: krs_forest bound of level 12 (center, radius with margin)
+// krs_forest_data[13...13]: krs_forest mirror 13 (krs_mirror)
+// krs_forest_data[14...20]: krs_forest kernel 0 (level 0) (krs_torus_capsule)
+// krs_forest_data[21...21]: krs_forest kernel 1 (level 0) (krs_sphere)
+// krs_forest_data[22...22]: krs_forest kernel 2 (level 0) (krs_sphere)
+// krs_forest_data[23...23]: krs_forest kernel 3 (level 0) (krs_sphere)
+// krs_forest_data[24...30]: krs_forest kernel 4 (level 1) (krs_torus_capsule)
+// krs_forest_data[31...37]: krs_forest kernel 5 (level 2) (krs_torus_capsule)
+// krs_forest_data[38...44]: krs_forest kernel 6 (level 3) (krs_torus_capsule)
+// krs_forest_data[45...51]: krs_forest kernel 7 (level 4) (krs_torus_capsule)
+// krs_forest_data[52...58]: krs_forest kernel 8 (level 5) (krs_torus_capsule)
+// krs_forest_data[59...65]: krs_forest kernel 9 (level 6) (krs_torus_capsule)
+// krs_forest_data[66...72]: krs_forest kernel 10 (level 7) (krs_torus_capsule)
+// krs_forest_data[73...79]: krs_forest kernel 11 (level 8) (krs_torus_capsule)
+// krs_forest_data[80...80]: krs_forest kernel 12 (level 14) (krs_plane)
+// krs_forest_data[81]: krs_forest bound of level 0 (center, radius with margin)
+// krs_forest_data[82]: krs_forest bound of level 1 (center, radius with margin)
+// krs_forest_data[83]: krs_forest bound of level 2 (center, radius with margin)
+// krs_forest_data[84]: krs_forest bound of level 3 (center, radius with margin)
+// krs_forest_data[85]: krs_forest bound of level 4 (center, radius with margin)
+// krs_forest_data[86]: krs_forest bound of level 5 (center, radius with margin)
+// krs_forest_data[87]: krs_forest bound of level 6 (center, radius with margin)
+// krs_forest_data[88]: krs_forest bound of level 7 (center, radius with margin)
+// krs_forest_data[89]: krs_forest bound of level 8 (center, radius with margin)
+// krs_forest_data[90]: krs_forest bound of level 9 (center, radius with margin)
+// krs_forest_data[91]: krs_forest bound of level 10 (center, radius with margin)
+// krs_forest_data[92]: krs_forest bound of level 11 (center, radius with margin)
+// krs_forest_data[93]: krs_forest bound of level 12 (center, radius with margin)
+// krs_forest_data[94]: krs_forest bound of level 13 (center, radius with margin)
 float krs_forest(vec3 p) {
     float d = 3.0e38;
     vec3 v;
     float reach;
-    d = min(d, krs_plane_distance(p, krs_forest_data[79]));
+    d = min(d, krs_plane_distance(p, krs_forest_data[80]));
+    p = krs_mirror_fold(p, krs_forest_data[13]);
+    v = p - krs_forest_data[94].xyz;
+    reach = d + krs_forest_data[94].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
     p = krs_mirror_fold(p, krs_forest_data[12]);
+    v = p - krs_forest_data[93].xyz;
+    reach = d + krs_forest_data[93].w;
+    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
+    p = krs_mirror_fold(p, krs_forest_data[11]);
     v = p - krs_forest_data[92].xyz;
     reach = d + krs_forest_data[92].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    p = krs_mirror_fold(p, krs_forest_data[11]);
+    p = krs_mirror_fold(p, krs_forest_data[10]);
     v = p - krs_forest_data[91].xyz;
     reach = d + krs_forest_data[91].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    p = krs_mirror_fold(p, krs_forest_data[10]);
+    p = krs_mirror_fold(p, krs_forest_data[9]);
     v = p - krs_forest_data[90].xyz;
     reach = d + krs_forest_data[90].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    p = krs_mirror_fold(p, krs_forest_data[9]);
+    p = krs_mirror_fold(p, krs_forest_data[8]);
     v = p - krs_forest_data[89].xyz;
     reach = d + krs_forest_data[89].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    p = krs_mirror_fold(p, krs_forest_data[8]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78], krs_forest_data[79]));
+    p = krs_mirror_fold(p, krs_forest_data[7]);
     v = p - krs_forest_data[88].xyz;
     reach = d + krs_forest_data[88].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]));
-    p = krs_mirror_fold(p, krs_forest_data[7]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71], krs_forest_data[72]));
+    p = krs_mirror_fold(p, krs_forest_data[6]);
     v = p - krs_forest_data[87].xyz;
     reach = d + krs_forest_data[87].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]));
-    p = krs_mirror_fold(p, krs_forest_data[6]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64], krs_forest_data[65]));
+    p = krs_mirror_fold(p, krs_forest_data[5]);
     v = p - krs_forest_data[86].xyz;
     reach = d + krs_forest_data[86].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]));
-    p = krs_mirror_fold(p, krs_forest_data[5]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57], krs_forest_data[58]));
+    p = krs_mirror_fold(p, krs_forest_data[4]);
     v = p - krs_forest_data[85].xyz;
     reach = d + krs_forest_data[85].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]));
-    p = krs_mirror_fold(p, krs_forest_data[4]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50], krs_forest_data[51]));
+    p = krs_mirror_fold(p, krs_forest_data[3]);
     v = p - krs_forest_data[84].xyz;
     reach = d + krs_forest_data[84].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]));
-    p = krs_mirror_fold(p, krs_forest_data[3]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43], krs_forest_data[44]));
+    p = krs_mirror_fold(p, krs_forest_data[2]);
     v = p - krs_forest_data[83].xyz;
     reach = d + krs_forest_data[83].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]));
-    p = krs_mirror_fold(p, krs_forest_data[2]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36], krs_forest_data[37]));
+    p = krs_mirror_fold(p, krs_forest_data[1]);
     v = p - krs_forest_data[82].xyz;
     reach = d + krs_forest_data[82].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]));
-    p = krs_mirror_fold(p, krs_forest_data[1]);
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29], krs_forest_data[30]));
+    p = krs_mirror_fold(p, krs_forest_data[0]);
     v = p - krs_forest_data[81].xyz;
     reach = d + krs_forest_data[81].w;
     if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]));
-    p = krs_mirror_fold(p, krs_forest_data[0]);
-    v = p - krs_forest_data[80].xyz;
-    reach = d + krs_forest_data[80].w;
-    if (v.x * v.x + v.y * v.y + v.z * v.z > reach * reach && reach > 0.0) return d;
-    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]));
-    d = min(d, krs_sphere_distance(p, krs_forest_data[20]));
+    d = min(d, krs_torus_capsule_distance(p, krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19], krs_forest_data[20]));
     d = min(d, krs_sphere_distance(p, krs_forest_data[21]));
     d = min(d, krs_sphere_distance(p, krs_forest_data[22]));
+    d = min(d, krs_sphere_distance(p, krs_forest_data[23]));
     return d;
 }
 krs_location krs_forest_locate(vec3 p) {
     krs_location w = krs_location(3.0e38, p, 0u, 0u, uvec2(0u));
     float d;
-    d = krs_plane_distance(p, krs_forest_data[79]);
-    if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 12u; w.level = 13u; }
+    d = krs_plane_distance(p, krs_forest_data[80]);
+    if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 12u; w.level = 14u; }
+    if (krs_mirror_signed_distance(p, krs_forest_data[13]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[13]); w.reflections.x |= 0x2000u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[12]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[12]); w.reflections.x |= 0x1000u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[11]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[11]); w.reflections.x |= 0x800u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[10]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[10]); w.reflections.x |= 0x400u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[9]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[9]); w.reflections.x |= 0x200u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[8]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[8]); w.reflections.x |= 0x100u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78], krs_forest_data[79]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 11u; w.level = 8u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[7]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[7]); w.reflections.x |= 0x80u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71], krs_forest_data[72]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 10u; w.level = 7u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[6]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[6]); w.reflections.x |= 0x40u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64], krs_forest_data[65]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 9u; w.level = 6u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[5]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[5]); w.reflections.x |= 0x20u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57], krs_forest_data[58]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 8u; w.level = 5u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[4]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[4]); w.reflections.x |= 0x10u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50], krs_forest_data[51]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 7u; w.level = 4u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[3]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[3]); w.reflections.x |= 0x8u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43], krs_forest_data[44]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 6u; w.level = 3u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[2]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[2]); w.reflections.x |= 0x4u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36], krs_forest_data[37]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 5u; w.level = 2u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[1]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[1]); w.reflections.x |= 0x2u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29], krs_forest_data[30]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 4u; w.level = 1u; }
     if (krs_mirror_signed_distance(p, krs_forest_data[0]) > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[0]); w.reflections.x |= 0x1u; }
-    d = krs_torus_capsule_distance(p, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19], krs_forest_data[20]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 0u; w.level = 0u; }
-    d = krs_sphere_distance(p, krs_forest_data[20]);
-    if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 1u; w.level = 0u; }
     d = krs_sphere_distance(p, krs_forest_data[21]);
-    if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 2u; w.level = 0u; }
+    if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 1u; w.level = 0u; }
     d = krs_sphere_distance(p, krs_forest_data[22]);
+    if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 2u; w.level = 0u; }
+    d = krs_sphere_distance(p, krs_forest_data[23]);
     if (d < w.dist) { w.dist = d; w.kernel_point = p; w.kernel = 3u; w.level = 0u; }
     return w;
 }
@@ -341,8 +350,13 @@ krs_kernel_shading krs_forest_shade(vec3 p, vec3 toLight, vec3 toEye, float thre
     float d;
     float e;
     float weight;
-    d = krs_plane_distance(p, krs_forest_data[79]);
-    if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 12u; s.where.level = 13u; s.light = light; s.view = view; }
+    d = krs_plane_distance(p, krs_forest_data[80]);
+    if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 12u; s.where.level = 14u; s.light = light; s.view = view; }
+    e = krs_mirror_signed_distance(p, krs_forest_data[13]);
+    if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[13]); s.where.reflections.x |= 0x2000u; }
+    weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
+    light = light + (krs_mirror_reflect_direction(light, krs_forest_data[13]) - light) * weight;
+    view = view + (krs_mirror_reflect_direction(view, krs_forest_data[13]) - view) * weight;
     e = krs_mirror_signed_distance(p, krs_forest_data[12]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[12]); s.where.reflections.x |= 0x1000u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
@@ -368,83 +382,83 @@ krs_kernel_shading krs_forest_shade(vec3 p, vec3 toLight, vec3 toEye, float thre
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[8]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[8]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78], krs_forest_data[79]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 11u; s.where.level = 8u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[7]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[7]); s.where.reflections.x |= 0x80u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[7]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[7]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71], krs_forest_data[72]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 10u; s.where.level = 7u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[6]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[6]); s.where.reflections.x |= 0x40u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[6]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[6]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64], krs_forest_data[65]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 9u; s.where.level = 6u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[5]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[5]); s.where.reflections.x |= 0x20u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[5]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[5]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57], krs_forest_data[58]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 8u; s.where.level = 5u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[4]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[4]); s.where.reflections.x |= 0x10u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[4]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[4]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50], krs_forest_data[51]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 7u; s.where.level = 4u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[3]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[3]); s.where.reflections.x |= 0x8u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[3]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[3]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43], krs_forest_data[44]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 6u; s.where.level = 3u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[2]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[2]); s.where.reflections.x |= 0x4u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[2]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[2]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36], krs_forest_data[37]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 5u; s.where.level = 2u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[1]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[1]); s.where.reflections.x |= 0x2u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[1]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[1]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29], krs_forest_data[30]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 4u; s.where.level = 1u; s.light = light; s.view = view; }
     e = krs_mirror_signed_distance(p, krs_forest_data[0]);
     if (e > 0.0) { p = krs_mirror_reflect(p, krs_forest_data[0]); s.where.reflections.x |= 0x1u; }
     weight = ramp ? clamp(e * inverse + 0.5, 0.0, 1.0) : (e > 0.0 ? 1.0 : 0.0);
     light = light + (krs_mirror_reflect_direction(light, krs_forest_data[0]) - light) * weight;
     view = view + (krs_mirror_reflect_direction(view, krs_forest_data[0]) - view) * weight;
-    d = krs_torus_capsule_distance(p, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]);
+    d = krs_torus_capsule_distance(p, krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19], krs_forest_data[20]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 0u; s.where.level = 0u; s.light = light; s.view = view; }
-    d = krs_sphere_distance(p, krs_forest_data[20]);
-    if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 1u; s.where.level = 0u; s.light = light; s.view = view; }
     d = krs_sphere_distance(p, krs_forest_data[21]);
-    if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 2u; s.where.level = 0u; s.light = light; s.view = view; }
+    if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 1u; s.where.level = 0u; s.light = light; s.view = view; }
     d = krs_sphere_distance(p, krs_forest_data[22]);
+    if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 2u; s.where.level = 0u; s.light = light; s.view = view; }
+    d = krs_sphere_distance(p, krs_forest_data[23]);
     if (d < s.where.dist) { s.where.dist = d; s.where.kernel_point = p; s.where.kernel = 3u; s.where.level = 0u; s.light = light; s.view = view; }
     vec3 q = s.where.kernel_point;
-    if (s.where.kernel == 0u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[13], krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19]); s.kind = 0u; }
-    else if (s.where.kernel == 1u) { s.normal = krs_sphere_normal(q, krs_forest_data[20]); s.kind = 1u; }
-    else if (s.where.kernel == 2u) { s.normal = krs_sphere_normal(q, krs_forest_data[21]); s.kind = 1u; }
-    else if (s.where.kernel == 3u) { s.normal = krs_sphere_normal(q, krs_forest_data[22]); s.kind = 1u; }
-    else if (s.where.kernel == 4u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[23], krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29]); s.kind = 0u; }
-    else if (s.where.kernel == 5u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[30], krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36]); s.kind = 0u; }
-    else if (s.where.kernel == 6u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[37], krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43]); s.kind = 0u; }
-    else if (s.where.kernel == 7u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[44], krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50]); s.kind = 0u; }
-    else if (s.where.kernel == 8u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[51], krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57]); s.kind = 0u; }
-    else if (s.where.kernel == 9u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[58], krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64]); s.kind = 0u; }
-    else if (s.where.kernel == 10u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[65], krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71]); s.kind = 0u; }
-    else if (s.where.kernel == 11u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[72], krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78]); s.kind = 0u; }
-    else { s.normal = krs_plane_normal(q, krs_forest_data[79]); s.kind = 2u; }
+    if (s.where.kernel == 0u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[14], krs_forest_data[15], krs_forest_data[16], krs_forest_data[17], krs_forest_data[18], krs_forest_data[19], krs_forest_data[20]); s.kind = 0u; }
+    else if (s.where.kernel == 1u) { s.normal = krs_sphere_normal(q, krs_forest_data[21]); s.kind = 1u; }
+    else if (s.where.kernel == 2u) { s.normal = krs_sphere_normal(q, krs_forest_data[22]); s.kind = 1u; }
+    else if (s.where.kernel == 3u) { s.normal = krs_sphere_normal(q, krs_forest_data[23]); s.kind = 1u; }
+    else if (s.where.kernel == 4u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[24], krs_forest_data[25], krs_forest_data[26], krs_forest_data[27], krs_forest_data[28], krs_forest_data[29], krs_forest_data[30]); s.kind = 0u; }
+    else if (s.where.kernel == 5u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[31], krs_forest_data[32], krs_forest_data[33], krs_forest_data[34], krs_forest_data[35], krs_forest_data[36], krs_forest_data[37]); s.kind = 0u; }
+    else if (s.where.kernel == 6u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[38], krs_forest_data[39], krs_forest_data[40], krs_forest_data[41], krs_forest_data[42], krs_forest_data[43], krs_forest_data[44]); s.kind = 0u; }
+    else if (s.where.kernel == 7u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[45], krs_forest_data[46], krs_forest_data[47], krs_forest_data[48], krs_forest_data[49], krs_forest_data[50], krs_forest_data[51]); s.kind = 0u; }
+    else if (s.where.kernel == 8u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[52], krs_forest_data[53], krs_forest_data[54], krs_forest_data[55], krs_forest_data[56], krs_forest_data[57], krs_forest_data[58]); s.kind = 0u; }
+    else if (s.where.kernel == 9u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[59], krs_forest_data[60], krs_forest_data[61], krs_forest_data[62], krs_forest_data[63], krs_forest_data[64], krs_forest_data[65]); s.kind = 0u; }
+    else if (s.where.kernel == 10u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[66], krs_forest_data[67], krs_forest_data[68], krs_forest_data[69], krs_forest_data[70], krs_forest_data[71], krs_forest_data[72]); s.kind = 0u; }
+    else if (s.where.kernel == 11u) { s.normal = krs_torus_capsule_normal(q, krs_forest_data[73], krs_forest_data[74], krs_forest_data[75], krs_forest_data[76], krs_forest_data[77], krs_forest_data[78], krs_forest_data[79]); s.kind = 0u; }
+    else { s.normal = krs_plane_normal(q, krs_forest_data[80]); s.kind = 2u; }
     return s;
 }

@@ -1,12 +1,13 @@
 // check_glsl_reference SCENE FILE WIDTH HEIGHT: the PNG `glsl_export --scene SCENE --reference FILE
 // --width WIDTH --height HEIGHT` wrote holds, byte for byte, the CPU reference frame as an 8-bit
 // framebuffer stores it (krs::glsl::framebuffer_byte: round(255 v), ties to even)
-// (krs::glsl::examples::reference_frame, rendered here again), RGB, top row first: the reference
+// (krs::scenes::reference_frame, rendered here again), RGB, top row first: the reference
 // comes bottom-up (as glReadPixels returns it), so its last row is the file's first. Its first and
 // last rows differ (the sky darkens upward), so a file written upside down fails. Exit status 0
 // when it holds; a message naming what failed otherwise.
 
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 
 #include <OpenImageIO/imageio.h>
 
@@ -25,8 +26,8 @@ int main(int argc, char** argv)
     const std::string scene = argv[1], path = argv[2];
     const int width = std::atoi(argv[3]), height = std::atoi(argv[4]);
     std::vector<float> reference;
-    krs::glsl::examples::for_each_scene([&](const auto& s) {
-        if (s.name == scene) reference = krs::glsl::examples::reference_frame(s, s.camera, width, height);
+    krs::scenes::for_each_scene([&](const auto& s) {
+        if (s.name == scene) reference = krs::scenes::reference_frame(s, s.camera, width, height);
     });
     if (reference.empty()) {
         std::fprintf(stderr, "no scene named %s\n", scene.c_str());

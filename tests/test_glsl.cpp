@@ -6,7 +6,8 @@
 #include "krs/fractal/kifs_presets.hpp"
 #include "krs/fractal/shell_presets.hpp"
 #include "krs/fractal/similar_shell.hpp"
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 #include "krs/trace/packet_trace.hpp"
 
 #include <doctest/doctest.h>
@@ -15,6 +16,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <numbers>
@@ -25,7 +27,7 @@
 
 namespace {
 
-namespace ex = krs::glsl::examples;
+namespace ex = krs::scenes;
 
 std::string read_file(const std::string& path)
 {
@@ -45,31 +47,60 @@ std::size_t occurrences(const std::string& text, const std::string& what)
 
 } // namespace
 
-TEST_CASE("glsl folder is up to date with the emitter")
+TEST_CASE("glsl folder is up to date with the emitter, and holds every scene's files and no others")
 {
-    int files = 0;
+    std::set<std::string> expected;
     ex::for_each_scene([&](const auto& s) {
         for (const ex::file_kind& kind : ex::files) {
-            const std::string path = std::string(KRS_SOURCE_DIR) + "/glsl/" + s.name + std::string(kind.suffix);
-            const std::string expected = ex::file_text(s, kind);
-            INFO(path << " is stale: regenerate with `cmake --build <build> --target krs_glsl_regenerate` "
+            const std::string name = s.name + std::string(kind.suffix);
+            const std::string path = std::string(KRS_SOURCE_DIR) + "/glsl/" + name;
+            INFO(path << " is stale or missing: regenerate with `cmake --build <build> --target krs_glsl_regenerate` "
                          "(or glsl_export --all glsl)");
-            CHECK(read_file(path) == expected);
-            ++files;
+            CHECK(read_file(path) == ex::file_text(s, kind));
+            expected.insert(name);
         }
     });
-    CHECK(files == 5 * 14);
+    CHECK(expected.size() == ex::files.size() * ex::scene_count);
+    // A scene dropped from the list leaves files the regeneration no longer writes: none may stay.
+    std::set<std::string> found;
+    for (const auto& entry : std::filesystem::directory_iterator(std::string(KRS_SOURCE_DIR) + "/glsl"))
+        if (entry.path().extension() == ".glsl") found.insert(entry.path().filename().string());
+    for (const std::string& name : found) {
+        INFO("glsl/" << name << " belongs to no scene of krs/scenes/example_scenes.hpp: remove it");
+        CHECK(expected.count(name) == 1);
+    }
+    CHECK(found.size() == expected.size());
 }
 
-TEST_CASE("glsl example scenes: one per scene of the examples")
+TEST_CASE("example scenes: one name each, a GLSL prefix, the name the scene is built with")
 {
-    // The list of issue 22: krs_tree's tree; krs_scenes' forest, terrain, rock, coral, grass and
-    // sponge; krs_fractals' five KIFS presets and cube singularity; the log-spherical lotus.
-    const std::vector<std::string> expected{"tree",        "forest",    "terrain",     "rock",
-                                            "coral",       "grass",     "sponge",      "kifs_square",
-                                            "kifs_cube",   "kifs_menger", "kifs_sierpinski", "kifs_koch",
-                                            "lotus",       "cube_singularity"};
-    CHECK(ex::scene_names() == expected);
+    std::set<std::string_view> seen;
+    ex::for_each_scene_entry([&]<class E>() {
+        INFO(E::name);
+        CHECK(seen.insert(E::name).second);
+        CHECK(krs::glsl::is_prefix(std::string(E::name) + "_")); // its GLSL names are NAME_...
+        CHECK(!E::summary.empty());
+        const auto s = E::build(E::default_seed);
+        CHECK(s.name == E::name);
+        CHECK(s.camera.width() == ex::frame_width);
+        CHECK(s.camera.height() == ex::frame_height);
+        if constexpr (E::seeded) {
+            // The seed is the scene's: another one moves something in its box (on a 5^3 grid over
+            // it), its own rebuilds the same field.
+            const auto other = E::build(E::default_seed + 1), again = E::build(E::default_seed);
+            int moved = 0, same = 0;
+            for (int i = 0; i < 125; ++i) {
+                const krs::vec3f u{float(i % 5) / 2.0f - 1.0f, float(i / 5 % 5) / 2.0f - 1.0f,
+                                   float(i / 25) / 2.0f - 1.0f};
+                const krs::vec3f h = s.sample_half, p = s.sample_center + krs::vec3f{u.x * h.x, u.y * h.y, u.z * h.z};
+                moved += other.field.distance(p) != s.field.distance(p);
+                same += again.field.distance(p) == s.field.distance(p);
+            }
+            CHECK(moved > 0);
+            CHECK(same == 125);
+        }
+    });
+    CHECK(seen.size() == ex::scene_count);
 }
 
 TEST_CASE("glsl float literals read back as the same float")
@@ -126,12 +157,12 @@ TEST_CASE("render_reference is the library's tracer: its scene pixels are sphere
         CHECK(hits > found.size() / 20);
         CHECK(differ == 0);
     };
-    const auto tree = ex::tree();
+    const auto tree = ex::tree_scene::build();
     check(tree, tree.camera, "at rest");
     check(tree, tree.camera.with_size(width, height).turned(11.0f, 40.0f, 30.0f), "turned");
-    const auto koch = ex::kifs_koch();
+    const auto koch = ex::kifs_koch_scene::build();
     check(koch, koch.camera, "at rest");
-    const auto sponge = ex::sponge(); // bounded: both clip to its box
+    const auto sponge = ex::sponge_scene::build(); // bounded: both clip to its box
     check(sponge, sponge.camera.with_size(width, height).turned(7.0f, 0.0f, 0.0f), "turned");
 }
 
@@ -230,8 +261,8 @@ TEST_CASE("glsl emits each kernel kind once and only the kinds a scene uses")
 
     // Two fields in one program share the library.
     krs::glsl::emitter e;
-    e.add(ex::tree().field, "a");
-    e.add(ex::forest().field, "b");
+    e.add(ex::tree_scene::build().field, "a");
+    e.add(ex::forest_scene::build().field, "b");
     const std::string both = e.source();
     CHECK(occurrences(both, "float krs_torus_capsule_distance(") == 1);
     CHECK(occurrences(both, "float krs_sphere_distance(") == 1);
@@ -241,7 +272,7 @@ TEST_CASE("glsl emits each kernel kind once and only the kinds a scene uses")
 
 TEST_CASE("glsl data layout: pack equals the emitter data and the documented vec4 order")
 {
-    const auto s = ex::sponge();
+    const auto s = ex::sponge_scene::build();
     krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, "data", 0});
     e.add(s.field, "sponge");
     const std::vector<float> packed = krs::glsl::pack(s.field, "sponge");
@@ -276,7 +307,7 @@ TEST_CASE("glsl data name: follows the prefix, and names nothing else the code d
 {
     // The array is prefix + data_name. A data name that makes it one of the scene's functions
     // (krs_sponge, krs_sponge_locate) would redefine it: refused by name.
-    const auto s = ex::sponge();
+    const auto s = ex::sponge_scene::build();
     for (const char* clash : {"sponge", "sponge_locate", "sponge_shade"}) {
         INFO(std::string(clash));
         krs::glsl::emitter e({krs::glsl::target::glsl330, krs::glsl::data_mode::buffer, clash, 0});
@@ -310,7 +341,7 @@ TEST_CASE("glsl data name: follows the prefix, and names nothing else the code d
 
 TEST_CASE("glsl scene names: one that makes a name the library or an earlier field declares is refused")
 {
-    const auto s = ex::sponge();
+    const auto s = ex::sponge_scene::build();
     krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "data", 0});
     REQUIRE(e.add(s.field, "sponge") == "krs_sponge");
     const std::string before = e.source();
@@ -366,7 +397,7 @@ std::set<std::string> identifiers(const std::string& text)
 
 TEST_CASE("glsl prefix: every name the snippet declares carries it, the scene function included")
 {
-    const auto s = ex::forest();
+    const auto s = ex::forest_scene::build();
     for (const auto mode : {krs::glsl::data_mode::constants, krs::glsl::data_mode::buffer}) {
         krs::glsl::emitter plain({krs::glsl::target::glsl450, mode, "data", 0});
         krs::glsl::emitter mine({krs::glsl::target::glsl450, mode, "data", 0, "forest_gen_"});
@@ -414,7 +445,7 @@ TEST_CASE("glsl prefix: every name the snippet declares carries it, the scene fu
 
 TEST_CASE("glsl es300 snippets declare precision and the version line is optional")
 {
-    const auto s = ex::terrain();
+    const auto s = ex::terrain_scene::build();
     const krs::glsl::options es{krs::glsl::target::es300, krs::glsl::data_mode::constants, "t", 0};
     const std::string without = krs::glsl::emit(s.field, "terrain", es);
     const std::string with = krs::glsl::emit(s.field, "terrain", es, true);
@@ -465,7 +496,7 @@ TEST_CASE("glsl fractals: KIFS and similar shells emit by recursion, pack agrees
 
 TEST_CASE("pinhole_camera::turned: at rest the camera, an orbit about the pivot's vertical, a rigid basis")
 {
-    const krs::pinhole_camera v = ex::tree().camera.with_size(160, 120);
+    const krs::pinhole_camera v = ex::tree_scene::build().camera.with_size(160, 120);
     const auto equal = [](const krs::vec3f& a, const krs::vec3f& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
     const auto same = [&](const krs::pinhole_camera& a, const krs::pinhole_camera& b) {
         return equal(a.eye(), b.eye()) && equal(a.forward(), b.forward()) && equal(a.right(), b.right()) &&
@@ -546,9 +577,9 @@ TEST_CASE("pinhole_camera::turned: pointer up raises the eye, the elevation stay
                 }
         ++scenes;
     });
-    CHECK(scenes == 14);
+    CHECK(scenes == int(ex::scene_count));
     // The turn is reduced to one turn: a day of iTime gives the camera of the same phase.
-    const krs::pinhole_camera v = ex::tree().camera.with_size(width, height);
+    const krs::pinhole_camera v = ex::tree_scene::build().camera.with_size(width, height);
     const krs::pinhole_camera late = v.turned(86400.0f + 15.0f, 0.0f, 0.0f);
     const krs::pinhole_camera early = v.turned(15.0f, 0.0f, 0.0f);
     CHECK(krs::length(late.eye() - early.eye()) <= 1e-3f * krs::length(v.eye() - v.pivot()));
@@ -565,7 +596,7 @@ TEST_CASE("pinhole_camera::turned: pointer up raises the eye, the elevation stay
 
 TEST_CASE("shadertoy_options::validate and the camera's orbit refuse what would draw NaN or nothing, by name")
 {
-    const auto s = ex::kifs_koch();
+    const auto s = ex::kifs_koch_scene::build();
     const auto refused = [&](const krs::glsl::shadertoy_options& o, const char* name) {
         INFO(name);
         CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains(name), krs::invalid_parameter);
@@ -619,7 +650,7 @@ TEST_CASE("shadertoy_options::validate and the camera's orbit refuse what would 
                          doctest::Contains("camera.up"), krs::invalid_parameter);
     CHECK_THROWS_WITH_AS(s.camera.with_size(0, 4), doctest::Contains("camera.size"), krs::invalid_parameter);
     // A palette must hold one finite colour per kernel type.
-    const auto grass = ex::grass();
+    const auto grass = ex::grass_scene::build();
     CHECK_THROWS_WITH_AS(krs::glsl::shadertoy(grass.field, grass.camera, grass.program, "g", {{0.1f, 0.2f, 0.3f}}),
                          doctest::Contains("glsl.palette"), krs::invalid_parameter);
     CHECK_THROWS_WITH_AS(
@@ -629,7 +660,7 @@ TEST_CASE("shadertoy_options::validate and the camera's orbit refuse what would 
 
 TEST_CASE("shadertoy grass: blades green, ground soil (the scene's palette, not bark by kernel type)")
 {
-    const auto s = ex::grass();
+    const auto s = ex::grass_scene::build();
     const std::vector<krs::vec3f> palette = krs::glsl::palette_of(s.field, s.palette);
     REQUIRE(palette.size() == 2);
     CHECK(palette[0].y > palette[0].x + 0.05f); // torus_capsule blades: green dominates
@@ -659,7 +690,7 @@ TEST_CASE("glsl distance_only: no locate, shade or their structs, a gradient-sha
     });
     CHECK(fields == 8);
     // A snippet keeps them unless asked.
-    const auto sponge = ex::sponge();
+    const auto sponge = ex::sponge_scene::build();
     krs::glsl::options o;
     const std::string full = krs::glsl::emit(sponge.field, "sponge", o);
     o.distance_only = true;
@@ -673,7 +704,7 @@ TEST_CASE("glsl distance_only: no locate, shade or their structs, a gradient-sha
 
 TEST_CASE("shadertoy refuses bad orbits and frame sizes by name")
 {
-    const auto s = ex::kifs_koch();
+    const auto s = ex::kifs_koch_scene::build();
     for (const int bad : {0, -3, 16385}) {
         INFO(bad);
         CHECK_THROWS_WITH_AS(krs::glsl::render_reference(s.field, s.camera, s.program, s.albedo, bad, 8),

@@ -13,7 +13,8 @@
 #include "krs/fractal/log_tilings.hpp"
 #include "krs/fractal/shell_presets.hpp"
 #include "krs/fractal/similar_shell.hpp"
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/torus.hpp"
 
@@ -42,7 +43,7 @@ namespace {
 using krs_test::buffer, krs_test::compile, krs_test::gpu_result, krs_test::link, krs_test::require_context,
     krs_test::run_point_program, krs_test::run_points, krs_test::validate_spirv, krs_test::validate_with_glslang;
 
-namespace ex = krs::glsl::examples;
+namespace ex = krs::scenes;
 using krs::vec3f;
 
 
@@ -318,8 +319,8 @@ TEST_CASE("glslangValidator accepts every emitted snippet for every target")
 TEST_CASE("Two shipped snippets in one shader: each library part once, both fields right")
 {
     // Unguarded, the second snippet redefined struct krs_location and every shared function.
-    const auto tree = ex::tree();
-    const auto terrain = ex::terrain();
+    const auto tree = ex::tree_scene::build();
+    const auto terrain = ex::terrain_scene::build();
     const ex::file_kind& constants = ex::files[0];
     REQUIRE(constants.mode == krs::glsl::data_mode::constants);
     const std::string both = ex::file_text(tree, constants) + ex::file_text(terrain, constants);
@@ -342,24 +343,24 @@ TEST_CASE("Two shipped snippets in one shader: each library part once, both fiel
 
 TEST_CASE("GLSL tree scene matches the C++ field on llvmpipe")
 {
-    check_scene(ex::tree());
+    check_scene(ex::tree_scene::build());
 }
 TEST_CASE("GLSL forest scene matches the C++ field on llvmpipe")
 {
-    check_scene(ex::forest());
+    check_scene(ex::forest_scene::build());
 }
 TEST_CASE("GLSL terrain scene matches the C++ field on llvmpipe")
 {
-    check_scene(ex::terrain());
+    check_scene(ex::terrain_scene::build());
 }
 TEST_CASE("GLSL sponge scene matches the C++ field on llvmpipe")
 {
-    check_scene(ex::sponge());
+    check_scene(ex::sponge_scene::build());
 }
 TEST_CASE("GLSL rock and grass scenes match the C++ field on llvmpipe")
 {
-    check_scene(ex::rock());
-    check_scene(ex::grass());
+    check_scene(ex::rock_scene::build());
+    check_scene(ex::grass_scene::build());
 }
 
 TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field on llvmpipe")
@@ -408,7 +409,7 @@ TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field o
     }
 
     // union_of(lipschitz_warp(sequence, twist), box) through the compute path (distance only).
-    const auto tree = ex::tree();
+    const auto tree = ex::tree_scene::build();
     using warped = krs::lipschitz_warp<krs::model::tree_sequence, krs::twist_warp>;
     const krs::union_of<warped, krs::box> scene(warped(tree.field, krs::twist_warp(0.2f, 8.0f)),
                                                 krs::box({2.0f, 0.5f, 0.0f}, {0.4f, 0.5f, 0.3f}));
@@ -428,7 +429,7 @@ TEST_CASE("GLSL axis mirrors and a union with a twist warp match the C++ field o
 TEST_CASE("GLSL buffer mode animates a sequence without recompiling")
 {
     // The same code, the data of a sequence with moved mirrors: the GPU follows the new data.
-    const auto sponge = ex::sponge();
+    const auto sponge = ex::sponge_scene::build();
     krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::buffer, "sponge_data", 0});
     const std::string fn = e.add(sponge.field, "sponge");
     krs::model::sponge_sequence::builder b;
@@ -456,7 +457,7 @@ TEST_CASE("Every Shadertoy program in glsl/ on llvmpipe matches its CPU referenc
         check_frame(s);
         ++programs;
     });
-    CHECK(programs == 14); // tests/test_glsl.cpp checks the names
+    CHECK(programs == int(ex::scene_count));
 }
 
 TEST_CASE("Shadertoy programs orbit with iTime and iMouse as pinhole_camera::turned says")
@@ -494,9 +495,9 @@ TEST_CASE("Shadertoy programs orbit with iTime and iMouse as pinhole_camera::tur
             }
         }
     };
-    check(ex::tree());
-    check(ex::kifs_menger());
-    check(ex::lotus()); // vertical z: the orbit about the lotus axis
+    check(ex::tree_scene::build());
+    check(ex::kifs_menger_scene::build());
+    check(ex::lotus_scene::build()); // vertical z: the orbit about the lotus axis
 }
 
 // ---- fractal fields (krs/fractal) ---------------------------------------------------------------

@@ -7,7 +7,8 @@
 
 #include "krs/compose/depth.hpp"
 #include "krs/glsl/emitter.hpp"
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 #include "krs/kernels/torus_capsule.hpp"
 #include "krs/shade/global.hpp"
 #include "krs/shade/texture.hpp"
@@ -36,7 +37,7 @@
 namespace {
 
 using krs::vec3f;
-namespace ex = krs::glsl::examples;
+namespace ex = krs::scenes;
 
 constexpr std::size_t point_count = 16384;
 
@@ -255,13 +256,13 @@ void check_early_exit(const ex::scene<S>& scene)
 
 TEST_CASE("GLSL sequence walk: the per-level early exit gives the full walk's value, and is live")
 {
-    check_early_exit(ex::tree());
-    check_early_exit(ex::forest());
+    check_early_exit(ex::tree_scene::build());
+    check_early_exit(ex::forest_scene::build());
 }
 
 TEST_CASE("GLSL soft shadow and ambient occlusion match the C++ on llvmpipe")
 {
-    const auto tree = ex::tree();
+    const auto tree = ex::tree_scene::build();
     const shading_inputs in = near_surface(tree, 0x5a4d);
     krs::glsl::emitter e({krs::glsl::target::glsl450});
     const std::string fn = e.add(tree.field, "tree");
@@ -473,7 +474,7 @@ const std::string uv_where = "krs_location(0.0, a, uint(b.x), 0u, uvec2(0u))";
 
 TEST_CASE("GLSL kernel uv of a sequence matches the C++ torus_capsule::uv on llvmpipe")
 {
-    const auto tree = ex::tree();
+    const auto tree = ex::tree_scene::build();
     krs::glsl::emitter e({krs::glsl::target::glsl450});
     e.add(tree.field, "tree");
     const std::size_t field_vec4s = e.vec4_count();
@@ -505,7 +506,7 @@ TEST_CASE("GLSL kernel uv in buffer mode follows the data of another sequence of
 {
     // Two trees of one structure (same levels, seed, leaves: same kernel kinds per level) and
     // other shapes; the code is emitted for the first, the data of the same calls for the second.
-    const auto tree = ex::tree();
+    const auto tree = ex::tree_scene::build();
     krs::model::tree_style style;
     style.levels = 12;
     style.seed = 3;
@@ -551,7 +552,7 @@ TEST_CASE("GLSL kernel uv in buffer mode follows the data of another sequence of
 
 TEST_CASE("GLSL shading: bad parameters are refused with the C++ parameter's name, the emitter unchanged")
 {
-    const auto tree = ex::tree();
+    const auto tree = ex::tree_scene::build();
     krs::glsl::emitter e({krs::glsl::target::glsl450});
     e.add(tree.field, "tree");
     const std::string before = e.source();
@@ -607,7 +608,7 @@ TEST_CASE("GLSL shading: bad parameters are refused with the C++ parameter's nam
     // Kernel uv reads its sequence's kernels where add() put them: it needs that sequence's name.
     refused([&] { e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv"); }, "glsl.add_shading.field");
     refused([&] { e.add_shading(krs::kernel_uv_glsl{tree.field}, "tree_uv", "forest"); }, "glsl.add_shading.field");
-    const auto forest = ex::forest(); // a sequence of the same kinds but other kernels
+    const auto forest = ex::forest_scene::build(); // a sequence of the same kinds but other kernels
     refused([&] { e.add_shading(krs::kernel_uv_glsl{forest.field}, "tree_uv", "tree"); }, "glsl.add_shading.field");
 }
 
@@ -617,7 +618,7 @@ TEST_CASE("GLSL shading: a field named as a shading function's helper is refused
     e.add_shading(krs::depth_projection{}, "camera");
     const std::string before = e.source();
     try {
-        e.add(ex::tree().field, "camera_view_depth");
+        e.add(ex::tree_scene::build().field, "camera_view_depth");
         FAIL("a field named camera_view_depth was accepted beside depth_projection's krs_camera_view_depth");
     } catch (const krs::invalid_parameter& error) {
         CHECK(error.parameter() == std::string("glsl.add.name"));
@@ -627,7 +628,7 @@ TEST_CASE("GLSL shading: a field named as a shading function's helper is refused
 
 TEST_CASE("GLSL shading compiles for 330, 450 and ES 3.00 (glslangValidator) and for Vulkan (spirv-val)")
 {
-    const auto tree = ex::tree();
+    const auto tree = ex::tree_scene::build();
     const std::string dir = check_dir();
     // A word of capitals and digits outside the preprocessor lines (include guards): a placeholder
     // of a shading function's GLSL that fill() left.

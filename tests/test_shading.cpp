@@ -2,7 +2,8 @@
 // against closed forms and brute-force references.
 
 #include "krs/compose/depth.hpp"
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/model/terrain.hpp"
@@ -375,7 +376,7 @@ namespace {
 // the lanes left out of the shadow. The scalar call is the reference; the packet runs the same
 // template, so under -ffp-contract=off every lane must equal it bit for bit.
 template <class S>
-void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint64_t seed)
+void check_packet_shading(const krs::scenes::scene<S>& scene, std::uint64_t seed)
 {
     using P = krs::packet_f;
     constexpr std::size_t W = krs::lane_count<P>;
@@ -475,15 +476,15 @@ void check_packet_shading(const krs::glsl::examples::scene<S>& scene, std::uint6
 
 TEST_CASE("soft shadows and ambient occlusion in packets equal the scalar calls lane by lane")
 {
-    namespace ex = krs::glsl::examples;
-    SUBCASE("tree") { check_packet_shading(ex::tree(), 1); }
-    SUBCASE("forest") { check_packet_shading(ex::forest(), 2); }
-    SUBCASE("terrain") { check_packet_shading(ex::terrain(), 3); }
+    namespace ex = krs::scenes;
+    SUBCASE("tree") { check_packet_shading(ex::tree_scene::build(), 1); }
+    SUBCASE("forest") { check_packet_shading(ex::forest_scene::build(), 2); }
+    SUBCASE("terrain") { check_packet_shading(ex::terrain_scene::build(), 3); }
 }
 
 TEST_CASE("soft shadow: lanes with an unusable shadow ray are dark, in packets and alone")
 {
-    const auto tree = krs::glsl::examples::tree();
+    const auto tree = krs::scenes::tree_scene::build();
     krs::soft_shadow_options o;
     const vec3f p{0.3f, 3.0f, 0.2f}, n{0, 1, 0};
     const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();

@@ -14,7 +14,8 @@
 #include "krs/expansion.hpp"
 #include "krs/fractal/log_tilings.hpp"
 #include "krs/fractal/shell_presets.hpp"
-#include "krs/glsl/example_scenes.hpp"
+#include "krs/scenes/example_scenes.hpp"
+#include "krs/scenes/scene_files.hpp"
 #include "krs/kernels/kernels.hpp"
 #include "krs/mesh/extract.hpp"
 #include "krs/model/terrain.hpp"
@@ -40,7 +41,7 @@ using krs::vec3d;
 using krs::vec3f;
 using krs_test::in_ball;
 using krs_test::uniform;
-namespace ex = krs::glsl::examples;
+namespace ex = krs::scenes;
 
 // A point inside a kernel from its closed form, and how deep it lies at least (nullopt for a
 // plane: a half-space is cut by the mirrors of any sequence that holds it).
@@ -373,14 +374,14 @@ TEST_CASE("every shipped field type is negative inside and meshes closed")
     check_meshes(spherical, "log-spherical tiling", 48, box_of({0, 0, 0}, {2, 2, 2}), true, true);
 
     // Similar shells in every seam mode mesh closed, in the scenes' boxes, which cut no cube or
-    // petal (krs/glsl/example_scenes.hpp); the modes that jump at seams by design (none, hidden
+    // petal (krs/scenes/example_scenes.hpp); the modes that jump at seams by design (none, hidden
     // boundary) have vertices off the zero set there, so only adjacent shells are held to it.
     for (const krs::shell_options& o : every_seam_mode) {
         const bool continuous = o.seams == krs::shell_seams::adjacent_shells;
         check_meshes(krs::make_cube_singularity(1.0f, o), "cube singularity, " + label(o), 40,
-                     box_of({0, 0, 0}, vec3d(ex::cube_singularity_scene().sample_half)), continuous);
+                     box_of({0, 0, 0}, vec3d(ex::cube_singularity_scene::build().sample_half)), continuous);
         check_meshes(krs::make_recursive_lotus(1.0f, 8, o), "recursive lotus, " + label(o), 40,
-                     box_of({0, 0, 0}, vec3d(ex::lotus().sample_half)), continuous);
+                     box_of({0, 0, 0}, vec3d(ex::lotus_scene::build().sample_half)), continuous);
     }
 }
 
@@ -485,5 +486,5 @@ TEST_CASE("every example scene is negative inside and meshes to a closed manifol
                      own.is_bounded() ? own : box_of(vec3d(s.sample_center), vec3d(s.sample_half)), true,
                      holds_plane<F>::value, fine ? 3e-3 : 1e-3);
     });
-    CHECK(scenes == int(ex::scene_names().size()));
+    CHECK(scenes == int(ex::scene_count));
 }
