@@ -285,7 +285,10 @@ krs_case(krs_view          0 "tree ;grass ;kifs_menger "                        
 krs_case(krs_view          2 "--glsl, --scene, --seed"                             --glsl <out>/missing.glsl --seed 3)
 
 # hello_krs, hello_hypertree: no options, and they say so
-krs_case(hello_krs         0 "usage: ;no options"                                  --help)
-krs_case(hello_krs         2 "usage: ;no options"                                  --levels 3)
-krs_case(hello_hypertree   0 "usage: ;no options"                                  -h)
-krs_case(hello_hypertree   2 "usage: ;no options"                                  --seed 3)
+foreach(hello hello_krs hello_hypertree)
+    krs_case(${hello} 0 "usage: ;no options" --help)
+    krs_case(${hello} 0 "usage: ;no options" -h)
+    krs_case(${hello} 2 "usage: ;no options" --levels 3)
+    krs_case(${hello} 2 "usage: ;no options" tree)
+    krs_case(${hello} 2 "usage: ;no options" --version)
+endforeach()

@@ -54,16 +54,16 @@ const vec4 krs_mirrors_data[20] = vec4[20](
     vec4(1.0, 1.0, 8.500001, 4.2500005),
     vec4(2.0, 1.0, 7.7000003, 3.8500001),
     vec4(0.0, 0.4, 0.0, 0.4),
-    vec4(0.72172123, 0.6328306, 0.28043514, 29.692247),
-    vec4(0.7333254, 0.25449267, -0.63045007, 39.466743),
-    vec4(-0.32228377, 0.81365293, 0.483841, -24.370558),
-    vec4(0.6762592, -0.7140447, -0.18114538, 41.797913),
-    vec4(-0.4890069, 0.83840835, -0.240715, -26.235071),
-    vec4(0.15381543, -0.09354419, 0.98366165, 3.5367854),
-    vec4(0.8885707, 0.44673964, -0.10423873, 45.97888),
-    vec4(-0.21809004, 0.9755074, 0.028671414, -6.65864),
-    vec4(-0.27589118, -0.052786212, 0.9597383, -9.9257965),
-    vec4(49.656246, -7.819757, -6.2301064, 0.4));
+    vec4(0.72172123, 0.6328306, 0.28043514, -34.839718),
+    vec4(0.7333254, 0.25449267, -0.63045007, -26.102795),
+    vec4(-0.32228377, 0.81365293, 0.483841, 4.4461117),
+    vec4(0.6762592, -0.7140447, -0.18114538, -18.669107),
+    vec4(-0.4890069, 0.83840835, -0.240715, 17.488972),
+    vec4(0.15381543, -0.09354419, 0.98366165, -10.216464),
+    vec4(0.8885707, 0.44673964, -0.10423873, -33.47176),
+    vec4(-0.21809004, 0.9755074, 0.028671414, 12.841648),
+    vec4(-0.27589118, -0.052786212, 0.9597383, 14.742726),
+    vec4(-39.757725, -7.819757, -6.2301064, 0.4));
 // krs_mirrors_data[0...0]: krs_mirrors_0 mirror 0 (krs_axis_mirror)
 // krs_mirrors_data[1...1]: krs_mirrors_0 mirror 1 (krs_axis_mirror)
 // krs_mirrors_data[2...2]: krs_mirrors_0 mirror 2 (krs_axis_mirror)
@@ -120,15 +120,15 @@ float krs_mirrors(vec3 p) {
 const vec3 KRS_ALBEDO = vec3(0.8, 0.52, 0.3);
 const float KRS_NORMAL_STEP = 0.5;
 const float KRS_NORMAL_STEP_FLOOR = 3.8146973e-06; // of the largest coordinate
-const vec3 KRS_EYE = vec3(48.343567, 40.35984, -76.3941);
-const vec3 KRS_FORWARD = vec3(-0.13552618, -0.40657857, 0.9035079);
-const vec3 KRS_RIGHT = vec3(-0.98893636, 0.0, -0.14834045);
-const vec3 KRS_UP = vec3(-0.060312048, 0.9136158, 0.40208033);
-const vec3 KRS_PIVOT = vec3(36.306953, 4.249996, 3.849997);
+const vec3 KRS_EYE = vec3(-39.020313, 32.018944, -65.57239);
+const vec3 KRS_FORWARD = vec3(0.13794015, -0.36784035, 0.91960096);
+const vec3 KRS_RIGHT = vec3(-0.98893636, 0.0, 0.14834046);
+const vec3 KRS_UP = vec3(0.05456561, 0.92988896, 0.3637707);
+const vec3 KRS_PIVOT = vec3(-28.606955, 4.2499924, 3.8499956);
 const vec3 KRS_VERTICAL = vec3(0.0, 1.0, 0.0);
-const vec3 KRS_TILT_AXIS = vec3(0.98893636, -0.0, 0.14834045); // a positive tilt raises the eye
-const float KRS_TILT_LOWEST = -0.33143952;
-const float KRS_TILT_HIGHEST = 1.0648239;
+const vec3 KRS_TILT_AXIS = vec3(0.98893636, -0.0, -0.14834046); // a positive tilt raises the eye
+const float KRS_TILT_LOWEST = -0.28941903;
+const float KRS_TILT_HIGHEST = 1.1068444;
 const float KRS_ORBIT_RATE = 0.10471976; // radians per second of iTime
 const float KRS_DRAG_TURN = 6.2831855;
 const float KRS_DRAG_TILT = 2.0943952;
@@ -178,7 +178,7 @@ vec3 krs_primary_direction(krs_view c, vec2 pixel, vec2 resolution) {
     return d / sqrt(dot(d, d));
 }
 const vec3 KRS_TO_LIGHT = vec3(0.59743804, 0.7060631, -0.3801878);
-const float KRS_MAX_DISTANCE = 355.25577;
+const float KRS_MAX_DISTANCE = 355.2558;
 const int KRS_MAX_STEPS = 256;
 const float KRS_THRESHOLD_FLOOR = 1e-05;
 const float KRS_FOOTPRINT_SCALE = 0.5;

@@ -727,7 +727,7 @@ TEST_CASE("GLSL field scenes (not sequences) match the C++ field on llvmpipe")
             }
         }
     });
-    CHECK(scenes == 8); // coral, the five KIFS presets, the lotus and the cube singularity
+    CHECK(scenes == 9); // coral, the mirrors, the five KIFS presets, the lotus and the cube singularity
 }
 
 // ---- KIFS colouring (krs/fractal/kifs_colour.hpp) --------------------------------------------

@@ -396,6 +396,13 @@ std::vector<vec3d> scene_witnesses(const ex::scene<F>& s)
         // that keep their interior points inside.
         const double moved = double(s.field.distortion().amplitude) * std::sqrt(3.0);
         return instance_witnesses(s.field.base(), moved, [&](const vec3d& p) { return s.field.distortion().apply(p); });
+    } else if constexpr (std::is_same_v<F, ex::mirrors_field>) {
+        // Two clouds of spheres: the inside of each one's instances (a union is inside where a
+        // part is).
+        std::vector<vec3d> points = instance_witnesses(s.field.template component<0>(), 0.0, [](const vec3d& p) { return p; });
+        for (const vec3d& p : instance_witnesses(s.field.template component<1>(), 0.0, [](const vec3d& p) { return p; }))
+            points.push_back(p);
+        return points;
     } else if constexpr (std::is_same_v<F, krs::model::plane_sequence>) {
         if (s.name == "rock") return {vec3d(s.sample_center)}; // the rock's centre, inside every facet
         // Terrain: the ground is the height field y = height + slope (a . F(x, z)) or above it,
