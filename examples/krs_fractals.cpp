@@ -46,6 +46,7 @@
 #include "krs/trace/sphere_trace.hpp"
 
 #include "support/command_line.hpp"
+#include "support/common_options.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/scene_choice.hpp"
@@ -97,10 +98,9 @@ options parse(int argc, char** argv)
     options o;
     example::command_line args("krs_fractals", "Renders the KIFS gallery and a log-spherical zoom to PNG files, or "
                                                "with --slice a cross-section of one field's distance.");
-    args.integer("--width", o.width, 1, 8192, "image width in pixels");
-    args.integer("--height", o.height, 1, 8192, "image height in pixels");
-    args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
-    args.text("--output-dir", o.output_dir, "the folder the PNG files go to (made if missing)", "DIR");
+    example::add_image_size(args, o.width, o.height);
+    example::add_threads(args, o.threads);
+    example::add_output_folder(args, o.output_dir, "the PNG files");
     args.choice("--colouring", o.colouring, {"on", "off"}, "colour the KIFS frames by orbit traps and fold counts");
     std::vector<std::string> frames;
     ex::for_each_scene_entry([&]<class E>() {

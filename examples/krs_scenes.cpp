@@ -47,6 +47,7 @@
 #include "krs/trace/camera.hpp"
 
 #include "support/command_line.hpp"
+#include "support/common_options.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/scene_choice.hpp"
@@ -639,13 +640,12 @@ options parse(int argc, char** argv)
 {
     options o;
     example::command_line args("krs_scenes", "Renders the paper's section 7 scenes to PNG files.");
-    args.integer("--width", o.width, 1, 8192, "image width in pixels");
-    args.integer("--height", o.height, 1, 8192, "image height in pixels");
-    args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
+    example::add_image_size(args, o.width, o.height);
+    example::add_threads(args, o.threads);
     std::vector<std::string> names;
     for (const scene_entry& e : scenes) names.emplace_back(e.name);
     const example::scene_choice choice(args, o.only, names, "render this scene only (default: all)", "--only");
-    args.text("--output-dir", o.output_dir, "the folder the PNG files go to (made if missing)", "DIR");
+    example::add_output_folder(args, o.output_dir, "the PNG files");
     args.number("--reflectivity", o.reflectivity, 0.0, 1.0, false, "mirrors scene: reflectivity of the spheres at normal incidence "
                  "(Schlick), each hit tracing one reflected ray; 0: no reflections");
     args.parse(argc, argv);

@@ -18,6 +18,7 @@
 #include "krs/trace/tile_rays.hpp"
 
 #include "support/command_line.hpp"
+#include "support/common_options.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
@@ -48,14 +49,13 @@ options parse(int argc, char** argv)
 {
     options o;
     example::command_line args("krs_tree", "Renders a KRS tree to a PNG and prints the time per frame and per ray.");
-    args.integer("--width", o.width, 1, 16384, "image width in pixels");
-    args.integer("--height", o.height, 1, 16384, "image height in pixels");
-    args.integer("--threads", o.threads, 0, 1024, "render threads (0: all cores)");
+    example::add_image_size(args, o.width, o.height);
+    example::add_threads(args, o.threads);
     // At most 20: each level doubles the twigs, and 21 levels make 6.3 M kernel instances, over
     // the 4.19 M (2^22) that krs::expand takes (the renderer expands every instance).
     args.integer("--levels", o.levels, 1, 20, "branching levels of the tree (20 makes ~3.1 M kernel instances)");
-    args.integer("--seed", o.seed, 0, 1 << 30, "seed of the tree's random growth");
-    args.text("--output", o.output, "the PNG to write (.png; its directory must exist)", "FILE.png");
+    example::add_seed(args, o.seed, "the tree's random growth");
+    example::add_output_file(args, o.output, "FILE.png", "the PNG to write (.png; its directory must exist)");
     args.parse(argc, argv);
     example::require_output_file(args, "--output", o.output, {".png"});
     o.threads = example::thread_count(o.threads);

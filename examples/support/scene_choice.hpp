@@ -11,6 +11,7 @@
 
 #include "krs/scenes/example_scenes.hpp"
 #include "command_line.hpp"
+#include "common_options.hpp"
 
 #include <cstdint>
 #include <cstdio>
@@ -35,11 +36,11 @@ public:
                  const std::string& alias = "")
         : names_(std::move(names))
     {
-        scene_ = args.choice(alias.empty() ? "--scene" : "--scene," + alias, name, names_,
-                             alias.empty() ? help : help + " (" + alias + ": its older name)");
+        const option_spelling scene = spelled("--scene", help, alias);
+        scene_ = args.choice(scene.names, name, names_, scene.help);
         args.app().add_flag_callback("--list-scenes", [this] { list(); }, "print the scenes --scene takes, and exit");
-        seed_ = args.integer("--seed", seed_value_, 0, 1 << 30,
-                             "seed of the scenes that draw random numbers (default: each scene's own)");
+        seed_ = add_seed(args, seed_value_, "the scenes that draw random numbers");
+        seed_->default_str("each scene's own");
     }
 
     // The seed asked for, if any (read after parsing).
