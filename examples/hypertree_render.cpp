@@ -36,6 +36,7 @@
 #include "hypertree/presets.hpp"
 #include "hypertree/render/render.hpp"
 #include "support/command_line.hpp"
+#include "support/common_options.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
@@ -180,13 +181,12 @@ int main(int argc, char** argv)
     std::string store = std::string(name_of(o.store));
     std::vector<std::string> store_names(storage_type_names.begin(), storage_type_names.end());
     CLI::Option* store_option = args.choice("--store", store, store_names, "voxel store (default: the forest file's, else bit_array)");
-    args.integer("--width", o.width, 1, 8192, "image width in pixels");
-    args.integer("--height", o.height, 1, 8192, "image height in pixels");
+    example::add_image_size(args, o.width, o.height);
     args.integer_or_word("--supersampling", o.supersampling, 1, 16, "auto", 0, "samples per pixel along each axis");
     args.number("--density-scale", o.density_scale, 0, 100, true, "k of section 8.1");
-    args.integer("--threads", o.threads, 0, 1024, "threads (0: all cores)");
-    args.integer("--seed", o.seed, 0, 1 << 30, "seed of the generation");
-    args.text("--output", o.output, "the PNG to write (.png; its directory must exist)", "FILE.png");
+    example::add_threads(args, o.threads);
+    example::add_seed(args, o.seed, "the generation");
+    example::add_output_file(args, o.output, "FILE.png", "the PNG to write (.png; its directory must exist)");
     args.text("--save-volume", o.save_volume, "also save the voxel store (binary, with a checksum; any name)", "FILE");
     // The extension (what Houdini and Blender look for) is checked with the other outputs after
     // parsing (support/output_path.hpp); here only that this build can write the grids at all.
