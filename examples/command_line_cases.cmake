@@ -4,6 +4,11 @@
 # pixels. Rows marked "old" were accepted by the parser before CLI11 (a number's prefix was taken,
 # or a float was not checked) or refused without naming the option.
 #
+# The options every program spells alike (support/common_options.hpp): --width/--height in
+# [1, 16384], --threads in [0, 1024] ("one per core"), --seed in [0, 2^30], --output FILE,
+# --output-dir DIR. Each program's rows refuse them at their ranges' edges and show them in --help;
+# an older spelling kept as an alias has a row that still works and a --help row that says so.
+#
 #        program           status  must say                                          arguments
 
 # krs_tree
@@ -24,7 +29,9 @@ krs_case(krs_tree          2 "--seed;missing"                                   
 krs_case(krs_tree          2 "--output;'--width'"                                  --output --width 8)
 krs_case(krs_tree          2 "--fast"                                              --fast)
 krs_case(krs_tree          2 "--width;2"                                           --width 8 --width 9)
-krs_case(krs_tree          0 "--levels;--output"                                   --help)
+krs_case(krs_tree          0 "--levels;--output;--width;--height;--threads;one per core;--seed"  --help)
+krs_case(krs_tree          2 "--width;'16385';[1, 16384]"                          --width 16385)
+krs_case(krs_tree          2 "--seed;'1073741825';[0, 1073741824]"                 --seed 1073741825)
 krs_case(krs_tree          0 "wrote"                                               --width 8 --height 8 --levels 2 --threads 1
                                                                                    --output <out>/krs_tree.png)
 
@@ -51,7 +58,12 @@ krs_case(hypertree_render  2 "--tree;--forest"                                  
 krs_case(hypertree_render  2 "--width;'8192x'"                                     --width 8192x)
 krs_case(hypertree_render  2 "--seed;missing"                                      --seed)
 krs_case(hypertree_render  2 "--samples"                                           --samples 4)
-krs_case(hypertree_render  0 "--supersampling;--density-scale"                     --help)
+krs_case(hypertree_render  0 "--supersampling;--density-scale;--width;--height;--threads;one per core;--seed;--output" --help)
+# The shared sizes (support/common_options.hpp): [1, 16384] as every program's (was [1, 8192]).
+krs_case(hypertree_render  2 "--width;'16385';[1, 16384]"                          --width 16385)
+krs_case(hypertree_render  2 "--height;'0';[1, 16384]"                             --height 0)
+krs_case(hypertree_render  2 "--threads;'1025';[0, 1024]"                          --threads 1025)
+krs_case(hypertree_render  2 "--seed;'-1';[0, 1073741824]"                         --seed -1)
 krs_case(hypertree_render  0 "rendered 16x16"                                      --preset C --resolution 16 --width 16 --height 16
                                                                                    --supersampling auto --threads 1 --output <out>/hypertree.png)
 # Decimal, whole: CLI11 alone reads integers in base 0, where 010 is 8.
@@ -124,7 +136,8 @@ if(PROGRAM STREQUAL "hypertree_render")
 endif()
 
 # krs_scenes
-krs_case(krs_scenes        2 "--width;'0';[1, 8192]"                               --width 0)
+krs_case(krs_scenes        2 "--width;'0';[1, 16384]"                              --width 0) # was [1, 8192]
+krs_case(krs_scenes        2 "--height;'16385';[1, 16384]"                         --height 16385)
 krs_case(krs_scenes        2 "--height;'abc'"                                      --height abc)
 krs_case(krs_scenes        2 "--seed;'2.5'"                                        --seed 2.5)
 krs_case(krs_scenes        2 "--threads;'1025';[0, 1024]"                          --threads 1025)
@@ -134,7 +147,7 @@ krs_case(krs_scenes        2 "--scene;'sky';one of forest|terrain|rock|mirrors|c
 krs_case(krs_scenes        2 "--scene;'sky';one of forest|"                        --only sky)
 krs_case(krs_scenes        2 "--scene;'kifs_koch';one of forest|"                  --scene kifs_koch)
 krs_case(krs_scenes        2 "--output-dir;missing"                                --output-dir)
-krs_case(krs_scenes        0 "--scene;--only: its older name;--list-scenes;--seed;--output-dir" -h)
+krs_case(krs_scenes        0 "--scene;--only: its older name;--list-scenes;--seed;--output-dir;--threads;one per core" -h)
 krs_case(krs_scenes        0 "forest ;2^6 trees;mirrors ;figure 5;sponge ;(--seed)"  --list-scenes)
 krs_case(krs_scenes        0 "total:;1 scene"                                      --scene rock --seed 4 --width 8 --height 8 --threads 1
                                                                                    --output-dir <out>)
@@ -146,11 +159,13 @@ krs_case(krs_scenes        0 "total:;1 scene"                                   
 
 # krs_fractals
 krs_case(krs_fractals      2 "--width;'3x'"                                        --width 3x)
-krs_case(krs_fractals      2 "--height;'0';[1, 8192]"                              --height 0)
+krs_case(krs_fractals      2 "--height;'0';[1, 16384]"                             --height 0) # was [1, 8192]
+krs_case(krs_fractals      2 "--width;'16385';[1, 16384]"                          --width 16385)
+krs_case(krs_fractals      2 "--seed;'-3';[0, 1073741824]"                         --seed -3)
 krs_case(krs_fractals      2 "--threads;'nan'"                                     --threads nan)
 krs_case(krs_fractals      2 "--output-dir;missing"                                --output-dir=)
 krs_case(krs_fractals      2 "--zoom"                                              --zoom 3)
-krs_case(krs_fractals      0 "--width;--output-dir"                                --help)
+krs_case(krs_fractals      0 "--width;--height;--output-dir;--threads;one per core;--scene;--list-scenes;--seed" --help)
 krs_case(krs_fractals      0 "total:;12 frames"                                    --width 4 --height 4 --threads 1 --output-dir <out>)
 krs_case(krs_fractals      0 "total:;12 frames"                                    --width 4 --height 4 --threads 1 --colouring off
                                                                                    --output-dir <out>)
@@ -197,7 +212,15 @@ krs_case(glsl_export       2 "--prefix;'a-b'"                                   
 krs_case(glsl_export       2 "--prefix;'App_'"                                     --prefix App_)
 krs_case(glsl_export       2 "--prefix;'app'"                                      --prefix app)
 krs_case(glsl_export       2 "--prefix;Shadertoy"                                  --target shadertoy --prefix app_)
-krs_case(glsl_export       2 "--all;'--scene'"                                     --all --scene tree)
+krs_case(glsl_export       2 "--output-dir;'--scene'"                              --all --scene tree)
+# --output-dir DIR writes the glsl/ folder (--all DIR: its older spelling); the choices of one file
+# do not apply to it and are refused rather than ignored.
+krs_case(glsl_export       2 "--output-dir;missing"                                --output-dir)
+krs_case(glsl_export       2 "--scene: --output-dir writes every scene"            --output-dir <out>/all --scene tree)
+krs_case(glsl_export       2 "--target: --output-dir writes every scene"           --all <out>/all --target 330)
+krs_case(glsl_export       2 "--mode: --output-dir"                                --output-dir <out>/all --mode buffer)
+krs_case(glsl_export       2 "--output: --output-dir"                              --output-dir <out>/all --output <out>/x.glsl)
+krs_case(glsl_export       0 ""                                                    --all <out>/all_old) # the older spelling still writes
 krs_case(glsl_export       2 "--version"                                           --version)
 krs_case(glsl_export       2 "--width;'0';an integer in [1, 16384]"                --reference <out>/r.png --width 0)
 krs_case(glsl_export       2 "--width;'16385';[1, 16384]"                          --reference <out>/r.png --width 16385)
@@ -205,13 +228,13 @@ krs_case(glsl_export       2 "--height;'0';[1, 16384]"                          
 krs_case(glsl_export       2 "--height;'16385';[1, 16384]"                         --reference <out>/r.png --height 16385)
 krs_case(glsl_export       2 "--height;'12x'"                                      --reference <out>/r.png --height 12x)
 krs_case(glsl_export       2 "--width;--reference"                                 --width 64)
-krs_case(glsl_export       2 "--reference;--all"                                   --reference <out>/r.png --all <out>)
+krs_case(glsl_export       2 "--reference;--output-dir"                            --reference <out>/r.png --output-dir <out>)
 krs_case(glsl_export       2 "--reference;missing"                                 --reference)
 krs_case(glsl_export       2 "--reference;'k.jpg';.png"                            --reference k.jpg)
 krs_case(glsl_export       2 "--reference;'k.png.exr';.png"                        --reference k.png.exr)
-krs_case(glsl_export       0 "--scene;--target;--mode;--list-scenes;--seed"         --help)
+krs_case(glsl_export       0 "--scene;--target;--mode;--list-scenes;--seed;--output;--output-dir;--all: its older name;--width;--height" --help)
 krs_case(glsl_export       0 "tree ;mirrors ;figure 5;lotus ;cube_singularity ;(--seed)" --list-scenes)
-krs_case(glsl_export       2 "--seed;--all"                                        --all <out> --seed 2)
+krs_case(glsl_export       2 "--seed;--output-dir"                                 --all <out> --seed 2)
 krs_case(glsl_export       2 "--seed;'-1';[0, 1073741824]"                         --seed -1)
 krs_case(glsl_export       0 ""                                                    --scene mirrors --target 330 --output <out>/mirrors.glsl)
 krs_case(glsl_export       0 ""                                                    --scene forest --seed 9 --target shadertoy
@@ -232,21 +255,27 @@ krs_case(krs_export        2 "--scene;'sky';one of tree|forest|"                
 krs_case(krs_export        2 "--resolution;'0';[1, 65536]"                          --scene rock --resolution 0 --mesh <out>/x.ply)
 krs_case(krs_export        2 "--resolution;'2.5'"                                   --scene rock --resolution 2.5 --mesh <out>/x.ply)
 krs_case(krs_export        2 "--memory-budget;'0';[1, 1048576]"                     --scene rock --memory-budget 0 --mesh <out>/x.ply)
-krs_case(krs_export        2 "--mesh;'x.stl';.ply, .obj, .glb or .gltf"             --scene rock --mesh x.stl)
-krs_case(krs_export        2 "--mesh;--instances"                                   --scene rock)
-krs_case(krs_export        2 "--instances;'x.ply';.gltf or .glb"                    --scene sponge --instances x.ply)
+# --output FILE: the file (--mesh FILE: its older spelling); --instances writes it as instances
+# (--instances FILE: its older spelling).
+krs_case(krs_export        2 "--output;'x.stl';.ply, .obj, .glb or .gltf"           --scene rock --output x.stl)
+krs_case(krs_export        2 "--output;'x.stl';.ply, .obj, .glb or .gltf"           --scene rock --mesh x.stl)
+krs_case(krs_export        2 "--output: give the file to write (FILE.ply"           --scene rock)
+krs_case(krs_export        2 "--output: give the file to write (FILE.gltf or FILE.glb)" --scene tree --instances)
+krs_case(krs_export        2 "--output (--instances);'x.ply';.gltf or .glb"         --scene sponge --instances --output x.ply)
+krs_case(krs_export        2 "--output (--instances);'x.ply';.gltf or .glb"         --scene sponge --instances x.ply)
+krs_case(krs_export        2 "--instances FILE, --output: one file"                 --scene tree --instances <out>/a.gltf --output <out>/b.gltf)
 krs_case(krs_export        2 "--instance-levels;'-1';[0, 64]"                       --scene sponge --instance-levels -1 --instances <out>/x.gltf)
-krs_case(krs_export        0 "--mesh;--resolution;--instances;--list-scenes;--seed"  --help)
-krs_case(krs_export        0 "krs_export: mirrors: ;triangles"                      --scene mirrors --resolution 24 --mesh <out>/mirrors.ply)
+krs_case(krs_export        0 "--output;--mesh: its older name;--resolution;--instances;--instances FILE: its older spelling;--list-scenes;--seed" --help)
+krs_case(krs_export        0 "krs_export: mirrors: ;triangles"                      --scene mirrors --resolution 24 --output <out>/mirrors.ply)
 krs_case(krs_export        0 "krs_export: rock: ;triangles;-> "                      --scene rock --resolution 8 --mesh <out>/rock.obj)
 krs_case(krs_export        2 "--projection-steps;'65';[0, 64]"                     --scene rock --projection-steps 65 --mesh <out>/x.ply)
-krs_case(krs_export        2 "--uv;--mesh"                                          --scene rock --uv)
+krs_case(krs_export        2 "--uv, --kernel-colors: only for a mesh, not with --instances" --scene tree --uv --instances --output <out>/x.gltf)
 krs_case(krs_export        2 "--up;'x';y|z"                                         --scene rock --up x --mesh <out>/x.ply)
 krs_case(krs_export        2 "--gpu-instancing: only with --instances"              --scene rock --gpu-instancing --mesh <out>/x.ply)
 # Refusals found while meshing (status 1) name the option typed, not the library's field.
 krs_case(krs_export        1 "--memory-budget: is below the mesh's estimated size;lower --resolution;(got 1 MB)" --scene tree --resolution 256 --memory-budget 1 --mesh <out>/x.ply)
 krs_case(krs_export        1 "--uv / --kernel-colors: needs a field that locates"   --scene kifs_menger --resolution 8 --uv --mesh <out>/x.ply)
-krs_case(krs_export        0 "krs_export: tree: ;triangles"                         --scene tree --resolution 16 --uv --kernel-colors --mesh <out>/tree.obj)
+krs_case(krs_export        0 "krs_export: tree: ;triangles;-> ;tree.obj"            --scene tree --resolution 16 --uv --kernel-colors --output <out>/tree.obj)
 # The similar shells mesh at the default resolution (issue 41: their inside was 0, never negative;
 # a few seconds), and a grid too coarse for the geometry says the field was never negative there.
 krs_case(krs_export        0 "krs_export: lotus: ;triangles"                        --scene lotus --mesh <out>/lotus.ply)
@@ -261,9 +290,9 @@ if(KRS_WITH_GLTF)
                                                                                     --scene mirrors --instances <out>/x.glb)
     # Scenes with planes (the tree's ground, the rock's and terrain's facets) export as instances:
     # their planes are meshed within the scene's box.
-    krs_case(krs_export    0 "krs_export: tree: ;instances"                          --scene tree --resolution 8 --instances <out>/tree.glb)
+    krs_case(krs_export    0 "krs_export: tree: ;instances;tree.glb"                 --scene tree --resolution 8 --instances --output <out>/tree.glb)
     krs_case(krs_export    0 "krs_export: rock: ;instances"                          --scene rock --resolution 8 --instances <out>/rock.glb)
-    krs_case(krs_export    0 "krs_export: terrain: ;instances"                       --scene terrain --resolution 8 --instances <out>/terrain.gltf)
+    krs_case(krs_export    0 "krs_export: terrain: ;instances;terrain.gltf"          --output <out>/terrain.gltf --scene terrain --resolution 8 --instances)
     # The count printed is the file's: kernels that mesh to nothing are named and not counted.
     krs_case(krs_export    0 "mesh to nothing and are not written: kernel;8 parts, 320 instances" --scene tree --resolution 96 --instance-levels 8 --instances <out>/tree8.gltf)
 endif()
@@ -279,8 +308,12 @@ krs_case(krs_view          2 "--glsl, --scene"                                  
 krs_case(krs_view          2 "--accumulate;--frames"                               --accumulate)
 krs_case(krs_view          2 "--exit-after-reload;--glsl FILE"                     --exit-after-reload 5 --frames 2)
 krs_case(krs_view          2 "--exit-after-reload;'0';(0, 3600]"                   --exit-after-reload 0)
-krs_case(krs_view          2 "--screenshot;'k.jpg';.png"                           --frames 1 --screenshot k.jpg)
-krs_case(krs_view          0 "--scene;--glsl;--frames;--screenshot;--accumulate;--exit-after-reload;space pauses" --help)
+krs_case(krs_view          2 "--output;'k.jpg';.png"                               --frames 1 --output k.jpg)
+krs_case(krs_view          2 "--output;'k.jpg';.png"                               --frames 1 --screenshot k.jpg) # its older name
+krs_case(krs_view          2 "--output;missing"                                    --output)
+krs_case(krs_view          2 "--height;'16385';[1, 16384]"                         --height 16385)
+krs_case(krs_view          2 "--output;/dev/null is not a directory"               --frames 1 --output /dev/null/v.png)
+krs_case(krs_view          0 "--scene;--glsl;--frames;--output;--screenshot: its older name;--accumulate;--exit-after-reload;--width;--height;space pauses" --help)
 krs_case(krs_view          0 "tree ;grass ;kifs_menger "                           --list-scenes)
 krs_case(krs_view          2 "--glsl, --scene, --seed"                             --glsl <out>/missing.glsl --seed 3)
 

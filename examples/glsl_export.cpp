@@ -4,7 +4,8 @@
 //   glsl_export --scene NAME --target 330|450|es300|shadertoy --mode constants|buffer|uniform-buffer
 //               [--output FILE]
 //   glsl_export --scene NAME --reference FILE.png [--width W] [--height H]
-//   glsl_export --all DIR      regenerates every file of the repository's glsl/ folder
+//   glsl_export --output-dir DIR   regenerates every file of the repository's glsl/ folder
+//                                  (--all DIR: its older spelling)
 //
 // NAME is one of the scenes of krs/scenes/example_scenes.hpp (--list-scenes prints them; --seed S
 // builds the scenes that draw random numbers at seed S instead of their own). Snippets have no #version line (paste them after your own); a shadertoy
@@ -18,6 +19,7 @@
 #include "krs/scenes/scene_files.hpp"
 
 #include "support/command_line.hpp"
+#include "support/common_options.hpp"
 #include "support/scene_choice.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
@@ -79,15 +81,15 @@ std::vector<unsigned char> reference_png(const std::vector<float>& rgba, int wid
 int main(int argc, char** argv)
 {
     namespace ex = krs::scenes;
-    std::string scene = "tree", target = "450", mode = "constants", output, all;
-    example::command_line args("glsl_export", "Writes an example scene's GLSL to a file or stdout; --all DIR "
+    std::string scene = "tree", target = "450", mode = "constants", output, output_dir;
+    example::command_line args("glsl_export", "Writes an example scene's GLSL to a file or stdout; --output-dir DIR "
                                               "regenerates every file of the repository's glsl/ folder.");
     const example::scene_choice scenes(args, scene, example::all_scene_names(), "the scene");
     args.choice("--target", target, {"330", "450", "es300", "shadertoy"}, "the GLSL dialect");
     args.choice("--mode", mode, {"constants", "buffer", "uniform-buffer"},
                 "the scene's data as constants, in a buffer (UBO for 330 and ES, SSBO for 450), or in a "
                 "uniform buffer (450: at binding 0, for Vulkan)");
-    args.text("--output", output, "the file to write: .glsl or .frag (default and -: stdout)", "FILE.glsl");
+    example::add_output_file(args, output, "FILE.glsl", "the file to write: .glsl or .frag (default and -: stdout)");
     std::string prefix = "krs_";
     args.app()
         .add_option("--prefix", prefix, "the start of every global name of a snippet (default krs_)")
@@ -99,38 +101,45 @@ int main(int argc, char** argv)
                                                               "digits and _, a letter first and _ last, not gl_, no __)";
             },
             "", "prefix"));
-    args.text("--all", all, "write every scene in every target and mode into this folder (made if missing)", "DIR");
+    // The glsl/ folder: --all DIR was its spelling before every program's folder was --output-dir.
+    example::add_output_folder(args, output_dir, "the files of every scene in every target and mode (as in glsl/)",
+                               "--all");
     std::string reference;
     int width = 640, height = 360;
     args.text("--reference", reference, "write the CPU reference frame of the scene's Shadertoy program to this PNG file",
               "FILE.png");
-    // As large as a GL framebuffer may be (GL_MAX_RENDERBUFFER_SIZE is 16384 on llvmpipe).
-    args.integer("--width", width, 1, 16384, "the reference frame's width in pixels (with --reference)");
-    args.integer("--height", height, 1, 16384, "the reference frame's height in pixels (with --reference)");
+    example::add_image_size(args, width, height, " of the reference frame (with --reference)");
     args.parse(argc, argv);
-    if (prefix != "krs_" && (target == "shadertoy" || !all.empty()))
-        args.fail("--prefix: applies to snippets, not to a Shadertoy program or the glsl/ folder (--all)");
+    if (prefix != "krs_" && (target == "shadertoy" || !output_dir.empty()))
+        args.fail("--prefix: applies to snippets, not to a Shadertoy program or the glsl/ folder (--output-dir)");
     if (reference.empty() && (args.app().count("--width") > 0 || args.app().count("--height") > 0))
         args.fail("--width, --height: apply to the reference frame: give --reference FILE.png");
-    if (!reference.empty() && !all.empty()) args.fail("--reference: writes one scene's frame, not with --all");
-    if (scenes.seed() && !all.empty()) args.fail("--seed: the glsl/ folder (--all) holds every scene at its own seed");
+    if (!reference.empty() && !output_dir.empty()) args.fail("--reference: writes one scene's frame, not with --output-dir");
+    if (scenes.seed() && !output_dir.empty())
+        args.fail("--seed: the glsl/ folder (--output-dir) holds every scene at its own seed");
+    // The folder holds every scene in every kind: a choice of one was ignored without a word.
+    for (const char* one : {"--scene", "--target", "--mode", "--output"})
+        if (!output_dir.empty() && args.app().count(one) > 0)
+            args.fail(std::string(one) +
+                      ": --output-dir writes every scene in every target and mode; give one or the other");
     // Refused before the work, the same way in every program (support/output_path.hpp); the frame
     // is PNG only (a .jpg would be lossy, not the 8-bit values).
     if (!reference.empty()) example::require_output_file(args, "--reference", reference, {".png"});
     if (!to_stdout(output)) example::require_output_file(args, "--output", output, glsl_extensions);
-    if (!all.empty()) example::require_output_folder(args, "--all", all);
+    if (!output_dir.empty()) example::require_output_folder(args, "--output-dir", output_dir);
     try {
-        if (!all.empty()) {
+        if (!output_dir.empty()) {
             bool ok = true;
             int count = 0;
             ex::for_each_scene([&](const auto& s) {
                 for (const ex::file_kind& kind : ex::files) {
-                    const bool written = write(all + "/" + s.name + std::string(kind.suffix), ex::file_text(s, kind));
+                    const bool written =
+                        write(output_dir + "/" + s.name + std::string(kind.suffix), ex::file_text(s, kind));
                     ok = written && ok;
                     count += written ? 1 : 0; // only what reached the disk
                 }
             });
-            std::fprintf(stderr, "glsl_export: wrote %d files to %s\n", count, all.c_str());
+            std::fprintf(stderr, "glsl_export: wrote %d files to %s\n", count, output_dir.c_str());
             return ok ? 0 : 1;
         }
         ex::file_kind kind{"", krs::glsl::target::glsl450, krs::glsl::data_mode::constants};

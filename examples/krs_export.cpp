@@ -1,9 +1,13 @@
 // krs_export: an example scene as a triangle mesh, for Blender, Houdini, game engines and any
 // rasterizer (krs/mesh/extract.hpp; the writers krs/mesh/write.hpp and krs/mesh/gltf.hpp).
 //
-//   krs_export --scene NAME [--mesh FILE.ply|FILE.obj|FILE.glb|FILE.gltf] [--resolution N]
+//   krs_export --scene NAME --output FILE.ply|FILE.obj|FILE.glb|FILE.gltf [--resolution N]
 //              [--memory-budget MB] [--projection-steps K] [--uv] [--kernel-colors] [--up y|z]
-//              [--instances FILE.gltf|FILE.glb [--instance-levels K] [--max-instances M] [--gpu-instancing]]
+//   krs_export --scene NAME --instances --output FILE.gltf|FILE.glb [--instance-levels K]
+//              [--max-instances M] [--gpu-instancing] [--resolution N] ...
+//
+// (--mesh FILE and --instances FILE, the older spellings of --output FILE and of --instances
+// --output FILE, are still taken.)
 //
 // NAME is one of the scenes of krs/scenes/example_scenes.hpp (--list-scenes prints them; --seed S
 // builds the seeded ones at S). The mesh covers the scene's bounding box, or for a scene without
@@ -43,6 +47,7 @@
 #include "krs/mesh/instances.hpp"
 
 #include "support/command_line.hpp"
+#include "support/common_options.hpp"
 #include "support/scene_choice.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
@@ -120,38 +125,53 @@ int main(int argc, char** argv)
     long long budget_mb = 1024;
     example::command_line args("krs_export", "Writes an example scene as a triangle mesh (PLY, OBJ, GLB or glTF).");
     const example::scene_choice scenes(args, scene, example::all_scene_names(), "the scene");
-    args.text("--mesh", mesh, "the mesh file to write: .ply (binary), .obj, .glb or .gltf", "FILE");
+    example::add_output_file(args, mesh, "FILE", "the file to write: .ply (binary), .obj, .glb or .gltf", "--mesh");
     args.integer("--resolution", resolution, 1, krs::max_mesh_resolution, "cells along the scene box's longest side (default 128)");
     args.integer("--projection-steps", steps, 0, 64, "Newton steps moving each vertex onto the surface (default 4)");
     args.integer("--memory-budget", budget_mb, 1, 1 << 20, "the most the mesh may take while it is built, in MB (default 1024)");
     std::string instances;
     int instance_levels = 4;
     long long max_instances = 1 << 20;
-    args.text("--instances", instances, "a sequence scene as instanced glTF (a node per instance): .gltf or .glb", "FILE");
+    // A kind of output, not a second output option: --instances FILE (the file given here) is its
+    // older spelling, from before every program's file was --output.
+    CLI::Option* instances_option =
+        args.text("--instances", instances,
+                  "write a sequence scene as instanced glTF (a node per instance) to --output FILE.gltf or "
+                  ".glb (--instances FILE: its older spelling)",
+                  "[FILE]")
+            ->expected(0, 1);
     args.integer("--instance-levels", instance_levels, 0, 64, "mirror levels expanded into instances (default 4)");
     args.integer("--max-instances", max_instances, 1, 1ll << 40, "the most instances allowed (default 1048576)");
     bool uv = false, kernel_colors = false;
-    args.app().add_flag("--uv", uv, "per-vertex uv of each vertex's kernel (sequence scenes; --mesh only)");
+    args.app().add_flag("--uv", uv,
+                        "per-vertex uv of each vertex's kernel (sequence scenes; a mesh, not --instances)");
     args.app().add_flag("--kernel-colors", kernel_colors,
-                        "per-vertex colour by kernel (sequence scenes; --mesh only); linear RGB, written as glTF linear floats, "
-                        "PLY bytes and OBJ floats sRGB-encoded");
+                        "per-vertex colour by kernel (sequence scenes; a mesh, not --instances); linear RGB, "
+                        "written as glTF linear floats, PLY bytes and OBJ floats sRGB-encoded");
     bool gpu_instancing = false;
     args.app().add_flag("--gpu-instancing", gpu_instancing,
                         "--instances with EXT_mesh_gpu_instancing (required by the file) instead of a node per instance");
     std::string up_name = "y";
     args.choice("--up", up_name, {"y", "z"}, "the file's up axis (default y; z for z-up tools such as Blender's PLY import)");
     args.parse(argc, argv);
+    // From here on `mesh` is the file of a mesh and `instances` the file of instances, one empty.
+    const bool instanced = instances_option->count() > 0;
+    if (instanced && !instances.empty() && !mesh.empty())
+        args.fail("--instances FILE, --output: one file; give --instances --output FILE.gltf");
+    if (instanced && instances.empty()) std::swap(instances, mesh);
     const krs::up_axis up = up_name == "z" ? krs::up_axis::z : krs::up_axis::y;
-    if (gpu_instancing && instances.empty()) args.fail("--gpu-instancing: only with --instances");
+    if (gpu_instancing && !instanced) args.fail("--gpu-instancing: only with --instances");
     const std::size_t budget_bytes = std::size_t(budget_mb) << 20;
     const unsigned attributes = (uv ? krs::mesh_attribute::uv : 0u) | (kernel_colors ? krs::mesh_attribute::kernel_color : 0u);
-    if (attributes != 0 && mesh.empty()) args.fail("--uv, --kernel-colors: only with --mesh");
+    if (attributes != 0 && instanced) args.fail("--uv, --kernel-colors: only for a mesh, not with --instances");
     if (mesh.empty() && instances.empty())
-        args.fail("--mesh: give the file to write (FILE.ply, FILE.obj, FILE.glb or FILE.gltf), or --instances FILE.gltf");
+        args.fail(std::string("--output: give the file to write (") +
+                  (instanced ? "FILE.gltf or FILE.glb" : "FILE.ply, FILE.obj, FILE.glb or FILE.gltf") + ")");
     // A format krs_export writes, a directory that takes the file, not a directory: checked as
     // every program checks its outputs (support/output_path.hpp).
-    if (!mesh.empty()) example::require_output_file(args, "--mesh", mesh, {".ply", ".obj", ".glb", ".gltf"});
-    if (!instances.empty()) example::require_output_file(args, "--instances", instances, {".gltf", ".glb"});
+    if (!mesh.empty()) example::require_output_file(args, "--output", mesh, {".ply", ".obj", ".glb", ".gltf"});
+    if (!instances.empty())
+        example::require_output_file(args, "--output (--instances)", instances, {".gltf", ".glb"});
     const std::string ext = lower_extension(mesh);
     const std::string iext = lower_extension(instances);
 #if !defined(KRS_WITH_GLTF)
@@ -159,7 +179,7 @@ int main(int argc, char** argv)
 #endif
 #if !defined(KRS_WITH_GLTF)
     if (ext == ".glb" || ext == ".gltf")
-        args.fail("--mesh: '" + mesh + "': this build has no glTF writer (it needs tinygltf, libtinygltf-dev)");
+        args.fail("--output: '" + mesh + "': this build has no glTF writer (it needs tinygltf, libtinygltf-dev)");
 #endif
 
     int status = 1;

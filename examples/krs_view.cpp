@@ -3,9 +3,11 @@
 // krs/scenes/example_scenes.hpp; --list-scenes prints them, --seed S builds a seeded one at S) or
 // a user's own file (--glsl FILE, any Shadertoy Image tab).
 //
-//   krs_view [--scene NAME | --glsl FILE] [--width W --height H] [--time T]
-//   krs_view ... --frames N [--screenshot FILE.png] [--accumulate]      (headless)
-//   krs_view --glsl FILE --frames N --screenshot FILE.png --exit-after-reload SECONDS
+//   krs_view [--scene NAME | --glsl FILE] [--width W --height H] [--time T] [--output FILE.png]
+//   krs_view ... --frames N [--output FILE.png] [--accumulate]      (headless)
+//   krs_view --glsl FILE --frames N --output FILE.png --exit-after-reload SECONDS
+//
+// (--screenshot FILE.png, the older spelling of --output, is still taken.)
 //
 // The inputs are Shadertoy's (support/shadertoy_host.hpp): iTime orbits the scene's camera, a drag
 // turns it (iMouse, the program's own krs::pinhole_camera turn); space pauses time, P writes the
@@ -19,7 +21,7 @@
 // stderr and its first line in the title.
 //
 // Headless (--frames N): the window stays hidden, N frames are drawn at --time T (default 0, time
-// does not run: the frames are reproducible), the last is written to --screenshot, and the time per
+// does not run: the frames are reproducible), the last is written to --output, and the time per
 // frame is printed. Without --accumulate every frame is the plain one (fragCoord at the pixel
 // centers), which is the frame `glsl_export --reference` computes on the CPU. With
 // --exit-after-reload S, the viewer waits up to S seconds for the --glsl file to change and
@@ -33,6 +35,7 @@
 #include "krs/scenes/scene_files.hpp"
 
 #include "support/command_line.hpp"
+#include "support/common_options.hpp"
 #include "support/example_io.hpp"
 #include "support/file_watch.hpp"
 #include "support/output_path.hpp"
@@ -75,16 +78,15 @@ options parse(int argc, char** argv)
     const example::scene_choice scenes(args, o.scene, example::all_scene_names(), "the example scene whose program runs");
     args.text("--glsl", o.glsl,
               "run this Shadertoy program (mainImage) instead, reloaded when it changes", "FILE");
-    args.integer("--width", o.width, 1, 16384, "the frame's width in pixels");
-    args.integer("--height", o.height, 1, 16384, "the frame's height in pixels");
+    example::add_image_size(args, o.width, o.height);
     args.number("--time", o.time, 0.0, 1e6, false,
                 "iTime at the start, seconds (headless: throughout)");
     args.integer("--frames", o.frames, 1, 1000000,
                  "headless: draw this many frames, print their time and exit");
-    args.text("--screenshot", o.screenshot,
-              "headless: write the last frame to this PNG; interactive: where P writes "
-              "(default krs_view.png)",
-              "FILE.png");
+    example::add_output_file(args, o.screenshot, "FILE.png",
+                             "headless: write the last frame to this PNG; interactive: where P writes "
+                             "(default krs_view.png)",
+                             "--screenshot");
     args.app().add_flag("--accumulate", o.accumulate,
                         "headless: each frame adds a jittered sample to the mean");
     args.number("--exit-after-reload", o.reload_seconds, 0.0, 3600.0, true,
@@ -103,11 +105,10 @@ options parse(int argc, char** argv)
         args.fail("--exit-after-reload: needs --glsl FILE and --frames N");
     if (o.screenshot.empty() && !o.headless()) o.screenshot = "krs_view.png";
     if (!o.screenshot.empty() && !o.screenshot.ends_with(".png"))
-        args.fail("--screenshot: '" + o.screenshot +
-                  "' is not a .png file (frames are written as PNG)");
+        args.fail("--output: '" + o.screenshot + "' is not a .png file (frames are written as PNG)");
     // Where a run ends in a screenshot, its path is checked before the window opens, as every
     // program's outputs are (support/output_path.hpp).
-    if (o.headless() && !o.screenshot.empty()) example::require_output_file(args, "--screenshot", o.screenshot, {".png"});
+    if (o.headless() && !o.screenshot.empty()) example::require_output_file(args, "--output", o.screenshot, {".png"});
     return o;
 }
 

@@ -20,17 +20,17 @@ if(KRS_WITH_OPENVDB)
                                            --output <work>/render.png --save-nvdb <file>)
 endif()
 
-krs_output_folder(krs_scenes sponge.png --only sponge --width 8 --height 6 --threads 1 --output-dir <dir>)
+krs_output_folder(krs_scenes sponge.png --scene sponge --width 8 --height 6 --threads 1 --output-dir <dir>)
 
 krs_output_folder(krs_fractals slice_sphere_distance.png --slice sphere --width 8 --height 8 --output-dir <dir>)
 
 krs_output_file(glsl_export .glsl       --scene tree --output <file>)
 krs_output_file(glsl_export .png        --scene tree --reference <file> --width 8 --height 8)
-krs_output_folder(glsl_export tree.glsl --all <dir>)
+krs_output_folder(glsl_export tree.glsl --output-dir <dir>)
 
-krs_output_file(krs_export .ply         --scene rock --resolution 8 --mesh <file>)
-krs_output_file(krs_export .obj         --scene rock --resolution 8 --mesh <file>)
+krs_output_file(krs_export .ply         --scene rock --resolution 8 --output <file>)
+krs_output_file(krs_export .obj         --scene rock --resolution 8 --output <file>)
 if(KRS_WITH_GLTF)
-    krs_output_file(krs_export .glb     --scene rock --resolution 8 --mesh <file>)
-    krs_output_file(krs_export .gltf    --scene tree --resolution 8 --instance-levels 1 --instances <file>)
+    krs_output_file(krs_export .glb     --scene rock --resolution 8 --output <file>)
+    krs_output_file(krs_export .gltf    --scene tree --resolution 8 --instance-levels 1 --instances --output <file>)
 endif()

@@ -39,12 +39,12 @@ mesh_line=""
 for kind in glb ply obj; do
     up=y
     [ "$kind" = ply ] && up=z
-    mesh_line="$("$krs_export" --scene tree --resolution 48 --kernel-colors --up "$up" --mesh "tree.$kind" 2>/dev/null)"
+    mesh_line="$("$krs_export" --scene tree --resolution 48 --kernel-colors --up "$up" --output "tree.$kind" 2>/dev/null)"
     echo "$mesh_line"
 done
 triangles="$(sed -n 's/.*: \([0-9]*\) triangles, \([0-9]*\) vertices.*/\1/p' <<<"$mesh_line")"
 vertices="$(sed -n 's/.*: \([0-9]*\) triangles, \([0-9]*\) vertices.*/\2/p' <<<"$mesh_line")"
-instances_line="$("$krs_export" --scene tree --resolution 48 --instance-levels 8 --instances tree_instances.gltf 2>/dev/null | tail -n 1)"
+instances_line="$("$krs_export" --scene tree --resolution 48 --instance-levels 8 --instances --output tree_instances.gltf 2>/dev/null | tail -n 1)"
 echo "$instances_line"
 instance_count="$(sed -n 's/.* parts, \([0-9]*\) instances,.*/\1/p' <<<"$instances_line")"
 "$hypertree_render" --preset A --resolution 64 --width 16 --height 16 --threads 2 --output preview.png --save-vdb tree.vdb 2>/dev/null | tail -n 2

@@ -41,7 +41,7 @@ case "$case_name" in
 frame_*)
     need_xvfb
     scene="${case_name#frame_}"
-    "$xvfb_run" -a "$view" --scene "$scene" --frames 2 --screenshot "$work/view.png" \
+    "$xvfb_run" -a "$view" --scene "$scene" --frames 2 --output "$work/view.png" \
         --width 160 --height 120 ||
         fail "krs_view --scene $scene failed"
     "$export" --scene "$scene" --reference "$work/reference.png" --width 160 --height 120 ||
@@ -57,7 +57,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
 }
 EOF
     status=0
-    "$xvfb_run" -a "$view" --glsl "$work/broken.glsl" --frames 2 --screenshot "$work/view.png" \
+    "$xvfb_run" -a "$view" --glsl "$work/broken.glsl" --frames 2 --output "$work/view.png" \
         --width 32 --height 24 \
         >"$work/out.txt" 2>"$work/err.txt" || status=$?
     [ "$status" -eq 1 ] || { cat "$work/err.txt" >&2; fail "exit status $status, expected 1"; }
@@ -69,7 +69,7 @@ EOF
 no_display)
     status=0
     env -u DISPLAY -u WAYLAND_DISPLAY "$view" --scene sponge --frames 1 \
-        --screenshot "$work/view.png" --width 16 --height 16 >"$work/out.txt" 2>"$work/err.txt" || status=$?
+        --output "$work/view.png" --width 16 --height 16 >"$work/out.txt" 2>"$work/err.txt" || status=$?
     [ "$status" -eq 1 ] || { cat "$work/err.txt" >&2; fail "exit status $status, expected 1"; }
     must_say "$work/err.txt" "krs_view: cannot open a window: "
     must_say "$work/err.txt" "; run under xvfb-run or with a display"
@@ -84,7 +84,7 @@ EOF
     for run in plain accumulated; do
         flag=() && [ "$run" = accumulated ] && flag=(--accumulate)
         "$xvfb_run" -a "$view" --glsl "$work/edges.glsl" --frames 16 "${flag[@]}" \
-            --screenshot "$work/$run.png" --width 16 --height 8 || fail "krs_view ($run) failed"
+            --output "$work/$run.png" --width 16 --height 8 || fail "krs_view ($run) failed"
     done
     "$check" coverage "$work/plain.png" 8 4 0 0 ||
         fail "the plain frame is not the program at the pixel centers"
@@ -95,7 +95,7 @@ EOF
 reload)
     need_xvfb
     printf 'void mainImage(out vec4 c, in vec2 p) { c = not_yet_written(p); }\n' >"$work/edited.glsl"
-    "$xvfb_run" -a "$view" --glsl "$work/edited.glsl" --frames 2 --screenshot "$work/view.png" \
+    "$xvfb_run" -a "$view" --glsl "$work/edited.glsl" --frames 2 --output "$work/view.png" \
         --width 32 --height 24 --exit-after-reload 30 >"$work/out.txt" 2>"$work/err.txt" &
     viewer=$!
     # Until the viewer has compiled (and refused) the broken file: then the good one is a change.

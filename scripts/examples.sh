@@ -48,9 +48,9 @@ if [ -x "$build_dir/examples/krs_export" ]; then
     # .glb where the build has tinygltf (install-deps.sh --examples installs it), else PLY.
     if "$build_dir/examples/krs_export" --help | grep -q "glb"; then mesh_ext=glb; else mesh_ext=ply; fi
     echo "examples.sh: krs_export -> out/{rock,kifs_menger}.$mesh_ext, out/tree.obj"
-    "$build_dir/examples/krs_export" --scene rock --resolution 128 --mesh "$out_dir/rock.$mesh_ext"
-    "$build_dir/examples/krs_export" --scene kifs_menger --resolution 128 --mesh "$out_dir/kifs_menger.$mesh_ext"
-    "$build_dir/examples/krs_export" --scene tree --resolution 96 --mesh "$out_dir/tree.obj"
+    "$build_dir/examples/krs_export" --scene rock --resolution 128 --output "$out_dir/rock.$mesh_ext"
+    "$build_dir/examples/krs_export" --scene kifs_menger --resolution 128 --output "$out_dir/kifs_menger.$mesh_ext"
+    "$build_dir/examples/krs_export" --scene tree --resolution 96 --output "$out_dir/tree.obj"
     ran=$((ran + 1))
 fi
 echo "examples.sh: $ran example(s) rendered into $out_dir"
