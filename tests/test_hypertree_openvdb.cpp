@@ -247,14 +247,17 @@ TEST_CASE("VDB and NanoVDB written z-up: both readers put each voxel at its y-up
         const vec3d want = turned(volume.voxel_center(v.index));
         const openvdb::Vec3d got = xf.indexToWorld(openvdb::Coord(c[0], c[1], c[2]));
         const nanovdb::Vec3d nano_got = nano->indexToWorld(nanovdb::Vec3d(c[0], c[1], c[2]));
-        worst_vdb = std::max({worst_vdb, std::abs(got[0] - want.x), std::abs(got[1] - want.y), std::abs(got[2] - want.z)});
-        worst_nano = std::max({worst_nano, std::abs(nano_got[0] - want.x), std::abs(nano_got[1] - want.y), std::abs(nano_got[2] - want.z)});
+        worst_vdb = std::max({worst_vdb, std::abs(got[0] - want.x), std::abs(got[1] - want.y),
+                              std::abs(got[2] - want.z)});
+        worst_nano = std::max({worst_nano, std::abs(nano_got[0] - want.x), std::abs(nano_got[1] - want.y),
+                               std::abs(nano_got[2] - want.z)});
         // And back: the turned world point names the voxel that holds the stored density.
         const openvdb::Vec3d q = xf.worldToIndex(openvdb::Vec3d(want.x, want.y, want.z));
         const nanovdb::Vec3d nq = nano->worldToIndex(nanovdb::Vec3d(want.x, want.y, want.z));
         const openvdb::Coord ijk(int(std::floor(q[0] + 0.5)), int(std::floor(q[1] + 0.5)), int(std::floor(q[2] + 0.5)));
         const nanovdb::Coord nijk(int(std::floor(nq[0] + 0.5)), int(std::floor(nq[1] + 0.5)), int(std::floor(nq[2] + 0.5)));
-        wrong_value += std::lround(d.getValue(ijk) * 255.0f) != v.value.density || std::lround(nd.getValue(nijk) * 255.0f) != v.value.density;
+        wrong_value += std::lround(d.getValue(ijk) * 255.0f) != v.value.density ||
+                       std::lround(nd.getValue(nijk) * 255.0f) != v.value.density;
         lo = {std::min(lo.x, got[0]), std::min(lo.y, got[1]), std::min(lo.z, got[2])};
         hi = {std::max(hi.x, got[0]), std::max(hi.y, got[1]), std::max(hi.z, got[2])};
         all_z += got[2];

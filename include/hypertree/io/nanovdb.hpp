@@ -113,7 +113,8 @@ nanovdb_grids to_nanovdb(const S& store, const nvdb_grid_names& names = {}, krs:
 // (y: the scene's own frame). Refuses an empty store, an empty path or a directory, and bad names
 // (invalid_parameter); a failed write is a save_error naming the path and leaves no file behind.
 template <voxel_store S>
-void save_nvdb(const S& store, const std::filesystem::path& path, const nvdb_grid_names& names = {}, krs::up_axis up = krs::up_axis::y)
+void save_nvdb(const S& store, const std::filesystem::path& path, const nvdb_grid_names& names = {},
+               krs::up_axis up = krs::up_axis::y)
 {
     detail::require_nvdb_names("save_nvdb", names);
     detail::require_output_path("save_nvdb", path);

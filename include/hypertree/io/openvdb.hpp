@@ -95,8 +95,10 @@ inline openvdb::math::Transform::Ptr vdb_transform(const hypervolume& volume, kr
     const vec3d& s = volume.voxel_size();
     const vec3d& o = volume.origin();
     const vec3d centre_of_first{o.x + 0.5 * s.x, o.y + 0.5 * s.y, o.z + 0.5 * s.z};
+    using openvdb::math::MapBase;
+    using openvdb::math::Transform;
     if (up == krs::up_axis::y)
-        return openvdb::math::Transform::Ptr(new openvdb::math::Transform(openvdb::math::MapBase::Ptr(new openvdb::math::ScaleTranslateMap(
+        return Transform::Ptr(new Transform(MapBase::Ptr(new openvdb::math::ScaleTranslateMap(
             openvdb::Vec3d(s.x, s.y, s.z), openvdb::Vec3d(centre_of_first.x, centre_of_first.y, centre_of_first.z)))));
     const std::array<double, 9> r = krs::up_rotation(up);
     const double scale[3] = {s.x, s.y, s.z};
@@ -105,7 +107,7 @@ inline openvdb::math::Transform::Ptr vdb_transform(const hypervolume& volume, kr
     for (int row = 0; row < 3; ++row)
         for (int column = 0; column < 3; ++column) m(column, row) = r[std::size_t(row * 3 + column)] * scale[column];
     m.setTranslation(openvdb::Vec3d(t.x, t.y, t.z));
-    return openvdb::math::Transform::Ptr(new openvdb::math::Transform(openvdb::math::MapBase::Ptr(new openvdb::math::AffineMap(m))));
+    return Transform::Ptr(new Transform(MapBase::Ptr(new openvdb::math::AffineMap(m))));
 }
 
 inline void put_vdb_metadata(openvdb::GridBase& grid, const hypervolume& volume)
@@ -174,7 +176,8 @@ struct vdb_file_writer : openvdb::io::Archive {
 // scene's own frame). Refuses an empty store, an empty path or a directory, and bad names
 // (invalid_parameter); a failed write is a save_error naming the path, and leaves no file behind.
 template <voxel_store S>
-void save_vdb(const S& store, const std::filesystem::path& path, const vdb_grid_names& names = {}, krs::up_axis up = krs::up_axis::y)
+void save_vdb(const S& store, const std::filesystem::path& path, const vdb_grid_names& names = {},
+              krs::up_axis up = krs::up_axis::y)
 {
     detail::require_vdb_names("save_vdb", names);
     detail::require_output_path("save_vdb", path);
@@ -227,8 +230,8 @@ inline vdb_volume volume_of(const openvdb::GridBase& grid, std::string_view file
     if (!aligned(columns(up))) up = krs::up_axis::z;
     const std::array<openvdb::Vec3d, 3> column = columns(up);
     if (!aligned(column))
-        throw fail("its transform rotates or shears the voxels (only an axis-aligned scale and translation, or that turned z-up as "
-                   "save_vdb writes it, map to a hypervolume)");
+        throw fail("its transform rotates or shears the voxels (only an axis-aligned scale and translation, "
+                   "or that turned z-up as save_vdb writes it, map to a hypervolume)");
     const openvdb::Vec3d centre0 = scene_point(up, openvdb::Vec3d(0, 0, 0));
     openvdb::Vec3d scale;
     for (int a = 0; a < 3; ++a) {
