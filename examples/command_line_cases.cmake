@@ -99,10 +99,16 @@ krs_case(hypertree_render  0 "rendered 16x16"                                   
                                                                                    --height 16 --threads 1 --output <out>/hypertree.png)
 krs_case(hypertree_render  2 "--save-vdb;'tree.txt';does not end in .vdb"          --save-vdb tree.txt)
 krs_case(hypertree_render  2 "--save-nvdb;'.nvdb';does not end in .nvdb"           --save-nvdb .nvdb)
+# --up: krs_export's words and refusal (support/up_axis_option.hpp), only where it turns a file.
+krs_case(hypertree_render  2 "--up;'x';y|z"                                         --up x)
+krs_case(hypertree_render  2 "--up: only with --save-vdb or --save-nvdb"           --preset C --resolution 16 --up z)
 if(KRS_WITH_OPENVDB)
     krs_case(hypertree_render 2 "--save-vdb;/dev/null is not a directory"          --save-vdb /dev/null/t.vdb)
-    krs_case(hypertree_render 0 "saved the grids to;t.vdb;t.nvdb;rendered 16x16"  --preset C --resolution 16 --width 16
+    krs_case(hypertree_render 0 "saved the grids to;t.vdb, up y;t.nvdb, up y;rendered 16x16" --preset C --resolution 16 --width 16
                                                                                   --height 16 --threads 1 --output <out>/hypertree.png
+                                                                                  --save-vdb <out>/t.vdb --save-nvdb <out>/t.nvdb)
+    krs_case(hypertree_render 0 "t.vdb, up z;t.nvdb, up z"                         --preset C --resolution 16 --width 16 --height 16
+                                                                                  --threads 1 --output <out>/hypertree.png --up z
                                                                                   --save-vdb <out>/t.vdb --save-nvdb <out>/t.nvdb)
 else()
     krs_case(hypertree_render 2 "--save-vdb;no OpenVDB"                            --save-vdb t.vdb)

@@ -6,6 +6,7 @@
 //                      [--store dense|index_list|bit_array|partitioned] [--width W] [--height H]
 //                      [--supersampling S|auto] [--density-scale K] [--threads N] [--seed N]
 //                      [--output FILE.png] [--save-volume FILE] [--save-vdb FILE.vdb] [--save-nvdb FILE.nvdb]
+//                      [--up y|z]
 //                      [--lod N] [--clear-above Y] [--ambient A] [--diffuse D] [--specular S]
 //                      [--shininess N] [--light-elevation DEG] [--light-azimuth DEG]
 //                      [--normals structure_flow|part_boxes|line_flow] [--shadows on|off] [--noise on|off]
@@ -28,6 +29,9 @@
 // --save-vdb and --save-nvdb write the store as OpenVDB and NanoVDB grids (hypertree/io/openvdb.hpp,
 // io/nanovdb.hpp): they exist only in a build that found OpenVDB and NanoVDB (KRS_WITH_OPENVDB,
 // from the target krs::hypertree_openvdb); elsewhere they are refused with a message saying so.
+// --up z writes both turned z-up, the tree's +y along the file's +z (the grids' transform carries
+// the turn, the voxels are the same), so Blender and Houdini show it standing; --up is refused
+// without one of them, as the PNG and --save-volume are of the tree in its own y-up frame.
 
 #include "hypertree/forest.hpp"
 #include "hypertree/hypertree.hpp"
@@ -40,6 +44,7 @@
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
+#include "support/up_axis_option.hpp"
 
 #ifndef KRS_WITH_OPENVDB
 #define KRS_WITH_OPENVDB 0
@@ -71,6 +76,7 @@ double seconds_since(clock_type::time_point t0) { return std::chrono::duration<d
 
 struct settings {
     std::string tree_file, forest_file, preset = "A", output = "hypertree.png", save_volume, save_vdb, save_nvdb;
+    krs::up_axis up = krs::up_axis::y; // of the .vdb and .nvdb files (--up)
     std::optional<int> resolution;
     storage_type store = storage_type::bit_array;
     int width = 480, height = 480, supersampling = 0, threads = 0; // supersampling 0 = auto
@@ -123,16 +129,16 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     }
 #if KRS_WITH_OPENVDB
     // The library's errors name the path; the option is named here.
-    const auto saving = [](const char* option, const std::string& path, auto&& save_as) {
+    const auto saving = [&o](const char* option, const std::string& path, auto&& save_as) {
         try {
             save_as();
         } catch (const std::exception& e) {
             throw std::runtime_error(std::string(option) + " " + path + ": " + e.what());
         }
-        std::printf("saved the grids to %s\n", path.c_str());
+        std::printf("saved the grids to %s, up %s\n", path.c_str(), std::string(krs::up_axis_name(o.up)).c_str());
     };
-    if (!o.save_vdb.empty()) saving("--save-vdb", o.save_vdb, [&] { save_vdb(store, o.save_vdb); });
-    if (!o.save_nvdb.empty()) saving("--save-nvdb", o.save_nvdb, [&] { save_nvdb(store, o.save_nvdb); });
+    if (!o.save_vdb.empty()) saving("--save-vdb", o.save_vdb, [&] { save_vdb(store, o.save_vdb, {}, o.up); });
+    if (!o.save_nvdb.empty()) saving("--save-nvdb", o.save_nvdb, [&] { save_nvdb(store, o.save_nvdb, {}, o.up); });
 #endif
     if (store.nonempty_count() == 0)
         throw std::runtime_error("nothing is left to render (--clear-above cleared every voxel, or the tree is empty)");
@@ -202,6 +208,7 @@ int main(int argc, char** argv)
         ->check(grid_writer);
     args.text("--save-nvdb", o.save_nvdb, "also save the store as NanoVDB grids: density, level", "FILE.nvdb")
         ->check(grid_writer);
+    const example::up_axis_option up_option(args);
     args.integer("--lod", o.lod, 1, 1600, "reduce the tree to N voxels along each axis before rendering (level of detail, section 9)")
         ->default_str("off");
     double clear_above = 0;
@@ -241,6 +248,9 @@ int main(int argc, char** argv)
     example::require_output_file(args, "--output", o.output, {".png"});
     if (!o.save_vdb.empty()) example::require_output_file(args, "--save-vdb", o.save_vdb, {".vdb"});
     if (!o.save_nvdb.empty()) example::require_output_file(args, "--save-nvdb", o.save_nvdb, {".nvdb"});
+    // The PNG and --save-volume are of the tree in its own frame: --up turns only the grid files.
+    if (up_option.given() && o.save_vdb.empty() && o.save_nvdb.empty()) args.fail("--up: only with --save-vdb or --save-nvdb");
+    o.up = up_option.axis();
     // The binary format has no extension of its own: any name whose directory takes a file.
     if (!o.save_volume.empty())
         example::require_output_file(args, "--save-volume", o.save_volume, {});

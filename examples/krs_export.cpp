@@ -51,6 +51,7 @@
 #include "support/scene_choice.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
+#include "support/up_axis_option.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -151,15 +152,15 @@ int main(int argc, char** argv)
     bool gpu_instancing = false;
     args.app().add_flag("--gpu-instancing", gpu_instancing,
                         "--instances with EXT_mesh_gpu_instancing (required by the file) instead of a node per instance");
-    std::string up_name = "y";
-    args.choice("--up", up_name, {"y", "z"}, "the file's up axis (default y; z for z-up tools such as Blender's PLY import)");
+    const example::up_axis_option up_option(args);
     args.parse(argc, argv);
     // From here on `mesh` is the file of a mesh and `instances` the file of instances, one empty.
     const bool instanced = instances_option->count() > 0;
     if (instanced && !instances.empty() && !mesh.empty())
         args.fail("--instances FILE, --output: one file; give --instances --output FILE.gltf");
     if (instanced && instances.empty()) std::swap(instances, mesh);
-    const krs::up_axis up = up_name == "z" ? krs::up_axis::z : krs::up_axis::y;
+    const krs::up_axis up = up_option.axis();
+    const std::string& up_name = up_option.name();
     if (gpu_instancing && !instanced) args.fail("--gpu-instancing: only with --instances");
     const std::size_t budget_bytes = std::size_t(budget_mb) << 20;
     const unsigned attributes = (uv ? krs::mesh_attribute::uv : 0u) | (kernel_colors ? krs::mesh_attribute::kernel_color : 0u);

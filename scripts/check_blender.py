@@ -5,6 +5,7 @@
 #   ARGS: key=value pairs, see check_blender.sh.
 import json
 import math
+import re
 import sys
 
 import bpy
@@ -91,7 +92,10 @@ for kind in ("glb", "ply", "obj"):
     for f in m.polygons:
         up += (objs[0].matrix_world.to_3x3() @ f.normal) * f.area
     up.normalize()
-    check(f"{kind}: stands upright", up.z > 0.99, f"area-weighted normal sum {tuple(round(x, 3) for x in up)}: along +z")
+    # (The box is reported, not checked: the ground, meshed over the scene's box, is wider than the
+    # tree is tall: 7.29 x 7.29 x 6.65 at resolution 48.)
+    check(f"{kind}: stands upright", up.z > 0.99, f"area-weighted normal sum {tuple(round(x, 3) for x in up)}: along +z; "
+          f"world box extent {[round(e, 3) for e in world_box(objs)]} (x, y, z)")
     check(f"{kind}: colours", len(m.color_attributes) > 0, f"{len(m.color_attributes)} colour attributes")
     if len(m.color_attributes) > 0:
         colours[kind] = colours_by_position(objs[0])
@@ -107,35 +111,72 @@ if len(colours) == 3:
     check("colours agree", len(common) > 0.9 * int(args["vertices"]) and worst <= 1 / 255,
           f"{len(common)} vertices in all three files; largest sRGB difference {worst * 255:.3f} / 255 (at most 1)")
 
-# Instanced glTF: one placed object per instance, each where the file's node graph puts it.
+# Instanced glTF: one placed object per printed instance, each at the transform krs::expand gives.
+# An object showing kernel K carries K's points (its box centre and that moved by one along x, y
+# and z: they pin a rigid motion), which must land within 1e-4 of where one of K's expansion
+# instances puts them; an object showing "levels below L" (the mirror levels under the instanced
+# ones, meshed whole) carries the origin and unit points of its own space, which must land where
+# an isometry of level L (the instances of a kernel of level L) puts them. Each expansion instance
+# is used once, and every instance of each part Blender shows is there.
 reset()
 import_gltf(args["instances"])
 objs = meshes()
 check("instances: placed", len(objs) == int(args["instance_count"]), f"{len(objs)} mesh objects (krs_export printed {args['instance_count']})")
-with open(args["instances"]) as f:
-    gltf = json.load(f)
-# The file's own placements (translation and rotation of each instance node, under its parents),
-# turned into Blender's frame by the importer's documented conversion (x, y, z) -> (x, -z, y).
-placements = []
+with open(args["expansion"]) as f:
+    expansion = json.load(f)
 
 
-def walk(index, parent):
-    node = gltf["nodes"][index]
-    t = mathutils.Matrix.Translation(node.get("translation", [0, 0, 0]))
-    x, y, z, w = node.get("rotation", [0, 0, 0, 1])
-    world = parent @ t @ mathutils.Quaternion((w, x, y, z)).to_matrix().to_4x4()
-    if "mesh" in node:
-        placements.append(world.translation.copy())
-    for child in node.get("children", []):
-        walk(child, world)
+def blender_frame(p):
+    # Blender's glTF importer turns glTF's y-up (the scene's frame) z-up: (x, y, z) -> (x, -z, y).
+    return mathutils.Vector((p[0], -p[2], p[1]))
 
 
-for root in gltf["scenes"][gltf.get("scene", 0)]["nodes"]:
-    walk(root, mathutils.Matrix.Identity(4))
-theirs = sorted((p.x, -p.z, p.y) for p in placements)
-ours = sorted(tuple(o.matrix_world.translation) for o in objs)
-worst = max((max(abs(a - b) for a, b in zip(p, q)) for p, q in zip(ours, theirs)), default=math.inf)
-check("instances: transforms", len(ours) == len(theirs) and worst <= 1e-4, f"largest distance of an object's origin from its node's {worst:.2e} (at most 1e-4)")
+def isometry(instance, p):
+    r, t = instance["rotation"], instance["translation"]
+    return [sum(r[3 * row + c] * p[c] for c in range(3)) + t[row] for row in range(3)]
+
+
+unit_points = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+kernels = expansion["kernels"]
+first_of_level = {}
+for k, kernel in enumerate(kernels):
+    first_of_level.setdefault(kernel["level"], k)
+expected = {}  # part name -> the world points of each of its expansion instances, Blender's frame
+placed = {}  # part name -> the world points of each object showing it
+unnamed = []
+for o in objs:
+    # The glTF mesh's name, "kernel K" or "levels below L", then " (mirrored)" for the part mirrored
+    # through x = 0 in its own space (krs/mesh/instances.hpp): its points are mirrored too.
+    match = re.fullmatch(r"(kernel|levels below) (\d+)( \(mirrored\))?(\.\d+)?", o.data.name)
+    if not match or (match.group(1) == "levels below" and int(match.group(2)) not in first_of_level):
+        unnamed.append(o.data.name)
+        continue
+    part = f"{match.group(1)} {match.group(2)}"
+    if part not in expected:
+        kernel = int(match.group(2)) if match.group(1) == "kernel" else first_of_level[int(match.group(2))]
+        local = kernels[kernel]["points"] if match.group(1) == "kernel" else unit_points
+        expected[part] = [(local, [blender_frame(isometry(i, p)) for p in local]) for i in expansion["instances"] if i["kernel"] == kernel]
+    local = expected[part][0][0] if expected[part] else unit_points
+    if match.group(3):
+        local = [(-p[0], p[1], p[2]) for p in local]
+    placed.setdefault(part, []).append([o.matrix_world @ blender_frame(p) for p in local])
+check("instances: meshes named by their part", not unnamed, f"{len(unnamed)} objects whose mesh names no kernel or level {unnamed[:3]}")
+worst = 0.0
+unmatched = 0
+for part, objects in placed.items():
+    candidates = [points for _, points in expected[part]]
+    unmatched += abs(len(objects) - len(candidates))
+    for points in objects:
+        if not candidates:
+            break
+        distance = [max((a - b).length for a, b in zip(points, c)) for c in candidates]
+        best = min(range(len(candidates)), key=distance.__getitem__)
+        worst = max(worst, distance[best])
+        candidates.pop(best)
+shown = sum(len(expected[part]) for part in placed)
+check("instances: where krs::expand puts them", unmatched == 0 and worst <= 1e-4 and shown == len(objs),
+      f"{len(objs)} objects of {len(placed)} parts ({', '.join(sorted(placed))}), {shown} expansion placements of those parts, "
+      f"{unmatched} unmatched; largest distance of a part's point from the expansion's {worst:.2e} (at most 1e-4)")
 
 # VDB: a volume with the density, level and part grids, upright.
 reset()
@@ -147,9 +188,10 @@ if volumes:
     grids.load()
     names = sorted(g.name for g in grids)
     check("vdb: grids", names == ["density", "level", "part"], f"{names}")
-    # hypertree_render's VDB is y-up (no --up yet): the extents are reported, not checked.
+    # Written --up z: the tree (taller than wide) stands, its world box longest along Blender's z.
     extent = world_box(volumes)
-    print(f"check_blender: vdb: world box extent {[round(e, 3) for e in extent]} (x, y, z)", flush=True)
+    check("vdb: stands upright", extent[2] > max(extent[0], extent[1]),
+          f"world box extent {[round(e, 3) for e in extent]} (x, y, z): longest along z")
     # One small frame in Cycles: the volume renders (a few samples, a tiny image: seconds).
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"

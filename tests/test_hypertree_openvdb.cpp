@@ -208,6 +208,95 @@ TEST_CASE_TEMPLATE_DEFINE("VDB files read by OpenVDB and NanoVDB hold every voxe
 }
 TEST_CASE_TEMPLATE_APPLY(vdb_every_voxel, hypertree::store_kinds);
 
+TEST_CASE("VDB and NanoVDB written z-up: both readers put each voxel at its y-up centre turned to (x, -z, y), load_vdb turns it back")
+{
+    openvdb::initialize();
+    scratch_directory dir;
+    const preset_tree& t = preset_trees().front(); // preset A: a tree growing along +y
+    const auto store = partitioned_store::build(t.volume, t.voxels);
+    const hypervolume& volume = store.volume();
+    const std::filesystem::path vdb = dir.path / "up_z.vdb", nvdb = dir.path / "up_z.nvdb";
+    save_vdb(store, vdb, {}, krs::up_axis::z);
+    save_nvdb(store, nvdb, {}, krs::up_axis::z);
+
+    openvdb::io::File file(vdb.string());
+    file.open();
+    const auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("density"));
+    file.close();
+    REQUIRE(density);
+    const auto nano_handle = nanovdb::io::readGrid(nvdb.string(), "density");
+    const nanovdb::FloatGrid* nano = nano_handle.grid<float>();
+    REQUIRE(nano != nullptr);
+    // The voxels themselves are not moved: the same index coordinates hold the same densities.
+    CHECK(std::size_t(density->activeVoxelCount()) == store.nonempty_count());
+    CHECK(nano->activeVoxelCount() == store.nonempty_count());
+    // The z-up turn written out by hand: the +90 degree rotation about x that sends +y to +z.
+    const auto turned = [](const vec3d& p) { return vec3d{p.x, -p.z, p.y}; };
+    const openvdb::math::Transform& xf = density->transform();
+    const auto d = density->getConstAccessor();
+    const auto nd = nano->getAccessor();
+    const vec3d& s = volume.voxel_size();
+    const double side = std::min({s.x, s.y, s.z});
+    double worst_vdb = 0, worst_nano = 0;
+    std::size_t checked = 0, wrong_value = 0;
+    krs::vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    double trunk_z = 0, all_z = 0;
+    std::size_t trunk = 0;
+    for (const stored_voxel& v : t.voxels) {
+        const auto c = cell(volume, v.index);
+        const vec3d want = turned(volume.voxel_center(v.index));
+        const openvdb::Vec3d got = xf.indexToWorld(openvdb::Coord(c[0], c[1], c[2]));
+        const nanovdb::Vec3d nano_got = nano->indexToWorld(nanovdb::Vec3d(c[0], c[1], c[2]));
+        worst_vdb = std::max({worst_vdb, std::abs(got[0] - want.x), std::abs(got[1] - want.y),
+                              std::abs(got[2] - want.z)});
+        worst_nano = std::max({worst_nano, std::abs(nano_got[0] - want.x), std::abs(nano_got[1] - want.y),
+                               std::abs(nano_got[2] - want.z)});
+        // And back: the turned world point names the voxel that holds the stored density.
+        const openvdb::Vec3d q = xf.worldToIndex(openvdb::Vec3d(want.x, want.y, want.z));
+        const nanovdb::Vec3d nq = nano->worldToIndex(nanovdb::Vec3d(want.x, want.y, want.z));
+        const openvdb::Coord ijk(int(std::floor(q[0] + 0.5)), int(std::floor(q[1] + 0.5)), int(std::floor(q[2] + 0.5)));
+        const nanovdb::Coord nijk(int(std::floor(nq[0] + 0.5)), int(std::floor(nq[1] + 0.5)), int(std::floor(nq[2] + 0.5)));
+        wrong_value += std::lround(d.getValue(ijk) * 255.0f) != v.value.density ||
+                       std::lround(nd.getValue(nijk) * 255.0f) != v.value.density;
+        lo = {std::min(lo.x, got[0]), std::min(lo.y, got[1]), std::min(lo.z, got[2])};
+        hi = {std::max(hi.x, got[0]), std::max(hi.y, got[1]), std::max(hi.z, got[2])};
+        all_z += got[2];
+        if (v.value.level == 0) trunk_z += got[2], ++trunk;
+        ++checked;
+    }
+    CHECK(checked == store.nonempty_count());
+    CHECK(worst_vdb < 1e-6 * side); // a millionth of a voxel
+    CHECK(worst_nano < 1e-6 * side);
+    CHECK(wrong_value == 0);
+    // The tree stands along +z: the active voxels' world box is longest in z, and the trunk (level 0)
+    // lies at its bottom.
+    const krs::vec3d extent = hi - lo;
+    MESSAGE("z-up world box of the active voxels: " << extent.x << " x " << extent.y << " x " << extent.z);
+    CHECK(extent.z > extent.x);
+    CHECK(extent.z > extent.y);
+    REQUIRE(trunk > 0);
+    CHECK(trunk_z / double(trunk) < all_z / double(checked)); // not upside down
+
+    // The library's loader finds the turn in the transform and gives the y-up store back.
+    for_each_store_kind([&]<class T>() {
+        CAPTURE(store_kind_name<T>);
+        check_same(store, load_vdb<T>(vdb));
+    });
+    // A transform turned any other way names no hypervolume: refused, saying why.
+    {
+        auto grids = to_openvdb(store);
+        grids.density->transform().postRotate(0.3, openvdb::math::Y_AXIS);
+        const auto path = dir.path / "turned.vdb";
+        openvdb::io::File(path.string()).write(openvdb::GridPtrVec{grids.density});
+        try {
+            (void)load_vdb<dense_store>(path);
+            FAIL("a grid turned about y was read");
+        } catch (const std::exception& e) {
+            CHECK(std::string(e.what()).find("its transform rotates or shears the voxels") != std::string::npos);
+        }
+    }
+}
+
 TEST_CASE("load_vdb reads a grid written by another tool: the box of its active voxels under its transform")
 {
     openvdb::initialize();

@@ -570,6 +570,7 @@ TEST_CASE("mesh attributes: each vertex's uv and colour are its kernel's, and PL
     // and each must be the mesh's linear colour encoded (the PLY's to its byte rounding).
     const auto glb = temp_path("attributes_assimp.glb");
     krs::save_glb(m, glb);
+    check_with_validator(glb);
     std::vector<std::vector<krs::vec3d>> encoded; // per file, per mesh vertex: its sRGB-encoded colour
     for (const auto& file : {ply, obj, glb}) {
         CAPTURE(file.string());

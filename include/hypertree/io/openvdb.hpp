@@ -21,12 +21,17 @@
 // spanning [origin + ijk * size, origin + (ijk + 1) * size). So every grid's map is the
 // ScaleTranslateMap with scale = voxel_size (per axis: the presets' voxels are not cubes) and
 // translation = origin + voxel_size / 2, and index coordinates are the store's voxel coordinates.
+// Written z-up (krs/io/up_axis.hpp: for Blender and Houdini, which read the transform as it is),
+// the map is that followed by the rotation (x, y, z) -> (x, -z, y): an AffineMap whose linear
+// part is the rotation times the scale. The voxels are the same; only where they land turns.
 //
 // Metadata. Every grid carries the hypervolume as given (doubles, so it comes back bit for bit,
 // which the transform's rounded sums would not give): "krs_hypervolume_origin" and
-// "krs_hypervolume_extent" (vec3d) and "krs_hypervolume_resolution" (vec3i). A grid without them
-// (made by another tool) is read too: its hypervolume is the box of its active voxels under its
-// transform, which must then be an axis-aligned scale and translation.
+// "krs_hypervolume_extent" (vec3d) and "krs_hypervolume_resolution" (vec3i), in the scene's y-up
+// frame whichever the file's up axis. A grid without them (made by another tool) is read too: its
+// hypervolume is the box of its active voxels under its transform. The reader takes a transform
+// that is an axis-aligned scale and translation, possibly followed by the z-up rotation (found
+// from the transform itself, so a z-up file comes back as the y-up store it was written from).
 //
 // Reading back: density values are turned into densities by round(value * 255), exact for what
 // `save_vdb` wrote; a value outside [0, 1] or not finite is refused (rescale such a grid first),
@@ -37,6 +42,7 @@
 #include "hypertree/io/binary.hpp" // load_error, loaded_voxels
 #include "hypertree/io/grid_files.hpp"
 #include "hypertree/store/store.hpp"
+#include "krs/io/up_axis.hpp"
 
 #include <openvdb/openvdb.h>
 
@@ -81,15 +87,27 @@ inline void require_vdb_names(std::string_view caller, const vdb_grid_names& nam
     require_grid_names(caller, {{"density", &names.density}, {"level", &names.level}, {"part", &names.part}});
 }
 
-// The map described above: voxel centres where the hypervolume has them.
-inline openvdb::math::Transform::Ptr vdb_transform(const hypervolume& volume)
+// The map described above: voxel centres where the hypervolume has them, turned to the file's up
+// axis. OpenVDB's matrices act on row vectors (world = [i j k 1] M), so M's upper 3x3 block is the
+// transpose of (rotation * scale) and its last row the turned centre of voxel (0, 0, 0).
+inline openvdb::math::Transform::Ptr vdb_transform(const hypervolume& volume, krs::up_axis up)
 {
     const vec3d& s = volume.voxel_size();
     const vec3d& o = volume.origin();
-    const openvdb::Vec3d scale(s.x, s.y, s.z);
-    const openvdb::Vec3d centre_of_first(o.x + 0.5 * s.x, o.y + 0.5 * s.y, o.z + 0.5 * s.z);
-    return openvdb::math::Transform::Ptr(
-        new openvdb::math::Transform(openvdb::math::MapBase::Ptr(new openvdb::math::ScaleTranslateMap(scale, centre_of_first))));
+    const vec3d centre_of_first{o.x + 0.5 * s.x, o.y + 0.5 * s.y, o.z + 0.5 * s.z};
+    using openvdb::math::MapBase;
+    using openvdb::math::Transform;
+    if (up == krs::up_axis::y)
+        return Transform::Ptr(new Transform(MapBase::Ptr(new openvdb::math::ScaleTranslateMap(
+            openvdb::Vec3d(s.x, s.y, s.z), openvdb::Vec3d(centre_of_first.x, centre_of_first.y, centre_of_first.z)))));
+    const std::array<double, 9> r = krs::up_rotation(up);
+    const double scale[3] = {s.x, s.y, s.z};
+    const vec3d t = krs::to_file(up, centre_of_first);
+    openvdb::Mat4d m = openvdb::Mat4d::identity();
+    for (int row = 0; row < 3; ++row)
+        for (int column = 0; column < 3; ++column) m(column, row) = r[std::size_t(row * 3 + column)] * scale[column];
+    m.setTranslation(openvdb::Vec3d(t.x, t.y, t.z));
+    return Transform::Ptr(new Transform(MapBase::Ptr(new openvdb::math::AffineMap(m))));
 }
 
 inline void put_vdb_metadata(openvdb::GridBase& grid, const hypervolume& volume)
@@ -104,9 +122,10 @@ inline void put_vdb_metadata(openvdb::GridBase& grid, const hypervolume& volume)
 
 } // namespace detail
 
-// The store's grids in memory, named and transformed as above. An empty store gives empty grids.
+// The store's grids in memory, named and transformed as above (`up`: the file's up axis). An
+// empty store gives empty grids.
 template <voxel_store S>
-vdb_grids to_openvdb(const S& store, const vdb_grid_names& names = {})
+vdb_grids to_openvdb(const S& store, const vdb_grid_names& names = {}, krs::up_axis up = krs::up_axis::y)
 {
     detail::require_vdb_names("to_openvdb", names);
     openvdb::initialize(); // registers the grid and map types; idempotent
@@ -115,7 +134,7 @@ vdb_grids to_openvdb(const S& store, const vdb_grid_names& names = {})
     g.density = openvdb::FloatGrid::create(0.0f);
     g.level = openvdb::Int32Grid::create(0);
     g.part = openvdb::Int32Grid::create(0);
-    const openvdb::math::Transform::Ptr transform = detail::vdb_transform(volume);
+    const openvdb::math::Transform::Ptr transform = detail::vdb_transform(volume, up);
     {
         openvdb::FloatGrid::Accessor density = g.density->getAccessor();
         openvdb::Int32Grid::Accessor level = g.level->getAccessor(), part = g.part->getAccessor();
@@ -153,18 +172,19 @@ struct vdb_file_writer : openvdb::io::Archive {
 
 } // namespace detail
 
-// Writes the store's three grids to an OpenVDB file (.vdb). Refuses an empty store, an empty
-// path or a directory, and bad names (invalid_parameter); a failed write is a save_error naming
-// the path, and leaves no file behind.
+// Writes the store's three grids to an OpenVDB file (.vdb), with the up axis `up` (y: the
+// scene's own frame). Refuses an empty store, an empty path or a directory, and bad names
+// (invalid_parameter); a failed write is a save_error naming the path, and leaves no file behind.
 template <voxel_store S>
-void save_vdb(const S& store, const std::filesystem::path& path, const vdb_grid_names& names = {})
+void save_vdb(const S& store, const std::filesystem::path& path, const vdb_grid_names& names = {},
+              krs::up_axis up = krs::up_axis::y)
 {
     detail::require_vdb_names("save_vdb", names);
     detail::require_output_path("save_vdb", path);
     if (store.nonempty_count() == 0)
         throw invalid_parameter("save_vdb store", "must hold at least one non-empty voxel (an empty tree has no grid to write)",
                                 "0 voxels");
-    const vdb_grids g = to_openvdb(store, names);
+    const vdb_grids g = to_openvdb(store, names, up);
     krs::write_file("save_vdb", path, [&](std::ostream& out) { detail::vdb_file_writer().write_to(out, {g.density, g.level, g.part}); });
 }
 
@@ -182,19 +202,41 @@ inline vdb_volume volume_of(const openvdb::GridBase& grid, std::string_view file
 {
     const auto fail = [&](const std::string& message) { return load_error(file, std::nullopt, "grid \"" + grid.getName() + "\": " + message); };
     const openvdb::math::Transform& xf = grid.transform();
-    // An axis-aligned scale and translation: the Jacobian's off-diagonal entries are zero.
     if (!xf.isLinear()) throw fail("its transform is not linear (frustum maps name no box of voxels)");
-    const openvdb::Vec3d centre0 = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
+    // World points of the file taken back to the scene's frame under the file's up axis.
+    const auto scene_point = [&](krs::up_axis up, const openvdb::Vec3d& index) {
+        const openvdb::Vec3d w = xf.indexToWorld(index);
+        const vec3d p = krs::from_file(up, vec3d{w[0], w[1], w[2]});
+        return openvdb::Vec3d(p.x, p.y, p.z);
+    };
+    // The Jacobian's columns in the scene's frame: an axis-aligned scale has no off-diagonal entry.
+    // The up axis is the one under which that holds (a y-up map is never aligned read as z-up).
+    const auto columns = [&](krs::up_axis up) {
+        std::array<openvdb::Vec3d, 3> c;
+        for (int a = 0; a < 3; ++a) {
+            openvdb::Vec3d unit(0, 0, 0);
+            unit[a] = 1;
+            c[std::size_t(a)] = scene_point(up, unit) - scene_point(up, openvdb::Vec3d(0, 0, 0));
+        }
+        return c;
+    };
+    const auto aligned = [](const std::array<openvdb::Vec3d, 3>& c) {
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                if (b != a && !(std::abs(c[std::size_t(a)][b]) <= 1e-12 * std::abs(c[std::size_t(a)][a]))) return false;
+        return true;
+    };
+    krs::up_axis up = krs::up_axis::y;
+    if (!aligned(columns(up))) up = krs::up_axis::z;
+    const std::array<openvdb::Vec3d, 3> column = columns(up);
+    if (!aligned(column))
+        throw fail("its transform rotates or shears the voxels (only an axis-aligned scale and translation, "
+                   "or that turned z-up as save_vdb writes it, map to a hypervolume)");
+    const openvdb::Vec3d centre0 = scene_point(up, openvdb::Vec3d(0, 0, 0));
     openvdb::Vec3d scale;
     for (int a = 0; a < 3; ++a) {
-        openvdb::Vec3d unit(0, 0, 0);
-        unit[a] = 1;
-        const openvdb::Vec3d column = xf.indexToWorld(unit) - centre0;
-        for (int b = 0; b < 3; ++b)
-            if (b != a && std::abs(column[b]) > 1e-12 * std::abs(column[a]))
-                throw fail("its transform rotates or shears the voxels (only an axis-aligned scale and translation map to a hypervolume)");
-        if (!(column[a] > 0)) throw fail("its transform's scale must be positive on every axis");
-        scale[a] = column[a];
+        if (!(column[std::size_t(a)][a] > 0)) throw fail("its transform's scale must be positive on every axis");
+        scale[a] = column[std::size_t(a)][a];
     }
     vdb_volume out;
     const auto origin_meta = grid.getMetadata<openvdb::Vec3DMetadata>(vdb_metadata::origin);
@@ -219,7 +261,7 @@ inline vdb_volume volume_of(const openvdb::GridBase& grid, std::string_view file
             const openvdb::CoordBBox box = grid.evalActiveVoxelBoundingBox();
             if (box.empty()) throw fail("it has no active voxel, so it names no hypervolume");
             const openvdb::Coord dim = box.dim();
-            const openvdb::Vec3d low = xf.indexToWorld(box.min().asVec3d()) - 0.5 * scale;
+            const openvdb::Vec3d low = scene_point(up, box.min().asVec3d()) - 0.5 * scale;
             out.volume = hypervolume({low[0], low[1], low[2]}, {dim[0] * scale[0], dim[1] * scale[1], dim[2] * scale[2]},
                                      resolution{dim[0], dim[1], dim[2]});
             out.offset = box.min();
