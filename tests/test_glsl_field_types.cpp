@@ -240,6 +240,14 @@ TEST_CASE("GLSL of every field type matches the C++ on llvmpipe, and every type 
     check_distance("placed", krs::placed(krs::smooth_union(ball, block, {0.2f}), shear), {2.4f, -0.6f, 0.6f},
                    {1.8f, 1.4f, 1.8f}, {"placed", "smooth_blend"});
     check_distance("rotated", krs::rotated(block, {0.3f, 1.0f, -0.2f}, 0.9f), {0.3f, 0.3f, 0}, reach, {"placed"});
+    // Repetition (krs/compose/repeated.hpp): a ball in its cell on an endless xz lattice, and a
+    // capsule crossing into its neighbours with counts on two axes.
+    check_distance("repeated", krs::repeated(ball, {{1.3f}, {1.0f, 1}, {1.2f}}), {0.2f, 0.5f, -0.3f}, {4.0f, 1.5f, 4.0f},
+                   {"repeated"});
+    check_distance("repeated_counts",
+                   krs::repeated(krs::capsule({-0.4f, 0.0f, 0.1f}, {0.9f, 0.35f, -0.2f}, 0.15f),
+                                 {{1.0f, 5}, {0.9f, 2}, {1.2f}}),
+                   {2.0f, 0.4f, 0.0f}, {4.0f, 2.0f, 3.0f}, {"repeated"});
 
     // A KIFS with every fold step kind.
     using steps = krs::fold_program<krs::abs_fold<krs::fold_x | krs::fold_z>, krs::plane_fold, krs::sort_fold,
