@@ -40,6 +40,7 @@
 
 namespace {
 
+using krs::vec3d;
 using krs::vec3f;
 
 // Types the cases below run (filled as they run; the coverage test reads it).
@@ -234,6 +235,19 @@ TEST_CASE("GLSL of every field type matches the C++ on llvmpipe, and every type 
                    krs::smooth_intersection(ball, block, {0.15f, krs::blend_shape::exponential}), seam, reach,
                    {"smooth_blend"});
     check_distance("smooth_subtract", krs::smooth_subtraction(ball, block, {0.1f}), seam, reach, {"smooth_blend"});
+    // Placement (krs/compose/placed.hpp): a sheared, scaled and turned blend, moved off the origin.
+    const krs::affine_map shear{{vec3d{1.3, 0.4, 0.0}, vec3d{-0.2, 0.7, 0.3}, vec3d{0.1, 0.0, 1.6}}, {2.0, -1.0, 0.5}};
+    check_distance("placed", krs::placed(krs::smooth_union(ball, block, {0.2f}), shear), {2.4f, -0.6f, 0.6f},
+                   {1.8f, 1.4f, 1.8f}, {"placed", "smooth_blend"});
+    check_distance("rotated", krs::rotated(block, {0.3f, 1.0f, -0.2f}, 0.9f), {0.3f, 0.3f, 0}, reach, {"placed"});
+    // Repetition (krs/compose/repeated.hpp): a ball in its cell on an endless xz lattice, and a
+    // capsule crossing into its neighbours with counts on two axes.
+    check_distance("repeated", krs::repeated(ball, {{1.3f}, {1.0f, 1}, {1.2f}}), {0.2f, 0.5f, -0.3f}, {4.0f, 1.5f, 4.0f},
+                   {"repeated"});
+    check_distance("repeated_counts",
+                   krs::repeated(krs::capsule({-0.4f, 0.0f, 0.1f}, {0.9f, 0.35f, -0.2f}, 0.15f),
+                                 {{1.0f, 5}, {0.9f, 2}, {1.2f}}),
+                   {2.0f, 0.4f, 0.0f}, {4.0f, 2.0f, 3.0f}, {"repeated"});
 
     // A KIFS with every fold step kind.
     using steps = krs::fold_program<krs::abs_fold<krs::fold_x | krs::fold_z>, krs::plane_fold, krs::sort_fold,
