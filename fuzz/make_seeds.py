@@ -248,6 +248,7 @@ definition_seeds.update({
     "tree_bom": b"\xef\xbb\xbf" + small_tree(ONE_STEM + BRANCH),
     "tree_bom_cr_mixed": b"\xef\xbb\xbf" + small_tree(ONE_STEM + BRANCH).replace(b"\n", b"\r", 3),
     "refused_cr_in_quote": small_tree('NAME "split\rhere"\n' + BRANCH),
+    "refused_quote_open_at_line_end": small_tree('NAME "open\nNAME "closed"\n' + BRANCH),
     "refused_utf16": b"\xff\xfe" + small_tree(BRANCH).decode().encode("utf-16-le"),
     "refused_utf16_big_endian": b"\xfe\xff" + small_tree(BRANCH).decode().encode("utf-16-be"),
     "refused_utf32": b"\xff\xfe\x00\x00" + small_tree(BRANCH).decode().encode("utf-32-le"),

@@ -530,7 +530,7 @@ TEST_CASE("hypertree io line endings: LF, CR LF and a lone CR read alike, a UTF-
         {"TREEDEPTH 4\rTRANSFORM 1 0\r  SCALE big\r", "t.tree:3:9:", "expected a number after SCALE, got 'big'"},
         {"TREEDEPTH 4\r\rTRANSFORM 1 0\r\n  SCALE big", "t.tree:4:9:", "expected a number after SCALE"},
         {"\xEF\xBB\xBFTREEDEPTH x\n", "t.tree:1:11:", "expected an integer"}, // columns from after the mark
-        {"NAME \"no end\rTRANSFORM 1 0\r", "t.tree:1:6:", "unterminated quoted text"}, // a quote ends at a CR too
+        {"NAME \"no end\rNAME \"x\"\r", "t.tree:1:6:", "unterminated quoted text"}, // a quote ends at a CR too
         {"\xFF\xFET\0R\0", "t.tree:1:1:", "the file is UTF-16 (it starts with that byte-order mark); save it as UTF-8 or ASCII"},
         {"\xFE\xFF\0T", "t.tree:1:1:", "the file is UTF-16"},
         {std::string("\xFF\xFE\0\0T\0\0\0", 8), "t.tree:1:1:", "the file is UTF-32"},
