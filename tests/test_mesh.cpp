@@ -320,9 +320,13 @@ TEST_CASE("mesh: progress reports each pass from its start, with the grid, and t
     }
     CHECK(reports.front().stage == krs::mesh_stage::estimate);
     CHECK(reports.back().stage == krs::mesh_stage::vertices);
-    // Each pass is heard of more than at its start (1% steps): alive throughout, not only at the ends.
-    for (const krs::mesh_stage stage : order)
+    // Each pass is heard of more than at its start (1% steps): alive throughout, not only at the
+    // ends; and each is heard to end.
+    for (const krs::mesh_stage stage : order) {
+        CAPTURE(int(stage));
         CHECK(std::count_if(reports.begin(), reports.end(), [&](const krs::mesh_report& r) { return r.stage == stage; }) > 5);
+        CHECK(std::any_of(reports.begin(), reports.end(), [&](const krs::mesh_report& r) { return r.stage == stage && r.done == 1; }));
+    }
 }
 
 TEST_CASE("mesh: a budget just above the true mesh size is not refused by the estimate")

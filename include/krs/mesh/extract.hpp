@@ -110,7 +110,7 @@ inline constexpr unsigned all = uv | kernel_color;
 // What an extraction reports while it works (mesh_options::progress), so a caller can show that a
 // long one is alive: which pass runs, the fraction of it done, the full grid, and the estimate once
 // the coarse pass has made it. Each pass reports its start (done 0) before any work, then at most
-// once per percent. The passes, in order: `estimate` (the coarse pass of Up front above, with
+// once per percent, and its end (done 1). The passes, in order: `estimate` (the coarse pass of Up front above, with
 // estimate_first), `cells` (the full grid's cells meshed), `vertices` (each vertex placed on the
 // surface). The library prints nothing; the caller decides what to show.
 enum class mesh_stage { estimate, cells, vertices };
@@ -228,6 +228,7 @@ public:
         grid();
         begin(mesh_stage::vertices);
         project();
+        report(1);
         if constexpr (locates) add_attributes();
         stats_.peak_bytes = bytes();
         if (stats) *stats = stats_;
@@ -242,6 +243,7 @@ private:
             while (size < n_[0] || size < n_[1] || size < n_[2]) size *= 2;
             root_ = size;
             visit(0, 0, 0, size);
+            report(1); // the last blocks may lie beyond the grid, which visit() counts unreported
         } else {
             for (std::int64_t k = 0; k < n_[2]; ++k) {
                 for (std::int64_t j = 0; j < n_[1]; ++j)
@@ -316,7 +318,7 @@ private:
     }
     void report(double done)
     {
-        if (o_.progress && done >= reported_ + 0.01) {
+        if (o_.progress && (done >= reported_ + 0.01 || (done == 1 && reported_ < 1))) {
             reported_ = done;
             mesh_report r;
             r.stage = stage_;
