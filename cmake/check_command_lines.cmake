@@ -8,8 +8,11 @@
 # literally. A refusal (status 2) must print them on stderr and nothing on stdout: a command line
 # is refused before any work starts, so nothing is built or rendered first (the old parser took
 # "3x" for 3 and rendered for minutes). A failure found while working (status 1) prints them on
-# stderr. Other rows (--help, tiny renders) print them on stdout.
-# "<out>" in an argument stands for WORK_DIR, where rows may write files.
+# stderr. Other rows (--help, tiny renders) print them on stdout. Two marks on a text of `say`
+# change where it is looked for: "stderr:text" on stderr whatever the status (a success's
+# progress and estimates), "!text" nowhere (stdout or stderr: work a refusal must come before).
+# "<out>" in an argument stands for WORK_DIR, where rows may write files, "<data>" for DATA_DIR
+# (input files the table's rows read). A table needs MIN_ROWS rows of the program (default 5).
 # Every row runs; the failures are listed together.
 
 include("${CMAKE_CURRENT_LIST_DIR}/run_report.cmake")
@@ -31,6 +34,7 @@ function(krs_case program status say)
     set(arguments)
     foreach(argument IN LISTS ARGN)
         string(REPLACE "<out>" "${WORK_DIR}" argument "${argument}")
+        string(REPLACE "<data>" "${DATA_DIR}" argument "${argument}")
         list(APPEND arguments "${argument}")
     endforeach()
     string(JOIN " " shown ${PROGRAM} ${arguments})
@@ -59,9 +63,23 @@ function(krs_case program status say)
         set(stream stdout)
     endif()
     foreach(text IN LISTS say)
-        string(FIND "${where}" "${text}" at)
+        if(text MATCHES "^!(.*)$")
+            string(FIND "${out}${err}" "${CMAKE_MATCH_1}" at)
+            if(NOT at EQUAL -1)
+                list(APPEND problems "says \"${CMAKE_MATCH_1}\", which must not come")
+            endif()
+            continue()
+        endif()
+        set(in "${where}")
+        set(in_stream ${stream})
+        if(text MATCHES "^stderr:(.*)$")
+            set(text "${CMAKE_MATCH_1}")
+            set(in "${err}")
+            set(in_stream stderr)
+        endif()
+        string(FIND "${in}" "${text}" at)
         if(at EQUAL -1)
-            list(APPEND problems "${stream} does not say \"${text}\"")
+            list(APPEND problems "${in_stream} does not say \"${text}\"")
         endif()
     endforeach()
     krs_report_run("${shown}" "${result}" "${problems}" "${out}" "${err}")
@@ -72,7 +90,10 @@ include("${CASES}")
 get_property(rows GLOBAL PROPERTY krs_rows)
 get_property(failures GLOBAL PROPERTY krs_failures)
 # A table with no rows for this example would pass without checking anything.
-if(rows LESS 5)
+if(NOT DEFINED MIN_ROWS)
+    set(MIN_ROWS 5)
+endif()
+if(rows LESS MIN_ROWS)
     message(FATAL_ERROR "check_command_lines: only ${rows} row(s) for ${PROGRAM} in ${CASES}")
 endif()
 if(failures)

@@ -2,7 +2,10 @@
 # nothing is claimed (issue 37).
 #
 #   cmake -DPROGRAM=krs_tree -DEXECUTABLE=<path> -DLIMITER=<run_with_file_limit> -DCASES=<table>
-#         -DWORK_DIR=<dir> -DPART=writes|read_only -P check_output_failures.cmake
+#         -DWORK_DIR=<dir> -DPART=writes|read_only [-DLAUNCHER=xvfb-run;-a] -P check_output_failures.cmake
+#
+# LAUNCHER, when given, runs every command (krs_view draws under a virtual display, `xvfb-run -a`);
+# the file size limit is set inside it, on the program alone, never on the display server.
 #
 # The table (examples/output_failure_cases.cmake) has one row per writer of a program:
 #   krs_output_file(program extension arguments...)    "<file>" in the arguments is the output file
@@ -98,9 +101,9 @@ function(krs_run kind row_dir earlier status must_say limit)
     endforeach()
     file(GLOB_RECURSE dirs_before LIST_DIRECTORIES true "${row_dir}/*")
     if(limit)
-        set(command "${LIMITER}" ${limit} "${EXECUTABLE}" ${arguments})
+        set(command ${LAUNCHER} "${LIMITER}" ${limit} "${EXECUTABLE}" ${arguments})
     else()
-        set(command "${EXECUTABLE}" ${arguments})
+        set(command ${LAUNCHER} "${EXECUTABLE}" ${arguments})
     endif()
     execute_process(COMMAND ${command} WORKING_DIRECTORY "${row_dir}"
                     RESULT_VARIABLE result OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 120)

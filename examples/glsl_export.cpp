@@ -20,6 +20,7 @@
 
 #include "support/command_line.hpp"
 #include "support/common_options.hpp"
+#include "support/error_message.hpp"
 #include "support/scene_choice.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
@@ -53,7 +54,7 @@ bool write(const std::string& path, const std::string& text)
         krs::write_file("", path, text);
         return true;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "glsl_export: %s\n", e.what());
+        std::fprintf(stderr, "glsl_export: %s\n", example::message_of(e).c_str());
         return false;
     }
 }
@@ -176,7 +177,7 @@ int main(int argc, char** argv)
                     if (text_wanted && !write(output, text)) return;
                 }
             } catch (const std::exception& e) {
-                std::fprintf(stderr, "glsl_export: %s\n", e.what());
+                std::fprintf(stderr, "glsl_export: %s\n", example::message_of(e).c_str());
                 return;
             }
             std::fprintf(stderr, "glsl_export: wrote the %dx%d reference frame to %s\n", width, height, reference.c_str());
@@ -184,7 +185,7 @@ int main(int argc, char** argv)
         });
         return ok ? 0 : 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "glsl_export: %s\n", e.what());
+        std::fprintf(stderr, "glsl_export: %s\n", example::message_of(e).c_str());
         return 1;
     }
 }

@@ -35,12 +35,14 @@
 
 #include "hypertree/forest.hpp"
 #include "hypertree/hypertree.hpp"
+#include "hypertree/io/definition_refusals.hpp"
 #include "hypertree/lod.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/presets.hpp"
 #include "hypertree/render/render.hpp"
 #include "support/command_line.hpp"
 #include "support/common_options.hpp"
+#include "support/error_message.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
@@ -64,6 +66,7 @@
 #include <stdexcept>
 #include <utility>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 
@@ -114,12 +117,31 @@ struct render_extras {
     world_box frame{};
     std::function<void(tree_shape&)> adjust_shape;
     sample_displacement displacement; // the definition file's RENDERPERTURB (render-time noise)
+    // Who chose the store kind and the resolution, for a store over the budget: "--store" or the
+    // forest file's "file:line:col: STORAGETYPE", and "--resolution" or "RESOLUTION".
+    std::string store_source = "--store", resolution_word = "RESOLUTION";
 };
+
+// A store of the chosen kind over the memory budget, refused with what fits (store_kinds.hpp's
+// store_budget_problem) by whoever chose it. Before generation (no voxels yet) only a kind sized
+// by its grid (dense) can be refused, and is, so that minutes of generation are not spent first.
+void require_store_fits(storage_type kind, const hypervolume& volume, std::span<const stored_voxel> voxels, bool voxels_known,
+                        const render_extras& extras)
+{
+    const std::string problem = store_budget_problem(kind, volume, voxels, voxels_known, memory_budget{}, extras.resolution_word);
+    if (!problem.empty()) throw std::runtime_error(extras.store_source + " " + problem);
+}
 
 template <voxel_store S>
 int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>& voxels, const depth_colors& colors,
                      const settings& o, double creation_seconds, const render_extras& extras)
 {
+    require_store_fits(storage_type_of<S>, volume, voxels, true, extras);
+    // The steps between creation and the light sweep report no progress of their own (a store of
+    // a 1600^3 tree takes seconds to build): each is announced with its size, so a long one is
+    // seen to be working (stderr, with the progress lines).
+    std::fprintf(stderr, "store: %zu voxels in a %s store of %zu bytes\n", voxels.size(), std::string(store_kind_name<S>).c_str(),
+                 S::bytes_needed(volume, voxels));
     const auto t0 = clock_type::now();
     const S store = S::build(volume, voxels);
     const double store_seconds = seconds_since(t0);
@@ -133,7 +155,7 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
         try {
             save_as();
         } catch (const std::exception& e) {
-            throw std::runtime_error(std::string(option) + " " + path + ": " + e.what());
+            throw std::runtime_error(std::string(option) + " " + path + ": " + example::message_of(e));
         }
         std::printf("saved the grids to %s, up %s\n", path.c_str(), std::string(krs::up_axis_name(o.up)).c_str());
     };
@@ -148,6 +170,8 @@ int render_and_write(const hypervolume& volume, const std::vector<stored_voxel>&
     mo.density_scale = o.density_scale;
     mo.displacement = extras.displacement;
     const int threads = example::thread_count(o.threads);
+    const resolution grid = volume.grid();
+    std::fprintf(stderr, "marcher: bricks of the %d x %d x %d grid\n", grid.x, grid.y, grid.z);
     // The marcher sweeps the lights through the voxels once (light_sweep.hpp), on these threads.
     const volume_marcher marcher(store, shape, colors, mo, parallel_with_progress(threads, "light sweep"));
 
@@ -258,6 +282,9 @@ int main(int argc, char** argv)
     const bool store_given = store_option->count() > 0;
     o.store = storage_type(std::find(store_names.begin(), store_names.end(), store) - store_names.begin());
 
+    // The tree file read, so that a refusal of one of its settings while building or rendering
+    // is reported at its line (io/definition_refusals.hpp).
+    std::optional<parsed_tree> tree_file;
     try {
         build_options options;
         options.generation.parallel_for = parallel_with_progress(example::thread_count(o.threads), "create");
@@ -271,7 +298,13 @@ int main(int argc, char** argv)
             if (!o.noise)
                 for (parsed_tree& t : forest.trees) t.ifs.perturb = {}, t.voxel_perturb.reset();
             if (o.resolution) forest.listing.grid = resolution::cube(*o.resolution);
-            if (!store_given) o.store = forest.listing.storage;
+            if (!store_given) {
+                o.store = forest.listing.storage;
+                const source_position at = forest.listing.storage_at;
+                extras.store_source = forest.listing.file_name + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": STORAGETYPE";
+            }
+            if (o.resolution) extras.resolution_word = "--resolution";
+            require_store_fits(o.store, forest.volume(), {}, false, extras);
             generated_forest built = build_forest(forest, o.seed, options);
             volume = built.volume, voxels = std::move(built.voxels);
             colors = forest.trees.front().colors();
@@ -285,7 +318,12 @@ int main(int argc, char** argv)
             }
             if (o.resolution) tree.ifs.volume = hypervolume(tree.ifs.volume.origin(), tree.ifs.volume.extent(), resolution::cube(*o.resolution));
             if (!o.noise) tree.ifs.perturb = {}, tree.voxel_perturb.reset(), tree.render_perturb.reset();
+            if (o.resolution || o.tree_file.empty()) extras.resolution_word = "--resolution";
+            if (!o.tree_file.empty()) tree_file = tree;
+            require_store_fits(o.store, tree.ifs.volume, {}, false, extras);
             const generated_hits hits = generate(tree.ifs, o.seed, options.generation);
+            // A file's tree that fills nothing is refused at the line to change (PERTURB's, or the box's).
+            if (tree_file && hits.hits.empty()) throw empty_tree_refusal(tree, o.seed);
             const std::vector<voxel_entry> entries = compact(hits.hits, options.generation.parallel_for, hits.volume.voxel_count());
             const density_classes classes(entries, tree.density_class_count.value_or(options.density_class_count));
             voxels = classify(entries, classes, tree.ifs.branch_depth);
@@ -323,8 +361,13 @@ int main(int argc, char** argv)
         }
         const double creation = seconds_since(t0);
         return with_store(o.store, [&]<class S>() { return render_and_write<S>(volume, voxels, colors, o, creation, extras); });
+    } catch (const krs::invalid_parameter& e) {
+        // A limit met while building from a tree file, at the line of the setting that set it.
+        const std::optional<definition_error> located = tree_file ? at_its_line(*tree_file, e) : std::nullopt;
+        std::fprintf(stderr, "%s: %s\n", args.program().c_str(), located ? located->what() : e.message().c_str());
+        return 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "%s: %s\n", args.program().c_str(), e.what());
+        std::fprintf(stderr, "%s: %s\n", args.program().c_str(), example::message_of(e).c_str());
         return 1;
     }
     return 1;

@@ -48,6 +48,7 @@
 
 #include "support/command_line.hpp"
 #include "support/common_options.hpp"
+#include "support/error_message.hpp"
 #include "support/scene_choice.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
@@ -59,6 +60,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -70,7 +72,7 @@ namespace {
 // messages pass through unchanged.
 std::string in_option_words(const std::exception& e, long long budget_mb, std::size_t budget_bytes)
 {
-    std::string text = e.what();
+    std::string text = example::message_of(e);
     if (!dynamic_cast<const krs::invalid_parameter*>(&e)) return text;
     static const std::pair<const char*, const char*> names[] = {
         {"instance_options.mesh.memory_budget", "--memory-budget"},
@@ -242,13 +244,35 @@ int main(int argc, char** argv)
             const krs::vec3d c(s.sample_center), h(s.sample_half);
             o.box = krs::box_around(c - h, c + h);
         }
-        example::progress bar(stderr, "mesh");
-        o.progress = [&](double done) { bar.update(std::size_t(done * 1000), 1000); };
+        // Alive from the first second: the grid before any pass, the estimate before the full
+        // one, and a bar per pass (the library reports each pass's start: mesh_report).
+        std::optional<example::progress> bar;
+        std::optional<krs::mesh_stage> stage;
+        o.progress = [&](const krs::mesh_report& r) {
+            if (stage != r.stage) {
+                if (bar) bar->finish();
+                const std::size_t* n = r.cells_per_axis;
+                if (!stage) {
+                    const std::string first = r.stage == krs::mesh_stage::estimate
+                                                  ? ", its mesh's size estimated first from a pass at resolution " +
+                                                        std::to_string(r.coarse_resolution)
+                                                  : std::string();
+                    std::fprintf(stderr, "krs_export: %s: a grid of %zu x %zu x %zu cells (%.3g in all)%s\n", scene.c_str(), n[0],
+                                 n[1], n[2], double(n[0]) * double(n[1]) * double(n[2]), first.c_str());
+                }
+                if (r.stage == krs::mesh_stage::cells && r.estimated_bytes > 0)
+                    std::fprintf(stderr, "krs_export: %s: estimated mesh %.0f MB, within the --memory-budget of %lld MB\n", scene.c_str(),
+                                 r.estimated_bytes / double(1 << 20), budget_mb);
+                stage = r.stage;
+                bar.emplace(stderr, r.stage == krs::mesh_stage::estimate ? "estimate" : r.stage == krs::mesh_stage::cells ? "mesh" : "vertices");
+            }
+            bar->update(std::size_t(r.done * 1000), 1000);
+        };
         try {
             const auto start = std::chrono::steady_clock::now();
             krs::mesh_stats stats;
             const krs::triangle_mesh m = krs::extract_mesh(s.field, o, &stats);
-            bar.finish();
+            if (bar) bar->finish();
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             if (m.triangles.empty()) {
                 // Whether a finer grid can help: only where the field went below a cell's reach.
@@ -277,7 +301,7 @@ int main(int argc, char** argv)
                         double(m.triangle_count()) / seconds, mesh.c_str());
             status = 0;
         } catch (const std::exception& e) {
-            bar.finish();
+            if (bar) bar->finish();
             std::fprintf(stderr, "krs_export: %s\n", in_option_words(e, budget_mb, budget_bytes).c_str());
         }
     });

@@ -47,6 +47,7 @@
 
 #include "support/command_line.hpp"
 #include "support/common_options.hpp"
+#include "support/error_message.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/scene_choice.hpp"
@@ -253,7 +254,7 @@ int write_slice(const options& opt, const F& field)
     try {
         image = krs::cross_section(field, plane, settings);
     } catch (const krs::invalid_parameter& e) {
-        std::fprintf(stderr, "krs_fractals: %s\n", e.what());
+        std::fprintf(stderr, "krs_fractals: %s\n", example::message_of(e).c_str());
         return 2;
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -19,6 +19,7 @@
 
 #include "support/command_line.hpp"
 #include "support/common_options.hpp"
+#include "support/error_message.hpp"
 #include "support/example_io.hpp"
 #include "support/output_path.hpp"
 #include "support/progress.hpp"
@@ -229,7 +230,7 @@ int main(int argc, char** argv)
     try {
         return render(opt);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "krs_tree: %s\n", e.what());
+        std::fprintf(stderr, "krs_tree: %s\n", example::message_of(e).c_str());
         return 1;
     }
 }

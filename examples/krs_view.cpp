@@ -36,6 +36,7 @@
 
 #include "support/command_line.hpp"
 #include "support/common_options.hpp"
+#include "support/error_message.hpp"
 #include "support/example_io.hpp"
 #include "support/file_watch.hpp"
 #include "support/output_path.hpp"
@@ -104,11 +105,9 @@ options parse(int argc, char** argv)
     if (given("--exit-after-reload") && (!o.headless() || o.glsl.empty()))
         args.fail("--exit-after-reload: needs --glsl FILE and --frames N");
     if (o.screenshot.empty() && !o.headless()) o.screenshot = "krs_view.png";
-    if (!o.screenshot.empty() && !o.screenshot.ends_with(".png"))
-        args.fail("--output: '" + o.screenshot + "' is not a .png file (frames are written as PNG)");
-    // Where a run ends in a screenshot, its path is checked before the window opens, as every
-    // program's outputs are (support/output_path.hpp).
-    if (o.headless() && !o.screenshot.empty()) example::require_output_file(args, "--output", o.screenshot, {".png"});
+    // The screenshot's path is checked before the window opens, as every program's outputs are
+    // (support/output_path.hpp): a PNG name, no directory, a directory that takes a file.
+    if (!o.screenshot.empty()) example::require_output_file(args, "--output", o.screenshot, {".png"});
     return o;
 }
 
@@ -341,7 +340,7 @@ int main(int argc, char** argv)
     try {
         if (o.glsl.empty()) text = scene_program(o.scene, o.seed);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "krs_view: %s\n", e.what());
+        std::fprintf(stderr, "krs_view: %s\n", example::message_of(e).c_str());
         return 1;
     }
     try {

@@ -34,3 +34,6 @@ if(KRS_WITH_GLTF)
     krs_output_file(krs_export .glb     --scene rock --resolution 8 --output <file>)
     krs_output_file(krs_export .gltf    --scene tree --resolution 8 --instance-levels 1 --instances --output <file>)
 endif()
+
+# Under xvfb-run (LAUNCHER): the screenshot of a headless frame, the viewer's one file.
+krs_output_file(krs_view .png           --scene tree --width 8 --height 8 --frames 1 --screenshot <file>)

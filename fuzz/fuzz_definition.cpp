@@ -13,7 +13,10 @@
 //   generator much longer than a voxel) and then generated and stored, with the iteration count
 //   cut to 200 and the resolution to at most 16 per axis so one execution stays fast. The store
 //   must hold only voxels of the (reduced) hypervolume, at most one per hit;
-// - a parsed forest has a resolution of at most 2^32 - 1 voxels and at least one tree.
+// - a parsed forest has a resolution of at most 2^32 - 1 voxels and at least one tree;
+// - how an editor saved the text changes nothing (issue 37): the same text with its LFs made
+//   CRs (old Mac endings) or CR LFs, or with a UTF-8 byte-order mark in front, is read by both
+//   readers to the same outcome, the same refusal at the same line and column or a success.
 //
 // Define KRS_FUZZ_VERBOSE to print each input's outcome. fuzz/replay_main.cpp runs the same
 // function over fuzz/corpus/definition/ and fuzz/crashers/definition/ in ctest.
@@ -27,6 +30,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <string_view>
 
 namespace {
@@ -97,11 +101,44 @@ void check_forest(const hypertree::parsed_forest& forest)
     if (forest.trees.empty()) fail();
 }
 
+// What each reader makes of `text`: its refusal's message (with the location) or "read".
+std::string outcome(std::string_view text)
+{
+    std::string out;
+    try {
+        (void)hypertree::parse_definition(text, "fuzz.tree");
+        out = "read";
+    } catch (const hypertree::definition_error& e) {
+        out = e.what();
+    }
+    try {
+        (void)hypertree::parse_forest(text, "fuzz/fuzz.forest");
+        return out + " | read";
+    } catch (const hypertree::definition_error& e) {
+        return out + " | " + e.what();
+    }
+}
+
+// The text as other editors save it reads the same. Only texts that hold no CR (whose CRs would
+// change meaning) and start with no byte-order mark or NUL (which a mark in front would hide).
+void check_saved_forms(std::string_view text)
+{
+    if (text.find('\r') != std::string_view::npos) return;
+    if (!text.empty() && (text.front() == '\xEF' || text.front() == '\xFF' || text.front() == '\xFE' || text.front() == '\0')) return;
+    const std::string original = outcome(text);
+    std::string cr(text), crlf;
+    for (char& c : cr)
+        if (c == '\n') c = '\r';
+    for (char c : text) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    if (outcome(cr) != original || outcome(crlf) != original || outcome("\xEF\xBB\xBF" + std::string(text)) != original) fail();
+}
+
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
     const std::string_view text(reinterpret_cast<const char*>(data), size);
+    check_saved_forms(text);
     try {
         check_tree(hypertree::parse_definition(text, "fuzz.tree"));
     } catch (const hypertree::definition_error& e) {

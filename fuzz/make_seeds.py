@@ -200,6 +200,8 @@ write_corpora(("builders", seeds), ("fractals", fractal_seeds))
 EXAMPLES = os.path.join(HERE, "..", "examples", "hypertrees")
 definition_seeds = {}
 for example in sorted(os.listdir(EXAMPLES)):
+    if not os.path.isfile(os.path.join(EXAMPLES, example)):  # figure09_quarters/: a folder of trees
+        continue
     with open(os.path.join(EXAMPLES, example), "rb") as fh:
         definition_seeds["example_" + example.replace(".", "_")] = fh.read()
 
@@ -239,6 +241,20 @@ definition_seeds.update({
     "forest_small": b"RESOLUTION 32 16 32\nSTORAGETYPE partitioned\nTREE a.tree\nTREE \"b c.tree\" 1 0 -1\n"
                     b"TREE /abs/d.tree -1e9 0 1e9\n",
     "forest_refused_storage": b"RESOLUTION 8\nSTORAGETYPE octree\nTREE a.tree\n",
+    # Files as editors save them (issue 37): old Mac line endings (CR only), a UTF-8 byte-order
+    # mark, both, a lone CR inside quoted text, UTF-16 and UTF-32 (refused by name), and each kind
+    # of file given as the other (named by its first keyword only the other kind has).
+    "tree_cr_only": small_tree(ONE_STEM + BRANCH + 'NAME "a name"  # a comment\n').replace(b"\n", b"\r"),
+    "tree_bom": b"\xef\xbb\xbf" + small_tree(ONE_STEM + BRANCH),
+    "tree_bom_cr_mixed": b"\xef\xbb\xbf" + small_tree(ONE_STEM + BRANCH).replace(b"\n", b"\r", 3),
+    "refused_cr_in_quote": small_tree('NAME "split\rhere"\n' + BRANCH),
+    "refused_quote_open_at_line_end": small_tree('NAME "open\nNAME "closed"\n' + BRANCH),
+    "refused_utf16": b"\xff\xfe" + small_tree(BRANCH).decode().encode("utf-16-le"),
+    "refused_utf16_big_endian": b"\xfe\xff" + small_tree(BRANCH).decode().encode("utf-16-be"),
+    "refused_utf32": b"\xff\xfe\x00\x00" + small_tree(BRANCH).decode().encode("utf-32-le"),
+    "refused_forest_as_tree": b"RESOLUTION 8\nSTORAGETYPE dense\nTREE other.forest\n",
+    "forest_cr_only_bom": b"\xef\xbb\xbfRESOLUTION 8\rSTORAGETYPE dense\rTREE a.tree 1 0 0\r",
+    "forest_refused_tree_keyword": b"RESOLUTION 8\nTREEDEPTH 4\nSTORAGETYPE dense\nTREE a.tree\n",
 })
 
 

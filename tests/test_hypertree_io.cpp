@@ -5,9 +5,11 @@
 
 #include "hypertree/create/generate.hpp"
 #include "hypertree/io/definition_file.hpp"
+#include "hypertree/io/definition_refusals.hpp"
 #include "hypertree/forest.hpp"
 #include "hypertree/io/forest_file.hpp"
 #include "hypertree/presets.hpp"
+#include "hypertree/store/store_kinds.hpp"
 
 #include <doctest/doctest.h>
 
@@ -15,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -471,4 +474,205 @@ TEST_CASE("hypertree io forest trees land at their offsets in one volume")
     CHECK(misplaced == 0);
     for (std::size_t n : per_tree) CHECK(n > 200);
     CHECK(std::is_sorted(built.voxels.begin(), built.voxels.end(), [](const stored_voxel& a, const stored_voxel& b) { return a.index < b.index; }));
+}
+
+namespace {
+
+// The three numbers after `before` in `text` (what a message offers as fitting), for a check that
+// feeds them back to the library.
+vec3d three_after(const std::string& text, std::string_view before)
+{
+    const std::size_t at = text.find(before);
+    REQUIRE(at != std::string::npos);
+    std::istringstream in(text.substr(at + before.size()));
+    vec3d v;
+    in >> v.x >> v.y >> v.z;
+    REQUIRE(!in.fail());
+    return v;
+}
+std::uint64_t number_after(const std::string& text, std::string_view before)
+{
+    const std::size_t at = text.find(before);
+    REQUIRE(at != std::string::npos);
+    return std::stoull(text.substr(at + before.size()));
+}
+
+// A small tree whose line `extra` goes in as line 3 (after RESOLUTION and ITERATIONS).
+std::string small_tree(std::string_view extra)
+{
+    return "RESOLUTION 16\nITERATIONS 3000\n" + std::string(extra) +
+           "\nTREEDEPTH 5\nHYPERVOLUME 1.5 1.08 1.5\nDISPLACEMENT 0.75 0.03 0.75\nCONDENSATION\n  CONE y 0 0.45 0.04 0.02\n"
+           "TRANSFORM 1 0\n  SCALE 0.5\n  ROTATE 0 0 1 50\n  TRANSLATE 0 0.2 0\n";
+}
+
+std::string replaced(std::string text, std::string_view from, std::string_view to)
+{
+    for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) text.replace(at, from.size(), to);
+    return text;
+}
+
+} // namespace
+
+TEST_CASE("hypertree io line endings: LF, CR LF and a lone CR read alike, a UTF-8 byte-order mark is skipped")
+{
+    const std::string lf = small_tree("NAME \"with quotes\"  # and a comment");
+    const parsed_tree reference = parse_definition(lf, "t.tree");
+    for (const std::string& text : {replaced(lf, "\n", "\r"), replaced(lf, "\n", "\r\n"), "\xEF\xBB\xBF" + lf,
+                                    "\xEF\xBB\xBF" + replaced(lf, "\n", "\r")}) {
+        CAPTURE(text);
+        const parsed_tree t = parse_definition(text, "t.tree");
+        check_same_ifs(t.ifs, reference.ifs);
+        CHECK(t.transform_at == reference.transform_at); // lines counted alike
+    }
+    // Before, a CR-only file was one line ("unexpected 'ITERATIONS' after RESOLUTION"), and a
+    // mark an unknown keyword '\xef\xbb\xbfRESOLUTION'.
+    check_errors({
+        {"TREEDEPTH 4\rTRANSFORM 1 0\r  SCALE big\r", "t.tree:3:9:", "expected a number after SCALE, got 'big'"},
+        {"TREEDEPTH 4\r\rTRANSFORM 1 0\r\n  SCALE big", "t.tree:4:9:", "expected a number after SCALE"},
+        {"\xEF\xBB\xBFTREEDEPTH x\n", "t.tree:1:11:", "expected an integer"}, // columns from after the mark
+        {"NAME \"no end\rNAME \"x\"\r", "t.tree:1:6:", "unterminated quoted text"}, // a quote ends at a CR too
+        {"\xFF\xFET\0R\0", "t.tree:1:1:", "the file is UTF-16 (it starts with that byte-order mark); save it as UTF-8 or ASCII"},
+        {"\xFE\xFF\0T", "t.tree:1:1:", "the file is UTF-16"},
+        {std::string("\xFF\xFE\0\0T\0\0\0", 8), "t.tree:1:1:", "the file is UTF-32"},
+    });
+    // The end of input counts CR lines too ("expected at least one TRANSFORM" after the last).
+    check_errors({{"TREEDEPTH 4\rTREEDEPTH", "t.tree:2:1:", "TREEDEPTH"}, {"TREEDEPTH 4\r\r", "t.tree:3:1:", "expected at least one TRANSFORM"}});
+    const parsed_forest f = parse_forest("\xEF\xBB\xBFRESOLUTION 8\rSTORAGETYPE dense\rTREE a.tree\rTREE b.tree 1 2 3\r", "f.forest");
+    REQUIRE(f.trees.size() == 2);
+    CHECK(f.trees[1].at.line == 4);
+    CHECK(f.trees[1].offset.z == 3);
+}
+
+TEST_CASE("hypertree io a forest's TREE naming a forest is refused at its line, a file given as the other kind says what it is")
+{
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("krs_test_hypertree_io_kinds_" + std::to_string(std::random_device{}()));
+    std::filesystem::create_directories(dir);
+    {
+        std::ofstream(dir / "inner.forest") << "RESOLUTION 8\n# a comment\nstoragetype dense\nTREE t.tree\n";
+        std::ofstream(dir / "outer.forest") << "RESOLUTION 8\nSTORAGETYPE dense\n\nTREE inner.forest 1 0 0\n";
+        std::ofstream(dir / "t.tree") << small_tree("");
+    }
+    CHECK(thrown_by([&] { load_forest(dir / "outer.forest"); }) ==
+          (dir / "outer.forest").string() + ":4:1: '" + (dir / "inner.forest").string() +
+              "' is a forest file (line 3 is a forest's keyword); TREE takes a tree definition file");
+    // Given where the other kind is wanted (hypertree_render --tree / --forest), at the first
+    // keyword only the other kind has (RESOLUTION both share).
+    CHECK(thrown_by([&] { load_definition(dir / "inner.forest"); })
+              .starts_with((dir / "inner.forest").string() + ":3:1: STORAGETYPE is a forest file's keyword: this is a forest file"));
+    CHECK(thrown_by([&] { load_forest(dir / "t.tree"); })
+              .starts_with((dir / "t.tree").string() + ":2:1: ITERATIONS is a tree definition's keyword: this is a tree definition file"));
+    std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("hypertree io ITERATIONS over the generator's budget is refused at its line with the count that fits")
+{
+    const parsed_tree tree = parse_definition(replaced(small_tree("# a comment"), "ITERATIONS 3000", "ITERATIONS 2000000000"), "t.tree");
+    std::string message;
+    try {
+        building_from(tree, [&] { return generate(tree.ifs, 1); });
+        FAIL("not refused");
+    } catch (const definition_error& e) {
+        message = e.what();
+    }
+    CAPTURE(message);
+    CHECK(message.starts_with("t.tree:2:1: ITERATIONS 2000000000: would record up to "));
+    CHECK(message.find("ifs.") == std::string::npos);
+    CHECK(message.find("krs: ") == std::string::npos);
+    // What it says fits, fits: the generator plans it, and one cycle more it refuses.
+    ifs<runtime_pipeline> fitting = tree.ifs;
+    fitting.iterations = number_after(message, "at most ");
+    CHECK_NOTHROW((void)detail::planned_chunk_count(fitting, generation_options{}));
+    fitting.iterations += std::uint64_t(fitting.tree_depth);
+    CHECK_THROWS_AS((void)detail::planned_chunk_count(fitting, generation_options{}), krs::invalid_parameter);
+
+    // A refusal of no setting of the file passes unchanged.
+    CHECK_THROWS_AS(building_from(tree, [] { throw krs::invalid_parameter("march_options.ambient", "must be >= 0", "-1"); }),
+                    krs::invalid_parameter);
+}
+
+TEST_CASE("hypertree io RENDERPERTURB wider than the march can step across is refused at its line with an amplitude that fits")
+{
+    const parsed_tree tree = parse_definition(small_tree("RENDERPERTURB 1e9 1e9 1e9 4"), "t.tree");
+    REQUIRE(tree.render_perturb);
+    march_options o;
+    o.displacement = *tree.render_perturb;
+    const hypervolume& v = tree.ifs.volume;
+    const world_box box{v.origin(), v.maximum()};
+    std::string message;
+    try {
+        o.validate(v, box);
+        FAIL("not refused");
+    } catch (const krs::invalid_parameter& e) {
+        const std::optional<definition_error> located = at_its_line(tree, e);
+        REQUIRE(located);
+        message = located->what();
+    }
+    CAPTURE(message);
+    CHECK(message.starts_with("t.tree:3:1: RENDERPERTURB 1e+09 1e+09 1e+09: must leave at most 2^23 samples"));
+    CHECK(message.find("march_options") == std::string::npos);
+    CHECK(message.find("step_factor") == std::string::npos);
+    const vec3d fits = three_after(message, "an amplitude of ");
+    o.displacement.amplitude = krs::vec3f(float(fits.x), float(fits.y), float(fits.z));
+    CHECK_NOTHROW(o.validate(v, box));
+    CHECK(fits.x > 0);
+}
+
+TEST_CASE("hypertree io a PERTURB that leaves no voxel is refused at its line with an amplitude that fills some")
+{
+    const parsed_tree tree = parse_definition(small_tree("PERTURB 1e9 1e9 1e9"), "t.tree");
+    REQUIRE(generate(tree.ifs, 1).hits.empty()); // the case: nothing generated
+    const std::string message = empty_tree_refusal(tree, 1).what();
+    CAPTURE(message);
+    CHECK(message.starts_with("t.tree:3:1: PERTURB 1e+09 1e+09 1e+09: the tree generated no voxels"));
+    ifs<runtime_pipeline> trial = tree.ifs;
+    trial.perturb.amplitude = three_after(message, "an amplitude of ");
+    CHECK(trial.perturb.amplitude.x < 1e9);
+    CHECK(!generate(trial, 1).hits.empty());
+
+    // Without noise, a tree outside its box is blamed on the placement.
+    const parsed_tree away = parse_definition(replaced(small_tree(""), "DISPLACEMENT 0.75 0.03 0.75", "DISPLACEMENT -50 0 0"), "t.tree");
+    REQUIRE(generate(away.ifs, 1).hits.empty());
+    CHECK(std::string(empty_tree_refusal(away, 1).what()).starts_with("t.tree:6:1: the tree generated no voxels: none of its points"));
+}
+
+TEST_CASE("hypertree io a store over the budget names what fits: the other kinds, and the finest dense grid")
+{
+    const hypervolume big({0, 0, 0}, {1, 1, 1}, resolution::cube(1600));
+    const memory_budget budget{}; // 4 GiB
+    const std::string before = store_budget_problem(storage_type::dense, big, {}, false, budget, "RESOLUTION");
+    CAPTURE(before);
+    CHECK(before.starts_with("dense needs " + std::to_string(dense_store::bytes_needed(big)) + " bytes for 1600 x 1600 x 1600 voxels"));
+    const int n = int(number_after(before, "dense at RESOLUTION "));
+    CHECK(dense_store::bytes_needed(hypervolume({0, 0, 0}, {1, 1, 1}, resolution::cube(n))) <= budget.bytes);
+    CHECK(dense_store::bytes_needed(hypervolume({0, 0, 0}, {1, 1, 1}, resolution::cube(n + 1))) > budget.bytes);
+    CHECK(store_budget_problem(storage_type::bit_array, big, {}, false, budget, "RESOLUTION").empty()); // not known yet
+
+    // With the voxels known, the kinds listed are exactly those within the budget.
+    const hypervolume small({0, 0, 0}, {1, 1, 1}, resolution::cube(64));
+    std::vector<stored_voxel> voxels;
+    for (voxel_index i = 0; i < 64 * 64 * 64; i += 97) voxels.push_back({i, voxel{1, 0}, 0});
+    const memory_budget tight{dense_store::bytes_needed(small) - 1};
+    const std::string after = store_budget_problem(storage_type::dense, small, voxels, true, tight, "--resolution");
+    CAPTURE(after);
+    for_each_store_kind([&]<class S>() {
+        if (storage_type_of<S> == storage_type::dense) return;
+        const bool fits = S::bytes_needed(small, voxels) <= tight.bytes;
+        CHECK((after.find(std::string(store_kind_name<S>) + " (") != std::string::npos) == fits);
+    });
+    CHECK(after.find("dense at --resolution 63 or less") != std::string::npos);
+}
+
+TEST_CASE("hypertree io a forest's tree over the generator's budget is refused at its own file's ITERATIONS line")
+{
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("krs_test_hypertree_io_budget_" + std::to_string(std::random_device{}()));
+    std::filesystem::create_directories(dir);
+    {
+        std::ofstream(dir / "f.forest") << "RESOLUTION 16\nSTORAGETYPE bit_array\nTREE t.tree\n";
+        std::ofstream(dir / "t.tree") << replaced(small_tree(""), "ITERATIONS 3000", "ITERATIONS 2000000000");
+    }
+    const loaded_forest forest = load_forest(dir / "f.forest");
+    CHECK(thrown_by([&] { (void)build_forest(forest, 1); }).starts_with((dir / "t.tree").string() + ":2:1: ITERATIONS 2000000000: would record"));
+    std::filesystem::remove_all(dir);
 }

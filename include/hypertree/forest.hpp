@@ -16,12 +16,14 @@
 // from the tree's own: a region holding no forest voxel is reported at the tree file's TRIM line.
 
 #include "hypertree/build.hpp"
+#include "hypertree/io/definition_refusals.hpp"
 #include "hypertree/io/forest_file.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/perturbation.hpp"
 #include "hypertree/store/partitioned_store.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,10 +51,16 @@ inline generated_forest build_forest(const loaded_forest& forest, std::uint64_t 
                                               options.generation, scratch);
         } catch (const krs::invalid_parameter& e) {
             const std::string& name = e.parameter();
-            if (!name.starts_with("ifs.trim[")) throw;
+            // The tree's own settings (ITERATIONS against the generator's budget, ...) at their
+            // line of its file; the grid is the forest's, so a refusal of it is not the tree's.
+            if (!name.starts_with("ifs.")) throw;
+            if (!name.starts_with("ifs.trim[")) {
+                if (std::optional<definition_error> located = at_its_line(parsed, e)) throw *located;
+                throw;
+            }
             const std::size_t j = std::size_t(std::stoul(name.substr(9)));
             if (j >= parsed.trim_at.size()) throw;
-            throw definition_error(parsed.file, parsed.trim_at[j], "TRIM in the forest's grid: " + std::string(e.what()));
+            throw definition_error(parsed.file, parsed.trim_at[j], "TRIM in the forest's grid: " + e.message());
         }
         for (stored_voxel& v : voxels) v.part = std::uint8_t(std::min<std::size_t>(i, 255));
         if (parsed.voxel_perturb) {

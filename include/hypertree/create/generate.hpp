@@ -453,12 +453,18 @@ std::uint64_t planned_chunk_count(const ifs<P>& definition, const generation_opt
     definition.validate();
     const std::uint64_t cycles = cycle_count(definition);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
-    const double worst_bytes = double(cycles) * double(depth) * voxels_per_generator(definition) * double(sizeof(hit));
-    if (worst_bytes > double(options.budget.bytes))
+    const double bytes_per_cycle = double(depth) * voxels_per_generator(definition) * double(sizeof(hit));
+    const double worst_bytes = double(cycles) * bytes_per_cycle;
+    if (worst_bytes > double(options.budget.bytes)) {
+        // What fits: whole cycles of tree_depth iterations within the budget.
+        const std::uint64_t fitting = std::uint64_t(std::floor(double(options.budget.bytes) / bytes_per_cycle)) * depth;
         throw krs::invalid_parameter("ifs.iterations",
                                      "would record up to " + std::to_string(std::uint64_t(worst_bytes)) + " bytes of hits, over the memory budget of " +
-                                         std::to_string(options.budget.bytes) + " bytes",
+                                         std::to_string(options.budget.bytes) + " bytes; " +
+                                         (fitting > 0 ? "at most " + std::to_string(fitting) + " iterations fit"
+                                                      : "no iteration fits (the generator covers too many voxels for the budget)"),
                                      std::to_string(definition.iterations));
+    }
     if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
     return detail::divide_up(cycles, options.chunk_cycles);
 }

@@ -32,6 +32,7 @@
 #include "hypertree/io/lexer.hpp"
 
 #include <array>
+#include <cstdlib>
 #include <filesystem>
 #include <numbers>
 #include <optional>
@@ -61,10 +62,59 @@ struct parsed_tree {
     std::optional<perturbation> voxel_perturb;
     std::optional<sample_displacement> render_perturb;
     // Where the file said so, for refusals found after parsing (a forest's build checks TRIM
-    // against its own grid, and refuses RENDERPERTURB: forest.hpp, forest_file.hpp).
+    // against its own grid, and refuses RENDERPERTURB: forest.hpp, forest_file.hpp; budgets and
+    // the marcher's limits: io/definition_refusals.hpp).
     std::string file;
     std::optional<source_position> voxel_perturb_at, render_perturb_at;
     std::vector<source_position> trim_at; // one per ifs.trim region, in its order
+    std::vector<source_position> transform_at, condensation_at; // one per block, in file order
+    // The line of each keyword the file gives once (RESOLUTION, ITERATIONS, PERTURB, ...), the
+    // generator's under the word the file used (POINTINIT or LINEINIT).
+    std::vector<std::pair<std::string_view, source_position>> keyword_at;
+
+    // A setting of the file: its keyword and the line that gave it (`given` false, and the
+    // position 1:1, for a keyword left at its default).
+    struct setting {
+        std::string_view keyword;
+        source_position at;
+        bool given = false;
+    };
+    // The setting a refusal of the C++ model names by its parameter (krs::invalid_parameter's
+    // parameter(), "ifs.iterations", "hypervolume.resolution", "ifs.transforms[2]", ...); none for
+    // a parameter no keyword sets.
+    std::optional<setting> setting_of(const std::string& parameter) const
+    {
+        const auto keyword = [&](std::string_view k) {
+            for (const auto& [name, at] : keyword_at)
+                if (name == k) return setting{name, at, true};
+            return setting{k, {}, false};
+        };
+        const auto block = [&](std::string_view k, const std::vector<source_position>& at, std::size_t prefix) {
+            std::size_t j = 0;
+            if (parameter.size() > prefix && parameter[prefix] == '[') j = std::size_t(std::strtoul(parameter.c_str() + prefix + 1, nullptr, 10));
+            return j < at.size() ? setting{k, at[j], true} : setting{k, {}, false};
+        };
+        if (parameter.starts_with("ifs.transforms")) return block("TRANSFORM", transform_at, 14);
+        if (parameter.starts_with("ifs.condensations")) return block("CONDENSATION", condensation_at, 17);
+        if (parameter.starts_with("cone")) return block("CONDENSATION", condensation_at, 4);
+        if (parameter.starts_with("ifs.trim")) return block("TRIM", trim_at, 8);
+        if (parameter.starts_with("ifs.tree_depth")) return keyword("TREEDEPTH");
+        if (parameter.starts_with("ifs.branch_depth")) {
+            const setting b = keyword("BRANCHDEPTH");
+            return b.given ? b : keyword("TREEDEPTH");
+        }
+        if (parameter.starts_with("ifs.iterations")) return keyword("ITERATIONS");
+        if (parameter.starts_with("ifs.generator")) {
+            const setting line = keyword("LINEINIT");
+            return line.given ? line : keyword("POINTINIT");
+        }
+        if (parameter.starts_with("ifs.perturb")) return keyword("PERTURB");
+        if (parameter.starts_with("march_options.displacement")) return keyword("RENDERPERTURB");
+        if (parameter.starts_with("hypervolume.resolution")) return keyword("RESOLUTION");
+        if (parameter.starts_with("hypervolume.extent")) return keyword("HYPERVOLUME");
+        if (parameter.starts_with("hypervolume")) return keyword("DISPLACEMENT"); // the origin and the box
+        return std::nullopt;
+    }
 
     // The color the file gives voxels of `depth`, if a DEPTHCOLOR covers it.
     std::optional<rgb> color_of_depth(int depth) const
@@ -148,12 +198,11 @@ inline const keyword_entry* find_definition_keyword(const io::token& t)
     return nullptr;
 }
 
-// "krs: shear.exponent: must be >= 1 (got 0.5)" -> "shear.exponent: must be >= 1 (got 0.5)".
-inline std::string without_library_prefix(const krs::invalid_parameter& e)
+// The keywords only forest files have (forest_file.hpp; RESOLUTION both kinds share): what tells
+// a forest file from a tree definition.
+inline bool is_forest_only_keyword(const io::token& t)
 {
-    std::string_view s = e.what();
-    if (s.starts_with("krs: ")) s.remove_prefix(5);
-    return std::string(s);
+    return t.kind == io::token_kind::word && (io::same_word(t.text, "STORAGETYPE") || io::same_word(t.text, "TREE"));
 }
 
 // The class counts DENSITYCLASSES accepts: density_classes' limits (create/density.hpp), repeated
@@ -178,7 +227,14 @@ public:
         for (const io::source_line& line : lines) {
             const io::token& first = line.tokens.front();
             const keyword_entry* keyword = find_definition_keyword(first);
-            if (keyword == nullptr) fail(first.at, "unknown keyword " + io::describe(&first) + "; " + keyword_list());
+            if (keyword == nullptr) {
+                // A forest file given where a tree is wanted fails at its first forest keyword;
+                // say what the file is rather than list the tree's keywords.
+                if (is_forest_only_keyword(first))
+                    fail(first.at, io::upper(first.text) + " is a forest file's keyword: this is a forest file, and a tree "
+                                                          "definition file is expected here");
+                fail(first.at, "unknown keyword " + io::describe(&first) + "; " + keyword_list());
+            }
             io::statement s(file_, line, keyword->usage);
             if (!is_element(keyword->id)) close_block();
             read(s, keyword->id);
@@ -226,7 +282,7 @@ private:
         try {
             return build();
         } catch (const krs::invalid_parameter& e) {
-            fail(at, "invalid " + std::string(what) + ": " + without_library_prefix(e));
+            fail(at, "invalid " + std::string(what) + ": " + e.message());
         }
     }
 
@@ -343,6 +399,7 @@ private:
             break;
         case definition_keyword::point_init: {
             once(s, definition_keyword::point_init, "the generator (POINTINIT or LINEINIT)");
+            generator_keyword_ = "POINTINIT";
             const vec3d p = vector3(s);
             s.finish();
             tree_.generator = generator_shape::line(p, p);
@@ -350,6 +407,7 @@ private:
         }
         case definition_keyword::line_init: {
             once(s, definition_keyword::point_init, "the generator (POINTINIT or LINEINIT)");
+            generator_keyword_ = "LINEINIT";
             const vec3d a = vector3(s), b = vector3(s);
             s.finish();
             tree_.generator = generator_shape::line(a, b);
@@ -563,30 +621,15 @@ private:
         }
     }
 
-    // The position a refusal of the C++ model belongs to, from the parameter it names.
-    source_position position_of(const std::string& parameter) const
+    // Where each setting was given, for refusals of the C++ model (parsed_tree::setting_of).
+    void record_positions(parsed_tree& out) const
     {
-        const auto at = [&](definition_keyword k) { return seen(k).value_or(source_position{}); };
-        if (parameter.starts_with("ifs.transforms[")) {
-            const std::size_t j = std::size_t(std::stoul(parameter.substr(15)));
-            if (j < transforms_.size()) return transforms_[j].at;
-        }
-        if (parameter.starts_with("ifs.transforms")) return transforms_.empty() ? source_position{} : transforms_.front().at;
-        if (parameter.starts_with("ifs.condensations") || parameter.starts_with("cone"))
-            return condensations_.empty() ? source_position{} : condensations_.front().at;
-        if (parameter.starts_with("ifs.tree_depth")) return at(definition_keyword::tree_depth);
-        if (parameter.starts_with("ifs.branch_depth"))
-            return seen(definition_keyword::branch_depth).value_or(at(definition_keyword::tree_depth));
-        if (parameter.starts_with("ifs.iterations")) return at(definition_keyword::iterations);
-        if (parameter.starts_with("ifs.generator")) return at(definition_keyword::point_init);
-        if (parameter.starts_with("ifs.perturb")) return at(definition_keyword::perturb);
-        if (parameter.starts_with("ifs.trim[")) {
-            const std::size_t j = std::size_t(std::stoul(parameter.substr(9)));
-            if (j < trim_at_.size()) return trim_at_[j];
-        }
-        if (parameter.starts_with("hypervolume.resolution")) return at(definition_keyword::resolution);
-        if (parameter.starts_with("hypervolume.extent")) return at(definition_keyword::hypervolume);
-        return at(definition_keyword::displacement);
+        for (const auto& k : definition_keywords)
+            // POINTINIT and LINEINIT share one slot (one generator), kept under the word used.
+            if (const std::optional<source_position> at = seen(k.id); at && k.id != definition_keyword::line_init)
+                out.keyword_at.emplace_back(k.id == definition_keyword::point_init ? generator_keyword_ : k.name, *at);
+        for (const auto& t : transforms_) out.transform_at.push_back(t.at);
+        for (const auto& c : condensations_) out.condensation_at.push_back(c.at);
     }
 
     parsed_tree assemble()
@@ -629,21 +672,29 @@ private:
                 tree.condensations.push_back(
                     {*c.stem, checked(c.at, "CONDENSATION", [&] { return runtime_pipeline(std::move(c.elements)); })});
         }
+        parsed_tree out{{},
+                        std::move(depth_colors_),
+                        density_class_count_,
+                        voxel_perturb_,
+                        render_perturb_,
+                        std::string(file_),
+                        seen(definition_keyword::voxel_perturb),
+                        seen(definition_keyword::render_perturb),
+                        trim_at_,
+                        {},
+                        {},
+                        {}};
+        record_positions(out);
         try {
             tree.volume = hypervolume::from_displacement(extent_, displacement_, grid_);
             tree.validate();
         } catch (const krs::invalid_parameter& e) {
-            fail(position_of(e.parameter()), "invalid tree: " + without_library_prefix(e));
+            const auto setting = out.setting_of(e.parameter());
+            fail(setting ? setting->at : seen(definition_keyword::displacement).value_or(source_position{}),
+                 "invalid tree: " + e.message());
         }
-        return {std::move(tree),
-                std::move(depth_colors_),
-                density_class_count_,
-                voxel_perturb_,
-                render_perturb_,
-                std::string(file_),
-                seen(definition_keyword::voxel_perturb),
-                seen(definition_keyword::render_perturb),
-                trim_at_};
+        out.ifs = std::move(tree);
+        return out;
     }
 
     std::string_view text_, file_;
@@ -660,6 +711,7 @@ private:
     std::optional<sample_displacement> render_perturb_;
     std::vector<source_position> trim_at_;
     std::array<std::optional<source_position>, std::size_t(definition_keyword::count)> seen_{};
+    std::string_view generator_keyword_; // POINTINIT or LINEINIT, whichever the file used
 };
 
 } // namespace detail

@@ -42,11 +42,25 @@ struct parsed_forest {
     resolution grid;
     storage_type storage = storage_type::index_list;
     std::vector<forest_tree> trees;
+    source_position resolution_at, storage_at; // their lines, for refusals found after parsing
 };
 
 namespace detail {
 
 inline constexpr std::string_view forest_keywords = "RESOLUTION, STORAGETYPE, TREE";
+
+// The first line of `text` whose keyword only forest files have, if any. Text that does not even
+// tokenize is no forest; its own parse reports it.
+inline std::optional<int> forest_keyword_line(std::string_view text)
+{
+    try {
+        for (const io::source_line& line : io::tokenize(text, {})) {
+            if (is_forest_only_keyword(line.tokens.front())) return line.tokens.front().at.line;
+        }
+    } catch (const definition_error&) {
+    }
+    return std::nullopt;
+}
 
 inline void forest_once(const io::statement& s, std::optional<source_position>& seen)
 {
@@ -96,6 +110,11 @@ inline parsed_forest parse_forest(std::string_view text, std::string_view file_n
             }
             s.finish();
             forest.trees.push_back(std::move(tree));
+        } else if (detail::find_definition_keyword(first) != nullptr) {
+            // A tree definition given where a forest is wanted: say so at its first tree keyword.
+            throw definition_error(file_name, first.at,
+                                   io::upper(first.text) + " is a tree definition's keyword: this is a tree definition file, and a "
+                                                           "forest file (" + std::string(detail::forest_keywords) + ") is expected here");
         } else {
             throw definition_error(file_name, first.at,
                                    "unknown keyword " + io::describe(&first) + "; a forest file's keywords are " + std::string(detail::forest_keywords));
@@ -106,6 +125,7 @@ inline parsed_forest parse_forest(std::string_view text, std::string_view file_n
     if (!storage_at)
         throw definition_error(file_name, end, "expected a STORAGETYPE line (" + storage_type_choices(", ", " or ") + ")");
     if (forest.trees.empty()) throw definition_error(file_name, end, "expected at least one TREE line");
+    forest.resolution_at = *resolution_at, forest.storage_at = *storage_at;
     return forest;
 }
 
@@ -141,6 +161,12 @@ inline loaded_forest load_forest(const std::filesystem::path& path)
         if (!tree_file.problem.empty())
             throw definition_error(forest.listing.file_name, tree.at,
                                    "cannot read the tree file '" + tree.file.string() + "': " + tree_file.problem);
+        // Forests do not nest (one volume, one storage type): a TREE naming a forest file is
+        // refused at this TREE line, not reported as an unknown keyword inside the other file.
+        if (const std::optional<int> line = detail::forest_keyword_line(tree_file.text))
+            throw definition_error(forest.listing.file_name, tree.at,
+                                   "'" + tree.file.string() + "' is a forest file (line " + std::to_string(*line) +
+                                       " is a forest's keyword); TREE takes a tree definition file");
         forest.trees.push_back(parse_definition(tree_file.text, tree.file.string()));
         // Render-time noise is one field for the whole march, which renders every tree at once: a
         // tree cannot carry its own. Refused at its line rather than dropped.

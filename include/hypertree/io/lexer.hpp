@@ -12,6 +12,11 @@
 // tab is one column. Every problem is a `definition_error` whose message starts with
 // `file:line:column:` like a compiler's, so editors jump to it; the message says what was
 // expected and what was found.
+//
+// Files come from every editor: a line ends at LF, CR LF or a lone CR (old Mac editors, which
+// otherwise made the whole file one line), and a UTF-8 byte-order mark at the start (Windows
+// editors) is skipped, columns counting from after it. A UTF-16 or UTF-32 mark is refused by name:
+// every other byte of such a file is 0, and its first line would read as an unknown keyword.
 
 #include "hypertree/volume.hpp"
 #include "krs/core/validate.hpp"
@@ -81,8 +86,29 @@ struct source_line {
     source_position end;
 };
 
+// A CR is blank where it is the first half of CR LF; a lone CR ends a line (line_break_at).
 inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 inline bool ends_word(char c) { return is_blank(c) || c == '\n' || c == '(' || c == ')' || c == ',' || c == '~' || c == '#' || c == '"'; }
+// Whether a line ends at text[i]: an LF, or a CR that no LF follows.
+inline bool line_break_at(std::string_view text, std::size_t i)
+{
+    return text[i] == '\n' || (text[i] == '\r' && (i + 1 == text.size() || text[i + 1] != '\n'));
+}
+
+// The bytes of a UTF-8 byte-order mark at the start of `text` (0 or 3), skipped by tokenize. A
+// mark of UTF-16 or UTF-32 is refused, naming the encoding and what to save the file as.
+inline std::size_t byte_order_mark(std::string_view text, std::string_view file)
+{
+    if (text.starts_with("\xEF\xBB\xBF")) return 3;
+    const auto refuse = [&](std::string_view encoding) {
+        throw definition_error(file, {1, 1}, "the file is " + std::string(encoding) +
+                                                 " (it starts with that byte-order mark); save it as UTF-8 or ASCII");
+    };
+    using namespace std::string_view_literals;
+    if (text.starts_with("\xFF\xFE\0\0"sv) || text.starts_with("\0\0\xFE\xFF"sv)) refuse("UTF-32");
+    if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF")) refuse("UTF-16");
+    return 0;
+}
 
 inline char ascii_upper(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
 inline std::string upper(std::string_view s)
@@ -133,7 +159,7 @@ inline std::vector<source_line> tokenize(std::string_view text, std::string_view
     std::vector<source_line> lines;
     source_line current;
     int line = 1;
-    std::size_t line_start = 0;
+    std::size_t line_start = byte_order_mark(text, file);
     const auto position = [&](std::size_t at) {
         // A line longer than an int can count keeps the largest column rather than wrapping.
         const std::size_t column = at - line_start + 1;
@@ -147,17 +173,17 @@ inline std::vector<source_line> tokenize(std::string_view text, std::string_view
         }
         current = {};
     };
-    std::size_t i = 0;
+    std::size_t i = line_start;
     while (i < text.size()) {
         const char c = text[i];
-        if (c == '\n') {
+        if (line_break_at(text, i)) {
             close_line();
             if (line < std::numeric_limits<int>::max()) ++line;
             line_start = ++i;
         } else if (is_blank(c)) {
             ++i;
         } else if (c == '#') {
-            while (i < text.size() && text[i] != '\n') ++i;
+            while (i < text.size() && !line_break_at(text, i)) ++i;
         } else if (c == '(' || c == ')' || c == ',' || c == '~') {
             const token_kind kind = c == '(' ? token_kind::open_paren
                                     : c == ')' ? token_kind::close_paren
@@ -166,7 +192,8 @@ inline std::vector<source_line> tokenize(std::string_view text, std::string_view
             current.tokens.push_back({kind, text.substr(i, 1), position(i), 1});
             ++i;
         } else if (c == '"') {
-            const std::size_t close = text.find_first_of("\"\n", i + 1);
+            // A quote closes on its own line: at the first '"' before any line break (CR included).
+            const std::size_t close = text.find_first_of("\"\n\r", i + 1);
             if (close == std::string_view::npos || text[close] != '"')
                 throw definition_error(file, position(i), "unterminated quoted text: a '\"' must close it on the same line");
             current.tokens.push_back({token_kind::quoted, text.substr(i + 1, close - i - 1), position(i), int(close - i + 1)});
@@ -185,8 +212,8 @@ inline std::vector<source_line> tokenize(std::string_view text, std::string_view
 inline source_position end_of_input(std::string_view text)
 {
     source_position at{1, 1};
-    for (char c : text) {
-        if (c == '\n') at = {at.line + 1, 1};
+    for (std::size_t i = text.starts_with("\xEF\xBB\xBF") ? 3 : 0; i < text.size(); ++i) {
+        if (line_break_at(text, i)) at = {at.line + 1, 1};
         else ++at.column;
     }
     return at;

@@ -148,11 +148,21 @@ struct march_options {
                                          std::to_string(step_factor));
         const krs::vec3f pad = displacement.amplitude;
         const double widened = krs::length(krs::vec3d((hi + pad) - (lo - pad))) / double(step);
-        if (!(widened < limit))
+        if (!(widened < limit)) {
+            // What fits: the amplitude scaled by t, with |diagonal| + 2 t |amplitude| below the
+            // limit's length (the triangle inequality bounds the widened diagonal), a little less
+            // so that float rounding keeps it under.
+            const double room = (limit * double(step) - krs::length(krs::vec3d(hi - lo))) * 0.999;
+            const double t = room > 0 ? room / (2 * krs::length(krs::vec3d(pad))) : 0;
+            const krs::vec3d fits = krs::vec3d(pad) * t;
             throw krs::invalid_parameter("march_options.displacement.amplitude",
-                                         "must leave at most 2^23 samples across the tree's box widened by it on every side (that box's "
-                                         "diagonal / (step_factor x the smallest voxel side) is " + std::to_string(widened) + ")",
-                                         std::to_string(pad.x) + " " + std::to_string(pad.y) + " " + std::to_string(pad.z));
+                                         "must leave at most 2^23 samples across the tree's box widened by it on every side (" +
+                                             krs::detail::to_text(widened) + " samples of the march's step); " +
+                                             (t > 0 ? "an amplitude of " + krs::detail::to_text(fits.x) + " " + krs::detail::to_text(fits.y) +
+                                                          " " + krs::detail::to_text(fits.z) + " or less fits"
+                                                    : "no amplitude fits"),
+                                         krs::detail::to_text(pad.x) + " " + krs::detail::to_text(pad.y) + " " + krs::detail::to_text(pad.z));
+        }
     }
 
     // The lights' directions made unit. Finite and non-zero: an infinite component normalized to

@@ -15,18 +15,25 @@
 namespace krs {
 
 // Thrown for impossible parameters. what() reads "krs: <parameter>: <problem> (got <value>)".
+// The parts stay available, so a caller that set the parameter from its own input (a definition
+// file's keyword, a command-line option) can say the same in that input's words.
 class invalid_parameter : public std::invalid_argument {
 public:
     invalid_parameter(std::string_view parameter, std::string_view problem, std::string_view got = {})
-        : std::invalid_argument(compose(parameter, problem, got)), parameter_(parameter)
+        : std::invalid_argument("krs: " + compose(parameter, problem, got)), parameter_(parameter), problem_(problem), got_(got)
     {
     }
     const std::string& parameter() const noexcept { return parameter_; }
+    const std::string& problem() const noexcept { return problem_; }
+    const std::string& got() const noexcept { return got_; } // empty when the message gives no value
+    // what() without its "krs: ", for a program or a file reader that puts its own name in front
+    // (one prefix per message).
+    std::string message() const { return compose(parameter_, problem_, got_); }
 
 private:
     static std::string compose(std::string_view parameter, std::string_view problem, std::string_view got)
     {
-        std::string s = "krs: ";
+        std::string s;
         s += parameter;
         s += ": ";
         s += problem;
@@ -37,7 +44,7 @@ private:
         }
         return s;
     }
-    std::string parameter_;
+    std::string parameter_, problem_, got_;
 };
 
 namespace detail {

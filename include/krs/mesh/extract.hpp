@@ -107,6 +107,21 @@ inline constexpr unsigned kernel_color = 2; // kernel_color(kernel index): trian
 inline constexpr unsigned all = uv | kernel_color;
 } // namespace mesh_attribute
 
+// What an extraction reports while it works (mesh_options::progress), so a caller can show that a
+// long one is alive: which pass runs, the fraction of it done, the full grid, and the estimate once
+// the coarse pass has made it. Each pass reports its start (done 0) before any work, then at most
+// once per percent, and its end (done 1). The passes, in order: `estimate` (the coarse pass of Up front above, with
+// estimate_first), `cells` (the full grid's cells meshed), `vertices` (each vertex placed on the
+// surface). The library prints nothing; the caller decides what to show.
+enum class mesh_stage { estimate, cells, vertices };
+struct mesh_report {
+    mesh_stage stage = mesh_stage::cells;
+    double done = 0;                           // the fraction of this pass done, in [0, 1]
+    std::size_t cells_per_axis[3] = {0, 0, 0}; // the full-resolution grid (padded)
+    int coarse_resolution = 0;                 // the estimate's pass (0: none)
+    double estimated_bytes = 0;                // the full mesh's estimate (0 until it is made)
+};
+
 struct mesh_options {
     int resolution = 64;         // cells along the box's longest side: [1, max_mesh_resolution]
     int projection_steps = 4;    // Newton steps onto the zero set per vertex: [0, 64]
@@ -117,8 +132,8 @@ struct mesh_options {
                                  // each cell its own 8, as before; kept for bench_mesh's comparison)
     bool estimate_first = true;  // refuse up front from a coarse pass's estimate (see Up front above)
     bounding_box box = bounding_box::unbounded(); // where to mesh; unbounded: the field's own box
-    // Called now and then with the fraction of the grid's volume done, in [0, 1].
-    std::function<void(double)> progress;
+    // Called at the start of each pass and now and then during it (mesh_report above).
+    std::function<void(const mesh_report&)> progress;
 
     void validate() const
     {
@@ -197,14 +212,23 @@ public:
     std::size_t count(std::size_t budget)
     {
         counting_budget_ = budget;
+        begin(mesh_stage::estimate);
         grid();
         return bytes();
     }
 
+    // The grid as the constructor sized it (cells per axis, cell size), before any pass.
+    void describe(mesh_stats& out) const { out = stats_; }
+    // The coarse pass's estimate, carried by the full passes' reports.
+    void estimated(int coarse_resolution, double bytes) { coarse_resolution_ = coarse_resolution, estimated_bytes_ = bytes; }
+
     triangle_mesh run(mesh_stats* stats)
     {
+        begin(mesh_stage::cells);
         grid();
+        begin(mesh_stage::vertices);
         project();
+        report(1);
         if constexpr (locates) add_attributes();
         stats_.peak_bytes = bytes();
         if (stats) *stats = stats_;
@@ -219,6 +243,7 @@ private:
             while (size < n_[0] || size < n_[1] || size < n_[2]) size *= 2;
             root_ = size;
             visit(0, 0, 0, size);
+            report(1); // the last blocks may lie beyond the grid, which visit() counts unreported
         } else {
             for (std::int64_t k = 0; k < n_[2]; ++k) {
                 for (std::int64_t j = 0; j < n_[1]; ++j)
@@ -284,11 +309,24 @@ private:
         return d;
     }
 
+    // A pass begins: reported at once (done 0), whatever its first cell costs.
+    void begin(mesh_stage stage)
+    {
+        stage_ = stage;
+        reported_ = -1;
+        report(0);
+    }
     void report(double done)
     {
-        if (o_.progress && done >= reported_ + 0.01) {
+        if (o_.progress && (done >= reported_ + 0.01 || (done == 1 && reported_ < 1))) {
             reported_ = done;
-            o_.progress(done);
+            mesh_report r;
+            r.stage = stage_;
+            r.done = done;
+            for (int a = 0; a < 3; ++a) r.cells_per_axis[a] = std::size_t(n_[a]);
+            r.coarse_resolution = coarse_resolution_;
+            r.estimated_bytes = estimated_bytes_;
+            o_.progress(r);
         }
     }
 
@@ -493,6 +531,7 @@ private:
         const double step = h_ * 1e-3;
         mesh_.normals.resize(mesh_.positions.size());
         for (std::size_t v = 0; v < edges_.size(); ++v) {
+            if (v % 4096 == 0) report(double(v) / double(edges_.size()));
             const vec3d start = root_on_edge(edges_[v]);
             vec3d p = start;
             double dp = eval(p);
@@ -521,6 +560,9 @@ private:
     std::int64_t n_[3] = {0, 0, 0};
     std::int64_t root_ = 1;
     double done_ = 0, reported_ = 0;
+    mesh_stage stage_ = mesh_stage::cells;
+    int coarse_resolution_ = 0;
+    double estimated_bytes_ = 0;
     std::size_t counting_budget_ = 0; // > 0: the coarse pass (count), with this budget
     triangle_mesh mesh_;
     std::vector<pending> edges_;
@@ -542,7 +584,16 @@ triangle_mesh extract_mesh(const F& f, const mesh_options& options = {}, mesh_st
         mesh_options coarse = options;
         coarse.resolution = options.resolution / factor;
         coarse.attributes = 0;
-        coarse.progress = nullptr;
+        // The coarse pass reports as the estimate's stage of the full mesh: its grid is the full one.
+        mesh_stats full_grid;
+        x.describe(full_grid);
+        if (options.progress)
+            coarse.progress = [&](const mesh_report& r) {
+                mesh_report full = r;
+                for (int a = 0; a < 3; ++a) full.cells_per_axis[a] = full_grid.cells_per_axis[a];
+                full.coarse_resolution = coarse.resolution;
+                options.progress(full);
+            };
         const double scale = double(options.resolution) / double(coarse.resolution);
         const double refuse_above = double(options.memory_budget) * (1.0 + detail::estimate_slack);
         const std::size_t coarse_budget = std::size_t(std::min(refuse_above / (scale * scale), 1e18)) + 1;
@@ -566,6 +617,7 @@ triangle_mesh extract_mesh(const F& f, const mesh_options& options = {}, mesh_st
                                         std::to_string(int(scale * scale + 0.5)) +
                                         "); raise the budget or lower mesh_options.resolution",
                                     std::to_string(options.memory_budget));
+        x.estimated(coarse.resolution, estimate);
     }
     return x.run(stats);
 }
