@@ -468,7 +468,7 @@ struct generation_plan {
     std::size_t tasks = 0; // task g makes chunks [first_chunk(g), first_chunk(g + 1))
 
     std::uint64_t cycles_of(std::uint64_t chunk) const { return std::min(chunk_cycles, cycles - chunk * chunk_cycles); }
-    // floor(chunks g / tasks) without the product, which could pass 2^64 (g itself with a task a chunk).
+    // floor(chunks g / tasks) without the product, which could pass 2^64 (g with a task a chunk).
     std::uint64_t first_chunk(std::size_t task) const { return chunks / tasks * task + chunks % tasks * task / tasks; }
     // The same chunks in `groups` tasks (one a chunk at most).
     generation_plan in_groups(std::size_t groups) const

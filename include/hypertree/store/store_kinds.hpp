@@ -36,7 +36,7 @@ concept store_kind = voxel_store<S> && requires {
 using store_kinds = std::tuple<dense_store, index_list_store, bit_array_store, partitioned_store>;
 
 namespace detail {
-// Deduction fails, naming the type and its unmet requirement, for an entry that is not a store kind.
+// Deduction fails, naming the type and its unmet requirement, for an entry that is no store kind.
 template <store_kind... S>
 constexpr bool are_store_kinds(const std::tuple<S...>*)
 {
