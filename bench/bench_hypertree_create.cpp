@@ -176,20 +176,19 @@ step_floor floor_of(const ifs<>& tree, int repeat)
     const auto best = [](double& slot, double start) { slot = std::min(slot, bench::thread_cpu_seconds() - start); };
     for (int r = 0; r < repeat; ++r) {
         hypertree::detail::no_observer observer;
-        const std::uint64_t chunks = hypertree::detail::planned_chunk_count(tree, g);
-        const std::size_t groups = hypertree::detail::generation_group_count(
-            chunks, double(hypertree::detail::chunk_room(tree, std::min(g.chunk_cycles, hypertree::detail::cycle_count(tree)))));
+        const hypertree::detail::generation_plan planned = hypertree::detail::plan_generation(tree, g);
+        const hypertree::detail::generation_plan grouped = planned.in_groups(hypertree::detail::generation_group_count(tree, planned));
         std::size_t hits = 0;
         double start = bench::thread_cpu_seconds();
-        hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) { hits += h.size(), h = {}; }, groups);
+        hypertree::detail::generate_chunks(tree, 1, grouped, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) { hits += h.size(), h = {}; });
         best(f.generate, start);
         f.hits = hits;
-        std::vector<hypertree::detail::bucketed_chunk> keyed(groups);
+        std::vector<hypertree::detail::bucketed_chunk> keyed(grouped.tasks);
         start = bench::thread_cpu_seconds();
-        hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t k, hypertree::detail::chunk_output& h) {
+        hypertree::detail::generate_chunks(tree, 1, grouped, g, observer, [&](std::size_t k, hypertree::detail::chunk_output& h) {
             keyed[k] = hypertree::detail::bucket_chunk({h.data(), h.size()}, *plan, &scratch);
             h = {};
-        }, groups);
+        });
         const double generate_and_bucket = bench::thread_cpu_seconds() - start;
         f.bucket = std::min(f.bucket, std::max(0.0, generate_and_bucket - f.generate));
         start = bench::thread_cpu_seconds();
@@ -201,10 +200,10 @@ step_floor floor_of(const ifs<>& tree, int repeat)
             // them), checked against the merge's entries.
             hypertree::detail::voxel_table_pool pool(tree.volume.voxel_count(), &scratch);
             start = bench::thread_cpu_seconds();
-            hypertree::detail::generate_chunks(tree, 1, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) {
+            hypertree::detail::generate_chunks(tree, 1, grouped, g, observer, [&](std::size_t, hypertree::detail::chunk_output& h) {
                 pool.with_table([&](hypertree::detail::voxel_table& t) { t.add({h.data(), h.size()}); });
                 h = {};
-            }, groups);
+            });
             f.table_add = std::min(f.table_add, std::max(0.0, bench::thread_cpu_seconds() - start - f.generate));
             start = bench::thread_cpu_seconds();
             const auto read = pool.read_out<std::pmr::vector<voxel_entry>>(1, {});

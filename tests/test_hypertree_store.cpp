@@ -14,11 +14,13 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <optional>
 #include <random>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -632,5 +634,29 @@ TEST_CASE("stores: build refuses lists that are unsorted, repeated, outside the 
         CHECK_THROWS_AS(hypertree::index_list_store::build(small_volume, voxels), krs::invalid_parameter);
         CHECK_THROWS_AS(hypertree::bit_array_store::build(small_volume, voxels), krs::invalid_parameter);
         CHECK_THROWS_AS(hypertree::partitioned_store::build(small_volume, voxels), krs::invalid_parameter);
+    }
+}
+
+TEST_CASE("store kinds: each enumerator, forest-file name and type agree")
+{
+    // The spellings of forest files (docs/hypertree_format.md, STORAGETYPE), written out here
+    // beside the enumerator of the same name: each enumerator names the kind whose type carries
+    // that spelling, and the kinds are these four.
+    using hypertree::storage_type;
+    const std::pair<std::string_view, storage_type> spelled[] = {
+        {"dense", storage_type::dense},
+        {"index_list", storage_type::index_list},
+        {"bit_array", storage_type::bit_array},
+        {"partitioned", storage_type::partitioned},
+    };
+    CHECK(std::size(spelled) == std::tuple_size_v<hypertree::store_kinds>);
+    for (const auto& [name, kind] : spelled) {
+        INFO(name);
+        CHECK(hypertree::name_of(kind) == name);
+        hypertree::with_store(kind, [&]<class S>() {
+            CHECK(S::kind_name == name);
+            CHECK(hypertree::store_kind_name<S> == name);
+            CHECK(hypertree::storage_type_of<S> == kind);
+        });
     }
 }

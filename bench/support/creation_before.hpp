@@ -174,7 +174,7 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
     std::pmr::vector<voxel_entry> entries(scratch);
     hypertree::detail::no_observer observer;
     if (const auto plan = direct_buckets::for_grid(definition.volume.voxel_count())) {
-        std::vector<bucketed_chunk> keyed(hypertree::detail::planned_chunk_count(definition, drawing));
+        std::vector<bucketed_chunk> keyed(hypertree::detail::plan_generation(definition, drawing).chunks);
         hypertree::detail::generate_chunks(definition, seed, drawing, observer, [&](std::size_t c, hypertree::detail::chunk_output& chunk) {
             keyed[c] = bench::before::bucket_chunk({chunk.data(), chunk.size()}, *plan, scratch);
             chunk = {};

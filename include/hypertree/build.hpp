@@ -34,9 +34,9 @@ namespace detail {
 // Generation, validation and density classes: the stored voxels of one tree, in a list drawn
 // from `scratch` (every temporary of the way too). Each list goes back to the scratch as soon as
 // the next is made, so the next step can reuse its pages. Where the grid allows, the chunks are
-// generated in groups of consecutive chunks (create/generate.hpp's generation_group_count), each
-// group's hits validated on its task while they are in cache and its buffer reused by the next
-// group: added to a per-voxel table on grids up to 2^21 voxels (create/voxel_table.hpp),
+// generated in groups of consecutive chunks (create/generate.hpp's generation_plan, made once),
+// each group's hits validated on its task while they are in cache and its buffer reused by the
+// next group: added to a per-voxel table on grids up to 2^21 voxels (create/voxel_table.hpp),
 // else bucketed (create/compact.hpp's direct_buckets) and merged; on larger grids validation reads
 // the chunks as pieces.
 template <transform_pipeline P>
@@ -45,13 +45,14 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
 {
     generation_options drawing = options;
     drawing.scratch = scratch;
+    // Planned once, before anything is allocated (a definition or budget is refused here): the
+    // chunks in cache-sized groups for the two grouped passes, the second running only where the
+    // first's table overflowed, and one task a chunk for the pieces of large grids.
+    const generation_plan plan = plan_generation(definition, drawing);
+    const generation_plan grouped = plan.in_groups(generation_group_count(definition, plan));
     std::pmr::vector<voxel_entry> entries(scratch);
     no_observer observer;
     const std::uint64_t voxel_count = definition.volume.voxel_count();
-    const auto groups_of = [&] {
-        const std::uint64_t chunks = planned_chunk_count(definition, drawing); // refuses before allocating
-        return generation_group_count(chunks, double(chunk_room(definition, std::min(drawing.chunk_cycles, cycle_count(definition)))));
-    };
     const auto classified = [&](const auto& groups_of_entries) {
         std::vector<std::span<const voxel_entry>> pieces(groups_of_entries.begin(), groups_of_entries.end());
         const density_classes classes(std::span<const std::span<const voxel_entry>>(pieces), density_class_count, options.parallel_for);
@@ -63,27 +64,26 @@ std::pmr::vector<stored_voxel> stored_voxels_of(const ifs<P>& definition, std::u
         // hits added on its task while hot. A voxel past 2^17 hits (never in the presets) sends the
         // build to the bucketed path below, which counts in 32 bits.
         voxel_table_pool pool(voxel_count, scratch);
-        generate_chunks(definition, seed, drawing, observer, [&](std::size_t, chunk_output& hits) {
+        generate_chunks(definition, seed, grouped, drawing, observer, [&](std::size_t, chunk_output& hits) {
             pool.with_table([&](voxel_table& table) { table.add({hits.data(), hits.size()}); });
             hits = {}; // its buffer back to the scratch, for the next group
-        }, groups_of());
+        });
         if (!pool.overflowed()) return classified(pool.read_out<std::pmr::vector<voxel_entry>>(options.parallel_for ? 4 : 1, options.parallel_for));
     }
-    if (const auto plan = direct_buckets::for_grid(definition.volume.voxel_count())) {
-        const std::size_t groups = groups_of();
-        std::vector<bucketed_chunk> keyed(groups);
-        generate_chunks(definition, seed, drawing, observer, [&](std::size_t g, chunk_output& hits) {
-            keyed[g] = bucket_chunk({hits.data(), hits.size()}, *plan, scratch);
+    if (const auto buckets = direct_buckets::for_grid(voxel_count)) {
+        std::vector<bucketed_chunk> keyed(grouped.tasks);
+        generate_chunks(definition, seed, grouped, drawing, observer, [&](std::size_t g, chunk_output& hits) {
+            keyed[g] = bucket_chunk({hits.data(), hits.size()}, *buckets, scratch);
             hits = {}; // its buffer back to the scratch, for the next group
-        }, groups);
+        });
         // The merge's groups are classified where they lie, each on its own task.
         const std::vector<std::pmr::vector<voxel_entry>> groups_of_entries =
-            merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *plan, options.parallel_for, scratch);
+            merge_bucketed_groups<std::pmr::vector<voxel_entry>>(keyed, *buckets, options.parallel_for, scratch);
         keyed.clear(); // the keys back to the scratch
         return classified(groups_of_entries);
     }
-    const generated_chunks generated = generate_chunks(definition, seed, drawing, observer);
-    compact_into(generated.pieces(), options.parallel_for, definition.volume.voxel_count(), scratch, entries);
+    const generated_chunks generated = generate_chunks(definition, seed, plan, drawing, observer);
+    compact_into(generated.pieces(), options.parallel_for, voxel_count, scratch, entries);
     const density_classes classes(entries, density_class_count);
     return classify(entries, classes, definition.branch_depth, std::pmr::vector<stored_voxel>(scratch), options.parallel_for);
 }

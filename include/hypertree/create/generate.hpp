@@ -444,51 +444,6 @@ std::uint64_t cycle_count(const ifs<P>& definition)
     return detail::divide_up(definition.iterations, std::uint64_t(definition.tree_depth));
 }
 
-// What generate_chunks checks before it allocates anything, and how many chunks it makes: the
-// definition itself, the chunk size, and the memory budget against the most hits the run can
-// record. Callers that size their own per-chunk lists (build_tree) call it first too.
-template <transform_pipeline P>
-std::uint64_t planned_chunk_count(const ifs<P>& definition, const generation_options& options)
-{
-    definition.validate();
-    const std::uint64_t cycles = cycle_count(definition);
-    const std::uint64_t depth = std::uint64_t(definition.tree_depth);
-    const double bytes_per_cycle = double(depth) * voxels_per_generator(definition) * double(sizeof(hit));
-    const double worst_bytes = double(cycles) * bytes_per_cycle;
-    if (worst_bytes > double(options.budget.bytes)) {
-        // What fits: whole cycles of tree_depth iterations within the budget.
-        const std::uint64_t fitting = std::uint64_t(std::floor(double(options.budget.bytes) / bytes_per_cycle)) * depth;
-        throw krs::invalid_parameter("ifs.iterations",
-                                     "would record up to " + std::to_string(std::uint64_t(worst_bytes)) + " bytes of hits, over the memory budget of " +
-                                         std::to_string(options.budget.bytes) + " bytes; " +
-                                         (fitting > 0 ? "at most " + std::to_string(fitting) + " iterations fit"
-                                                      : "no iteration fits (the generator covers too many voxels for the budget)"),
-                                     std::to_string(definition.iterations));
-    }
-    if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
-    return detail::divide_up(cycles, options.chunk_cycles);
-}
-
-struct no_after_chunk {
-    void operator()(std::size_t, chunk_output&) const {}
-};
-
-// How many consecutive chunks build_tree generates into one buffer and buckets together: enough
-// that a group's most hits fill about 1 MiB (the L2 cache of one core), and at least 8 groups
-// where there are that many chunks, for two to four threads to share. Bucketing chunk by chunk
-// split tree D's 1 M hits into 82 x 2048 pieces of 6 keys on average, each a cache line or more
-// to write and to read back, and the merge paid a loop per piece; in groups of 10 chunks the
-// pieces hold 60 keys.
-inline std::size_t generation_group_count(std::uint64_t chunks, double most_hits_per_chunk)
-{
-    constexpr double group_bytes = double(1 << 20);
-    constexpr std::uint64_t fewest_groups = 8;
-    const double per_group = std::max(1.0, std::floor(group_bytes / std::max(1.0, most_hits_per_chunk * double(sizeof(hit)))));
-    const std::uint64_t groups = std::max<std::uint64_t>(
-        std::min<std::uint64_t>(chunks, fewest_groups), std::uint64_t(std::ceil(double(chunks) / per_group)));
-    return std::size_t(std::min(groups, chunks));
-}
-
 // The most hits chunk `count` cycles can record: points make one per generator at most, lines the
 // walk's bound per generator; and a row's room more, which the lanes ask for before each row.
 template <transform_pipeline P>
@@ -500,51 +455,115 @@ std::size_t chunk_room(const ifs<P>& definition, std::uint64_t count)
                                                  cycle_lanes * (max_voxels_on_segment(definition.volume, definition.generator.length()) + 1);
 }
 
-// after_chunk(c, chunk) runs on chunk c's task as soon as the chunk is made, while its hits are
-// hot in cache; it may take them and empty the chunk.
-//
-// With `groups` > 0, the chunks are generated in that many groups of consecutive chunks (group g:
-// chunks [chunks g / groups, chunks (g + 1) / groups)), each group's hits one after the other in
-// one buffer on one task, and after_chunk(g, buffer) runs once per group. The hits taken in
-// group order are the hits taken in chunk order: the same list.
-template <transform_pipeline P, class Observer, class AfterChunk = no_after_chunk>
-generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_options& options, Observer& observer,
-                                 const AfterChunk& after_chunk = {}, std::size_t groups = 0)
+// How one run of the generator is cut up, worked out once (plan_generation) before anything is
+// allocated: the cycles, the chunks of generation_options::chunk_cycles cycles (the unit of the
+// random streams, so of the hits), and the tasks that make them, each a group of consecutive
+// chunks generated one after the other into one buffer (one chunk a task unless grouped). The
+// hits taken in task order are the hits in chunk order whatever the grouping. generate_chunks runs
+// a plan and works none of it out again; build_tree plans once for all its generation passes.
+struct generation_plan {
+    std::uint64_t cycles = 0;       // cycle_count
+    std::uint64_t chunk_cycles = 1; // cycles of every chunk but the last, which takes the rest
+    std::uint64_t chunks = 0;
+    std::size_t tasks = 0; // task g makes chunks [first_chunk(g), first_chunk(g + 1))
+
+    std::uint64_t cycles_of(std::uint64_t chunk) const { return std::min(chunk_cycles, cycles - chunk * chunk_cycles); }
+    // floor(chunks g / tasks) without the product, which could pass 2^64 (g with a task a chunk).
+    std::uint64_t first_chunk(std::size_t task) const { return chunks / tasks * task + chunks % tasks * task / tasks; }
+    // The same chunks in `groups` tasks (one a chunk at most).
+    generation_plan in_groups(std::size_t groups) const
+    {
+        generation_plan grouped = *this;
+        grouped.tasks = std::size_t(std::min<std::uint64_t>(groups, chunks));
+        return grouped;
+    }
+};
+
+// The plan of a run, one task a chunk, and what generate_chunks checks before it allocates
+// anything: the definition itself, the chunk size, and the memory budget against the most hits
+// the run can record.
+template <transform_pipeline P>
+generation_plan plan_generation(const ifs<P>& definition, const generation_options& options)
 {
-    const std::uint64_t chunks = planned_chunk_count(definition, options);
+    definition.validate();
+    generation_plan plan;
+    plan.cycles = cycle_count(definition);
+    const std::uint64_t depth = std::uint64_t(definition.tree_depth);
+    const double bytes_per_cycle = double(depth) * voxels_per_generator(definition) * double(sizeof(hit));
+    const double worst_bytes = double(plan.cycles) * bytes_per_cycle;
+    if (worst_bytes > double(options.budget.bytes)) {
+        // What fits: whole cycles of tree_depth iterations within the budget.
+        const std::uint64_t fitting = std::uint64_t(std::floor(double(options.budget.bytes) / bytes_per_cycle)) * depth;
+        throw krs::invalid_parameter("ifs.iterations",
+                                     "would record up to " + std::to_string(std::uint64_t(worst_bytes)) + " bytes of hits, over the memory budget of " +
+                                         std::to_string(options.budget.bytes) + " bytes; " +
+                                         (fitting > 0 ? "at most " + std::to_string(fitting) + " iterations fit"
+                                                      : "no iteration fits (the generator covers too many voxels for the budget)"),
+                                     std::to_string(definition.iterations));
+    }
+    if (options.chunk_cycles < 1) throw krs::invalid_parameter("generation_options.chunk_cycles", "must be >= 1", "0");
+    plan.chunk_cycles = options.chunk_cycles;
+    plan.chunks = detail::divide_up(plan.cycles, plan.chunk_cycles);
+    plan.tasks = std::size_t(plan.chunks);
+    return plan;
+}
+
+// How many groups of consecutive chunks build_tree generates, each into one buffer that it
+// validates while hot: enough that a group's most hits fill about 1 MiB (the L2 cache of one core),
+// and at least 8 groups where there are that many chunks, for two to four threads to share.
+// Bucketing chunk by chunk split tree D's 1 M hits into 82 x 2048 pieces of 6 keys on average,
+// each a cache line or more to write and to read back, and the merge paid a loop per piece; in
+// groups of 10 chunks the pieces hold 60 keys.
+template <transform_pipeline P>
+std::size_t generation_group_count(const ifs<P>& definition, const generation_plan& plan)
+{
+    constexpr double group_bytes = double(1 << 20);
+    constexpr std::uint64_t fewest_groups = 8;
+    const double most_hits_per_chunk = double(chunk_room(definition, std::min(plan.chunk_cycles, plan.cycles)));
+    const std::uint64_t chunks = plan.chunks;
+    const double per_group = std::max(1.0, std::floor(group_bytes / std::max(1.0, most_hits_per_chunk * double(sizeof(hit)))));
+    const std::uint64_t groups = std::max<std::uint64_t>(
+        std::min<std::uint64_t>(chunks, fewest_groups), std::uint64_t(std::ceil(double(chunks) / per_group)));
+    return std::size_t(std::min(groups, chunks));
+}
+
+struct no_after_chunk {
+    void operator()(std::size_t, chunk_output&) const {}
+};
+
+// Runs `plan` (plan_generation of this definition and options; the options say how: threads,
+// lanes, scratch). after_chunk(g, buffer) runs on task g as soon as its chunks are made, while
+// their hits are hot in cache; it may take them and empty the buffer.
+template <transform_pipeline P, class Observer, class AfterChunk = no_after_chunk>
+generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_plan& plan, const generation_options& options,
+                                 Observer& observer, const AfterChunk& after_chunk = {})
+{
     const drawn_ifs<P> tree(definition, seed);
     const std::uint64_t depth = std::uint64_t(definition.tree_depth);
-    const std::uint64_t cycles = cycle_count(definition);
     // The lanes' lookup tables, built once for all chunks (observed runs take the scalar loop).
     const std::optional<lane_tables> lanes_in_step =
         options.vector_lanes && std::is_same_v<Observer, no_observer> ? lane_tables::of(tree) : std::nullopt;
     const std::optional<voxel_lock> lock = definition.trim.empty() ? std::nullopt : std::optional<voxel_lock>(std::in_place, definition.volume, definition.trim);
-    const std::size_t tasks = groups == 0 ? std::size_t(chunks) : std::min<std::size_t>(groups, std::size_t(chunks));
-    const auto first_chunk = [&](std::size_t g) {
-        // floor(chunks g / tasks) without the product, which could pass 2^64.
-        return groups == 0 ? std::uint64_t(g) : chunks / tasks * g + chunks % tasks * g / tasks;
-    };
     generated_chunks out;
-    out.chunks.resize(tasks);
-    std::vector<generation_stats> chunk_stats(tasks);
+    out.chunks.resize(plan.tasks);
+    std::vector<generation_stats> chunk_stats(plan.tasks);
     const auto run = [&](std::size_t g) {
-        const std::uint64_t begin = first_chunk(g), end = first_chunk(g + 1);
-        const auto cycles_of = [&](std::uint64_t c) { return std::min(options.chunk_cycles, cycles - c * options.chunk_cycles); };
+        const std::uint64_t begin = plan.first_chunk(g), end = plan.first_chunk(g + 1);
         chunk_stats[g].recorded_per_depth.assign(depth, 0);
         // Room for the most hits the task's chunks can make, so the buffer never grows (a copy
         // that touches fresh pages). Pages never written are never touched, so where the system
         // overcommits (Linux's default) the worst case costs address space only; all chunks
-        // together stay within the budget checked above.
+        // together stay within the budget the plan checked.
         std::size_t room = 0;
-        for (std::uint64_t c = begin; c < end; ++c) room += chunk_room(definition, cycles_of(c));
+        for (std::uint64_t c = begin; c < end; ++c) room += chunk_room(definition, plan.cycles_of(c));
         out.chunks[g].from = scratch_or_default(options.scratch);
         out.chunks[g].make_room(room);
         for (std::uint64_t c = begin; c < end; ++c)
-            generate_chunk(tree, seed, c, cycles_of(c), lanes_in_step ? &*lanes_in_step : nullptr, lock ? &*lock : nullptr, out.chunks[g],
+            generate_chunk(tree, seed, c, plan.cycles_of(c), lanes_in_step ? &*lanes_in_step : nullptr, lock ? &*lock : nullptr, out.chunks[g],
                            chunk_stats[g], observer);
         after_chunk(g, out.chunks[g]);
     };
-    run_tasks(options.parallel_for, tasks, run);
+    run_tasks(options.parallel_for, plan.tasks, run);
 
     out.stats.recorded_per_depth.assign(depth, 0);
     for (const generation_stats& s : chunk_stats) {
@@ -553,6 +572,16 @@ generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, c
         for (std::size_t d = 0; d < depth; ++d) out.stats.recorded_per_depth[d] += s.recorded_per_depth[d];
     }
     return out;
+}
+
+// The same, planned here: one task a chunk, or with `groups` > 0 that many groups of consecutive
+// chunks (group g: chunks [chunks g / groups, chunks (g + 1) / groups)).
+template <transform_pipeline P, class Observer, class AfterChunk = no_after_chunk>
+generated_chunks generate_chunks(const ifs<P>& definition, std::uint64_t seed, const generation_options& options, Observer& observer,
+                                 const AfterChunk& after_chunk = {}, std::size_t groups = 0)
+{
+    const generation_plan plan = plan_generation(definition, options);
+    return generate_chunks(definition, seed, groups == 0 ? plan : plan.in_groups(groups), options, observer, after_chunk);
 }
 
 } // namespace detail

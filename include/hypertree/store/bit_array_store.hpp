@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -34,6 +35,8 @@ namespace hypertree {
 
 class bit_array_store {
 public:
+    // Its name in forest files and on command lines (store_kinds.hpp: the kinds' one list).
+    static constexpr std::string_view kind_name = "bit_array";
     static constexpr std::size_t bytes_per_voxel = sizeof(voxel_index) + sizeof(voxel);
 
     bit_array_store() = default;

@@ -24,6 +24,7 @@
 #include <cstring>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -31,6 +32,8 @@ namespace hypertree {
 
 class dense_store {
 public:
+    // Its name in forest files and on command lines (store_kinds.hpp: the kinds' one list).
+    static constexpr std::string_view kind_name = "dense";
     static constexpr std::size_t bytes_per_voxel = sizeof(voxel);
 
     // An empty store over the default one-voxel hypervolume.

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -28,6 +29,8 @@ namespace hypertree {
 
 class index_list_store {
 public:
+    // Its name in forest files and on command lines (store_kinds.hpp: the kinds' one list).
+    static constexpr std::string_view kind_name = "index_list";
     static constexpr std::size_t bytes_per_voxel = sizeof(voxel_index) + sizeof(voxel);
 
     index_list_store() = default;

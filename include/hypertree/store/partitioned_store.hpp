@@ -33,6 +33,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -51,6 +52,8 @@ struct store_part {
 
 class partitioned_store {
 public:
+    // Its name in forest files and on command lines (store_kinds.hpp: the kinds' one list).
+    static constexpr std::string_view kind_name = "partitioned";
     static constexpr std::size_t bytes_per_voxel = sizeof(voxel_index) + sizeof(voxel);
 
     partitioned_store() = default;

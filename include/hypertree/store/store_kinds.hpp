@@ -1,12 +1,15 @@
 #pragma once
-// The store kinds: the closed set of `voxel_store` models (store/store.hpp), listed once here.
-// Everything that names or iterates the kinds uses this list: forest files (io/forest_file.hpp)
-// read a kind by name, `with_store` turns a run-time kind into a type, `for_each_store_kind`
-// visits every type (benchmarks), and tests are templated over `store_kinds`.
+// The store kinds: the closed set of `voxel_store` models (store/store.hpp), listed once here, in
+// the tuple `store_kinds`. Each store type carries its own name (`S::kind_name`, the spelling of
+// forest files and command lines), and the rest is derived from the list: the names in list
+// order (`storage_type_names`), the run-time kind (`storage_type`, each enumerator the position
+// of its type in the list), `with_store` turning a run-time kind into a type, and
+// `for_each_store_kind` visiting every type (benchmarks); tests are templated over `store_kinds`.
 //
-// Adding a kind: write its header next to the others, then add it here in three places kept in
-// the same order (the `storage_type` enumerator, its name, its type in `store_kinds`). The
-// static_assert catches a list left short; docs/design.md ("Store kinds") lists what else to read.
+// Adding a kind: write its header next to the others, with its `kind_name`; include it here and
+// add its type to `store_kinds`, and an enumerator valued by its type for users who name the kind
+// in C++. A type that is not a store kind, or a name given twice, stops the compile here;
+// docs/design.md ("A store kind") lists what else to read.
 
 #include "hypertree/store/bit_array_store.hpp"
 #include "hypertree/store/dense_store.hpp"
@@ -15,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -25,12 +29,56 @@
 
 namespace hypertree {
 
-// The data structures of section 5, by the names forest files use.
-enum class storage_type { dense, index_list, bit_array, partitioned };
-inline constexpr std::array<std::string_view, 4> storage_type_names = {"dense", "index_list", "bit_array", "partitioned"};
-// Their types, in the order of `storage_type` (a tuple: doctest's TEST_CASE_TEMPLATE_APPLY takes it).
+// A store kind: a voxel_store that names itself.
+template <class S>
+concept store_kind = voxel_store<S> && requires {
+    { S::kind_name } -> std::convertible_to<std::string_view>;
+};
+
+// The data structures of section 5 (a tuple: doctest's TEST_CASE_TEMPLATE_APPLY takes it).
 using store_kinds = std::tuple<dense_store, index_list_store, bit_array_store, partitioned_store>;
-static_assert(std::tuple_size_v<store_kinds> == storage_type_names.size());
+
+namespace detail {
+// Deduction fails, naming the type and its unmet requirement, for an entry that is no store kind.
+template <store_kind... S>
+constexpr bool are_store_kinds(const std::tuple<S...>*)
+{
+    return true;
+}
+static_assert(are_store_kinds(static_cast<const store_kinds*>(nullptr)));
+
+template <class S, std::size_t I = 0>
+constexpr std::size_t store_kind_index()
+{
+    static_assert(I < std::tuple_size_v<store_kinds>, "not a type of store_kinds");
+    if constexpr (std::is_same_v<S, std::tuple_element_t<I, store_kinds>>)
+        return I;
+    else
+        return store_kind_index<S, I + 1>();
+}
+} // namespace detail
+
+// Their names, in the order of `store_kinds`, as the types give them.
+inline constexpr auto storage_type_names = []<std::size_t... I>(std::index_sequence<I...>) {
+    return std::array<std::string_view, sizeof...(I)>{std::string_view(std::tuple_element_t<I, store_kinds>::kind_name)...};
+}(std::make_index_sequence<std::tuple_size_v<store_kinds>>());
+static_assert(
+    [] {
+        for (std::size_t i = 0; i < storage_type_names.size(); ++i)
+            for (std::size_t j = i + 1; j < storage_type_names.size(); ++j)
+                if (storage_type_names[i] == storage_type_names[j]) return false;
+        return true;
+    }(),
+    "two store kinds share a kind_name: a forest file's STORAGETYPE would not say which");
+
+// A kind chosen at run time (forest files, command lines): each enumerator is the position of its
+// type in `store_kinds`, so the enumeration cannot drift from the list.
+enum class storage_type {
+    dense = int(detail::store_kind_index<dense_store>()),
+    index_list = int(detail::store_kind_index<index_list_store>()),
+    bit_array = int(detail::store_kind_index<bit_array_store>()),
+    partitioned = int(detail::store_kind_index<partitioned_store>()),
+};
 
 inline std::string_view name_of(storage_type s) { return storage_type_names[std::size_t(s)]; }
 
@@ -47,16 +95,6 @@ inline std::string storage_type_choices(std::string_view separator, std::string_
 }
 
 namespace detail {
-template <class S, std::size_t I = 0>
-constexpr std::size_t store_kind_index()
-{
-    static_assert(I < std::tuple_size_v<store_kinds>, "not a type of store_kinds");
-    if constexpr (std::is_same_v<S, std::tuple_element_t<I, store_kinds>>)
-        return I;
-    else
-        return store_kind_index<S, I + 1>();
-}
-
 template <std::size_t I, class F>
 decltype(auto) with_store_at(std::size_t kind, F& f)
 {
@@ -74,7 +112,7 @@ decltype(auto) with_store_at(std::size_t kind, F& f)
 template <class S>
 inline constexpr storage_type storage_type_of = storage_type(detail::store_kind_index<S>());
 template <class S>
-inline constexpr std::string_view store_kind_name = storage_type_names[detail::store_kind_index<S>()];
+inline constexpr std::string_view store_kind_name = storage_type_names[detail::store_kind_index<S>()]; // S::kind_name
 
 // f.template operator()<S>() for the store type S of `kind`; every S must give f the same result type.
 template <class F>

@@ -67,4 +67,26 @@ struct parameter {
     }
 };
 
+namespace detail {
+
+// A per-axis transform's parameters x, y, z (scale, translate): checked under the names
+// "<transform>.x", ".y" and ".z", and drawn in x, y, z order, which fixes the random numbers
+// each takes (so every per-axis transform draws alike).
+template <class Axes>
+void validate_axes(const Axes& axes, std::string_view transform)
+{
+    const std::string name(transform);
+    axes.x.validate(name + ".x");
+    axes.y.validate(name + ".y");
+    axes.z.validate(name + ".z");
+}
+template <class Axes>
+Axes drawn_axes(Axes axes, random_stream& random)
+{
+    axes.x = axes.x.draw(random), axes.y = axes.y.draw(random), axes.z = axes.z.draw(random);
+    return axes;
+}
+
+} // namespace detail
+
 } // namespace hypertree

@@ -17,18 +17,8 @@ struct scale {
     explicit scale(parameter uniform) : x(uniform), y(uniform), z(uniform) { validate(); }
     scale(parameter x_, parameter y_, parameter z_) : x(x_), y(y_), z(z_) { validate(); }
 
-    void validate() const
-    {
-        x.validate("scale.x");
-        y.validate("scale.y");
-        z.validate("scale.z");
-    }
-    scale draw(random_stream& random) const
-    {
-        scale s;
-        s.x = x.draw(random), s.y = y.draw(random), s.z = z.draw(random);
-        return s;
-    }
+    void validate() const { detail::validate_axes(*this, "scale"); }
+    scale draw(random_stream& random) const { return detail::drawn_axes(*this, random); }
     affine_map map_at(int level) const
     {
         affine_map a;

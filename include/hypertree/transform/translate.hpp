@@ -15,18 +15,8 @@ struct translate {
     translate() = default;
     translate(parameter x_, parameter y_, parameter z_) : x(x_), y(y_), z(z_) { validate(); }
 
-    void validate() const
-    {
-        x.validate("translate.x");
-        y.validate("translate.y");
-        z.validate("translate.z");
-    }
-    translate draw(random_stream& random) const
-    {
-        translate t;
-        t.x = x.draw(random), t.y = y.draw(random), t.z = z.draw(random);
-        return t;
-    }
+    void validate() const { detail::validate_axes(*this, "translate"); }
+    translate draw(random_stream& random) const { return detail::drawn_axes(*this, random); }
     affine_map map_at(int level) const
     {
         affine_map a;

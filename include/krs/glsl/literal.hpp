@@ -8,7 +8,6 @@
 #include <charconv>
 #include <cstddef>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace krs::glsl {
@@ -42,20 +41,6 @@ inline std::string vec3_array(const std::string& name, const std::vector<vec3f>&
     std::string s = "const vec3 " + name + "[" + std::to_string(values.size()) + "] = vec3[" + std::to_string(values.size()) + "](";
     for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ",\n    " : "") + vec3_literal(values[i]);
     return s + ");\n";
-}
-// The old `$` dialect (every `$` replaced by `name`), superseded by glsl::fill (names.hpp). No
-// header of the library uses it; it stays only until shadertoy.hpp's rewrite (issue 34, i34-trace)
-// has landed, so that branch compiles whichever is merged first. Do not use it in new code.
-inline std::string with_name(std::string_view text, const std::string& name)
-{
-    std::string s;
-    s.reserve(text.size() + 64);
-    for (char c : text)
-        if (c == '$')
-            s += name;
-        else
-            s += c;
-    return s;
 }
 
 } // namespace krs::glsl
