@@ -582,9 +582,9 @@ TEST_CASE("hypertree io ITERATIONS over the generator's budget is refused at its
     // What it says fits, fits: the generator plans it, and one cycle more it refuses.
     ifs<runtime_pipeline> fitting = tree.ifs;
     fitting.iterations = number_after(message, "at most ");
-    CHECK_NOTHROW((void)detail::planned_chunk_count(fitting, generation_options{}));
+    CHECK_NOTHROW((void)detail::plan_generation(fitting, generation_options{}));
     fitting.iterations += std::uint64_t(fitting.tree_depth);
-    CHECK_THROWS_AS((void)detail::planned_chunk_count(fitting, generation_options{}), krs::invalid_parameter);
+    CHECK_THROWS_AS((void)detail::plan_generation(fitting, generation_options{}), krs::invalid_parameter);
 
     // A refusal of no setting of the file passes unchanged.
     CHECK_THROWS_AS(building_from(tree, [] { throw krs::invalid_parameter("march_options.ambient", "must be >= 0", "-1"); }),
