@@ -18,8 +18,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <numbers>
+#include <regex>
 #include <sstream>
 #include <set>
 #include <string>
@@ -101,6 +103,30 @@ TEST_CASE("example scenes: one name each, a GLSL prefix, the name the scene is b
         }
     });
     CHECK(seen.size() == ex::scene_count);
+}
+
+// A scene is one entry (docs/design.md, "A scene"): a struct in example_scenes.hpp and its type in
+// example_scene_list. A struct left out of the list would be shipped, regenerated and tested by
+// nothing, so the header may hold no more scene structs than the list; and the table of scenes in
+// glsl/README.md is written by hand, so it must name every scene.
+TEST_CASE("example scenes: every scene struct is in the list, and glsl/README.md's table names each")
+{
+    {
+        const std::string header = read_file(std::string(KRS_SOURCE_DIR) + "/include/krs/scenes/example_scenes.hpp");
+        const std::regex entry(R"(\bstruct\s+\w+\s*:\s*(?:seeded_by\s*<[^>]*>|unseeded)\s*\{)");
+        const auto structs = std::distance(std::sregex_iterator(header.begin(), header.end(), entry), std::sregex_iterator());
+        INFO("scene structs in krs/scenes/example_scenes.hpp: " << structs << ", in example_scene_list: " << ex::scene_count);
+        CHECK(std::size_t(structs) == ex::scene_count);
+    }
+
+    const std::string readme = read_file((std::filesystem::path(KRS_SOURCE_DIR) / "glsl/README.md").string());
+    const std::size_t from = readme.find("| scene |");
+    REQUIRE(from != std::string::npos);
+    const std::string table = readme.substr(from, readme.find("\n\n", from) - from);
+    ex::for_each_scene_entry([&]<class E>() {
+        INFO("glsl/README.md's table of scenes has no row naming `" << E::name << "`");
+        CHECK(table.find("`" + std::string(E::name) + "`") != std::string::npos);
+    });
 }
 
 TEST_CASE("glsl float literals read back as the same float")

@@ -6,7 +6,12 @@
 //
 // The cases name the library types they exercise, and the last check reads the library's headers
 // for every type that carries GLSL (a glsl_name, or a glsl_emit member) and fails for one that no
-// case ran: a new field type cannot ship without being run here.
+// case ran: a new field type cannot ship without being run here. It also fails for a field type
+// (a class with a `distance` member) that carries no GLSL at all, which the first scan cannot see.
+//
+// The scan reads the headers rather than a list of types because a list would be one more thing to
+// forget: C++ cannot enumerate a namespace's types, and the type a contributor forgets to run is
+// the one they also forget to add to a list. The scan needs nothing from them.
 
 #include "krs/compose.hpp"
 #include "krs/fractal/fold_steps.hpp"
@@ -16,6 +21,7 @@
 #include "krs/fractal/shell_presets.hpp"
 #include "krs/fractal/similar_shell.hpp"
 #include "krs/glsl/emitter.hpp"
+#include "krs/glsl/shadertoy.hpp"
 #include "krs/kernels/kernels.hpp"
 #include "krs/kernels/tetrahedron.hpp"
 #include "krs/sequence.hpp"
@@ -112,6 +118,12 @@ template <class K>
 void check_kernel(const std::string& name, const K& kernel, const char* type)
 {
     check_distance(name, kernel, kernel.bound().center, vec3f{1, 1, 1} * (1.5f * kernel.bound().radius), {type});
+    // The colour a Shadertoy program gives the kind without a palette (docs/design.md, "A kernel",
+    // step 3): compiling this names the kind in kernel_without_default_albedo<K> when it has none.
+    const std::vector<vec3f> albedo = krs::glsl::palette_of(krs::sequence<K>{});
+    REQUIRE(albedo.size() == 1);
+    CHECK((albedo[0].x >= 0 && albedo[0].x <= 1 && albedo[0].y >= 0 && albedo[0].y <= 1 && albedo[0].z >= 0 &&
+           albedo[0].z <= 1));
     typename krs::sequence<K>::builder b;
     b.kernel(kernel);
     b.mirror(krs::mirror(krs::normalize(vec3f{1.0f, 0.2f, 0.1f}), kernel.bound().center.x + 0.3f));
@@ -163,6 +175,12 @@ void check_kernel(const std::string& name, const K& kernel, const char* type)
 // The library's headers: every class or struct that carries GLSL (its body names glsl_name,
 // glsl_parameters or glsl_emit, however declared).
 std::set<std::string> types_with_glsl() { return krs_test::classes_with(std::regex(R"(\bglsl_(?:name|parameters|emit)\b)")); }
+// Every field type: a class with a member `T distance(const vec3<T>& p) const` (rule 2's contract;
+// the `const` after one parameter leaves out vec3.hpp's free distance(a, b)).
+std::set<std::string> field_types()
+{
+    return krs_test::classes_with(std::regex(R"(\bT\s+distance\s*\(\s*const\s+vec3<T>\s*&\s*\w*\s*\)\s*const\b)"));
+}
 
 } // namespace
 
@@ -280,5 +298,13 @@ TEST_CASE("GLSL of every field type matches the C++ on llvmpipe, and every type 
     for (const std::string& type : with_glsl) {
         INFO("krs::" << type << " has GLSL but no case of tests/test_glsl_field_types.cpp runs it");
         CHECK(covered().count(type) == 1);
+    }
+    const std::set<std::string> fields = field_types();
+    CHECK(fields.count("sphere") == 1);
+    CHECK(fields.count("lipschitz_warp") == 1);
+    for (const std::string& type : fields) {
+        INFO("krs::" << type << " is a field (it has distance) but carries no GLSL: give it glsl_name, glsl_source "
+                                "and glsl_parameters(), or glsl_emit (docs/design.md#rule-4)");
+        CHECK(with_glsl.count(type) == 1);
     }
 }

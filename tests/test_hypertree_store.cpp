@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -154,6 +155,23 @@ TEST_CASE_TEMPLATE_DEFINE("stores: every kind returns the reference voxel for ev
     }
 }
 TEST_CASE_TEMPLATE_APPLY(small_grid_reference, hypertree::store_kinds);
+
+// A kind is one header, include/hypertree/store/<name>_store.hpp (docs/design.md, "A store kind"):
+// one written but left out of the list would be built and tested by nothing, so the list must hold
+// as many kinds as the folder has such headers (store_kinds.hpp including each is checked by the
+// ctest include_layers).
+TEST_CASE("stores: the list of kinds holds one kind per *_store.hpp header")
+{
+    std::size_t headers = 0, kinds = 0;
+    for (const auto& entry :
+         std::filesystem::directory_iterator(std::filesystem::path(KRS_SOURCE_DIR) / "include" / "hypertree" / "store")) {
+        const std::string name = entry.path().filename().string();
+        if (name.ends_with("_store.hpp")) ++headers;
+    }
+    hypertree::for_each_store_kind([&]<class S>() { ++kinds; });
+    CHECK(headers >= 4);
+    CHECK(kinds == headers);
+}
 
 TEST_CASE("stores: the bit array's occupancy bits and the partitioned store's parts on a small grid")
 {

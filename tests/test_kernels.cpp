@@ -18,12 +18,14 @@
 
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cfloat>
 #include <cmath>
 #include <functional>
 #include <numbers>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace {
@@ -1030,3 +1032,25 @@ static_assert(krs::kernel<krs::box>);
 static_assert(krs::kernel<krs::torus_capsule>);
 static_assert(krs::kernel<krs::sphere>);
 static_assert(krs::kernel<krs::tetrahedron>);
+
+// A kernel carries its GLSL (krs/field.hpp): the same geometry without glsl_name, glsl_source and
+// glsl_parameters() is a field but no kernel, so a sequence refuses it as a kind when it compiles.
+namespace {
+struct sphere_without_glsl {
+    krs::sphere s{{0, 0, 0}, 1};
+    template <class T>
+    T distance(const krs::vec3<T>& p) const { return s.distance(p); }
+    template <class T>
+    krs::vec3<T> normal(const krs::vec3<T>& p) const { return s.normal(p); }
+    krs::bounding_sphere bound() const { return s.bound(); }
+    krs::bounding_box bound_box() const { return s.bound_box(); }
+};
+struct sphere_with_glsl : sphere_without_glsl {
+    static constexpr std::string_view glsl_name = krs::sphere::glsl_name;
+    static constexpr std::string_view glsl_source = krs::sphere::glsl_source;
+    std::array<float, 4> glsl_parameters() const { return s.glsl_parameters(); }
+};
+} // namespace
+static_assert(krs::field<sphere_without_glsl>);
+static_assert(!krs::kernel<sphere_without_glsl>);
+static_assert(krs::kernel<sphere_with_glsl>);

@@ -7,8 +7,8 @@
 //   2. as a post-process, "a shift operation to the completed hypertree" (perturb_voxels below):
 //      every stored voxel moves, with its density, level and part, to the voxel holding its
 //      shifted center;
-//   3. at render time, on the marcher's sample positions (march_options::displacement,
-//      render/march_options.hpp), which moves no voxel.
+//   3. at render time, on the marcher's sample positions (sample_displacement below, the
+//      marcher's march_options::displacement), which moves no voxel.
 //
 // The field: shift(p) = (ax n(f p), ay n(f p + o1), az n(f p + o2)), n = value noise in [-1, 1]
 // (krs/core/noise.hpp), so |shift_i| <= a_i on each axis. It is smooth (value noise's gradient is
@@ -46,25 +46,56 @@ krs::vec3<T> noise_shift(const krs::vec3<T>& p, const krs::vec3<T>& amplitude, c
             amplitude.z * krs::value_noise(krs::vec3<T>{q.x - T(S(11.1)), q.y + T(S(23.9)), q.z - T(S(41.3))})};
 }
 
+namespace detail {
+// The noise of every stage: amplitudes are sizes (a negative one is the same noise mirrored:
+// refused rather than silently meaning that); all finite (an infinite frequency made every shift
+// NaN). Parameters are named `name.amplitude.x` ... `name.frequency`.
+template <class S>
+void require_noise(std::string_view name, const krs::vec3<S>& amplitude, S frequency)
+{
+    const std::string n(name);
+    krs::require_non_negative(n + ".amplitude.x", amplitude.x);
+    krs::require_non_negative(n + ".amplitude.y", amplitude.y);
+    krs::require_non_negative(n + ".amplitude.z", amplitude.z);
+    krs::require_non_negative(n + ".frequency", frequency);
+}
+} // namespace detail
+
 struct perturbation {
     vec3d amplitude{};
     double frequency = 8;
     bool enabled() const { return amplitude.x != 0 || amplitude.y != 0 || amplitude.z != 0; }
 
-    // Amplitudes are sizes (a negative one is the same noise mirrored: refused rather than
-    // silently meaning that); all finite (an infinite frequency made every shift NaN).
-    void validate(std::string_view name) const
-    {
-        const std::string n(name);
-        krs::require_non_negative(n + ".amplitude.x", amplitude.x);
-        krs::require_non_negative(n + ".amplitude.y", amplitude.y);
-        krs::require_non_negative(n + ".amplitude.z", amplitude.z);
-        krs::require_non_negative(n + ".frequency", frequency);
-    }
+    void validate(std::string_view name) const { detail::require_noise(name, amplitude, frequency); }
     // p + shift(p) (noise_shift above).
     vec3d displaced(const vec3d& p) const
     {
         const vec3d s = noise_shift(p, amplitude, frequency);
+        return {p.x + s.x, p.y + s.y, p.z + s.z};
+    }
+};
+
+// Render-time noise (stage 3, march_options::displacement): each primary sample p is looked up,
+// and shaded, at p + shift(p), the field above in float (the same noise and offsets as
+// generation's, at the sample's world position). |shift_i| <= amplitude_i, so the marcher widens
+// the tree's box by the amplitude on every side: a sample outside the box whose displaced position
+// falls inside still reads it. Empty-space skipping is off for displaced samples (a skip is
+// predicted from the undisplaced ray's path through empty bricks), and shadow rays are not
+// displaced (per-voxel shading lights the voxel the sample reads). Amplitude 0 (the default) is
+// today's march, pixel for pixel. The GLSL marcher refuses it (render/glsl.hpp). It is here, beside
+// the other two stages, so that a definition file's RENDERPERTURB (io/definition_file.hpp) is read
+// without the renderer's options.
+struct sample_displacement {
+    krs::vec3f amplitude{0.0f, 0.0f, 0.0f};
+    float frequency = 8.0f;
+    bool enabled() const { return amplitude.x != 0.0f || amplitude.y != 0.0f || amplitude.z != 0.0f; }
+
+    void validate(std::string_view name) const { detail::require_noise(name, amplitude, frequency); }
+    // p + shift(p) in the sample's lane type.
+    template <class T>
+    krs::vec3<T> displaced(const krs::vec3<T>& p) const
+    {
+        const krs::vec3<T> s = noise_shift(p, krs::vec3<T>{T(amplitude.x), T(amplitude.y), T(amplitude.z)}, T(frequency));
         return {p.x + s.x, p.y + s.y, p.z + s.z};
     }
 };

@@ -26,10 +26,10 @@
 // is read, and what the C++ model refuses afterwards (ifs::validate, the element constructors, the
 // contraction condition) is reported at the keyword that set it. Nothing half-built escapes.
 
+#include "hypertree/depth_colors.hpp"
 #include "hypertree/ifs.hpp"
-#include "hypertree/render/march_options.hpp"
-#include "hypertree/render/transfer.hpp"
 #include "hypertree/io/lexer.hpp"
+#include "hypertree/perturbation.hpp"
 
 #include <array>
 #include <cstdlib>
@@ -49,7 +49,7 @@ namespace hypertree {
 inline constexpr double radians_per_degree = std::numbers::pi / 180.0;
 
 // Everything a definition file describes. DEPTHCOLOR lines become depth_color_span values of the
-// renderer's transfer function (render/transfer.hpp): depths from..to get colors first..last,
+// renderer's transfer function (hypertree/depth_colors.hpp): depths from..to get colors first..last,
 // linearly in depth (section 8.3), RGB in [0, 1].
 struct parsed_tree {
     hypertree::ifs<runtime_pipeline> ifs;
@@ -57,7 +57,7 @@ struct parsed_tree {
     std::optional<int> density_class_count; // DENSITYCLASSES; empty: the caller's choice (build_options)
     // Noise at the two later stages of section 3.5 (perturbation.hpp): VOXELPERTURB, applied to the
     // built store by perturb_voxels, and RENDERPERTURB, the marcher's sample displacement
-    // (march_options::displacement). Empty: none. (PERTURB, the generation stage, is ifs.perturb;
+    // (march_options::displacement, read here as the sample_displacement it is). Empty: none. (PERTURB, the generation stage, is ifs.perturb;
     // TRIM regions are ifs.trim.)
     std::optional<perturbation> voxel_perturb;
     std::optional<sample_displacement> render_perturb;
@@ -378,11 +378,7 @@ private:
             d.amplitude = {in_float(a.x, "x"), in_float(a.y, "y"), in_float(a.z, "z")};
             if (!s.at_end()) d.frequency = float(s.number(number_rule::non_negative));
             s.finish();
-            checked(s.where(), "RENDERPERTURB", [&] {
-                march_options o;
-                o.displacement = d;
-                o.validate();
-            });
+            checked(s.where(), "RENDERPERTURB", [&] { d.validate("RENDERPERTURB"); });
             render_perturb_ = d;
             break;
         }

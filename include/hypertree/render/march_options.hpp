@@ -8,11 +8,10 @@
 // accepted or refused, with the same message, whichever of them is asked, and neither needs the
 // other to find out.
 
+#include "hypertree/depth_colors.hpp"
 #include "hypertree/perturbation.hpp"
-#include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/store/store.hpp"
-#include "krs/core/noise.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/core/vec3.hpp"
 
@@ -25,27 +24,6 @@ namespace hypertree {
 struct directional_light {
     krs::vec3f direction{0.4f, 0.8f, 0.45f}; // toward the light; normalized by the marcher
     rgb color{1.0f, 0.97f, 0.9f};
-};
-
-// Render-time noise (section 3.5's third stage, hypertree/perturbation.hpp): each primary sample
-// p is looked up, and shaded, at p + shift(p), the perturbation field in float (the same noise and
-// offsets as generation's, at the sample's world position). |shift_i| <= amplitude_i, so the
-// marcher widens the tree's box by the amplitude on every side: a sample outside the box whose
-// displaced position falls inside still reads it. Empty-space skipping is off for displaced
-// samples (a skip is predicted from the undisplaced ray's path through empty bricks), and shadow
-// rays are not displaced (per-voxel shading lights the voxel the sample reads). Amplitude 0 (the
-// default) is today's march, pixel for pixel. The GLSL marcher refuses it (glsl.hpp).
-struct sample_displacement {
-    krs::vec3f amplitude{0.0f, 0.0f, 0.0f};
-    float frequency = 8.0f;
-    bool enabled() const { return amplitude.x != 0.0f || amplitude.y != 0.0f || amplitude.z != 0.0f; }
-    // p + shift(p), the field of perturbation.hpp (noise_shift) in the sample's lane type.
-    template <class T>
-    krs::vec3<T> displaced(const krs::vec3<T>& p) const
-    {
-        const krs::vec3<T> s = noise_shift(p, krs::vec3<T>{T(amplitude.x), T(amplitude.y), T(amplitude.z)}, T(frequency));
-        return {p.x + s.x, p.y + s.y, p.z + s.z};
-    }
 };
 
 struct march_options {
@@ -118,10 +96,7 @@ struct march_options {
         // (Samples are counted in floats, exact to 2^24; a larger count is a full shadow ray anyway.)
         if (!(sweep_near_steps >= 1 && sweep_near_steps <= (1 << 20)))
             throw krs::invalid_parameter("march_options.sweep_near_steps", "must be in [1, 2^20]", std::to_string(sweep_near_steps));
-        krs::require_non_negative("march_options.displacement.amplitude.x", displacement.amplitude.x);
-        krs::require_non_negative("march_options.displacement.amplitude.y", displacement.amplitude.y);
-        krs::require_non_negative("march_options.displacement.amplitude.z", displacement.amplitude.z);
-        krs::require_non_negative("march_options.displacement.frequency", displacement.frequency);
+        displacement.validate("march_options.displacement");
         for (const auto& light : lights) require_color("march_options.lights.color", light.color);
         if (lights.size() > max_lights)
             throw krs::invalid_parameter("march_options.lights", "may hold at most " + std::to_string(max_lights) + " lights",

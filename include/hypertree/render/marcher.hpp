@@ -53,13 +53,13 @@
 // voxel of sample k of the previous ray; a ray reads it until its first mismatch and then
 // overwrites the rest. (The paper found it gave little; bench_hypertree_render measures it.)
 
+#include "hypertree/depth_colors.hpp"
 #include "hypertree/execution.hpp"
 #include "hypertree/render/brick_walk.hpp"
 #include "hypertree/render/light_sweep.hpp"
 #include "hypertree/render/march_options.hpp"
 #include "hypertree/render/shade_memo.hpp"
 #include "hypertree/render/shadow_ray.hpp"
-#include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/render/voxel_bricks.hpp"
 #include "hypertree/render/voxel_shading.hpp"

@@ -17,8 +17,8 @@
 // ds = step_factor x side the exponent is k x step_factor: one table of 256 floats per set of
 // options, computed in double; 255 is fully opaque whatever the exponent.
 
+#include "hypertree/depth_colors.hpp"
 #include "hypertree/render/march_options.hpp"
-#include "hypertree/render/transfer.hpp"
 #include "hypertree/render/tree_shape.hpp"
 #include "hypertree/render/voxel_bricks.hpp"
 #include "krs/glsl/literal.hpp"

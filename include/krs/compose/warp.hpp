@@ -18,10 +18,10 @@
 // both terms are <= |x - q|, so g never overestimates.
 
 #include "krs/core/bounds.hpp"
+#include "krs/core/noise.hpp"
 #include "krs/core/rounding.hpp"
 #include "krs/core/validate.hpp"
 #include "krs/field.hpp"
-#include "krs/shade/texture.hpp"
 
 #include <array>
 #include <cmath>
@@ -131,7 +131,8 @@ struct bend_warp {
 
 // Noise displacement: W(x) = x + a * (N(f x), N(f x + o1), N(f x + o2)) with N = value_noise.
 // ||J|| <= 1 + a f ||J_N|| and ||J_N|| <= its Frobenius norm <= sqrt(3) * |grad N|max
-// = sqrt(3) * 3.75 sqrt(3) = 11.25 (texture.hpp). Holds everywhere: unbounded domain.
+// = sqrt(3) * 3.75 sqrt(3) = 11.25 (value_noise_gradient_bound, krs/core/noise.hpp). Holds
+// everywhere: unbounded domain.
 struct noise_warp {
     float amplitude = 0.0f; // displacement scale in [0, 1e9] (the surface moves by up to amplitude)
     float frequency = 1.0f; // in (0, 1e9]: frequency times any coordinate within the policy stays finite

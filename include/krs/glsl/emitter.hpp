@@ -171,19 +171,9 @@ inline std::string version_line(target t)
     }
 }
 
-// What a type needs to be emitted: its GLSL next to its C++. A *GLSL type* (every kernel,
-// mirror kind, fold step and warp) names its functions' prefix (`glsl_name`), their text
-// (`glsl_source`, emitted once per shader however often the type is used) and its parameters:
-// `glsl_parameters()` returns them as a std::array<float, 4 N>, the N vec4s its functions take after
-// the point, in their order. The array is the one statement of the layout: its size is the vec4
-// count, and the functions' parameter lists are checked by compiling every type's GLSL
-// (tests/test_glsl_field_types.cpp).
-template <class X>
-concept glsl_type = requires(const X& x) {
-    { X::glsl_name } -> std::convertible_to<std::string_view>;
-    { X::glsl_source } -> std::convertible_to<std::string_view>;
-    { std::tuple_size<std::remove_cvref_t<decltype(x.glsl_parameters())>>::value } -> std::convertible_to<std::size_t>;
-};
+// What a type needs to be emitted: its GLSL next to its C++. A *GLSL type* (`krs::glsl_type`,
+// krs/field.hpp, which every kernel is) names its functions' prefix, their text and its
+// parameters as whole vec4s.
 template <glsl_type X>
 inline constexpr std::size_t vec4s_of = [] {
     constexpr std::size_t floats = std::tuple_size_v<decltype(std::declval<const X&>().glsl_parameters())>;
@@ -191,10 +181,8 @@ inline constexpr std::size_t vec4s_of = [] {
     return floats / 4;
 }();
 
-template <class K>
-concept glsl_kernel = kernel<K> && glsl_type<K>;
 // A field whose GLSL is one function: its source defines `float NAME_distance(vec3 p, vec4...)`
-// (every glsl_kernel, and distance-only fields such as tetrahedron).
+// (every kernel, and distance-only fields such as tetrahedron).
 template <class F>
 concept glsl_field = field<F> && glsl_type<F>;
 

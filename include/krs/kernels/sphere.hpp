@@ -51,11 +51,11 @@ struct sphere {
         return box_around(c - r, c + r);
     }
 
-    // GLSL (krs/glsl/emitter.hpp): the same distance and normal, parameters packed as one vec4
-    // (center, radius).
     // The colour a Shadertoy program and its reference shade this kind with where the caller
     // gives no palette (linear RGB; leaf green: spheres are a tree's leaves).
     static constexpr vec3f default_albedo{0.22f, 0.45f, 0.12f};
+    // GLSL (krs/glsl/emitter.hpp): the same distance and normal, parameters packed as one vec4
+    // (center, radius).
     static constexpr std::string_view glsl_name = "krs_sphere";
     static constexpr std::string_view glsl_source = R"(float krs_sphere_distance(vec3 p, vec4 s) { return length(p - s.xyz) - s.w; }
 vec3 krs_sphere_normal(vec3 p, vec4 s) {

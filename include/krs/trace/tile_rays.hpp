@@ -5,10 +5,7 @@
 // camera's direction needs a normalization and the prepass start (krs/trace/tile_prepass.hpp) a
 // walk through up to max_extra spheres, each with a square root. Done per ray, that scalar
 // chain of dependent square roots costs about as much as a few field evaluations of a deep
-// sequence. `tile_rays` computes a whole tile's rays W at a time with the same templates
-// (`primary_ray`, `start_for`) and hands them out from memory.
-//
-// `queue_tile_rays` computes a whole tile's rays W at a time with the same templates
+// sequence. So `queue_tile_rays` computes a whole tile's rays W at a time with the same templates
 // (`primary_ray`, `start_for`, `box_clip::apply`) and appends them to a `ray_queue` in packets:
 // the rays that miss the field's box (most of a picture where the scene is small in it) are
 // set aside there as misses by the same packet step, so only rays that enter the box are stored
@@ -30,8 +27,8 @@
 // `tile_rays` keeps the older interface, one `ray_job` at a time (`fill`, then `pop`), on the same
 // queue.
 
-#include "krs/trace/box_clip.hpp"
 #include "krs/core/validate.hpp"
+#include "krs/trace/box_clip.hpp"
 #include "krs/trace/packet_trace.hpp"
 #include "krs/trace/tile_prepass.hpp"
 
