@@ -35,7 +35,7 @@
 
 #include "hypertree/forest.hpp"
 #include "hypertree/hypertree.hpp"
-#include "hypertree/io/definition_refusals.hpp"
+#include "hypertree/definition_refusals.hpp"
 #include "hypertree/lod.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/presets.hpp"
@@ -283,7 +283,7 @@ int main(int argc, char** argv)
     o.store = storage_type(std::find(store_names.begin(), store_names.end(), store) - store_names.begin());
 
     // The tree file read, so that a refusal of one of its settings while building or rendering
-    // is reported at its line (io/definition_refusals.hpp).
+    // is reported at its line (definition_refusals.hpp).
     std::optional<parsed_tree> tree_file;
     try {
         build_options options;

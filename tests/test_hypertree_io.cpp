@@ -5,7 +5,7 @@
 
 #include "hypertree/create/generate.hpp"
 #include "hypertree/io/definition_file.hpp"
-#include "hypertree/io/definition_refusals.hpp"
+#include "hypertree/definition_refusals.hpp"
 #include "hypertree/forest.hpp"
 #include "hypertree/io/forest_file.hpp"
 #include "hypertree/presets.hpp"

@@ -16,7 +16,7 @@
 // from the tree's own: a region holding no forest voxel is reported at the tree file's TRIM line.
 
 #include "hypertree/build.hpp"
-#include "hypertree/io/definition_refusals.hpp"
+#include "hypertree/definition_refusals.hpp"
 #include "hypertree/io/forest_file.hpp"
 #include "hypertree/ops.hpp"
 #include "hypertree/perturbation.hpp"

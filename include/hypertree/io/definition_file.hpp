@@ -63,7 +63,7 @@ struct parsed_tree {
     std::optional<sample_displacement> render_perturb;
     // Where the file said so, for refusals found after parsing (a forest's build checks TRIM
     // against its own grid, and refuses RENDERPERTURB: forest.hpp, forest_file.hpp; budgets and
-    // the marcher's limits: io/definition_refusals.hpp).
+    // the marcher's limits: hypertree/definition_refusals.hpp).
     std::string file;
     std::optional<source_position> voxel_perturb_at, render_perturb_at;
     std::vector<source_position> trim_at; // one per ifs.trim region, in its order
