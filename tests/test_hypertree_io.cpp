@@ -4,11 +4,12 @@
 // small bad text and a check of the location and the expectation in its message.
 
 #include "hypertree/create/generate.hpp"
-#include "hypertree/io/definition_file.hpp"
 #include "hypertree/definition_refusals.hpp"
 #include "hypertree/forest.hpp"
+#include "hypertree/io/definition_file.hpp"
 #include "hypertree/io/forest_file.hpp"
 #include "hypertree/presets.hpp"
+#include "hypertree/render/march_options.hpp"
 #include "hypertree/store/store_kinds.hpp"
 
 #include <doctest/doctest.h>
