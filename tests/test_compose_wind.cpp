@@ -13,6 +13,7 @@
 #include "krs/trace/camera.hpp"
 #include "krs/trace/sphere_trace.hpp"
 
+#include "support/packet_points.hpp"
 #include "support/rejects.hpp"
 #include "support/random.hpp"
 
@@ -217,8 +218,6 @@ TEST_CASE("a swaying sphere never overestimates the distance to its moved surfac
 
 TEST_CASE("where the wind is zero the swaying field is the still one, bit for bit")
 {
-    using P = krs::packet_f;
-    constexpr std::size_t W = krs::lane_count<P>;
     const grown_tree grown = tree_of(8);
     const auto& tree = grown.field;
     krs::wind calm; // no sway, no gusts
@@ -230,12 +229,10 @@ TEST_CASE("where the wind is zero the swaying field is the still one, bit for bi
         const krs::swaying<krs::model::tree_sequence> f(tree, calm, 1.7f * float(i));
         CHECK(f.inverse_lipschitz() == 1.0f);
         for (int k = 0; k < 64; ++k) {
-            alignas(64) float x[W], y[W], z[W];
-            for (std::size_t l = 0; l < W; ++l)
-                x[l] = float(uniform(g, -3, 3)), y[l] = float(uniform(g, -1, 8)), z[l] = float(uniform(g, -3, 3));
-            const P d = f.distance(krs::vec3<P>{P::load_aligned(x), P::load_aligned(y), P::load_aligned(z)});
-            for (std::size_t l = 0; l < W; ++l) {
-                const vec3f p{x[l], y[l], z[l]};
+            const krs_test::packet_points points = krs_test::random_packet(g, {-3, -1, -3}, {3, 8, 3});
+            const krs::packet_f d = f.distance(points.packet);
+            for (std::size_t l = 0; l < points.lanes.size(); ++l) {
+                const vec3f p = points.lanes[l];
                 ++compared;
                 equal += f.distance(p) == tree.distance(p) && krs::lane_at(d, l) == tree.distance(p) &&
                          f.distance(vec3d(p)) == tree.distance(vec3d(p));
@@ -260,8 +257,6 @@ TEST_CASE("where the wind is zero the swaying field is the still one, bit for bi
 
 TEST_CASE("swaying fields in packets and in double equal the scalar float path")
 {
-    using P = krs::packet_f;
-    constexpr std::size_t W = krs::lane_count<P>;
     const grown_tree grown = tree_of(8);
     const auto& tree = grown.field;
     krs::wind w;
@@ -270,26 +265,15 @@ TEST_CASE("swaying fields in packets and in double equal the scalar float path")
     w.sway = 0.3f;
     w.gust = 0.5f;
     std::mt19937_64 g(355);
-    long lanes = 0, equal = 0;
-    double worst_double = 0;
+    krs_test::scalar_agreement agree;
     for (const float t : {0.0f, 2.5f, gust_peaks(w, 20.0, 1)[0]}) {
         const krs::swaying<krs::model::tree_sequence> f(tree, w, t);
-        for (int k = 0; k < 128; ++k) {
-            alignas(64) float x[W], y[W], z[W];
-            for (std::size_t i = 0; i < W; ++i)
-                x[i] = float(uniform(g, -3, 3)), y[i] = float(uniform(g, -1, 8)), z[i] = float(uniform(g, -3, 3));
-            const P d = f.distance(krs::vec3<P>{P::load_aligned(x), P::load_aligned(y), P::load_aligned(z)});
-            for (std::size_t i = 0; i < W; ++i) {
-                const vec3f p{x[i], y[i], z[i]};
-                ++lanes;
-                equal += krs::lane_at(d, i) == f.distance(p);
-                worst_double = std::max(worst_double, std::abs(f.distance(vec3d(p)) - double(f.distance(p))));
-            }
-        }
+        for (int k = 0; k < 128; ++k) agree.add(f, krs_test::random_packet(g, {-3, -1, -3}, {3, 8, 3}));
     }
-    std::printf("swaying tree: packets equal to scalar %ld/%ld, max |d_double - d_float| %.3g\n", equal, lanes, worst_double);
-    CHECK(equal == lanes); // the same + - * per lane (-ffp-contract=off)
-    CHECK(worst_double <= 1e-5);
+    std::printf("swaying tree: packets equal to scalar %ld/%ld, max |d_double - d_float| %.3g\n", agree.equal,
+                agree.lanes, agree.worst_double);
+    CHECK(agree.equal == agree.lanes); // the same + - * per lane (-ffp-contract=off)
+    CHECK(agree.worst_double <= 1e-5);
 }
 
 TEST_CASE("bad wind parameters are refused by name")
