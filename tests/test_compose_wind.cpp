@@ -175,7 +175,7 @@ TEST_CASE("a swaying tree is 1-Lipschitz at every instant, the gust peaks includ
     CHECK(worst_slope >= 0.9); // the bound is not needlessly loose where the shear is largest
 }
 
-TEST_CASE("a swaying sphere never overestimates the distance to its moved surface, and is zero on it")
+TEST_CASE("a swaying sphere never overestimates the distance to its moved surface, is zero on it, and in its bound")
 {
     const krs::sphere ball({0.3f, 2.2f, -0.2f}, 0.9f);
     krs::wind w;
@@ -206,6 +206,8 @@ TEST_CASE("a swaying sphere never overestimates the distance to its moved surfac
             if (d > 0) worst_over = std::max(worst_over, d - sampled), tightest = std::max(tightest, d / sampled);
             // Inside: the point the motion undoes lies inside the still sphere.
             if (d < -1e-5) CHECK(krs::length(p - horizontal(w) * (a * profile(w, p.y)) - vec3d(ball.center)) < double(ball.radius));
+            // and inside the bound (the still sphere's, grown by |a|).
+            if (d < 0) CHECK(krs::length(p - vec3d(f.bound().center)) <= double(f.bound().radius));
         }
         std::printf("swaying sphere t = %6.3f: a %+.4f, L %.4f, |d| on surface %.3g, d - sampled <= %.3g, largest "
                     "d / sampled %.4f\n",
