@@ -29,11 +29,11 @@
 // everywhere: unlike a twist or a bend (krs/compose/warp.hpp) the domain is unbounded and nothing
 // is clipped. So g is 1-Lipschitz and never overestimates (warp.hpp's argument: for a point q of
 // the swaying surface, f(W(x)) <= |W(x) - W(q)| <= L |x - q|) at every instant, and sphere
-// tracing is safe in every frame. The price is steps at most 1 / L(t) as long. Measured on a tree of height
-// 8.5 seen whole (tests/test_compose_wind.cpp prints it): a gust peak whose top moves 0.98 has
-// L = 1.12 and costs 1.09 times the still tree's steps per ray; a storm's 3.4, L = 1.48, 1.35
-// times. The bound is per instant, the tightest this shear allows, so a still moment costs
-// nothing: where a(t) = 0 (no wind, or an instant where the gusts cancel the lean) W is the
+// tracing is safe in every frame. The price is steps at most 1 / L(t) as long. Measured on a
+// tree of height 8.5 seen whole (tests/test_compose_wind.cpp prints it): a gust peak whose top
+// moves 0.98 has L = 1.12 and costs 1.09 times the still tree's steps per ray; a storm's 3.4,
+// L = 1.48, 1.35 times. The bound is per instant, the tightest this shear allows, so a still
+// moment costs nothing: where a(t) = 0 (no wind, or an instant where the gusts cancel the lean) W is the
 // identity, L = 1 and the field is the still one bit for bit.
 //
 // Stored in float: the direction (its horizontal part, normalized), the ground, 1 / height and the
