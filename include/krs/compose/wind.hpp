@@ -33,8 +33,8 @@
 // tree of height 8.5 seen whole (tests/test_compose_wind.cpp prints it): a gust peak whose top
 // moves 0.98 has L = 1.12 and costs 1.09 times the still tree's steps per ray; a storm's 3.4,
 // L = 1.48, 1.35 times. The bound is per instant, the tightest this shear allows, so a still
-// moment costs nothing: where a(t) = 0 (no wind, or an instant where the gusts cancel the lean) W is the
-// identity, L = 1 and the field is the still one bit for bit.
+// moment costs nothing: where a(t) = 0 (no wind, or an instant where the gusts cancel the lean)
+// W is the identity, L = 1 and the field is the still one bit for bit.
 //
 // Stored in float: the direction (its horizontal part, normalized), the ground, 1 / height and the
 // instant's a. The bound is taken from the stored values (|d| as stored, 2 / height as stored) in
