@@ -11,6 +11,7 @@
 #include "krs/kernels/box.hpp"
 #include "krs/kernels/sphere.hpp"
 
+#include "support/packet_points.hpp"
 #include "support/rejects.hpp"
 #include "support/random.hpp"
 
@@ -161,27 +162,13 @@ TEST_CASE("an affine map's placed field never overestimates, is zero on the imag
 
 TEST_CASE("placed fields in packets and in double equal the scalar float path")
 {
-    using P = krs::packet_f;
-    constexpr std::size_t W = krs::lane_count<P>;
     std::mt19937_64 g(83);
     const auto f = krs::placed(krs::smooth_union(krs::sphere({0, 0, 0}, 0.6f), krs::box({0.5f, 0, 0}, {0.3f, 0.3f, 0.3f})),
                                krs::affine_map{{vec3d{1.2, 0.3, 0}, vec3d{-0.1, 0.8, 0.2}, vec3d{0, 0.4, 1.5}}, {1, 2, 3}});
-    long lanes = 0, equal = 0;
-    double worst_double = 0;
-    for (int k = 0; k < 256; ++k) {
-        alignas(64) float x[W], y[W], z[W];
-        for (std::size_t i = 0; i < W; ++i)
-            x[i] = float(uniform(g, -1, 3)), y[i] = float(uniform(g, 0, 4)), z[i] = float(uniform(g, 1, 5));
-        const P d = f.distance(krs::vec3<P>{P::load_aligned(x), P::load_aligned(y), P::load_aligned(z)});
-        for (std::size_t i = 0; i < W; ++i) {
-            const vec3f p{x[i], y[i], z[i]};
-            ++lanes;
-            equal += krs::lane_at(d, i) == f.distance(p);
-            worst_double = std::max(worst_double, std::abs(f.distance(vec3d(p)) - double(f.distance(p))));
-        }
-    }
-    CHECK(equal == lanes); // the same + - * per lane (-ffp-contract=off)
-    CHECK(worst_double <= 1e-6);
+    krs_test::scalar_agreement agree;
+    for (int k = 0; k < 256; ++k) agree.add(f, krs_test::random_packet(g, {-1, 0, 1}, {3, 4, 5}));
+    CHECK(agree.equal == agree.lanes); // the same + - * per lane (-ffp-contract=off)
+    CHECK(agree.worst_double <= 1e-6);
 }
 
 TEST_CASE("placements are refused a scale of 0, a singular or ill-conditioned map and non-finite values")

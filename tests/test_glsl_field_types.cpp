@@ -234,6 +234,49 @@ TEST_CASE("GLSL of every field type matches the C++ on llvmpipe, and every type 
     check_distance("noise", noisy(ball, krs::noise_warp(0.08f, 3.0f)), {0, 0.5f, 0}, {1.0f, 1.0f, 1.0f},
                    {"lipschitz_warp", "noise_warp", "value_noise_glsl"});
 
+    // Wind (krs/compose/wind.hpp): a stem with a head swaying at several instants, the gust peak
+    // (found by sampling a(t) every millisecond) among them, each instant's values from the data;
+    // then NAME_at(p, time), the time passed by the shader, against the C++'s at(time).
+    const krs::union_of<krs::capsule, krs::sphere> stem(krs::capsule({0, 0, 0}, {0, 1.2f, 0}, 0.08f),
+                                                        krs::sphere({0, 1.3f, 0}, 0.2f));
+    krs::wind breeze;
+    breeze.direction = {1.0f, 0.0f, 0.4f};
+    breeze.height = 1.4f;
+    breeze.sway = 0.25f;
+    breeze.gust = 0.3f;
+    breeze.gust_period = 3.0f;
+    float peak = 0;
+    for (double t = 0; t < 30; t += 1e-3)
+        if (std::abs(breeze.sway_at(t)) > std::abs(breeze.sway_at(double(peak)))) peak = float(t);
+    const krs::swaying<krs::union_of<krs::capsule, krs::sphere>> swaying_stem(stem, breeze);
+    const vec3f wind_center{0.3f, 0.7f, 0.1f}, wind_half{1.0f, 1.0f, 0.8f};
+    const float instants[] = {0.0f, 1.3f, peak, 47.3f};
+    for (std::size_t i = 0; i < 4; ++i)
+        check_distance("wind_" + std::to_string(i), swaying_stem.at(instants[i]), wind_center, wind_half,
+                       {"swaying", "wind", "wind_warp"});
+    check_distance("wind_frozen", krs::lipschitz_warp<krs::box, krs::wind_warp>(block, breeze.warp_at(peak)),
+                   {0.6f, 0.4f, 0.1f}, {1.0f, 1.0f, 1.0f}, {"lipschitz_warp", "wind_warp"});
+    {
+        const std::vector<vec3f> points = box_points(wind_center, wind_half, 16384, 0x3535);
+        krs::glsl::emitter e({krs::glsl::target::glsl450, krs::glsl::data_mode::constants, "wind_live_data", 0});
+        const std::string fn = e.add(swaying_stem, "wind_live");
+        for (const float t : instants) {
+            const std::string probe = fn + "_probe";
+            const std::string snippet = e.source() + "float " + probe + "(vec3 p) { return " + fn + "_at(p, " +
+                                        krs::glsl::float_literal(t) + "); }\nkrs_location " + probe +
+                                        "_locate(vec3 p) { return krs_location(0.0, p, 0u, 0u, uvec2(0u)); }\n";
+            const auto gpu = krs_test::run_points(snippet, probe, points, {}, false, fn + "_data");
+            const auto now = swaying_stem.at(t);
+            float worst = 0;
+            for (std::size_t i = 0; i < points.size(); ++i) worst = std::max(worst, std::abs(gpu[i].distance - now.distance(points[i])));
+            const float extent = krs::length(wind_half);
+            std::printf("wind_live_at t = %-7.3f points %zu  max |d_gpu - d_cpu| %.3g = %.3g of extent %.3g\n", double(t),
+                        points.size(), double(worst), double(worst / extent), double(extent));
+            INFO("wind_live_at t = " << t);
+            CHECK(worst <= 1e-5f * extent);
+        }
+    }
+
     // Bounded: far points take the sphere's distance, near ones the field's (margin 0.3).
     check_distance("bounded", krs::bounded<krs::box>(block, 0.3f), {0.6f, 0.2f, 0.1f}, {2.0f, 2.0f, 2.0f},
                    {"bounded"});
