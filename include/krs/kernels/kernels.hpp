@@ -6,6 +6,7 @@
 #include "krs/kernels/capsule.hpp"
 #include "krs/kernels/infinite_cylinder.hpp"
 #include "krs/kernels/plane.hpp"
+#include "krs/kernels/round_box.hpp"
 #include "krs/kernels/sphere.hpp"
 #include "krs/kernels/tetrahedron.hpp"
 #include "krs/kernels/torus.hpp"
