@@ -5,6 +5,7 @@
 #include "krs/kernels/capped_cylinder.hpp"
 #include "krs/kernels/capsule.hpp"
 #include "krs/kernels/infinite_cylinder.hpp"
+#include "krs/kernels/octahedron.hpp"
 #include "krs/kernels/plane.hpp"
 #include "krs/kernels/round_box.hpp"
 #include "krs/kernels/sphere.hpp"
