@@ -46,8 +46,7 @@ public:
         half_length_ = static_cast<float>(0.5 * len);
         // A fixed unit vector across the axis: the normal's direction on the axis itself (where
         // every radial direction is as near) and uv's angle origin.
-        const vec3d helper = std::abs(u.x) < 0.6 ? vec3d{1, 0, 0} : vec3d{0, 1, 0};
-        const vec3d e1 = normalize(helper - u * dot(helper, u));
+        const vec3d e1 = unit_across(u);
         across_ = vec3f(e1);
         across_2_ = vec3f(cross(u, e1));
     }

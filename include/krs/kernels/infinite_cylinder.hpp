@@ -29,9 +29,7 @@ public:
     {
         // A fixed unit vector across the axis: the normal on the axis itself, where every radial
         // direction is as near.
-        const vec3d u(axis_);
-        const vec3d helper = std::abs(u.x) < 0.6 ? vec3d{1, 0, 0} : vec3d{0, 1, 0};
-        across_ = vec3f(normalize(helper - u * dot(helper, u)));
+        across_ = vec3f(unit_across(vec3d(axis_)));
     }
 
     const vec3f& point() const { return point_; }
