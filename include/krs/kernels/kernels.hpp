@@ -2,6 +2,7 @@
 // All kernel kinds krs ships, for users who do not want to pick headers one by one.
 
 #include "krs/kernels/box.hpp"
+#include "krs/kernels/capped_cone.hpp"
 #include "krs/kernels/capped_cylinder.hpp"
 #include "krs/kernels/capsule.hpp"
 #include "krs/kernels/infinite_cylinder.hpp"
