@@ -31,12 +31,6 @@ using krs::vec3d;
 using krs::vec3f;
 using krs_test::uniform;
 
-double segment_distance(const vec3d& p, const vec3d& a, const vec3d& b)
-{
-    const vec3d ab = b - a;
-    const double t = std::clamp(krs::dot(p - a, ab) / krs::dot(ab, ab), 0.0, 1.0);
-    return krs::length(p - (a + ab * t));
-}
 
 struct cone_case {
     krs::capped_cone kernel;
@@ -57,8 +51,8 @@ struct cone_case {
         const vec3d q = p - center;
         const double rho = std::hypot(krs::dot(q, e1), krs::dot(q, e2)), z = krs::dot(q, n);
         const vec3d at{rho, z, 0};
-        const double d = std::min({segment_distance(at, {0, -h, 0}, {ra, -h, 0}), segment_distance(at, {0, h, 0}, {rb, h, 0}),
-                                   segment_distance(at, {ra, -h, 0}, {rb, h, 0})});
+        const double d = std::min({krs_test::segment_distance(at, {0, -h, 0}, {ra, -h, 0}), krs_test::segment_distance(at, {0, h, 0}, {rb, h, 0}),
+                                   krs_test::segment_distance(at, {ra, -h, 0}, {rb, h, 0})});
         const bool inside = std::abs(z) <= h && rho <= ra + (rb - ra) * (z + h) / (2 * h);
         return inside ? -d : d;
     }
@@ -106,12 +100,7 @@ TEST_CASE("capped_cone: bound and bound_box hold inside points; the box is tight
     for (const cone_case& c : cases()) {
         const krs::bounding_box box = c.kernel.bound_box(), sampled = krs_test::check_kernel_bounds(c);
         const double slack = 0.01 * (c.h + std::max(c.ra, c.rb));
-        CHECK(sampled.lo.x - box.lo.x <= slack);
-        CHECK(box.hi.x - sampled.hi.x <= slack);
-        CHECK(sampled.lo.y - box.lo.y <= slack);
-        CHECK(box.hi.y - sampled.hi.y <= slack);
-        CHECK(sampled.lo.z - box.lo.z <= slack);
-        CHECK(box.hi.z - sampled.hi.z <= slack);
+        krs_test::check_box_tight(box, sampled, slack);
     }
 }
 

@@ -146,12 +146,7 @@ TEST_CASE("capped_cylinder: bound and bound_box hold inside points; the box is t
         const krs::bounding_box box = c.kernel.bound_box(), sampled = krs_test::check_kernel_bounds(c);
         // Exact: the sampled extremes (the rims) come within 1% of the size of the box's faces.
         const double slack = 0.01 * (c.solid.h + c.solid.r);
-        CHECK(sampled.lo.x - box.lo.x <= slack);
-        CHECK(box.hi.x - sampled.hi.x <= slack);
-        CHECK(sampled.lo.y - box.lo.y <= slack);
-        CHECK(box.hi.y - sampled.hi.y <= slack);
-        CHECK(sampled.lo.z - box.lo.z <= slack);
-        CHECK(box.hi.z - sampled.hi.z <= slack);
+        krs_test::check_box_tight(box, sampled, slack);
     }
 }
 

@@ -32,12 +32,6 @@ using krs::vec3d;
 using krs::vec3f;
 using krs_test::uniform;
 
-double segment_distance(const vec3d& p, const vec3d& a, const vec3d& b)
-{
-    const vec3d ab = b - a;
-    const double t = std::clamp(krs::dot(p - a, ab) / krs::dot(ab, ab), 0.0, 1.0);
-    return krs::length(p - (a + ab * t));
-}
 double triangle_distance(const vec3d& p, const vec3d& a, const vec3d& b, const vec3d& c)
 {
     const vec3d n = krs::normalize(krs::cross(b - a, c - a));
@@ -48,7 +42,7 @@ double triangle_distance(const vec3d& p, const vec3d& a, const vec3d& b, const v
     const double wa = krs::dot(krs::cross(c - b, foot - b), n) / area, wb = krs::dot(krs::cross(a - c, foot - c), n) / area;
     const double wc = 1 - wa - wb;
     if (wa >= 0 && wb >= 0 && wc >= 0) return std::abs(h);
-    return std::min({segment_distance(p, a, b), segment_distance(p, b, c), segment_distance(p, c, a)});
+    return std::min({krs_test::segment_distance(p, a, b), krs_test::segment_distance(p, b, c), krs_test::segment_distance(p, c, a)});
 }
 
 struct octahedron_case {

@@ -177,4 +177,23 @@ krs::bounding_box check_kernel_bounds(const Case& c, const std::vector<krs::vec3
     return {krs::vec3f(lo), krs::vec3f(hi)};
 }
 
+// A box is tight: each face within `slack` of the sampled extremes it must hold.
+inline void check_box_tight(const krs::bounding_box& box, const krs::bounding_box& sampled, double slack)
+{
+    CHECK(sampled.lo.x - box.lo.x <= slack);
+    CHECK(box.hi.x - sampled.hi.x <= slack);
+    CHECK(sampled.lo.y - box.lo.y <= slack);
+    CHECK(box.hi.y - sampled.hi.y <= slack);
+    CHECK(sampled.lo.z - box.lo.z <= slack);
+    CHECK(box.hi.z - sampled.hi.z <= slack);
+}
+
+// Distance from p to the segment ab, in double (references build on it).
+inline double segment_distance(const krs::vec3d& p, const krs::vec3d& a, const krs::vec3d& b)
+{
+    const krs::vec3d ab = b - a;
+    const double t = std::clamp(krs::dot(p - a, ab) / krs::dot(ab, ab), 0.0, 1.0);
+    return krs::length(p - (a + ab * t));
+}
+
 } // namespace krs_test
