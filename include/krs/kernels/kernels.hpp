@@ -5,6 +5,7 @@
 #include "krs/kernels/capped_cone.hpp"
 #include "krs/kernels/capped_cylinder.hpp"
 #include "krs/kernels/capsule.hpp"
+#include "krs/kernels/hexagonal_prism.hpp"
 #include "krs/kernels/infinite_cylinder.hpp"
 #include "krs/kernels/octahedron.hpp"
 #include "krs/kernels/plane.hpp"
