@@ -194,6 +194,16 @@ TEST_CASE("GLSL of every field type matches the C++ on llvmpipe, and every type 
                  krs::box({0.1f, 0.0f, 0.2f}, {0.5f, 0.3f, 0.4f}, krs::normalize(vec3f{1, 0.3f, 0}),
                           krs::normalize(vec3f{-0.3f, 1, 0}), {0, 0, 1}),
                  "box");
+    check_kernel("capped_cylinder", krs::capped_cylinder({-0.2f, 0.1f, 0.3f}, {0.3f, 0.5f, -0.1f}, 0.3f),
+                 "capped_cylinder");
+    // Unbounded like the plane (a sequence pair needs a bound): distance only, over a box around it.
+    check_distance("infinite_cylinder",
+                   krs::infinite_cylinder({0.1f, -0.2f, 0.2f}, krs::normalize(vec3f{0.3f, 1.0f, -0.4f}), 0.3f),
+                   {0.1f, -0.2f, 0.2f}, {1, 1, 1}, {"infinite_cylinder"});
+    check_kernel("round_box", krs::round_box({0.1f, -0.1f, 0.2f}, {0.5f, 0.3f, 0.4f}, 0.12f), "round_box");
+    check_kernel("octahedron", krs::octahedron({0.1f, 0.2f, -0.1f}, 0.6f), "octahedron");
+    check_kernel("capped_cone", krs::capped_cone({-0.2f, 0.1f, 0.3f}, {0.3f, 0.5f, -0.1f}, 0.4f, 0.1f), "capped_cone");
+    check_kernel("hexagonal_prism", krs::hexagonal_prism({0.1f, -0.1f, 0.2f}, 0.45f, 0.3f), "hexagonal_prism");
     check_kernel("torus", krs::torus({0.15f, 0.3f, 0.12f}, {0.3f, 1.0f, -0.2f}, 0.5f, 0.12f), "torus");
     check_kernel("torus_capsule", krs::torus_capsule({0, 0, 0}, {0.3f, 1.1f, 0}, {0.05f, 0.6f, 0}, 0.08f),
                  "torus_capsule");

@@ -120,6 +120,15 @@ inline vec3<T> reflect_direction(const vec3<T>& w, const vec3<T>& m)
     return w - m * (T(2) * dot(m, w));
 }
 
+// A fixed unit vector perpendicular to the unit vector n, from the coordinate axis x (or y when n
+// leans toward x, so the projection never cancels): what a kernel of revolution (torus, cylinder)
+// uses for its normal on the axis, where every direction across is as near, and as uv's origin.
+inline vec3<double> unit_across(const vec3<double>& n)
+{
+    const vec3<double> helper = std::abs(n.x) < 0.6 ? vec3<double>{1, 0, 0} : vec3<double>{0, 1, 0};
+    return normalize(helper - n * dot(helper, n));
+}
+
 // Lane i of a vector of lanes, as a scalar vector.
 template <class T>
 inline vec3<scalar_t<T>> lane_at(const vec3<T>& v, std::size_t i)

@@ -39,8 +39,7 @@ public:
         // A fixed unit vector in the circle's plane: the direction the normal and uv fall back to
         // on the axis, where every circle point is equally near, and uv's angle origin.
         const vec3d a(axis_);
-        const vec3d helper = std::abs(a.x) < 0.6 ? vec3d{1, 0, 0} : vec3d{0, 1, 0};
-        const vec3d e1 = normalize(helper - a * dot(helper, a));
+        const vec3d e1 = unit_across(a);
         in_plane_ = vec3f(e1);
         in_plane_2_ = vec3f(cross(a, e1));
     }
