@@ -11,7 +11,7 @@
 #include "krs/core/lanes.hpp"
 #include "krs/core/vec3.hpp"
 
-#include "support/random.hpp"
+#include "random.hpp"
 
 #include <doctest/doctest.h>
 
