@@ -95,7 +95,7 @@ TEST_CASE("capped_cone: distance, never overestimates, Lipschitz, lanes, normals
     for (const cone_case& c : cases()) krs_test::check_kernel_field_properties(c);
 }
 
-TEST_CASE("capped_cone: bound and bound_box hold inside points; the box is tight")
+TEST_CASE("capped_cone: bound and bound_box hold inside points, and the box is tight")
 {
     for (const cone_case& c : cases()) {
         const krs::bounding_box box = c.kernel.bound_box(), sampled = krs_test::check_kernel_bounds(c);

@@ -140,7 +140,7 @@ TEST_CASE("capped_cylinder: distance, never overestimates, Lipschitz, lanes, nor
     for (const capped_case& c : capped_cases()) krs_test::check_kernel_field_properties(c);
 }
 
-TEST_CASE("capped_cylinder: bound and bound_box hold inside points; the box is tight")
+TEST_CASE("capped_cylinder: bound and bound_box hold inside points, and the box is tight")
 {
     for (const capped_case& c : capped_cases()) {
         const krs::bounding_box box = c.kernel.bound_box(), sampled = krs_test::check_kernel_bounds(c);

@@ -98,7 +98,7 @@ TEST_CASE("hexagonal_prism: distance, never overestimates, Lipschitz, lanes, nor
     for (const prism_case& c : cases()) krs_test::check_kernel_field_properties(c);
 }
 
-TEST_CASE("hexagonal_prism: bound and bound_box hold inside points; the box is tight")
+TEST_CASE("hexagonal_prism: bound and bound_box hold inside points, and the box is tight")
 {
     for (const prism_case& c : cases()) {
         const krs::bounding_box box = c.kernel.bound_box();

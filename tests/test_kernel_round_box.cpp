@@ -84,7 +84,7 @@ TEST_CASE("round_box: distance, never overestimates, Lipschitz, lanes, normals")
     for (const round_box_case& c : cases()) krs_test::check_kernel_field_properties(c);
 }
 
-TEST_CASE("round_box: bound and bound_box hold inside points; the box is the outer box")
+TEST_CASE("round_box: bound and bound_box hold inside points, and the box is the outer box")
 {
     for (const round_box_case& c : cases()) {
         const krs::bounding_box box = c.kernel.bound_box();
